@@ -1,0 +1,104 @@
+"""The demsplit error hierarchy.
+
+Every error a user can provoke with their input is a :class:`DemsplitError`.
+Its message names where the problem is (file, timestep of the frame, line),
+what was expected, what was found, and how to fix it, so that the CLI can
+print it as is, without a traceback.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+class DemsplitError(Exception):
+    """Base class of every error demsplit raises on bad input or bad options.
+
+    Parameters
+    ----------
+    message
+        What is wrong: what was expected and what was found.
+    file, step, line
+        Where: the input file, the timestep of the frame being read, and the
+        1-based line number in the file (``None`` where it does not apply).
+    fix
+        How to fix it, in one sentence.
+    """
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        file: str | Path | None = None,
+        step: int | None = None,
+        line: int | None = None,
+        fix: str | None = None,
+    ) -> None:
+        self.message = message
+        self.file = None if file is None else str(file)
+        self.step = step
+        self.line = line
+        self.fix = fix
+        super().__init__(self._format())
+
+    def _format(self) -> str:
+        where = []
+        if self.file is not None:
+            where.append(self.file if self.line is None else f"{self.file}:{self.line}")
+        elif self.line is not None:
+            where.append(f"line {self.line}")
+        if self.step is not None:
+            where.append(f"timestep {self.step}")
+        text = (", ".join(where) + ": " if where else "") + self.message
+        if self.fix:
+            text += f" Fix: {self.fix}"
+        return text
+
+    def located(
+        self,
+        *,
+        file: str | Path | None = None,
+        step: int | None = None,
+        line: int | None = None,
+    ) -> "DemsplitError":
+        """Return a copy of this error with missing location facts filled in."""
+        return type(self)(
+            self.message,
+            file=self.file if self.file is not None else file,
+            step=self.step if self.step is not None else step,
+            line=self.line if self.line is not None else line,
+            fix=self.fix,
+        )
+
+
+class InputFormatError(DemsplitError):
+    """A dump, export or script does not have the layout its format requires."""
+
+
+class TruncatedFileError(InputFormatError):
+    """A file ends in the middle of a frame or a row."""
+
+
+class PrecisionError(DemsplitError):
+    """The printed precision of the input cannot support the requested result."""
+
+
+class MaterialError(DemsplitError):
+    """A material is missing or has values outside the physical range."""
+
+
+class ScriptError(DemsplitError):
+    """The simulator's input script cannot be understood."""
+
+
+class UnsupportedModelError(ScriptError):
+    """The run uses a contact model demsplit does not implement."""
+
+
+class ContactError(DemsplitError):
+    """A contact is physically or logically inconsistent (e.g. two rigid bodies,
+    an unknown particle id, a contact listed twice)."""
+
+
+class StoreError(DemsplitError):
+    """A result file cannot be written, read or resumed."""

@@ -1,0 +1,160 @@
+"""The canonical in-memory form of one timestep: :class:`Frame` and :class:`Box`.
+
+A frame is the unit of memory: readers yield one at a time. Tables are plain
+``dict[str, numpy.ndarray]`` (structure of arrays; float64 for reals, int64 for
+ids, int32 for types); DataFrames are only built at the user-facing edges.
+
+``particles`` columns
+    ``id`` (int64), ``type`` (int32), ``x y z`` (m), ``radius`` (m);
+    optional ``mass`` (kg), ``vx vy vz`` (m/s), ``fx fy fz`` (N).
+
+``contacts`` columns (one row per physical contact, never twice)
+    ``id1 id2`` (int64; for a wall contact ``id1`` is the particle and ``id2``
+    is -1), ``wall`` (int64, -1 for particle-particle, else an index into
+    ``Scene.walls``), ``delta`` (m, overlap), ``nx ny nz`` (unit normal from
+    body 1 to body 2), ``x1 y1 z1`` (m, centre of body 1 in the frame of the
+    normal, i.e. consistent with ``delta`` and ``n``), ``r1 r2`` (m, radii the
+    contact law uses; ``inf`` for a plane).
+
+    Optional, used when present: ``type1 type2`` (material types of the two
+    bodies; a reader that knows them sets them, otherwise they come from the
+    particles table and the wall list), ``m1 m2`` (kg), ``fn`` (N, elastic
+    normal force), ``ftx fty ftz`` (N, elastic tangential force), ``shearx
+    sheary shearz`` (m, LIGGGHTS tangential spring history), ``kn ks kno kso``
+    (stiffnesses the simulator stored), ``cpx cpy cpz`` (m, the simulator's own
+    contact point).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+Table = dict[str, np.ndarray]
+
+PARTICLE_REQUIRED = ("id", "type", "x", "y", "z", "radius")
+CONTACT_REQUIRED = ("id1", "id2", "wall", "delta", "nx", "ny", "nz", "x1", "y1", "z1", "r1", "r2")
+
+_INT_COLUMNS = {"id": np.int64, "id1": np.int64, "id2": np.int64, "wall": np.int64,
+                "type": np.int32, "type1": np.int32, "type2": np.int32}
+
+
+def as_column(name: str, values: np.ndarray | list | float) -> np.ndarray:
+    """Return ``values`` as the canonical dtype of column ``name``.
+
+    Ids become int64, types int32, everything else float64 (float32 input is
+    upcast before any arithmetic).
+    """
+    return np.asarray(values, dtype=_INT_COLUMNS.get(name, np.float64))
+
+
+def table_length(table: Table) -> int:
+    """Number of rows of a table (0 for an empty table)."""
+    for col in table.values():
+        return len(col)
+    return 0
+
+
+def take_rows(table: Table, rows: np.ndarray) -> Table:
+    """The rows ``rows`` (an index or boolean mask) of every column."""
+    return {name: col[rows] for name, col in table.items()}
+
+
+@dataclass
+class Box:
+    """Simulation box: bounds (m), periodicity per axis and triclinic tilt.
+
+    ``tilt`` holds LAMMPS's ``xy xz yz``; the periodic minimum image below is
+    exact for orthogonal boxes and applies the tilt in the LAMMPS order (z, then
+    y, then x) for triclinic ones.
+    """
+
+    lo: np.ndarray
+    hi: np.ndarray
+    periodic: tuple[bool, bool, bool] = (False, False, False)
+    tilt: np.ndarray = field(default_factory=lambda: np.zeros(3))
+
+    def __post_init__(self) -> None:
+        self.lo = np.asarray(self.lo, dtype=np.float64)
+        self.hi = np.asarray(self.hi, dtype=np.float64)
+        self.tilt = np.asarray(self.tilt, dtype=np.float64)
+        self.periodic = tuple(bool(p) for p in self.periodic)
+
+    @property
+    def lengths(self) -> np.ndarray:
+        """Edge lengths (m)."""
+        return self.hi - self.lo
+
+    @property
+    def any_periodic(self) -> bool:
+        return any(self.periodic)
+
+    def minimum_image(self, d: np.ndarray) -> np.ndarray:
+        """Minimum-image version of difference vectors ``d`` (shape (n, 3), m)."""
+        d = np.array(d, dtype=np.float64, copy=True)
+        L = self.lengths
+        xy, xz, yz = self.tilt
+        if self.periodic[2]:
+            k = np.rint(d[:, 2] / L[2])
+            d[:, 2] -= k * L[2]
+            d[:, 1] -= k * yz
+            d[:, 0] -= k * xz
+        if self.periodic[1]:
+            k = np.rint(d[:, 1] / L[1])
+            d[:, 1] -= k * L[1]
+            d[:, 0] -= k * xy
+        if self.periodic[0]:
+            k = np.rint(d[:, 0] / L[0])
+            d[:, 0] -= k * L[0]
+        return d
+
+    def wrap(self, x: np.ndarray) -> np.ndarray:
+        """Positions ``x`` (shape (n, 3), m) wrapped into the box along periodic
+        axes (orthogonal boxes; tilted boxes wrap in the same LAMMPS order)."""
+        x = np.array(x, dtype=np.float64, copy=True)
+        L = self.lengths
+        xy, xz, yz = self.tilt
+        if self.periodic[2]:
+            k = np.floor((x[:, 2] - self.lo[2]) / L[2])
+            x[:, 2] -= k * L[2]
+            x[:, 1] -= k * yz
+            x[:, 0] -= k * xz
+        if self.periodic[1]:
+            k = np.floor((x[:, 1] - self.lo[1]) / L[1])
+            x[:, 1] -= k * L[1]
+            x[:, 0] -= k * xy
+        if self.periodic[0]:
+            k = np.floor((x[:, 0] - self.lo[0]) / L[0])
+            x[:, 0] -= k * L[0]
+        return x
+
+
+@dataclass
+class Frame:
+    """One timestep of a run.
+
+    ``overlap_source`` says where ``contacts['delta']`` came from (e.g.
+    ``"dumped delta"``, ``"positions, full precision"``) and
+    ``overlap_error`` is the per-contact bound on the relative error of
+    ``delta`` that source implies (``None`` when it is at double precision).
+    ``notes`` collects what the reader could not provide and why.
+    """
+
+    step: int
+    particles: Table
+    contacts: Table
+    box: Box | None = None
+    time: float | None = None
+    source: tuple[str, ...] = ()
+    overlap_source: str = ""
+    overlap_error: np.ndarray | None = None
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def n_particles(self) -> int:
+        return table_length(self.particles)
+
+    @property
+    def n_contacts(self) -> int:
+        return table_length(self.contacts)

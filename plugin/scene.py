@@ -1,0 +1,173 @@
+"""What a run is made of: materials, contact model, walls.
+
+A :class:`Scene` is built from the LIGGGHTS input script
+(:func:`demsplit.readers.liggghts_script.read_script`), from a YADE snapshot's
+metadata, or given explicitly. Materials are keyed by an integer *type*: the
+LIGGGHTS atom type (walls use their ``type T``), or the YADE material id.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .errors import MaterialError, UnsupportedModelError
+
+NORMAL_MODELS = ("hertz", "hooke", "linear", "power")
+"""Normal laws: ``hertz`` (LIGGGHTS model hertz, YADE Hertz-Mindlin),
+``hooke`` (LIGGGHTS model hooke, kn from characteristicVelocity),
+``linear`` (a spring whose stiffness the simulator stored per contact, YADE
+CundallStrack), ``power`` (F = k delta^n, params ``k``, ``n``)."""
+
+TANGENTIAL_MODELS = ("history", "incremental", "none")
+"""Tangential laws: ``history`` (LIGGGHTS tangential history: spring
+displacement ``shear`` and kt built by the normal model), ``incremental``
+(YADE: elastic shear force and its stiffness stored per contact), ``none``
+(no tangential elastic energy)."""
+
+
+@dataclass(frozen=True)
+class Material:
+    """Elastic constants of one material.
+
+    E : Young's modulus (Pa); ``math.inf`` makes the body rigid.
+    nu : Poisson's ratio, -1 < nu <= 0.5.
+    """
+
+    E: float
+    nu: float
+
+    def __post_init__(self) -> None:
+        if not (self.E > 0):  # also rejects NaN
+            raise MaterialError(
+                f"Young's modulus must be > 0 (or inf for a rigid body), got E = {self.E!r}.",
+                fix="correct youngsModulus in the input script or the --material option.",
+            )
+        if not (-1.0 < self.nu <= 0.5):
+            raise MaterialError(
+                f"Poisson's ratio must lie in (-1, 0.5], got nu = {self.nu!r}.",
+                fix="correct poissonsRatio in the input script or the --material option.",
+            )
+
+    @property
+    def rigid(self) -> bool:
+        return math.isinf(self.E)
+
+
+@dataclass(frozen=True)
+class ContactModel:
+    """The contact law the run used.
+
+    ``params`` holds model constants: ``characteristic_velocity`` (m/s, hooke),
+    ``kt_to_kn`` (kt/kn for hooke; 1, or 2/7 with LIGGGHTS ``ktToKnUser on``),
+    ``k`` and ``n`` (power law).
+    """
+
+    normal: str = "hertz"
+    tangential: str = "history"
+    params: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.normal not in NORMAL_MODELS:
+            raise UnsupportedModelError(
+                f"normal contact model {self.normal!r} is not supported (supported: {', '.join(NORMAL_MODELS)}).",
+                fix="use a run made with a supported model, or describe the model explicitly.",
+            )
+        if self.tangential not in TANGENTIAL_MODELS:
+            raise UnsupportedModelError(
+                f"tangential contact model {self.tangential!r} is not supported "
+                f"(supported: {', '.join(TANGENTIAL_MODELS)}).",
+                fix="use a run made with a supported model, or describe the model explicitly.",
+            )
+
+
+WALL_KINDS = ("plane", "cylinder", "mesh", "yade_wall", "facet", "box")
+
+
+@dataclass(frozen=True)
+class Wall:
+    """A body that is not a particle.
+
+    kind : ``plane`` and ``cylinder`` (LIGGGHTS primitive walls, rebuilt from
+        positions), ``mesh`` (LIGGGHTS mesh, contacts from the wall dump),
+        ``yade_wall``, ``facet``, ``box`` (YADE bodies).
+    type : material type of the wall.
+    axis : 0, 1, 2 for x, y, z (plane normal, cylinder axis).
+    position : plane coordinate along ``axis`` (m).
+    radius : cylinder radius (m).
+    center : cylinder centre in the two other axes, in LIGGGHTS's cyclic order
+        (x: (y, z); y: (z, x); z: (x, y)) (m).
+    model : the wall's own contact model when it differs from the pair model.
+    """
+
+    name: str
+    kind: str
+    type: int
+    axis: int = 2
+    position: float = 0.0
+    radius: float = 0.0
+    center: tuple[float, float] = (0.0, 0.0)
+    model: ContactModel | None = None
+
+
+@dataclass
+class Scene:
+    """Materials per type, the contact model and the walls of a run."""
+
+    materials: dict[int, Material]
+    model: ContactModel = field(default_factory=ContactModel)
+    walls: list[Wall] = field(default_factory=list)
+    units: str = "si"
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        if self.units != "si":
+            raise UnsupportedModelError(
+                f"units {self.units!r} are not supported; demsplit works in SI.",
+                fix="run the simulation with 'units si'.",
+            )
+        self._table_cache: tuple[np.ndarray, np.ndarray] | None = None
+
+    @property
+    def single_material(self) -> bool:
+        """True when every type (walls included) has the same E and nu, so
+        every share is exactly 1/2 and no per-contact lookup is needed."""
+        return len(set(self.materials.values())) == 1
+
+    def material_tables(self) -> tuple[np.ndarray, np.ndarray]:
+        """Dense lookup tables ``E[type]``, ``nu[type]`` (NaN where no material)."""
+        if self._table_cache is None:
+            n = max(self.materials, default=-1) + 1
+            E = np.full(n, np.nan)
+            nu = np.full(n, np.nan)
+            for t, m in self.materials.items():
+                if t < 0:
+                    raise MaterialError(f"material type must be >= 0, got {t}.")
+                E[t], nu[t] = m.E, m.nu
+            self._table_cache = (E, nu)
+        return self._table_cache
+
+    def lookup(self, types: np.ndarray, *, what: str = "particle") -> tuple[np.ndarray, np.ndarray]:
+        """E (Pa) and nu for each entry of ``types``; a type with no material is
+        a :class:`MaterialError` that lists the missing types."""
+        E_tab, nu_tab = self.material_tables()
+        types = np.asarray(types, dtype=np.int64)
+        inside = (types >= 0) & (types < len(E_tab))
+        bad = ~inside
+        if inside.any():
+            bad[inside] = np.isnan(E_tab[types[inside]])
+        if bad.any():
+            missing = sorted(set(np.unique(types[bad]).tolist()))
+            raise MaterialError(
+                f"{what} type(s) {missing} have no material "
+                f"(materials are defined for types {sorted(self.materials)}).",
+                fix="define youngsModulus and poissonsRatio for every type in the input script, "
+                "or pass --material TYPE:E:NU.",
+            )
+        return E_tab[types], nu_tab[types]
+
+    def wall_types(self) -> np.ndarray:
+        """Material type of each wall, indexed like ``walls``."""
+        return np.array([w.type for w in self.walls], dtype=np.int64)

@@ -1,0 +1,43 @@
+"""Shared test fixtures.
+
+Simulator tests (Debian's ``liggghts``, ``yade``) skip with a stated reason when
+the program is absent, and fail instead when ``DEMSPLIT_REQUIRE_SIMULATORS=1``
+(as ``.ci/run`` sets after installing them).
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parent.parent
+SAMPLES = REPO / "sample_dumps"
+
+
+def require_program(name: str) -> str:
+    """Path of program ``name``; skip (or fail under DEMSPLIT_REQUIRE_SIMULATORS=1) if absent."""
+    path = shutil.which(name)
+    if path is None:
+        reason = f"{name} is not installed (apt-get install {name.split('-')[0]})"
+        if os.environ.get("DEMSPLIT_REQUIRE_SIMULATORS") == "1":
+            pytest.fail(f"DEMSPLIT_REQUIRE_SIMULATORS=1 but {reason}")
+        pytest.skip(reason)
+    return path
+
+
+@pytest.fixture
+def liggghts() -> str:
+    return require_program("liggghts")
+
+
+@pytest.fixture
+def yade() -> str:
+    return require_program("yade")
+
+
+@pytest.fixture
+def samples() -> Path:
+    return SAMPLES
