@@ -1,0 +1,390 @@
+"""The YADE side of demsplit: a full-precision snapshot exporter that runs
+inside a YADE script.
+
+Use it from a ``PyRunner`` placed between ``InteractionLoop`` and
+``NewtonIntegrator``, so that geometry, forces and positions are of the same
+instant (a PyRunner at the end of ``O.engines`` sees positions already moved
+to t + dt)::
+
+    import site; site.addsitedir("<site-packages of the Python where demsplit is installed>")
+    import demsplit.yade
+    O.engines = [ForceResetter(), InsertionSortCollider([...]),
+                 InteractionLoop([...], [...], [...]),
+                 PyRunner(command='demsplit.yade.snapshot("run.h5")', iterPeriod=1000),
+                 NewtonIntegrator(...)]
+
+Each call appends one snapshot (bodies, real interactions, the Ip2/Law2
+functors and their attributes, the periodic cell, ``O.energy`` and the laws'
+own elastic energies for validation) to one file. The file is HDF5 when
+``h5py`` is importable, otherwise an append-only stream of ``.npy`` records
+that needs nothing but numpy; :func:`demsplit.readers.yade_snapshot.open_yade_snapshot`
+reads both. Reals are stored as float64; in high-precision builds (mpmath
+scalars) ``penetrationDepth`` is also stored as decimal strings at the build's
+full precision.
+
+This module imports only numpy (and h5py lazily): it must import inside
+YADE's own Python, with Debian's numpy. ``yade`` itself is imported only by
+:func:`snapshot` and :func:`collect`.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import zlib
+from pathlib import Path
+
+import numpy as np
+
+from .errors import InputFormatError, TruncatedFileError
+
+FORMAT_NAME = "demsplit-yade-snapshot"
+FORMAT_VERSION = 1
+
+HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+NPY_STREAM_MAGIC = b"DEMSPLIT-YADE-SNAPSHOT npy-stream v1\n"
+"""First line of the numpy-only format. The rest of the file is a sequence of
+records ``b"DSREC <16-digit payload length>\\n" payload b"DSEND <8-hex crc32>\\n"``;
+the payload is ``np.save`` of the UTF-8 JSON metadata (a uint8 array) followed
+by ``np.save`` of every column listed in ``meta["columns"]``, in that order."""
+RECORD_HEAD = 6 + 16 + 1
+RECORD_TAIL = 6 + 8 + 1
+
+SHAPE_KINDS = {"Sphere": "sphere", "Wall": "wall", "Facet": "facet", "Box": "box", "Clump": "clump"}
+"""YADE shape class -> the ``kind`` column of the bodies table (else ``other``)."""
+
+MINDLIN_LAW = "Law2_ScGeom_MindlinPhys_Mindlin"
+CUNDALL_LAW = "Law2_ScGeom_FrictPhys_CundallStrack"
+
+
+# --------------------------------------------------------------------------
+# Collecting the state of a running YADE simulation
+# --------------------------------------------------------------------------
+
+def _plain(value):
+    """A JSON-able copy of a YADE attribute value: mpf -> float, vectors,
+    matrices and quaternions -> lists, anything else unknown -> its str."""
+    if value is None or isinstance(value, (bool, int, str)):
+        return value
+    if isinstance(value, float):
+        return value
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if type(value).__name__ == "mpf":
+        return float(value)
+    if type(value).__name__.startswith(("Vector", "Matrix", "Quaternion")):
+        try:
+            return [_plain(v) for v in value]
+        except TypeError:
+            pass
+    if hasattr(value, "dict") and callable(value.dict):  # a YADE Serializable
+        return {"class": type(value).__name__, **_plain(value.dict())}
+    return str(value)
+
+
+def _functor_list(functors) -> list[dict]:
+    return [{"class": type(f).__name__, "attrs": _plain(f.dict())} for f in functors]
+
+
+def _engines(O) -> tuple[list[dict], dict]:
+    """Engine order (class names, PyRunner commands) and the functors of the
+    InteractionLoop(s)."""
+    order, functors = [], {"geom": [], "phys": [], "law": []}
+    for e in O.engines:
+        entry = {"class": type(e).__name__}
+        if entry["class"] == "PyRunner":
+            entry["command"] = e.command
+        if entry["class"] == "InteractionLoop":
+            functors["geom"] += _functor_list(e.geomDispatcher.functors)
+            functors["phys"] += _functor_list(e.physDispatcher.functors)
+            functors["law"] += _functor_list(e.lawDispatcher.functors)
+        order.append(entry)
+    return order, functors
+
+
+def _law_energies(O) -> dict:
+    """The laws' own elastic energies (J), for validation: Mindlin's
+    ``normElastEnergy()`` and CundallStrack's ``elasticEnergy()``."""
+    out = {}
+    for e in O.engines:
+        if type(e).__name__ != "InteractionLoop":
+            continue
+        for f in e.lawDispatcher.functors:
+            name = type(f).__name__
+            if name == MINDLIN_LAW:
+                out["mindlin_normElastEnergy"] = float(f.normElastEnergy())
+            elif name == CUNDALL_LAW:
+                out["cundallstrack_elasticEnergy"] = float(f.elasticEnergy())
+    return out
+
+
+def _vec(v) -> tuple[float, ...]:
+    return tuple(float(x) for x in v)
+
+
+def _body_table(O) -> dict[str, np.ndarray]:
+    """One row per body. Positions are YADE's (unwrapped) ``state.pos`` and,
+    for periodic runs, ``O.cell.wrap(pos)``; facet vertices are global."""
+    periodic = bool(O.periodic)
+    nan3 = (np.nan,) * 3
+    rows = []
+    for b in O.bodies:
+        if b is None:  # erased body: its id stays free
+            continue
+        shape_class = type(b.shape).__name__ if b.shape is not None else "None"
+        kind = SHAPE_KINDS.get(shape_class, "other")
+        pos = b.state.pos
+        mat = b.material
+        radius = float(b.shape.radius) if kind == "sphere" else np.nan
+        axis, sense = (int(b.shape.axis), int(b.shape.sense)) if kind == "wall" else (-1, 0)
+        if kind == "facet":
+            verts = sum((_vec(pos + b.state.ori * v) for v in b.shape.vertices), ())
+        else:
+            verts = nan3 * 3
+        rows.append((
+            b.id, kind, shape_class, getattr(mat, "id", -1),
+            float(getattr(mat, "young", np.nan)), float(getattr(mat, "poisson", np.nan)),
+            float(getattr(mat, "density", np.nan)), radius,
+            *_vec(pos), *_vec(O.cell.wrap(pos) if periodic else pos),
+            *_vec(b.state.vel), float(b.state.mass), *_vec(b.state.ori),
+            b.clumpId, bool(b.dynamic), axis, sense,
+            *(_vec(b.shape.extents) if kind == "box" else nan3), *verts,
+        ))
+    cols = ("id kind shape_class material young poisson density radius x y z xw yw zw "
+            "vx vy vz mass qx qy qz qw clump dynamic wall_axis wall_sense ex ey ez "
+            "v0x v0y v0z v1x v1y v1z v2x v2y v2z").split()
+    data = list(zip(*rows)) if rows else [()] * len(cols)
+    dtypes = {"id": np.int64, "material": np.int64, "clump": np.int64, "dynamic": np.bool_,
+              "wall_axis": np.int8, "wall_sense": np.int8, "kind": "S8", "shape_class": "S32"}
+    return {c: np.asarray(d, dtype=dtypes.get(c, np.float64)) for c, d in zip(cols, data)}
+
+
+def _interaction_table(O, high_precision: bool) -> dict[str, np.ndarray]:
+    """One row per real interaction (``for i in O.interactions`` visits only
+    real ones), YADE's order of id1/id2 kept."""
+    rows, depth_text = [], []
+    nan = np.nan
+    for i in O.interactions:
+        g, p = i.geom, i.phys
+        d = g.penetrationDepth
+        rows.append((
+            i.id1, i.id2, type(g).__name__, type(p).__name__, float(d),
+            *_vec(g.normal), *_vec(g.contactPoint), float(g.refR1), float(g.refR2),
+            *_vec(p.normalForce), *_vec(p.shearForce), float(p.kn), float(p.ks),
+            float(getattr(p, "kno", nan)), float(getattr(p, "kso", nan)),
+            *(int(c) for c in i.cellDist), i.iterMadeReal,
+        ))
+        if high_precision:
+            depth_text.append(str(d))
+    cols = ("id1 id2 geom_class phys_class depth nx ny nz cpx cpy cpz refR1 refR2 "
+            "fnx fny fnz fsx fsy fsz kn ks kno kso cdx cdy cdz iter_made_real").split()
+    data = list(zip(*rows)) if rows else [()] * len(cols)
+    dtypes = {"id1": np.int64, "id2": np.int64, "cdx": np.int64, "cdy": np.int64, "cdz": np.int64,
+              "iter_made_real": np.int64, "geom_class": "S32", "phys_class": "S32"}
+    table = {c: np.asarray(d, dtype=dtypes.get(c, np.float64)) for c, d in zip(cols, data)}
+    if high_precision:
+        table["depth_text"] = np.asarray(depth_text, dtype=bytes) if depth_text else np.zeros(0, "S1")
+    return table
+
+
+def collect(O=None) -> tuple[dict, dict[str, dict[str, np.ndarray]]]:
+    """The current state of YADE's ``O`` as ``(meta, tables)``.
+
+    ``tables`` has ``bodies`` and ``interactions`` (column name -> array);
+    ``meta`` is JSON-able: iteration, time, dt, cell, materials, engines,
+    functors with their attributes, ``O.energy``, the laws' elastic energies,
+    interaction counts and the build's precision.
+    """
+    import yade
+    import yade.config
+
+    if O is None:
+        O = yade.Omega()
+    name = str(getattr(yade.config, "highPrecisionName", "PrecisionDouble"))
+    high_precision = name != "PrecisionDouble"
+    engines, functors = _engines(O)
+    n_potential = len(O.interactions)
+    n_real = O.interactions.countReal()
+    meta = {
+        "format": FORMAT_NAME,
+        "format_version": FORMAT_VERSION,
+        "yade_version": str(yade.config.version),
+        "precision_name": name,
+        "precision_decimal_places": int(getattr(yade.config, "highPrecisionDecimalPlaces", 15)),
+        "high_precision": high_precision,
+        "iter": int(O.iter),
+        "time": float(O.time),
+        "dt": float(O.dt),
+        "periodic": bool(O.periodic),
+        "hSize": _plain(O.cell.hSize) if O.periodic else None,
+        "materials": [{"class": type(m).__name__, **_plain(m.dict())} for m in O.materials],
+        "engines": engines,
+        "functors": functors,
+        "energy": {k: float(v) for k, v in O.energy.items()},
+        "track_energy": bool(O.trackEnergy),
+        "law_energies": _law_energies(O),
+        "n_interactions_potential": n_potential,
+        "n_interactions_real": n_real,
+    }
+    tables = {"bodies": _body_table(O), "interactions": _interaction_table(O, high_precision)}
+    if len(tables["interactions"]["id1"]) != n_real:
+        raise InputFormatError(
+            f"iterating O.interactions gave {len(tables['interactions']['id1'])} interactions "
+            f"but O.interactions.countReal() is {n_real}.",
+            step=int(O.iter), fix="report this YADE version to the demsplit developers.")
+    return meta, tables
+
+
+# --------------------------------------------------------------------------
+# Writing: one snapshot per call, appended atomically
+# --------------------------------------------------------------------------
+
+def h5py_or_none():
+    """The h5py module, or None when it cannot be imported (Debian's YADE
+    Python has no h5py unless python3-h5py is installed)."""
+    try:
+        import h5py
+    except Exception:  # ImportError, or an ABI mismatch with this numpy
+        return None
+    return h5py
+
+
+def sniff_format(path: str | Path) -> str | None:
+    """``"hdf5"``, ``"npy"`` or None (missing or empty file); anything else
+    raises :class:`InputFormatError`."""
+    path = Path(path)
+    if not path.exists() or path.stat().st_size == 0:
+        return None
+    with open(path, "rb") as f:
+        head = f.read(len(NPY_STREAM_MAGIC))
+    if head.startswith(HDF5_SIGNATURE):
+        return "hdf5"
+    if head == NPY_STREAM_MAGIC:
+        return "npy"
+    raise InputFormatError(
+        f"not a demsplit YADE snapshot file: it starts with {head[:16]!r}, expected the HDF5 "
+        f"signature or {NPY_STREAM_MAGIC.strip()!r}.",
+        file=path, fix="give the file written by demsplit.yade.snapshot().")
+
+
+def snapshot(path: str | Path, *, format: str = "auto", O=None) -> int:
+    """Append a snapshot of the running simulation to ``path``; return its
+    index (0 for the first).
+
+    format
+        ``"auto"`` (default): continue the existing file in its own format;
+        for a new file, HDF5 when h5py is importable, else the npy stream.
+        ``"hdf5"`` or ``"npy"`` force a format (an existing file must match).
+    """
+    meta, tables = collect(O)
+    return write_snapshot(path, meta, tables, format=format)
+
+
+def write_snapshot(path: str | Path, meta: dict, tables: dict[str, dict[str, np.ndarray]],
+                   *, format: str = "auto") -> int:
+    """Append one snapshot ``(meta, tables)`` to ``path`` (see :func:`snapshot`)."""
+    path = Path(path)
+    existing = sniff_format(path)
+    if format == "auto":
+        format = existing or ("hdf5" if h5py_or_none() is not None else "npy")
+    if format not in ("hdf5", "npy"):
+        raise ValueError(f"format must be 'auto', 'hdf5' or 'npy', got {format!r}")
+    if existing is not None and existing != format:
+        raise InputFormatError(
+            f"the file is in the {existing} snapshot format; cannot append a {format} snapshot.",
+            file=path, fix="use a new file name or format='auto'.")
+    if format == "hdf5":
+        return _write_hdf5(path, meta, tables)
+    return _write_npy(path, meta, tables)
+
+
+def _write_hdf5(path: Path, meta: dict, tables: dict) -> int:
+    """Group ``/snapshots/NNNNNN`` with a subgroup per table and a dataset per
+    column; attribute ``complete`` is set last, so a snapshot cut short (crash,
+    full disk) is recognisable. The file is opened and closed per snapshot."""
+    h5py = h5py_or_none()
+    if h5py is None:
+        raise InputFormatError("h5py cannot be imported in this Python.", file=path,
+                               fix="continue this run in a new file with format='npy'.")
+    with h5py.File(path, "a") as f:
+        f.attrs["format"] = FORMAT_NAME
+        f.attrs["format_version"] = FORMAT_VERSION
+        snaps = f.require_group("snapshots")
+        for name in snaps:
+            if not snaps[name].attrs.get("complete", False):
+                raise TruncatedFileError(
+                    f"snapshot group {name!r} is incomplete (a previous write was cut short).",
+                    file=path, fix="start a new snapshot file; the reader reports the broken snapshot.")
+        index = len(snaps)
+        g = snaps.create_group(f"{index:06d}")
+        g.attrs["iter"] = meta["iter"]
+        g.attrs["time"] = meta["time"]
+        g.attrs["meta_json"] = json.dumps(meta)
+        for tname, table in tables.items():
+            tg = g.create_group(tname)
+            for cname, col in table.items():
+                tg.create_dataset(cname, data=col)
+        f.flush()
+        g.attrs["complete"] = True
+    return index
+
+
+def _npy_payload(meta: dict, tables: dict) -> bytes:
+    columns = [[t, c] for t, table in tables.items() for c in table]
+    buf = io.BytesIO()
+    header = json.dumps({**meta, "columns": columns}).encode()
+    np.save(buf, np.frombuffer(header, dtype=np.uint8), allow_pickle=False)
+    for t, c in columns:
+        np.save(buf, np.ascontiguousarray(tables[t][c]), allow_pickle=False)
+    return buf.getvalue()
+
+
+def npy_records(path: Path) -> tuple[list[tuple[int, int]], str | None]:
+    """Scan a npy-stream file: ``([(payload offset, payload length), ...],
+    problem)`` where ``problem`` describes a cut-short or damaged last record
+    (None when the file ends cleanly after a complete record)."""
+    size = path.stat().st_size
+    records = []
+    with open(path, "rb") as f:
+        offset = len(NPY_STREAM_MAGIC)
+        while offset < size:
+            f.seek(offset)
+            head = f.read(RECORD_HEAD)
+            k = len(records)
+            if len(head) < RECORD_HEAD or not head.startswith(b"DSREC ") or head[-1:] != b"\n":
+                return records, f"snapshot {k} at byte {offset}: record header is cut short or damaged ({head!r})"
+            length = int(head[6:22])
+            end = offset + RECORD_HEAD + length
+            f.seek(end)
+            tail = f.read(RECORD_TAIL)
+            if len(tail) < RECORD_TAIL or not tail.startswith(b"DSEND ") or tail[-1:] != b"\n":
+                return records, (f"snapshot {k} at byte {offset}: declares {length} bytes but the file "
+                                 f"ends or is damaged before its end marker")
+            records.append((offset + RECORD_HEAD, length))
+            offset = end + RECORD_TAIL
+    return records, None
+
+
+def _write_npy(path: Path, meta: dict, tables: dict) -> int:
+    """Append one record, built in memory and written with one ``write`` and
+    an ``fsync``; the length prefix and crc32 end marker make a record cut
+    short detectable."""
+    if path.exists() and path.stat().st_size > 0:
+        records, problem = npy_records(path)
+        if problem:
+            raise TruncatedFileError(f"cannot append: {problem}.", file=path,
+                                     fix="start a new snapshot file; the reader reports the broken snapshot.")
+        index, prefix = len(records), b""
+    else:
+        index, prefix = 0, NPY_STREAM_MAGIC
+    payload = _npy_payload(meta, tables)
+    record = (prefix + b"DSREC %016d\n" % len(payload) + payload
+              + b"DSEND %08x\n" % (zlib.crc32(payload) & 0xFFFFFFFF))
+    with open(path, "ab") as f:
+        f.write(record)
+        f.flush()
+        os.fsync(f.fileno())
+    return index

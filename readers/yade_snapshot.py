@@ -1,0 +1,384 @@
+"""Reader of the snapshot files written by :func:`demsplit.yade.snapshot`.
+
+``open_yade_snapshot(path)`` returns a :class:`YadeSnapshotRun`: its
+``.scene`` (materials keyed by YADE material id, the contact model from the
+Law2 functor, the non-sphere bodies as walls) and, when iterated, one
+:class:`demsplit.frame.Frame` per snapshot, read one at a time. Both storage
+formats (HDF5, numpy-only record stream) are read by the same code.
+
+Contacts follow :mod:`demsplit.frame`: ``id1`` is always a particle (sphere).
+YADE puts the wall, facet or box first, so such rows are swapped: the normal
+and the shear force change sign and refR1/refR2 trade places. ``delta`` is
+YADE's ``penetrationDepth``; ``r1 r2`` are its ``refR1 refR2`` (walls and boxes
+act as a sphere of the particle's radius, facets of twice it, as YADE built
+kno) unless ``plane_as_plane=True``.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import zlib
+from collections.abc import Iterator
+from pathlib import Path
+
+import numpy as np
+
+from demsplit.errors import (ContactError, InputFormatError, MaterialError, TruncatedFileError,
+                             UnsupportedModelError)
+from demsplit.frame import Box, Frame, Table
+from demsplit.scene import ContactModel, Material, Scene, Wall
+from demsplit.yade import (CUNDALL_LAW, FORMAT_NAME, FORMAT_VERSION, MINDLIN_LAW, NPY_STREAM_MAGIC,
+                           RECORD_TAIL, npy_records, sniff_format)
+
+LAW_MODELS = {
+    MINDLIN_LAW: ContactModel(normal="hertz", tangential="incremental"),
+    CUNDALL_LAW: ContactModel(normal="linear", tangential="incremental"),
+}
+"""YADE Law2 functor -> the demsplit contact model."""
+
+WALL_KINDS = {"wall": "yade_wall", "facet": "facet", "box": "box"}
+"""Body kind in the snapshot -> :class:`demsplit.scene.Wall` kind."""
+
+RawSnapshot = tuple[dict, dict[str, Table]]
+
+
+# --------------------------------------------------------------------------
+# Storage: both formats behind count / meta(k) / snapshot(k)
+# --------------------------------------------------------------------------
+
+class _Hdf5Store:
+    def __init__(self, path: Path) -> None:
+        import h5py
+
+        self.path = path
+        self._file = h5py.File(path, "r")
+        if self._file.attrs.get("format") != FORMAT_NAME:
+            raise InputFormatError(
+                f"HDF5 file without the {FORMAT_NAME!r} format attribute "
+                f"(found {self._file.attrs.get('format')!r}).",
+                file=path, fix="give the file written by demsplit.yade.snapshot().")
+        self._names = sorted(self._file["snapshots"]) if "snapshots" in self._file else []
+
+    def __len__(self) -> int:
+        return len(self._names)
+
+    def problem(self, k: int) -> str | None:
+        g = self._file["snapshots"][self._names[k]]
+        if not g.attrs.get("complete", False):
+            return f"snapshot {k} (group /snapshots/{self._names[k]}) was cut short: it has no 'complete' mark"
+        return None
+
+    def meta(self, k: int) -> dict:
+        return json.loads(self._file["snapshots"][self._names[k]].attrs["meta_json"])
+
+    def snapshot(self, k: int) -> RawSnapshot:
+        g = self._file["snapshots"][self._names[k]]
+        tables = {t: {c: g[t][c][()] for c in g[t]} for t in ("bodies", "interactions")}
+        return self.meta(k), tables
+
+    def close(self) -> None:
+        self._file.close()
+
+
+class _NpyStore:
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self._records, self._problem = npy_records(path)
+
+    def __len__(self) -> int:
+        return len(self._records) + (self._problem is not None)
+
+    def problem(self, k: int) -> str | None:
+        return self._problem if k == len(self._records) else None
+
+    def _payload(self, k: int) -> bytes:
+        offset, length = self._records[k]
+        with open(self.path, "rb") as f:
+            f.seek(offset)
+            payload = f.read(length)
+            tail = f.read(RECORD_TAIL)
+        if int(tail[6:14], 16) != zlib.crc32(payload) & 0xFFFFFFFF:
+            raise InputFormatError(f"snapshot {k} at byte {offset}: crc32 mismatch, the record is damaged.",
+                                   file=self.path, fix="rewrite the snapshot file (rerun the simulation).")
+        return payload
+
+    def meta(self, k: int) -> dict:
+        return json.loads(np.load(io.BytesIO(self._payload(k)), allow_pickle=False).tobytes())
+
+    def snapshot(self, k: int) -> RawSnapshot:
+        buf = io.BytesIO(self._payload(k))
+        meta = json.loads(np.load(buf, allow_pickle=False).tobytes())
+        tables: dict[str, Table] = {"bodies": {}, "interactions": {}}
+        for t, c in meta.pop("columns"):
+            tables.setdefault(t, {})[c] = np.load(buf, allow_pickle=False)
+        return meta, tables
+
+    def close(self) -> None:
+        pass
+
+
+def _open_store(path: Path):
+    fmt = sniff_format(path)
+    if fmt is None:
+        raise InputFormatError("the snapshot file is missing or empty.", file=path,
+                               fix="check the path; the PyRunner calling demsplit.yade.snapshot() may not have run.")
+    return _Hdf5Store(path) if fmt == "hdf5" else _NpyStore(path)
+
+
+# --------------------------------------------------------------------------
+# Scene and frames
+# --------------------------------------------------------------------------
+
+def _text(col: np.ndarray) -> np.ndarray:
+    return col.astype(str)
+
+
+def scene_from_snapshot(meta: dict, bodies: Table, *, path: Path, step: int | None = None) -> Scene:
+    """Materials (keyed by YADE material id), contact model and walls of a snapshot."""
+    laws = [f["class"] for f in meta["functors"]["law"]]
+    known = [law for law in laws if law in LAW_MODELS]
+    if len(known) != 1 or len(laws) != 1:
+        raise UnsupportedModelError(
+            f"the InteractionLoop has Law2 functor(s) {laws}; demsplit reads runs with exactly one of "
+            f"{sorted(LAW_MODELS)}.", file=path, step=step,
+            fix="use Law2_ScGeom_MindlinPhys_Mindlin or Law2_ScGeom_FrictPhys_CundallStrack.")
+    materials = {}
+    for m in meta["materials"]:
+        if "young" not in m or "poisson" not in m:
+            continue
+        try:
+            materials[int(m["id"])] = Material(E=float(m["young"]), nu=float(m["poisson"]))
+        except MaterialError as err:
+            raise MaterialError(
+                f"YADE material {m['id']} ({m.get('label', '')!r}): {err.message}", file=path, step=step,
+                fix="CundallStrack's 'poisson' is ks/kn, not a Poisson ratio; demsplit needs it in (-1, 0.5].",
+            ) from None
+    kinds = _text(bodies["kind"])
+    walls = []
+    for row in np.flatnonzero(np.isin(kinds, list(WALL_KINDS))):
+        kind = WALL_KINDS[kinds[row]]
+        axis = int(bodies["wall_axis"][row]) if kind == "yade_wall" else 2
+        pos = (bodies["x"][row], bodies["y"][row], bodies["z"][row])[axis]
+        walls.append(Wall(name=f"body {int(bodies['id'][row])} ({kind})", kind=kind,
+                          type=int(bodies["material"][row]), axis=axis, position=float(pos)))
+    return Scene(materials=materials, model=LAW_MODELS[known[0]], walls=walls,
+                 source=f"{path} (YADE {meta.get('yade_version', '?')}, {meta.get('precision_name', '?')})")
+
+
+def _cell_box(meta: dict) -> Box | None:
+    """The periodic cell as a Box (origin 0, LAMMPS tilt from an upper-triangular hSize)."""
+    if not meta["periodic"]:
+        return None
+    h = np.asarray(meta["hSize"], dtype=np.float64).reshape(3, 3)
+    return Box(lo=np.zeros(3), hi=np.diag(h).copy(), periodic=(True, True, True),
+               tilt=np.array([h[0, 1], h[0, 2], h[1, 2]]))
+
+
+def _timing_note(meta: dict) -> str | None:
+    """Warn when no snapshot PyRunner sits between InteractionLoop and NewtonIntegrator."""
+    names = [e["class"] for e in meta["engines"]]
+    if "InteractionLoop" not in names or "NewtonIntegrator" not in names:
+        return None
+    lo, hi = names.index("InteractionLoop"), names.index("NewtonIntegrator")
+    if any("snapshot" in e.get("command", "") for e in meta["engines"][lo + 1:hi]):
+        return None
+    return ("no PyRunner calling demsplit.yade.snapshot sits between InteractionLoop and NewtonIntegrator: "
+            "positions (x1, contact point) may be one step ahead of delta and the normal")
+
+
+def frame_from_snapshot(meta: dict, tables: dict[str, Table], scene_walls: dict[int, int], *,
+                        path: Path, plane_as_plane: bool = False) -> tuple[Frame, np.ndarray]:
+    """One Frame from one raw snapshot, and the rows of the interactions table
+    that became contacts (to align per-interaction extras such as ``depth_text``)."""
+    step = int(meta["iter"])
+    bodies, inter = tables["bodies"], tables["interactions"]
+    kinds = _text(bodies["kind"])
+    ids = bodies["id"]
+    size = int(ids.max()) + 1 if len(ids) else 0
+    row_of = np.full(size, -1, dtype=np.int64)
+    row_of[ids] = np.arange(len(ids))
+    periodic = bool(meta["periodic"])
+
+    sphere = kinds == "sphere"
+    particles = {
+        "id": ids[sphere].astype(np.int64),
+        "type": bodies["material"][sphere].astype(np.int32),
+        "x": bodies["xw" if periodic else "x"][sphere], "y": bodies["yw" if periodic else "y"][sphere],
+        "z": bodies["zw" if periodic else "z"][sphere],
+        "radius": bodies["radius"][sphere],
+        "mass": bodies["mass"][sphere],
+        "vx": bodies["vx"][sphere], "vy": bodies["vy"][sphere], "vz": bodies["vz"][sphere],
+        "clump": bodies["clump"][sphere].astype(np.int64),
+    }
+
+    def rows(body_ids: np.ndarray, which: str) -> np.ndarray:
+        r = np.where((body_ids >= 0) & (body_ids < size), row_of[np.clip(body_ids, 0, max(size - 1, 0))], -1)
+        if (r < 0).any():
+            bad = int(body_ids[r < 0][0])
+            raise ContactError(f"interaction names body {bad} ({which}), which is not in the bodies table.",
+                               file=path, step=step, fix="rewrite the snapshot (the file is inconsistent).")
+        return r
+
+    ra, rb = rows(inter["id1"], "id1"), rows(inter["id2"], "id2")
+    sa, sb = kinds[ra] == "sphere", kinds[rb] == "sphere"
+    bad = ~(sa | sb) | np.isin(kinds[ra], ["other", "clump"]) | np.isin(kinds[rb], ["other", "clump"])
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise UnsupportedModelError(
+            f"{int(bad.sum())} interaction(s) involve no sphere or an unsupported shape, e.g. bodies "
+            f"{int(inter['id1'][i])} ({bodies['shape_class'][ra[i]].decode()}) and "
+            f"{int(inter['id2'][i])} ({bodies['shape_class'][rb[i]].decode()}).",
+            file=path, step=step, fix="demsplit reads sphere-sphere, sphere-Wall, sphere-Facet and sphere-Box contacts.")
+
+    # Body 2 sits at pos2 + hSize.cellDist in the frame of the normal.
+    shift = np.zeros((len(ra), 3))
+    if periodic:
+        h = np.asarray(meta["hSize"], dtype=np.float64).reshape(3, 3)
+        shift = np.stack([inter["cdx"], inter["cdy"], inter["cdz"]], axis=-1).astype(np.float64) @ h.T
+    pos = np.stack([bodies["x"], bodies["y"], bodies["z"]], axis=-1)
+    xa, xb = pos[ra], pos[rb] + shift
+
+    swap = ~sa  # YADE's body 1 is the wall/facet/box: the particle is body 2
+    sign = np.where(swap, -1.0, 1.0)
+    wall_of = np.full(size, -1, dtype=np.int64)
+    for body_id, index in scene_walls.items():
+        wall_of[body_id] = index
+    pair = sa & sb
+    id_a, id_b = inter["id1"], inter["id2"]
+    contacts = {
+        "id1": np.where(swap, id_b, id_a).astype(np.int64),
+        "id2": np.where(pair, id_b, -1).astype(np.int64),
+        "wall": np.where(pair, -1, wall_of[np.where(swap, id_a, id_b)]).astype(np.int64),
+        "delta": inter["depth"],
+        "nx": sign * inter["nx"], "ny": sign * inter["ny"], "nz": sign * inter["nz"],
+        "x1": np.where(swap, xb[:, 0], xa[:, 0]), "y1": np.where(swap, xb[:, 1], xa[:, 1]),
+        "z1": np.where(swap, xb[:, 2], xa[:, 2]),
+        "r1": np.where(swap, inter["refR2"], inter["refR1"]),
+        "r2": np.where(swap, inter["refR1"], inter["refR2"]),
+        "type1": bodies["material"][np.where(swap, rb, ra)].astype(np.int32),
+        "type2": bodies["material"][np.where(swap, ra, rb)].astype(np.int32),
+        "fn": np.sqrt(inter["fnx"] ** 2 + inter["fny"] ** 2 + inter["fnz"] ** 2),
+        "ftx": sign * inter["fsx"], "fty": sign * inter["fsy"], "ftz": sign * inter["fsz"],
+        "kn": inter["kn"], "ks": inter["ks"],
+        "cpx": inter["cpx"], "cpy": inter["cpy"], "cpz": inter["cpz"],
+    }
+    if np.isfinite(inter["kno"]).any():
+        contacts["kno"], contacts["kso"] = inter["kno"], inter["kso"]
+    if plane_as_plane:
+        contacts["r2"] = np.where(pair, contacts["r2"], np.inf)
+        contacts.pop("kno", None)
+
+    notes = [f"YADE {meta.get('yade_version', '?')} {meta.get('precision_name', '?')}"]
+    n_virtual = int(meta["n_interactions_potential"]) - int(meta["n_interactions_real"])
+    if n_virtual:
+        notes.append(f"{n_virtual} potential (non-real) interaction(s) not in the contacts table")
+    keep = inter["depth"] >= 0
+    if not keep.all():
+        notes.append(f"{int((~keep).sum())} real interaction(s) with penetrationDepth < 0 (neverErase) "
+                     "left out of the contacts table: they carry no elastic energy")
+        contacts = {c: v[keep] for c, v in contacts.items()}
+    timing = _timing_note(meta)
+    if timing:
+        notes.append(timing)
+    frame = Frame(step=step, particles=particles, contacts=contacts, box=_cell_box(meta),
+                  time=float(meta["time"]), source=(str(path),),
+                  overlap_source="YADE penetrationDepth (double)", overlap_error=None, notes=notes)
+    return frame, np.flatnonzero(keep)
+
+
+class YadeSnapshotRun:
+    """A snapshot file opened for reading: ``.scene``, ``len(run)``,
+    ``run.meta(k)`` (the snapshot's metadata: ``energy``, ``law_energies``,
+    functors, ...) and iteration over Frames, one snapshot at a time.
+
+    A snapshot that was cut short raises :class:`TruncatedFileError` when the
+    iteration reaches it (the complete ones before it are yielded).
+    """
+
+    def __init__(self, path: str | Path, *, plane_as_plane: bool = False) -> None:
+        self.path = Path(path)
+        self.plane_as_plane = plane_as_plane
+        self._store = _open_store(self.path)
+        if len(self._store) == 0:
+            raise InputFormatError("the snapshot file holds no snapshot.", file=self.path,
+                                   fix="run the simulation until the snapshot PyRunner has fired.")
+        meta, tables = self._read(0)
+        if int(meta.get("format_version", 0)) > FORMAT_VERSION:
+            raise InputFormatError(
+                f"snapshot format version {meta['format_version']} is newer than this reader ({FORMAT_VERSION}).",
+                file=self.path, fix="update demsplit.")
+        self.scene = scene_from_snapshot(meta, tables["bodies"], path=self.path, step=int(meta["iter"]))
+        kinds = _text(tables["bodies"]["kind"])
+        wall_ids = tables["bodies"]["id"][np.isin(kinds, list(WALL_KINDS))]
+        self._walls = {int(b): k for k, b in enumerate(wall_ids)}
+        self._wall_ids = wall_ids
+
+    def __len__(self) -> int:
+        return len(self._store)
+
+    def _check(self, k: int) -> None:
+        problem = self._store.problem(k)
+        if problem:
+            step = int(self._store.meta(k - 1)["iter"]) if k > 0 else None
+            raise TruncatedFileError(
+                f"{problem}; it is not read. {k} complete snapshot(s) precede it"
+                + (f" (the last at iteration {step})." if step is not None else "."),
+                file=self.path, fix="rerun or resume the simulation to rewrite the snapshot file; "
+                "the complete snapshots before it are read normally.")
+
+    def _read(self, k: int) -> RawSnapshot:
+        self._check(k)
+        return self._store.snapshot(k)
+
+    def meta(self, k: int) -> dict:
+        """Metadata of snapshot ``k`` without reading its tables."""
+        self._check(k)
+        return self._store.meta(k)
+
+    def frame(self, k: int) -> Frame:
+        return self._frame(*self._read(k))[0]
+
+    def _frame(self, meta: dict, tables: dict[str, Table]) -> tuple[Frame, np.ndarray]:
+        ids = tables["bodies"]["id"][np.isin(_text(tables["bodies"]["kind"]), list(WALL_KINDS))]
+        if not np.array_equal(ids, self._wall_ids):
+            raise InputFormatError(
+                f"the walls/facets/boxes changed (body ids {self._wall_ids.tolist()} in the first snapshot, "
+                f"{ids.tolist()} here).", file=self.path, step=int(meta["iter"]),
+                fix="write snapshots of runs whose non-sphere bodies stay the same to one file each.")
+        return frame_from_snapshot(meta, tables, self._walls, path=self.path, plane_as_plane=self.plane_as_plane)
+
+    def depth_text(self, k: int) -> np.ndarray | None:
+        """penetrationDepth of the contacts of frame ``k`` as decimal strings at
+        the build's full precision (high-precision builds only, else None)."""
+        meta, tables = self._read(k)
+        if "depth_text" not in tables["interactions"]:
+            return None
+        _, rows = self._frame(meta, tables)
+        return _text(tables["interactions"]["depth_text"][rows])
+
+    def __iter__(self) -> Iterator[Frame]:
+        for k in range(len(self)):
+            yield self.frame(k)
+
+    def close(self) -> None:
+        self._store.close()
+
+    def __enter__(self) -> "YadeSnapshotRun":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def open_yade_snapshot(path: str | Path, *, plane_as_plane: bool = False) -> YadeSnapshotRun:
+    """Open a file written by :func:`demsplit.yade.snapshot` (HDF5 or npy stream).
+
+    plane_as_plane
+        False (default): ``r1 r2`` are YADE's refR1/refR2 and ``kno`` is kept,
+        so the energy is the one YADE's forces imply (a Wall or Box acts as a
+        sphere of the particle's radius, a Facet as one of twice it). True:
+        ``r2 = inf`` for walls, facets and boxes and ``kno`` is dropped, so
+        Hertz is recomputed for a sphere on a plane (not what YADE computed).
+    """
+    return YadeSnapshotRun(path, plane_as_plane=plane_as_plane)
