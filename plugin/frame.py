@@ -31,6 +31,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .errors import ContactError, InputFormatError
+
 Table = dict[str, np.ndarray]
 
 PARTICLE_REQUIRED = ("id", "type", "x", "y", "z", "radius")
@@ -158,3 +160,63 @@ class Frame:
     @property
     def n_contacts(self) -> int:
         return table_length(self.contacts)
+
+
+class ParticleIndex:
+    """Maps particle ids to rows of a particles table (dense 0..n-1 index).
+
+    Uses a direct lookup array when ids are compact (the usual 1..N of
+    LIGGGHTS and 0..N-1 of YADE), binary search otherwise. Duplicate ids are
+    an error: one id must mean one particle.
+    """
+
+    def __init__(self, ids: np.ndarray, *, file: str | None = None, step: int | None = None) -> None:
+        ids = np.asarray(ids, dtype=np.int64)
+        self.ids = ids
+        self.file, self.step = file, step
+        n = len(ids)
+        lo = int(ids.min()) if n else 0
+        hi = int(ids.max()) if n else -1
+        self._dense = n > 0 and lo >= 0 and hi < 8 * n + 1024
+        if self._dense:
+            row = np.full(hi + 1, -1, dtype=np.int64)
+            row[ids] = np.arange(n, dtype=np.int64)
+            dup = n - np.count_nonzero(row >= 0)
+            self._row = row
+        else:
+            self._order = np.argsort(ids, kind="stable")
+            self._sorted = ids[self._order]
+            dup = int(np.count_nonzero(self._sorted[1:] == self._sorted[:-1]))
+        if dup:
+            counts = np.unique(ids, return_counts=True)
+            dups = counts[0][counts[1] > 1][:5].tolist()
+            raise InputFormatError(
+                f"{dup} duplicated particle id(s) in one frame, e.g. {dups}.",
+                file=file, step=step,
+                fix="each particle must appear once per frame; check that the dump is not the "
+                "concatenation of two runs or of several MPI ranks writing the same atoms.",
+            )
+
+    def rows(self, query: np.ndarray, *, what: str = "contact") -> np.ndarray:
+        """Row of each id in ``query``; unknown ids are a ContactError naming them."""
+        q = np.asarray(query, dtype=np.int64)
+        if self._dense:
+            inside = (q >= 0) & (q < len(self._row))
+            rows = np.full(q.shape, -1, dtype=np.int64)
+            rows[inside] = self._row[q[inside]]
+        else:
+            if len(self._sorted) == 0:
+                rows = np.full(q.shape, -1, dtype=np.int64)
+            else:
+                pos = np.clip(np.searchsorted(self._sorted, q), 0, len(self._sorted) - 1)
+                rows = np.where(self._sorted[pos] == q, self._order[pos], -1)
+        bad = rows < 0
+        if bad.any():
+            unknown = np.unique(q[bad])[:5].tolist()
+            raise ContactError(
+                f"{int(bad.sum())} {what}(s) reference particle id(s) not in the atom dump, e.g. {unknown}.",
+                file=self.file, step=self.step,
+                fix="pair the contact dump with the atom dump of the same timestep "
+                "(both dumps must be written every N steps with the same N).",
+            )
+        return rows
