@@ -100,6 +100,11 @@ class Wall:
     center : cylinder centre in the two other axes, in LIGGGHTS's cyclic order
         (x: (y, z); y: (z, x); z: (x, y)) (m).
     model : the wall's own contact model when it differs from the pair model.
+    file : mesh file of a ``mesh`` wall (LIGGGHTS ``fix mesh/surface file``).
+    transforms : the mesh's ``scale``/``move``/``rotate`` operations in the
+        order LIGGGHTS applies them (the order they appear on the fix line):
+        ``("scale", (s,))``, ``("move", (dx, dy, dz))`` (m),
+        ``("rotate", (ax, ay, az, angle_deg))``.
     """
 
     name: str
@@ -110,6 +115,8 @@ class Wall:
     radius: float = 0.0
     center: tuple[float, float] = (0.0, 0.0)
     model: ContactModel | None = None
+    file: str | None = None
+    transforms: tuple[tuple[str, tuple[float, ...]], ...] = ()
 
 
 @dataclass
