@@ -1,0 +1,232 @@
+"""The ``demsplit`` command.
+
+    demsplit run IN [--atoms F] [--contacts F] [--walls F] -o OUT.h5
+    demsplit info FILE
+    demsplit check IN
+    demsplit report OUT.h5 [-o report.html]
+    demsplit export OUT.h5 --parquet DIR | --csv DIR
+    demsplit convert IN -o CACHE.h5
+
+``IN`` is a LIGGGHTS input script (its dumps are found from its ``dump``
+lines unless given) or a ``demsplit.yade`` snapshot file. Errors print one
+message naming the file, timestep and line and how to fix it, and exit 2;
+``--debug`` shows the traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import traceback
+from pathlib import Path
+
+from .errors import DemsplitError
+from .scene import Material
+
+EXIT_ERROR = 2
+EXIT_BUG = 3
+
+
+def _material(text: str) -> tuple[int, Material]:
+    try:
+        t, E, nu = text.split(":")
+        return int(t), Material(float(E), float(nu))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected TYPE:E:NU (e.g. 1:5e7:0.3), got {text!r}") from None
+
+
+def _reader_options(args: argparse.Namespace) -> dict:
+    """Options of :func:`demsplit.readers.open_run` given on the command line."""
+    opts: dict = {}
+    for name in ("atoms", "contacts", "walls"):
+        value = getattr(args, name, None)
+        if value:
+            opts[name] = value
+    if getattr(args, "var", None):
+        opts["variables"] = dict(args.var)
+    if getattr(args, "material", None):
+        opts["materials"] = dict(args.material)
+    if getattr(args, "overlap_tolerance", None) is not None:
+        opts["overlap_tolerance"] = args.overlap_tolerance
+    if getattr(args, "force_positions", False):
+        opts["force_positions"] = True
+    if getattr(args, "plane_as_plane", False):
+        opts["plane_as_plane"] = True
+    return opts
+
+
+def _add_input(p: argparse.ArgumentParser) -> None:
+    p.add_argument("input", help="LIGGGHTS input script, or a demsplit.yade snapshot file")
+    g = p.add_argument_group("LIGGGHTS inputs (default: the files the script's dump lines write)")
+    g.add_argument("--atoms", help="atom dump (dump custom, text, .bin, or compressed)")
+    g.add_argument("--contacts", help="pair contact dump (dump local of compute pair/gran/local)")
+    g.add_argument("--walls", help="mesh-wall contact dump (dump local of compute wall/gran/local)")
+    g.add_argument("--var", nargs=2, action="append", metavar=("NAME", "VALUE"),
+                   help="script variable, as liggghts -var NAME VALUE")
+    g.add_argument("--material", action="append", type=_material, metavar="TYPE:E:NU",
+                   help="material of a type (Pa, -), overriding or completing the script")
+    g.add_argument("--overlap-tolerance", type=float, default=None, metavar="REL",
+                   help="largest relative overlap error accepted when overlaps must be recomputed from "
+                   "printed positions (default 1e-3)")
+    g.add_argument("--force-positions", action="store_true",
+                   help="recompute overlaps from printed positions even above the tolerance (reported)")
+    y = p.add_argument_group("YADE inputs")
+    y.add_argument("--plane-as-plane", action="store_true",
+                   help="treat YADE walls/facets/boxes as planes (R = inf) instead of YADE's refR")
+
+
+def _options(args: argparse.Namespace):
+    from .pipeline import Options
+
+    return Options(tangential_rule=args.tangential_rule, compare=not args.no_compare,
+                   contacts=not args.no_contacts)
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    from .pipeline import run_to_store
+    from .report import text_summary
+    from .results import load_results
+
+    report, _ = run_to_store(args.input, args.output, options=_options(args), jobs=args.jobs, dask=args.dask,
+                             resume=args.resume, on_bad_frame=args.on_bad_frame,
+                             progress=False if args.quiet else None, **_reader_options(args))
+    if not args.quiet:
+        print(text_summary(load_results(args.output)))
+        for note in report.notes:
+            print(f"note: {note}")
+        if report.bad_frames:
+            print(f"{len(report.bad_frames)} bad frame(s) skipped (listed in the output's provenance):")
+            for bad in report.bad_frames:
+                print(f"  frame {bad['frame']} (step {bad['step']}): {bad['error']}")
+        print(f"wrote {args.output} ({report.frames_done} frame(s)"
+              + (f", {report.frames_resumed} resumed" if report.frames_resumed else "") + ")")
+    return 0
+
+
+def cmd_info(args: argparse.Namespace) -> int:
+    from .readers.inspect import describe_file
+
+    print(describe_file(args.file))
+    return 0
+
+
+def cmd_check(args: argparse.Namespace) -> int:
+    from .readers.inspect import check_run
+
+    text, ok = check_run(args.input, **_reader_options(args))
+    print(text)
+    return 0 if ok else 1
+
+
+def cmd_report(args: argparse.Namespace) -> int:
+    from .report import text_summary, write_html
+    from .results import load_results
+
+    results = load_results(args.results)
+    if args.output:
+        write_html(results, args.output)
+        if not args.quiet:
+            print(f"wrote {args.output}")
+    else:
+        print(text_summary(results))
+    return 0
+
+
+def cmd_export(args: argparse.Namespace) -> int:
+    from .results import load_results
+    from .store import export_tables
+
+    if not (args.parquet or args.csv):
+        raise DemsplitError("nothing to export to.", fix="give --parquet DIR or --csv DIR.")
+    results = load_results(args.results)
+    for fmt, directory in (("parquet", args.parquet), ("csv", args.csv)):
+        if directory:
+            for path in export_tables(results, directory, fmt=fmt):
+                if not args.quiet:
+                    print(f"wrote {path}")
+    return 0
+
+
+def cmd_convert(args: argparse.Namespace) -> int:
+    from .readers.cache import convert_run
+
+    path = convert_run(args.input, args.output, **_reader_options(args))
+    if not args.quiet:
+        print(f"wrote {path}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="demsplit", description=__doc__.split("\n\n")[0])
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("--debug", action="store_true", help="show the traceback of an error")
+    common.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors; no progress bar")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    def add(name: str, help: str) -> argparse.ArgumentParser:  # every subcommand takes --debug/--quiet
+        return sub.add_parser(name, help=help, parents=[common])
+
+    p = add("run", "per-particle energies of every frame, written to an HDF5 store")
+    _add_input(p)
+    p.add_argument("-o", "--output", required=True, help="output HDF5 file")
+    p.add_argument("--jobs", "-j", type=int, default=1, help="worker processes (frames in parallel)")
+    p.add_argument("--dask", metavar="ADDRESS", help="run on a Dask cluster: tcp://HOST:PORT, or local:N")
+    p.add_argument("--resume", action="store_true", help="continue an interrupted run from its last complete frame")
+    p.add_argument("--on-bad-frame", choices=("stop", "skip"), default="stop",
+                   help="stop at a bad frame (default), or skip it and list it in the output")
+    p.add_argument("--tangential-rule", choices=("mindlin", "paper"), default="mindlin",
+                   help="tangential split factor: Mindlin (2-nu)/G (default) or the paper's eq. 22 (1-2nu)/G")
+    p.add_argument("--no-compare", action="store_true", help="skip the 50/50 and radius-weighted splits")
+    p.add_argument("--no-contacts", action="store_true", help="do not store the per-contact table")
+    p.set_defaults(func=cmd_run)
+
+    p = add("info", "describe a dump or snapshot file: kind, frames, columns, precision")
+    p.add_argument("file")
+    p.set_defaults(func=cmd_info)
+
+    p = add("check", "validate a run without computing energies")
+    _add_input(p)
+    p.set_defaults(func=cmd_check)
+
+    p = add("report", "summary of a result file: text, or a self-contained HTML page with -o")
+    p.add_argument("results")
+    p.add_argument("-o", "--output", help="HTML file to write")
+    p.set_defaults(func=cmd_report)
+
+    p = add("export", "export a result file's tables to Parquet or CSV")
+    p.add_argument("results")
+    p.add_argument("--parquet", metavar="DIR")
+    p.add_argument("--csv", metavar="DIR")
+    p.set_defaults(func=cmd_export)
+
+    p = add("convert", "write a run's dumps once to an HDF5 ingest cache read much faster later")
+    _add_input(p)
+    p.add_argument("-o", "--output", required=True, help="cache file (.h5)")
+    p.set_defaults(func=cmd_convert)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except DemsplitError as exc:
+        if args.debug:
+            traceback.print_exc()
+        print(f"demsplit: error: {exc}", file=sys.stderr)
+        return EXIT_ERROR
+    except KeyboardInterrupt:
+        print("demsplit: interrupted; run again with --resume to continue from the last complete frame.",
+              file=sys.stderr)
+        return 130
+    except Exception as exc:  # a bug: say so, keep the CLI's promise of one message
+        if args.debug:
+            traceback.print_exc()
+        print(f"demsplit: internal error ({type(exc).__name__}: {exc}). This is a bug in demsplit; "
+              "rerun with --debug and report the traceback.", file=sys.stderr)
+        return EXIT_BUG
+
+
+if __name__ == "__main__":
+    sys.exit(main())

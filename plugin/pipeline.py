@@ -1,0 +1,308 @@
+"""The pipeline: run files -> frames -> partition -> per-frame tables -> Results or a store.
+
+:func:`frame_tables` is the whole computation for one frame, a pure function
+of a :class:`~demsplit.frame.Frame` and a :class:`~demsplit.scene.Scene`.
+:func:`analyze` runs it over a run in memory and returns
+:class:`~demsplit.results.Results`; :func:`run_to_store` streams it into an
+HDF5 store, serially, in worker processes (``jobs``) or on a Dask cluster
+(``dask``), with identical results.
+"""
+
+from __future__ import annotations
+
+import sys
+from collections import deque
+from collections.abc import Callable, Iterator
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .errors import DemsplitError
+from .frame import Frame, ParticleIndex
+from .partition import ContactBodies, contact_energies, partition, per_particle
+from .scene import Scene
+
+Tables = dict[str, dict[str, np.ndarray]]
+
+
+@dataclass(frozen=True)
+class Options:
+    """What to compute.
+
+    tangential_rule : ``"mindlin"`` (default) or ``"paper"`` (see
+        :func:`demsplit.partition.tangential_share`).
+    compare : also compute the 50/50 (``u_equal``) and radius-weighted
+        (``u_radius``) splits per particle, and YADE's series-spring split
+        (``u_springs``) for its linear law.
+    contacts : keep the per-contact table (the largest table by far).
+    """
+
+    tangential_rule: str = "mindlin"
+    compare: bool = True
+    contacts: bool = True
+
+
+def comparison_splits(scene: Scene) -> tuple[str, ...]:
+    """The naive splits reported beside the distribution law for this scene."""
+    return ("equal", "radius", "springs") if scene.model.normal == "linear" else ("equal", "radius")
+
+
+def frame_tables(frame: Frame, scene: Scene, options: Options = Options()) -> Tables:
+    """Everything demsplit computes for one frame, as the store's tables.
+
+    ``particles``: per-particle energies under the distribution law (``u
+    u_n u_t``) and, with ``options.compare``, under the comparison splits;
+    ``contacts``: per-contact energies, shares, depth and contact points
+    (``cp*_sim``: the simulator's own point, when the input has it);
+    ``walls``: energy stored in each wall; ``frames``: one row of totals.
+    """
+    source = frame.source[0] if frame.source else None
+    particles, contacts = frame.particles, frame.contacts
+    index = ParticleIndex(particles["id"], file=source, step=frame.step)
+    try:
+        bodies = ContactBodies.build(contacts, scene, particles, index)
+        energies = contact_energies(contacts, scene, particles, bodies, index)
+        main = partition(contacts, scene, particles, split="material", tangential_rule=options.tangential_rule,
+                         energies=energies, bodies=bodies, index=index)
+        ptable, wtable = per_particle(contacts, main, particles, n_walls=len(scene.walls), index=index)
+        if options.compare:
+            for split in comparison_splits(scene):
+                other = partition(contacts, scene, particles, split=split, energies=energies, bodies=bodies,
+                                  index=index)
+                ptable[f"u_{split}"] = per_particle(contacts, other, particles, n_walls=len(scene.walls),
+                                                    index=index)[0]["u"]
+    except DemsplitError as exc:
+        raise exc.located(file=source, step=frame.step) from None
+    for what, why in main.skipped.items():
+        note = f"{what} not computed: {why}"
+        if note not in frame.notes:
+            frame.notes.append(note)
+    n = len(contacts["delta"])
+    step = np.int64(frame.step)
+    tables: Tables = {"particles": {"step": np.full(len(ptable["id"]), step), **ptable},
+                      "walls": {"step": np.full(len(wtable["wall"]), step), **wtable}}
+    if options.contacts:
+        ctable = {"step": np.full(n, step), "id1": contacts["id1"], "id2": contacts["id2"],
+                  "wall": contacts["wall"], "delta": contacts["delta"], **main.table()}
+        if "cpx" in contacts:
+            ctable.update(cpx_sim=contacts["cpx"], cpy_sim=contacts["cpy"], cpz_sim=contacts["cpz"])
+        tables["contacts"] = ctable
+    err = frame.overlap_error
+    tables["frames"] = {
+        "step": np.array([step]),
+        "time": np.array([np.nan if frame.time is None else frame.time]),
+        "n_particles": np.array([len(ptable["id"])], dtype=np.int64),
+        "n_contacts": np.array([n], dtype=np.int64),
+        "n_wall_contacts": np.array([int(np.count_nonzero(contacts["wall"] >= 0))], dtype=np.int64),
+        "u_n": np.array([main.u_n.sum()]),
+        "u_t": np.array([main.u_t.sum()]),
+        "overlap_max_rel_error": np.array([np.nan if err is None or len(err) == 0 else float(np.max(err))]),
+    }
+    return tables
+
+
+# --- running over a whole run ---------------------------------------------------------------
+
+@dataclass
+class RunReport:
+    """What a run did: frames written, frames skipped (with the reason), what
+    could not be computed, and notes from the readers."""
+
+    frames_done: int = 0
+    frames_resumed: int = 0
+    bad_frames: list[dict] = field(default_factory=list)
+    skipped: dict[str, str] = field(default_factory=dict)
+    notes: list[str] = field(default_factory=list)
+
+
+def _open(spec: dict):
+    from .readers import open_run
+
+    spec = dict(spec)
+    return open_run(spec.pop("path"), **spec)
+
+
+_WORKER_RUN: dict = {}
+
+
+def _worker_frame(spec_key: tuple, spec: dict, k: int, options: Options) -> tuple[int, Tables | DemsplitError, list]:
+    """Process frame ``k`` of the run ``spec`` in a worker (the run is opened once per worker)."""
+    run = _WORKER_RUN.get(spec_key)
+    if run is None:
+        _WORKER_RUN.clear()
+        run = _WORKER_RUN[spec_key] = _open(spec)
+    try:
+        frame = run.frame(k)
+        return k, frame_tables(frame, run.scene, options), frame.notes
+    except DemsplitError as exc:  # returned, not raised: the parent decides (stop or skip)
+        return k, exc, []
+
+
+def _spec_key(spec: dict) -> tuple:
+    return tuple(sorted((k, repr(v)) for k, v in spec.items()))
+
+
+def _serial(run, indices: list[int], options: Options) -> Iterator[tuple[int, Tables | DemsplitError, list]]:
+    for k in indices:
+        try:
+            frame = run.frame(k)
+            yield k, frame_tables(frame, run.scene, options), frame.notes
+        except DemsplitError as exc:
+            yield k, exc, []
+
+
+def _windowed(submit: Callable[[int], object], result: Callable[[object], tuple], indices: list[int],
+              window: int) -> Iterator[tuple]:
+    """Submit frames ahead but at most ``window`` at a time, yield results in frame order
+    (memory stays a few frames, whatever the number of frames)."""
+    pending: deque = deque()
+    it = iter(indices)
+    for k in it:
+        pending.append(submit(k))
+        if len(pending) >= window:
+            break
+    while pending:
+        fut = pending.popleft()
+        nxt = next(it, None)
+        if nxt is not None:
+            pending.append(submit(nxt))
+        yield result(fut)
+
+
+def _processes(run, indices: list[int], options: Options, jobs: int) -> Iterator[tuple]:
+    import multiprocessing as mp
+    from concurrent.futures import ProcessPoolExecutor
+
+    spec = run.spec
+    key = _spec_key(spec)
+    ctx = mp.get_context("forkserver" if sys.platform != "win32" else "spawn")
+    with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx) as pool:
+        yield from _windowed(lambda k: pool.submit(_worker_frame, key, spec, k, options),
+                             lambda fut: fut.result(), indices, 2 * jobs)
+
+
+def _dask(run, indices: list[int], options: Options, address: str) -> Iterator[tuple]:
+    from distributed import Client, LocalCluster
+
+    spec = run.spec
+    key = _spec_key(spec)
+    if address.startswith("local:"):
+        cluster = LocalCluster(n_workers=int(address.split(":", 1)[1]), threads_per_worker=1,
+                               processes=True, dashboard_address=None)
+        client = Client(cluster)
+    else:
+        cluster, client = None, Client(address)
+    try:
+        workers = max(1, len(client.scheduler_info().get("workers", {})))
+        yield from _windowed(lambda k: client.submit(_worker_frame, key, spec, k, options, pure=False),
+                             lambda fut: fut.result(), indices, 2 * workers)
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def process_run(run, options: Options = Options(), *, jobs: int = 1, dask: str | None = None,
+                on_bad_frame: str = "stop", skip_steps: set[int] | None = None,
+                steps: list[int] | None = None, progress: bool | None = None,
+                report: RunReport | None = None) -> Iterator[Tables]:
+    """Yield the tables of every frame of ``run`` in order.
+
+    jobs : worker processes (1: in this process). dask : a Dask scheduler
+        address, or ``local:N`` to start a local cluster of N workers.
+    on_bad_frame : ``"stop"`` raises the first frame's error; ``"skip"`` leaves
+        the frame out and lists it in ``report.bad_frames``.
+    skip_steps : steps already done (``--resume``); steps : restrict to these.
+    """
+    if on_bad_frame not in ("stop", "skip"):
+        raise ValueError(f"on_bad_frame must be 'stop' or 'skip', not {on_bad_frame!r}")
+    report = report if report is not None else RunReport()
+    all_steps = run_steps(run)
+    wanted = set(steps) if steps is not None else None
+    indices = [k for k, s in enumerate(all_steps)
+               if (wanted is None or s in wanted) and not (skip_steps and s in skip_steps)]
+    report.frames_resumed = len(skip_steps or ())
+    if dask:
+        results = _dask(run, indices, options, dask)
+    elif jobs > 1:
+        results = _processes(run, indices, options, jobs)
+    else:
+        results = _serial(run, indices, options)
+    from tqdm import tqdm
+
+    show = sys.stderr.isatty() if progress is None else progress
+    for k, out, notes in tqdm(results, total=len(indices), unit="frame", disable=not show, desc="demsplit"):
+        if isinstance(out, DemsplitError):
+            if on_bad_frame == "stop":
+                raise out
+            report.bad_frames.append({"frame": k, "step": int(all_steps[k]) if all_steps[k] is not None else None,
+                                      "error": str(out)})
+            continue
+        for note in notes:
+            if note not in report.notes:
+                report.notes.append(note)
+        report.frames_done += 1
+        yield out
+
+
+def run_steps(run) -> list:
+    """Timestep of every frame of ``run`` (from the reader's index when it has one)."""
+    steps = getattr(run, "steps", None)
+    if steps is not None:
+        return [int(s) for s in steps]
+    return [None] * len(run)
+
+
+def analyze(path: str | Path, *, options: Options = Options(), jobs: int = 1, dask: str | None = None,
+            on_bad_frame: str = "stop", progress: bool | None = False, **reader_options):
+    """Analyse a run in memory and return :class:`~demsplit.results.Results`.
+
+    ``path``: a LIGGGHTS input script or a ``demsplit.yade`` snapshot file;
+    ``reader_options`` go to :func:`demsplit.readers.open_run` (e.g.
+    ``atoms=``, ``contacts=``, ``walls=``, ``overlap_tolerance=``).
+    """
+    from .readers import open_run
+    from .results import Results, walls_meta_from_scene
+    from .store import build_provenance
+
+    run = open_run(path, **reader_options)
+    try:
+        report = RunReport()
+        frames = list(process_run(run, options, jobs=jobs, dask=dask, on_bad_frame=on_bad_frame,
+                                  progress=progress, report=report))
+        provenance = build_provenance(getattr(run, "sources", [path]), scene=run.scene,
+                                      options=asdict(options), **_report_provenance(run, report))
+        return Results.from_frames(frames, provenance, walls_meta_from_scene(run.scene))
+    finally:
+        run.close()
+
+
+def _report_provenance(run, report: RunReport) -> dict:
+    described = run.describe() if hasattr(run, "describe") else {}
+    return {"run": described, "bad_frames": report.bad_frames, "notes": report.notes}
+
+
+def run_to_store(path: str | Path, out: str | Path, *, options: Options = Options(), jobs: int = 1,
+                 dask: str | None = None, resume: bool = False, on_bad_frame: str = "stop",
+                 progress: bool | None = None, **reader_options) -> tuple[RunReport, Scene]:
+    """Analyse a run and stream the results into the HDF5 store ``out``
+    (written to a temporary name and renamed when complete; ``resume``
+    continues an interrupted run from its last complete frame)."""
+    from .readers import open_run
+    from .results import walls_meta_from_scene
+    from .store import ResultWriter, build_provenance
+
+    run = open_run(path, **reader_options)
+    try:
+        report = RunReport()
+        provenance = build_provenance(getattr(run, "sources", [path]), scene=run.scene, options=asdict(options),
+                                      run=run.describe() if hasattr(run, "describe") else {})
+        with ResultWriter(out, provenance, resume=resume, walls_meta=walls_meta_from_scene(run.scene)) as writer:
+            for tables in process_run(run, options, jobs=jobs, dask=dask, on_bad_frame=on_bad_frame,
+                                      skip_steps=writer.done_steps, progress=progress, report=report):
+                writer.append(tables)
+            writer.provenance.update(bad_frames=report.bad_frames, notes=report.notes)
+        return report, run.scene
+    finally:
+        run.close()
