@@ -176,15 +176,60 @@ def _cell_box(meta: dict) -> Box | None:
 
 
 def _timing_note(meta: dict) -> str | None:
-    """Warn when no snapshot PyRunner sits between InteractionLoop and NewtonIntegrator."""
+    """Warn when no PyRunner sits between InteractionLoop and NewtonIntegrator
+    (the snapshot cannot tell which PyRunner called it; any one there runs at
+    the consistent instant)."""
     names = [e["class"] for e in meta["engines"]]
     if "InteractionLoop" not in names or "NewtonIntegrator" not in names:
         return None
     lo, hi = names.index("InteractionLoop"), names.index("NewtonIntegrator")
-    if any("snapshot" in e.get("command", "") for e in meta["engines"][lo + 1:hi]):
+    if any(e["class"] == "PyRunner" for e in meta["engines"][lo + 1:hi]):
         return None
-    return ("no PyRunner calling demsplit.yade.snapshot sits between InteractionLoop and NewtonIntegrator: "
+    return ("no PyRunner sits between InteractionLoop and NewtonIntegrator: "
             "positions (x1, contact point) may be one step ahead of delta and the normal")
+
+
+def particle_first(t: Table, sphere1: np.ndarray, wall1: np.ndarray, wall2: np.ndarray) -> Table:
+    """Canonical contacts (:mod:`demsplit.frame`) from interactions in YADE's order.
+
+    ``t`` holds ``id1 id2 delta nx ny nz refR1 refR2``, the centres ``xa ya za``
+    of body 1 and ``xb yb zb`` of body 2 in the frame of the normal (body 2
+    shifted by hSize.cellDist), and optionally ``type_a type_b``, ``fnx fny
+    fnz`` (normalForce), ``fsx fsy fsz`` (shearForce), ``kn ks kno kso``,
+    ``cpx cpy cpz``. ``sphere1`` says whether YADE's body 1 is a sphere;
+    ``wall1``/``wall2`` give the wall index of each body (-1 for a sphere).
+
+    Where body 1 is a wall, facet or box (YADE's usual order), the particle
+    (body 2) becomes body 1: the normal and the shear force change sign
+    (YADE's shearForce acts on its body 2), refR1/refR2 trade places.
+    """
+    swap = ~np.asarray(sphere1, dtype=bool)
+    sign = np.where(swap, -1.0, 1.0)
+    pair = (wall1 < 0) & (wall2 < 0)
+
+    def pick(a: str, b: str) -> np.ndarray:
+        return np.where(swap, t[b], t[a])
+
+    out = {
+        "id1": pick("id1", "id2").astype(np.int64),
+        "id2": np.where(pair, t["id2"], -1).astype(np.int64),
+        "wall": np.where(pair, -1, np.where(swap, wall1, wall2)).astype(np.int64),
+        "delta": np.asarray(t["delta"], dtype=np.float64),
+        "nx": sign * t["nx"], "ny": sign * t["ny"], "nz": sign * t["nz"],
+        "x1": pick("xa", "xb"), "y1": pick("ya", "yb"), "z1": pick("za", "zb"),
+        "r1": pick("refR1", "refR2"), "r2": pick("refR2", "refR1"),
+    }
+    if "type_a" in t:
+        out["type1"] = pick("type_a", "type_b").astype(np.int32)
+        out["type2"] = pick("type_b", "type_a").astype(np.int32)
+    if "fnx" in t:
+        out["fn"] = np.sqrt(t["fnx"] ** 2 + t["fny"] ** 2 + t["fnz"] ** 2)
+    if "fsx" in t:
+        out["ftx"], out["fty"], out["ftz"] = sign * t["fsx"], sign * t["fsy"], sign * t["fsz"]
+    for c in ("kn", "ks", "kno", "kso", "cpx", "cpy", "cpz"):
+        if c in t:
+            out[c] = np.asarray(t[c], dtype=np.float64)
+    return out
 
 
 def frame_from_snapshot(meta: dict, tables: dict[str, Table], scene_walls: dict[int, int], *,
@@ -239,32 +284,20 @@ def frame_from_snapshot(meta: dict, tables: dict[str, Table], scene_walls: dict[
     pos = np.stack([bodies["x"], bodies["y"], bodies["z"]], axis=-1)
     xa, xb = pos[ra], pos[rb] + shift
 
-    swap = ~sa  # YADE's body 1 is the wall/facet/box: the particle is body 2
-    sign = np.where(swap, -1.0, 1.0)
     wall_of = np.full(size, -1, dtype=np.int64)
     for body_id, index in scene_walls.items():
         wall_of[body_id] = index
-    pair = sa & sb
-    id_a, id_b = inter["id1"], inter["id2"]
-    contacts = {
-        "id1": np.where(swap, id_b, id_a).astype(np.int64),
-        "id2": np.where(pair, id_b, -1).astype(np.int64),
-        "wall": np.where(pair, -1, wall_of[np.where(swap, id_a, id_b)]).astype(np.int64),
+    yade_order = {
+        **{c: inter[c] for c in ("id1", "id2", "nx", "ny", "nz", "refR1", "refR2", "fnx", "fny", "fnz",
+                                 "fsx", "fsy", "fsz", "kn", "ks", "cpx", "cpy", "cpz")},
         "delta": inter["depth"],
-        "nx": sign * inter["nx"], "ny": sign * inter["ny"], "nz": sign * inter["nz"],
-        "x1": np.where(swap, xb[:, 0], xa[:, 0]), "y1": np.where(swap, xb[:, 1], xa[:, 1]),
-        "z1": np.where(swap, xb[:, 2], xa[:, 2]),
-        "r1": np.where(swap, inter["refR2"], inter["refR1"]),
-        "r2": np.where(swap, inter["refR1"], inter["refR2"]),
-        "type1": bodies["material"][np.where(swap, rb, ra)].astype(np.int32),
-        "type2": bodies["material"][np.where(swap, ra, rb)].astype(np.int32),
-        "fn": np.sqrt(inter["fnx"] ** 2 + inter["fny"] ** 2 + inter["fnz"] ** 2),
-        "ftx": sign * inter["fsx"], "fty": sign * inter["fsy"], "ftz": sign * inter["fsz"],
-        "kn": inter["kn"], "ks": inter["ks"],
-        "cpx": inter["cpx"], "cpy": inter["cpy"], "cpz": inter["cpz"],
+        "xa": xa[:, 0], "ya": xa[:, 1], "za": xa[:, 2], "xb": xb[:, 0], "yb": xb[:, 1], "zb": xb[:, 2],
+        "type_a": bodies["material"][ra], "type_b": bodies["material"][rb],
     }
     if np.isfinite(inter["kno"]).any():
-        contacts["kno"], contacts["kso"] = inter["kno"], inter["kso"]
+        yade_order["kno"], yade_order["kso"] = inter["kno"], inter["kso"]
+    contacts = particle_first(yade_order, sa, wall_of[inter["id1"]], wall_of[inter["id2"]])
+    pair = sa & sb
     if plane_as_plane:
         contacts["r2"] = np.where(pair, contacts["r2"], np.inf)
         contacts.pop("kno", None)

@@ -1,0 +1,15 @@
+#!/bin/sh
+# Regenerate the YADE sample files of demsplit (run from anywhere):
+#   sh sample_dumps/yade/regenerate.sh
+# Needs Debian's yade (2023.02a) and demsplit installed in the dev Python
+# (`python`); DEMSPLIT_SITE tells the YADE scripts where to find it.
+set -eu
+here=$(cd "$(dirname "$0")" && pwd)
+DEMSPLIT_SITE=$(python -c "import sysconfig; print(sysconfig.get_paths()['purelib'])")
+export DEMSPLIT_SITE
+export DEMSPLIT_OUT="$here"
+cd "$here"
+rm -f ./*.h5 ./*.npys ./*.vtk ./*.txt
+for scene in mindlin_box cundall_periodic; do
+    yade -n -j1 -x "$scene.py" 2>&1 | grep "^$scene:" | tee "$scene.log"
+done
