@@ -83,6 +83,8 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = Options()) -> Ta
     tables: Tables = {"particles": {"step": np.full(len(ptable["id"]), step), **ptable},
                       "walls": {"step": np.full(len(wtable["wall"]), step), **wtable}}
     if options.contacts:
+        if frame.box is not None and frame.box.any_periodic:
+            main.cp = frame.box.wrap(main.cp)  # contact points of contacts across a boundary, back in the box
         ctable = {"step": np.full(n, step), "id1": contacts["id1"], "id2": contacts["id2"],
                   "wall": contacts["wall"], "delta": contacts["delta"], **main.table()}
         if "cpx" in contacts:
