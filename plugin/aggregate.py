@@ -1,0 +1,301 @@
+"""Statistics of per-particle energies: pure functions of the result DataFrames.
+
+Every function takes the tidy tables of :class:`demsplit.results.Results` and
+returns a new tidy DataFrame (one row per group). With ``by_frame=True`` (the
+default) each frame is summarised on its own (groups include ``step``); with
+``by_frame=False`` all rows of all frames are pooled into one distribution
+per group (energies are then particle-frame observations).
+
+Distribution statistics of a sample x_1..x_n (:func:`distribution_stats`):
+
+- ``count`` n, ``total`` = sum x_i, ``mean`` = total/n,
+- ``std`` = sqrt(sum (x_i - mean)^2 / n) (population spread, ddof = 0: the
+  particles present, not an estimate of a larger population),
+- ``p05 p25 p50 p75 p95``: quantiles by linear interpolation between order
+  statistics (numpy's default, Hyndman & Fan type 7),
+- ``top1_share``, ``top10_share``: the fraction of the total held by the
+  ceil(0.01 n) and ceil(0.10 n) largest values (at least one value),
+- ``gini`` = sum_i (2i - n - 1) x_(i) / (n sum x), x_(i) sorted ascending,
+  i = 1..n: 0 when every particle holds the same energy, (n-1)/n when one
+  particle holds all of it.
+
+Empty groups and groups with zero total give NaN for the ratios.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+import pandas as pd
+
+from .errors import DemsplitError
+
+QUANTILES = {"p05": 0.05, "p25": 0.25, "p50": 0.50, "p75": 0.75, "p95": 0.95}
+TOP_FRACTIONS = {"top1_share": 0.01, "top10_share": 0.10}
+STAT_COLUMNS = ("count", "total", "mean", "std", *QUANTILES, *TOP_FRACTIONS, "gini")
+
+SPLITS = {"material": "u", "equal": "u_equal", "radius": "u_radius"}
+"""The three distribution rules compared by :func:`split_comparison`: the
+material (Feng & Gao) law, the 50/50 split (LAMMPS pe/atom, Kratos) and the
+radius-weighted split (Aspherix)."""
+
+DEFAULT_SIZE_BINS = 8
+"""Number of log-spaced radius classes between the smallest and the largest
+radius when :func:`per_size` is given no bins."""
+
+
+def gini(x: np.ndarray) -> float:
+    """Gini coefficient G = sum_i (2i - n - 1) x_(i) / (n sum x) of values
+    ``x`` >= 0 (x_(i) ascending, i = 1..n); NaN if n = 0 or sum x = 0."""
+    x = np.sort(np.asarray(x, dtype=np.float64))
+    n = len(x)
+    total = x.sum()
+    if n == 0 or total == 0:
+        return math.nan
+    i = np.arange(1, n + 1)
+    return float(np.sum((2 * i - n - 1) * x) / (n * total))
+
+
+def top_share(x: np.ndarray, fraction: float) -> float:
+    """Fraction of sum x held by the ceil(fraction * n) largest values (at least one)."""
+    x = np.asarray(x, dtype=np.float64)
+    n = len(x)
+    total = x.sum()
+    if n == 0 or total == 0:
+        return math.nan
+    k = max(1, math.ceil(fraction * n))
+    return float(np.sort(x)[n - k:].sum() / total)
+
+
+def distribution_stats(x: np.ndarray) -> dict[str, float]:
+    """The statistics of the module docstring for one sample ``x``."""
+    x = np.asarray(x, dtype=np.float64)
+    n = len(x)
+    out: dict[str, float] = {"count": n, "total": float(x.sum())}
+    if n == 0:
+        out.update({name: math.nan for name in STAT_COLUMNS[2:]})
+        return out
+    out["mean"] = out["total"] / n
+    out["std"] = float(x.std())
+    qs = np.quantile(x, list(QUANTILES.values()))
+    out.update({name: float(q) for name, q in zip(QUANTILES, qs)})
+    out.update({name: top_share(x, f) for name, f in TOP_FRACTIONS.items()})
+    out["gini"] = gini(x)
+    return out
+
+
+def grouped_stats(df: pd.DataFrame, keys: Sequence[str], value: str) -> pd.DataFrame:
+    """:func:`distribution_stats` of column ``value`` for each group of ``keys``
+    (sorted by the keys); one row per group, columns ``keys`` + STAT_COLUMNS."""
+    _require(df, [*keys, value], "particles")
+    keys = list(keys)
+    rows = []
+    if not keys:
+        rows.append(distribution_stats(df[value].to_numpy()))
+    else:
+        for key, sub in df.groupby(keys, sort=True)[value]:
+            rows.append({**dict(zip(keys, key)), **distribution_stats(sub.to_numpy())})
+    out = pd.DataFrame(rows, columns=[*keys, *STAT_COLUMNS])
+    out["count"] = out["count"].astype(np.int64)
+    for k in keys:
+        out[k] = out[k].astype(df[k].dtype)
+    return out
+
+
+def per_type(particles: pd.DataFrame, value: str = "u", *, by_frame: bool = True) -> pd.DataFrame:
+    """Statistics of ``value`` (J) per particle type, plus ``share_of_total``:
+    the type's total over the total of all types (of that frame if by_frame)."""
+    keys = ["step", "type"] if by_frame else ["type"]
+    out = grouped_stats(particles, keys, value)
+    whole = out.groupby("step")["total"].transform("sum") if by_frame else out["total"].sum()
+    out["share_of_total"] = out["total"] / whole
+    return out
+
+
+def size_bins(radius: np.ndarray, bins=None) -> np.ndarray:
+    """Edges (m, ascending) of the radius classes.
+
+    ``bins``: ``None`` (DEFAULT_SIZE_BINS log-spaced classes), an int N or
+    ``"log:N"`` (N classes, edges geomspace(r_min, r_max, N+1)),
+    ``"linear:N"`` (linspace), ``"quantile:N"`` (edges at the quantiles
+    k/N of the radii; repeated edges, as with a few discrete sizes, are merged,
+    so there may be fewer classes), or an explicit sequence of edges.
+    """
+    r = np.asarray(radius, dtype=np.float64)
+    if isinstance(bins, (list, tuple, np.ndarray)):
+        edges = np.asarray(bins, dtype=np.float64)
+        if edges.ndim != 1 or len(edges) < 2 or np.any(np.diff(edges) <= 0):
+            raise DemsplitError(f"size bin edges must be an increasing sequence of at least 2 radii, got {bins!r}.",
+                                fix="pass ascending edges in metres, e.g. [0.001, 0.002, 0.004].")
+        return edges
+    if len(r) == 0:
+        return np.array([0.0, 0.0])
+    kind, n = "log", DEFAULT_SIZE_BINS
+    if isinstance(bins, (int, np.integer)):
+        n = int(bins)
+    elif isinstance(bins, str):
+        kind, _, count = bins.partition(":")
+        try:
+            n = int(count) if count else DEFAULT_SIZE_BINS
+        except ValueError:
+            n = 0
+    elif bins is not None:
+        raise DemsplitError(f"cannot use {bins!r} as size bins.",
+                            fix="pass an int, 'log:N', 'linear:N', 'quantile:N' or a sequence of edges.")
+    if n < 1 or kind not in ("log", "linear", "quantile"):
+        raise DemsplitError(f"cannot use {bins!r} as size bins.",
+                            fix="pass an int >= 1, 'log:N', 'linear:N', 'quantile:N' or a sequence of edges.")
+    lo, hi = r.min(), r.max()
+    if kind == "quantile":
+        return np.unique(np.quantile(r, np.linspace(0.0, 1.0, n + 1)))
+    if kind == "log":
+        if lo <= 0:
+            raise DemsplitError(f"log-spaced size bins need radii > 0, found a radius of {lo!r} m.",
+                                fix="pass bins='linear:N' or explicit edges.")
+        return np.geomspace(lo, hi, n + 1) if hi > lo else np.array([lo, hi])
+    return np.linspace(lo, hi, n + 1) if hi > lo else np.array([lo, hi])
+
+
+def size_class(radius: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """Index k of the class [edges[k], edges[k+1]) of each radius (the last class
+    includes its upper edge). A radius outside the edges is an error."""
+    r = np.asarray(radius, dtype=np.float64)
+    k = np.searchsorted(edges, r, side="right") - 1
+    n = max(len(edges) - 1, 1)
+    k[r == edges[-1]] = n - 1
+    outside = (r < edges[0]) | (r > edges[-1])
+    if outside.any():
+        raise DemsplitError(
+            f"{int(outside.sum())} particle(s) have radii outside the size bins "
+            f"[{edges[0]:.6g}, {edges[-1]:.6g}] m (e.g. {r[outside][0]:.6g} m).",
+            fix="widen the bin edges to cover every radius, or let demsplit choose them.",
+        )
+    return k
+
+
+def per_size(particles: pd.DataFrame, bins=None, value: str = "u", *, by_frame: bool = True) -> pd.DataFrame:
+    """Statistics of ``value`` per radius class (classes from :func:`size_bins`
+    over the radii of all frames, so every frame uses the same classes).
+    Columns: [``step``], ``size_class``, ``r_lo``, ``r_hi`` (m), STAT_COLUMNS."""
+    _require(particles, ["radius", value], "particles")
+    edges = size_bins(particles["radius"].to_numpy(), bins)
+    df = particles.assign(size_class=size_class(particles["radius"].to_numpy(), edges))
+    keys = ["step", "size_class"] if by_frame else ["size_class"]
+    out = grouped_stats(df, keys, value)
+    k = out["size_class"].to_numpy()
+    out.insert(len(keys), "r_lo", edges[k])
+    out.insert(len(keys) + 1, "r_hi", edges[np.minimum(k + 1, len(edges) - 1)])
+    return out
+
+
+def per_frame(particles: pd.DataFrame, walls: pd.DataFrame, frames: pd.DataFrame) -> pd.DataFrame:
+    """One row per frame: the frame table, plus
+    ``u_contacts`` = u_n + u_t (J, sum over contacts),
+    ``u_particles`` = sum of particle ``u``, ``u_walls`` = sum of wall ``u`` (J),
+    ``balance_rel_error`` = |u_particles + u_walls - u_contacts| / u_contacts
+    (energy conservation of the split; ~1e-15 when correct),
+    and the distribution statistics of particle ``u`` (``mean`` ... ``gini``)."""
+    out = frames.copy()
+    out["u_contacts"] = out["u_n"] + out["u_t"]
+    u_p = particles.groupby("step")["u"].sum() if len(particles) else pd.Series(dtype=float)
+    u_w = walls.groupby("step")["u"].sum() if len(walls) else pd.Series(dtype=float)
+    out["u_particles"] = out["step"].map(u_p).fillna(0.0).to_numpy(dtype=np.float64)
+    out["u_walls"] = out["step"].map(u_w).fillna(0.0).to_numpy(dtype=np.float64)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out["balance_rel_error"] = (out["u_particles"] + out["u_walls"] - out["u_contacts"]).abs() / out["u_contacts"]
+    stats = grouped_stats(particles, ["step"], "u").drop(columns=["count", "total"])
+    out = out.merge(stats, on="step", how="left")
+    out.attrs["units"] = {**frames.attrs.get("units", {}), "u_contacts": "J", "u_particles": "J",
+                          "u_walls": "J", "balance_rel_error": "1"}
+    return out
+
+
+def wall_energy(walls: pd.DataFrame, walls_meta: list[dict], frames: pd.DataFrame | None = None) -> pd.DataFrame:
+    """Energy per wall and frame (``walls`` table) with each wall's ``name``,
+    ``kind`` and material ``type`` from ``walls_meta``, and ``share`` = wall u /
+    total contact energy of the frame (u_n + u_t over all contacts)."""
+    meta = pd.DataFrame(walls_meta, columns=["wall", "name", "kind", "type"])
+    if len(meta):
+        meta["wall"] = meta["wall"].astype(np.int64)
+    out = walls.merge(meta, on="wall", how="left")
+    if frames is not None and len(frames):
+        total = (frames["u_n"] + frames["u_t"]).to_numpy()
+        with np.errstate(invalid="ignore", divide="ignore"):
+            out["share"] = out["u"].to_numpy() / pd.Series(total, index=frames["step"]).reindex(out["step"]).to_numpy()
+    return out.sort_values(["step", "wall"], kind="stable").reset_index(drop=True)
+
+
+SPLIT_STATS = ("total", "mean", "std", "p50", "p95", "top10_share", "gini")
+
+
+def split_comparison(particles: pd.DataFrame, *, by_frame: bool = True) -> pd.DataFrame:
+    """Per-type statistics under the three distribution rules of SPLITS, side by
+    side: columns ``<stat>_<rule>`` for each stat in SPLIT_STATS, and the
+    misattribution of each simpler rule in percent,
+    ``misattribution_equal_pct`` = (sum_type u_equal - sum_type u)/sum_type u * 100,
+    ``misattribution_radius_pct`` likewise with u_radius (NaN if sum_type u = 0)."""
+    _require(particles, list(SPLITS.values()), "particles")
+    keys = ["step", "type"] if by_frame else ["type"]
+    out = None
+    for rule, column in SPLITS.items():
+        stats = grouped_stats(particles, keys, column)
+        stats = stats[[*keys, *SPLIT_STATS] if out is not None else [*keys, "count", *SPLIT_STATS]]
+        stats = stats.rename(columns={s: f"{s}_{rule}" for s in SPLIT_STATS})
+        out = stats if out is None else out.merge(stats, on=keys)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        for rule in ("equal", "radius"):
+            out[f"misattribution_{rule}_pct"] = (
+                (out[f"total_{rule}"] - out["total_material"]) / out["total_material"] * 100.0
+            )
+    return out
+
+
+def contact_point_shift(contacts: pd.DataFrame, *, by_frame: bool = True) -> pd.DataFrame:
+    """Distance between demsplit's material-weighted contact point and the
+    simulator's own, in units of the overlap: d = |cp - cp_sim| / delta.
+
+    One row per [step and] kind (``pair`` or ``wall``): ``count`` (contacts with
+    both points and delta > 0), ``n_missing`` (contacts without a simulator point:
+    cp_sim NaN), ``median``, ``p95``, ``max`` of d.
+    """
+    needed = ["cpx", "cpy", "cpz", "cpx_sim", "cpy_sim", "cpz_sim", "delta", "wall"]
+    if not {"cpx_sim", "cpy_sim", "cpz_sim"} <= set(contacts.columns):
+        raise DemsplitError(
+            "the results hold no simulator contact point (columns cpx_sim cpy_sim cpz_sim).",
+            fix="dump the simulator's contact point (LIGGGHTS: compute pair/gran/local contactPoint; "
+            "YADE: i.geom.contactPoint in the export) and rerun demsplit.",
+        )
+    _require(contacts, needed, "contacts")
+    cp = contacts[["cpx", "cpy", "cpz"]].to_numpy()
+    sim = contacts[["cpx_sim", "cpy_sim", "cpz_sim"]].to_numpy()
+    with np.errstate(invalid="ignore", divide="ignore"):
+        d = np.linalg.norm(cp - sim, axis=1) / contacts["delta"].to_numpy()
+    df = pd.DataFrame({
+        "step": contacts["step"].to_numpy(),
+        "kind": np.where(contacts["wall"].to_numpy() < 0, "pair", "wall"),
+        "d": d,
+        "missing": np.isnan(sim).any(axis=1),
+    })
+    keys = ["step", "kind"] if by_frame else ["kind"]
+    rows = []
+    for key, sub in df.groupby(keys, sort=True):
+        ok = sub["d"].to_numpy()[~sub["missing"].to_numpy() & np.isfinite(sub["d"].to_numpy())]
+        row = dict(zip(keys, key))
+        row.update(count=len(ok), n_missing=int(sub["missing"].sum()))
+        if len(ok):
+            row.update(median=float(np.median(ok)), p95=float(np.quantile(ok, 0.95)), max=float(ok.max()))
+        else:
+            row.update(median=math.nan, p95=math.nan, max=math.nan)
+        rows.append(row)
+    return pd.DataFrame(rows, columns=[*keys, "count", "n_missing", "median", "p95", "max"])
+
+
+def _require(df: pd.DataFrame, columns: Sequence[str], table: str) -> None:
+    missing = [c for c in columns if c not in df.columns]
+    if missing:
+        raise DemsplitError(
+            f"the {table} table has no column(s) {missing} (it has {list(df.columns)}).",
+            fix="rerun demsplit with a version that writes these columns.",
+        )

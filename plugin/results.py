@@ -1,0 +1,266 @@
+"""The results of a demsplit analysis as tidy pandas DataFrames.
+
+:class:`Results` holds one DataFrame per table, one row per observation:
+
+``particles``
+    one row per particle and frame: ``step``, ``id``, ``type``, ``radius`` (m),
+    ``u``, ``u_n``, ``u_t`` (J, material distribution law), ``u_equal`` (J, 50/50
+    split), ``u_radius`` (J, radius-weighted split), ``n_contacts``; optionally
+    ``u_springs`` (J).
+``contacts``
+    one row per contact and frame: ``step``, ``id1``, ``id2`` (-1 for a wall),
+    ``wall`` (-1 for pairs), ``delta`` (m), ``u_n``, ``u_t``, ``u1``, ``u2`` (J),
+    ``share_n1``, ``share_t1``, ``depth1`` (m), ``cpx cpy cpz`` (m), optionally
+    ``cpx_sim cpy_sim cpz_sim`` (m, the simulator's own contact point).
+``walls``
+    one row per wall and frame: ``step``, ``wall``, ``u``, ``u_n``, ``u_t`` (J),
+    ``n_contacts``.
+``frames``
+    one row per frame: ``step``, ``time`` (s), ``n_particles``, ``n_contacts``,
+    ``n_wall_contacts``, ``u_n``, ``u_t`` (J), ``overlap_max_rel_error``.
+
+Every DataFrame carries ``df.attrs['units']``, a mapping column -> unit
+(``"1"`` for dimensionless numbers and counts). Rows are ordered by ``step``
+(stable: within a frame the pipeline's order is kept), whether the Results
+come from memory (:meth:`Results.from_frames`) or from a store
+(:func:`load_results`), so both give identical DataFrames.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .errors import StoreError
+
+Table = dict[str, np.ndarray]
+
+TABLES = ("particles", "contacts", "walls", "frames")
+"""The tables of a result set, in the order they are stored."""
+
+_ENERGY = {c: "J" for c in ("u", "u_n", "u_t", "u_equal", "u_radius", "u_springs", "u1", "u2")}
+_LENGTH = {c: "m" for c in ("radius", "delta", "depth1", "cpx", "cpy", "cpz", "cpx_sim", "cpy_sim", "cpz_sim")}
+_COUNT = {c: "1" for c in ("step", "id", "id1", "id2", "wall", "type", "n_contacts", "n_particles",
+                           "n_wall_contacts", "share_n1", "share_t1", "overlap_max_rel_error")}
+UNITS: dict[str, str] = {**_ENERGY, **_LENGTH, **_COUNT, "time": "s"}
+"""Unit of every known column; a column not listed here gets the unit ``""`` (unknown)."""
+
+_INT64 = ("step", "id", "id1", "id2", "wall", "n_contacts", "n_particles", "n_wall_contacts")
+_INT32 = ("type",)
+
+
+def canonical_column(name: str, values: np.ndarray, *, table: str = "", step: int | None = None) -> np.ndarray:
+    """``values`` as the canonical dtype of column ``name``: int64 for steps,
+    ids, wall indices and counts, int32 for types, float64 for everything else.
+
+    Integer columns given as floats must hold integral values (a NaN id or a
+    ``1.23457e+06`` count is an error, never a silent cast).
+    """
+    values = np.asarray(values)
+    if name in _INT64 or name in _INT32:
+        dtype = np.int64 if name in _INT64 else np.int32
+        if values.dtype.kind == "f":
+            bad = ~np.isfinite(values) | (values != np.round(values))
+            if bad.any():
+                row = int(np.flatnonzero(bad)[0])
+                raise StoreError(
+                    f"column {table}.{name} must hold integers, found {values[row]!r} in row {row}.",
+                    step=step,
+                    fix="pass integer arrays for ids, types, steps and counts.",
+                )
+        elif values.dtype.kind not in "iub":
+            raise StoreError(
+                f"column {table}.{name} must hold integers, found dtype {values.dtype}.",
+                step=step,
+                fix="pass integer arrays for ids, types, steps and counts.",
+            )
+        return values.astype(dtype, copy=False)
+    if values.dtype.kind not in "fiub":
+        raise StoreError(
+            f"column {table}.{name} must be numeric, found dtype {values.dtype}.",
+            step=step,
+            fix="pass numeric numpy arrays for every result column.",
+        )
+    return values.astype(np.float64, copy=False)
+
+
+def canonical_table(name: str, table: Mapping[str, np.ndarray], *, step: int | None = None) -> Table:
+    """Every column of ``table`` in its canonical dtype, all of one length."""
+    out = {col: canonical_column(col, vals, table=name, step=step) for col, vals in table.items()}
+    lengths = {col: len(v) for col, v in out.items()}
+    if len(set(lengths.values())) > 1:
+        raise StoreError(
+            f"table {name!r} has columns of different lengths: {lengths}.",
+            step=step,
+            fix="give every column of a table one value per row.",
+        )
+    return out
+
+
+def to_dataframe(table: Mapping[str, np.ndarray]) -> pd.DataFrame:
+    """A DataFrame of ``table`` (column order kept) with ``attrs['units']`` set."""
+    df = pd.DataFrame({col: np.asarray(vals) for col, vals in table.items()})
+    df.attrs["units"] = {col: UNITS.get(col, "") for col in df.columns}
+    return df
+
+
+def _sorted_by_step(table: Table) -> Table:
+    if "step" not in table or len(table["step"]) == 0:
+        return table
+    order = np.argsort(table["step"], kind="stable")
+    return {col: vals[order] for col, vals in table.items()}
+
+
+def walls_meta_from_scene(scene) -> list[dict]:
+    """``walls_meta`` (one JSON-able dict per wall index: ``wall``, ``name``,
+    ``kind``, ``type``) from a :class:`demsplit.scene.Scene`."""
+    return [{"wall": k, "name": w.name, "kind": w.kind, "type": int(w.type)} for k, w in enumerate(scene.walls)]
+
+
+@dataclass
+class Results:
+    """Per-particle, per-contact, per-wall and per-frame results of a run.
+
+    Build it with :meth:`from_frames` (per-frame tables from the pipeline),
+    :meth:`from_tables` (tables already holding every frame) or
+    :func:`load_results` (a store written by :class:`demsplit.store.ResultWriter`).
+    """
+
+    particles: pd.DataFrame
+    contacts: pd.DataFrame
+    walls: pd.DataFrame
+    frames: pd.DataFrame
+    provenance: dict = field(default_factory=dict)
+    walls_meta: list[dict] = field(default_factory=list)
+
+    @classmethod
+    def from_tables(
+        cls,
+        tables: Mapping[str, Mapping[str, np.ndarray]],
+        provenance: dict | None = None,
+        walls_meta: list[dict] | None = None,
+    ) -> "Results":
+        """Results from tables that already hold every frame (missing tables are empty)."""
+        unknown = set(tables) - set(TABLES)
+        if unknown:
+            raise StoreError(f"unknown table(s) {sorted(unknown)}; expected some of {list(TABLES)}.",
+                             fix="name the tables particles, contacts, walls, frames.")
+        frames = {
+            name: to_dataframe(_sorted_by_step(canonical_table(name, tables.get(name, {}))))
+            for name in TABLES
+        }
+        return cls(**frames, provenance=dict(provenance or {}), walls_meta=list(walls_meta or []))
+
+    @classmethod
+    def from_frames(
+        cls,
+        frames: Iterable[Mapping[str, Mapping[str, np.ndarray]]],
+        provenance: dict | None = None,
+        walls_meta: list[dict] | None = None,
+    ) -> "Results":
+        """Results from per-frame tables (the dicts the pipeline hands to
+        :meth:`demsplit.store.ResultWriter.append`), concatenated in step order.
+
+        Every frame must give a table the same columns (an absent table counts
+        as an empty one).
+        """
+        parts: dict[str, list[Table]] = {name: [] for name in TABLES}
+        columns: dict[str, list[str]] = {}
+        for frame in frames:
+            step = int(np.asarray(frame["frames"]["step"])[0]) if "frames" in frame else None
+            for name, table in frame.items():
+                if name not in parts:
+                    raise StoreError(f"unknown table {name!r}; expected some of {list(TABLES)}.", step=step,
+                                     fix="name the tables particles, contacts, walls, frames.")
+                cols = columns.setdefault(name, list(table))
+                if list(table) != cols:
+                    raise StoreError(
+                        f"table {name!r} has columns {list(table)}, earlier frames had {cols}.",
+                        step=step,
+                        fix="give every frame the same columns (fill what is unknown with NaN).",
+                    )
+                parts[name].append(canonical_table(name, table, step=step))
+        tables = {
+            name: {col: np.concatenate([p[col] for p in parts[name]]) for col in columns[name]}
+            for name in TABLES
+            if name in columns
+        }
+        return cls.from_tables(tables, provenance, walls_meta)
+
+    @property
+    def steps(self) -> np.ndarray:
+        """Timesteps of the frames, in stored order."""
+        return self.frames["step"].to_numpy() if "step" in self.frames else np.empty(0, np.int64)
+
+    def frame(self, step: int) -> "Results":
+        """The results of one frame (timestep ``step``)."""
+        if step not in set(self.steps.tolist()):
+            raise StoreError(f"no frame with timestep {step}; the results hold {_describe_steps(self.steps)}.",
+                             fix="pick one of the stored timesteps.")
+        pick = {name: getattr(self, name) for name in TABLES}
+        return Results(
+            **{name: _with_units(df[df["step"] == step].reset_index(drop=True), df) for name, df in pick.items()},
+            provenance=self.provenance,
+            walls_meta=self.walls_meta,
+        )
+
+    # Statistics (formulas in demsplit.aggregate)
+    def per_type(self, value: str = "u", *, by_frame: bool = True) -> pd.DataFrame:
+        """Distribution statistics of ``value`` per particle type (see :func:`demsplit.aggregate.per_type`)."""
+        from .aggregate import per_type
+
+        return per_type(self.particles, value, by_frame=by_frame)
+
+    def per_size(self, bins=None, value: str = "u", *, by_frame: bool = True) -> pd.DataFrame:
+        """Statistics of ``value`` per radius class (see :func:`demsplit.aggregate.per_size`)."""
+        from .aggregate import per_size
+
+        return per_size(self.particles, bins, value, by_frame=by_frame)
+
+    def per_frame(self) -> pd.DataFrame:
+        """Time series of totals and distribution statistics (see :func:`demsplit.aggregate.per_frame`)."""
+        from .aggregate import per_frame
+
+        return per_frame(self.particles, self.walls, self.frames)
+
+    def split_comparison(self, *, by_frame: bool = True) -> pd.DataFrame:
+        """Material law against 50/50 and radius splits per type (see
+        :func:`demsplit.aggregate.split_comparison`)."""
+        from .aggregate import split_comparison
+
+        return split_comparison(self.particles, by_frame=by_frame)
+
+    def contact_point_shift(self, *, by_frame: bool = True) -> pd.DataFrame:
+        """|cp - cp_sim|/delta statistics (see :func:`demsplit.aggregate.contact_point_shift`)."""
+        from .aggregate import contact_point_shift
+
+        return contact_point_shift(self.contacts, by_frame=by_frame)
+
+    def wall_energy(self) -> pd.DataFrame:
+        """Energy per wall and frame, with the wall names (see :func:`demsplit.aggregate.wall_energy`)."""
+        from .aggregate import wall_energy
+
+        return wall_energy(self.walls, self.walls_meta, self.frames)
+
+
+def _with_units(df: pd.DataFrame, like: pd.DataFrame) -> pd.DataFrame:
+    df.attrs["units"] = dict(like.attrs.get("units", {}))
+    return df
+
+
+def _describe_steps(steps: np.ndarray) -> str:
+    if len(steps) == 0:
+        return "no frames"
+    return f"{len(steps)} frame(s), timesteps {steps.min()}..{steps.max()}"
+
+
+def load_results(path: str | Path, *, steps: Iterable[int] | None = None) -> Results:
+    """Read a result store written by :class:`demsplit.store.ResultWriter`
+    (all frames, or only timesteps ``steps``)."""
+    from .store import read_store
+
+    return read_store(path, steps=steps)
