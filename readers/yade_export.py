@@ -1,0 +1,449 @@
+"""Readers of YADE's own text exports: ``yade.export.VTKExporter`` legacy ASCII
+VTK files (spheres, interactions) and ``yade.export.text``/``textExt`` sphere
+files.
+
+All of them print ``%g`` (6 significant digits). An overlap recomputed from
+such positions, delta = r1 + r2 - |x2 - x1|, has an absolute error up to
+sqrt(3) h, with h = 10^(floor(log10 max|x|) - 5) the last printed digit of the
+coordinates; its relative bound sqrt(3) h / delta is computed per contact and
+the frame is refused with :class:`~demsplit.errors.PrecisionError` when the
+largest bound exceeds ``tolerance``. A dumped ``penetrationDepth`` (a VTK
+``what`` field) is used instead when present: rounding delta itself to 6
+digits costs at most 5e-6 relative. For full precision use
+:func:`demsplit.yade.snapshot`.
+
+What the files hold (yade 2023.02a, py/export.py):
+
+- ``exportSpheres``: sphere centres (wrapped into the periodic cell), ``radius``,
+  and the ``what`` point fields; demsplit needs ``what=dict(id='b.id',
+  matId='b.material.id')``.
+- ``exportInteractions``: for each real interaction two points, the centre of
+  body 1 and the centre of body 2 + hSize.cellDist (unwrapped, so consistent
+  with each other), and the ``what`` cell fields. demsplit needs ``id1``,
+  ``id2`` and reads, when present, ``penetrationDepth``, ``normal``,
+  ``refR1``, ``refR2``, ``kno``, ``kso``, ``kn``, ``ks``, ``normalForce``,
+  ``shearForce``, ``contactPoint``. Without ``what`` the file has no data.
+- ``text``/``textExt``: ``#format x_y_z_r`` (or ``x_y_z_r_matId``,
+  ``id_x_y_z_r_matId``) then one sphere per line, unwrapped positions, no
+  contacts: contacts are recomputed from positions.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from demsplit.errors import InputFormatError, MaterialError, PrecisionError
+from demsplit.frame import Box, Frame, Table
+
+from .yade_snapshot import particle_first
+
+SNAPSHOT_FIX = ("write full-precision snapshots with demsplit.yade.snapshot() from a PyRunner "
+                "(see docs/yade.md), or raise the tolerance")
+VTK_ID_FIX = ("export with VTKExporter.exportSpheres(what=dict(id='b.id', matId='b.material.id')) and "
+              "exportInteractions(what=dict(id1='i.id1', id2='i.id2', penetrationDepth='i.geom.penetrationDepth', ...))")
+PERCENT_G_DIGITS = 6
+PERCENT_G_MAX_INT = 999_999
+"""Integers above this are printed by ``%g`` as ``1.23457e+06``: ids destroyed."""
+
+
+# --------------------------------------------------------------------------
+# Legacy ASCII VTK
+# --------------------------------------------------------------------------
+
+class VtkPolyData:
+    """The parts of a legacy ASCII POLYDATA file that VTKExporter writes:
+    ``points`` (n, 3), ``lines`` (m, 2) point indices or None, and
+    ``point_data`` / ``cell_data`` name -> array ((n,), (n, 3) or (n, 3, 3))."""
+
+    def __init__(self, path: Path, comment: str, points: np.ndarray, lines: np.ndarray | None,
+                 point_data: dict[str, np.ndarray], cell_data: dict[str, np.ndarray]) -> None:
+        self.path, self.comment = path, comment
+        self.points, self.lines = points, lines
+        self.point_data, self.cell_data = point_data, cell_data
+
+
+_COMPONENTS = {"SCALARS": 1, "VECTORS": 3, "NORMALS": 3, "TENSORS": 9}
+
+
+def read_vtk(path: str | Path) -> VtkPolyData:
+    """Parse a legacy ASCII VTK POLYDATA file (as written by VTKExporter).
+
+    The header (3 lines) is read as text; the body is split into tokens once
+    and each numeric block converted by numpy.
+    """
+    path = Path(path)
+    text = path.read_text()
+    head = text.split("\n", 3)
+    if len(head) < 4 or not head[0].startswith("# vtk DataFile"):
+        raise InputFormatError(f"not a legacy VTK file: first line {head[0][:40]!r}, expected '# vtk DataFile ...'.",
+                               file=path, line=1, fix="give a file written by yade.export.VTKExporter.")
+    if head[2].strip() != "ASCII":
+        raise InputFormatError(f"expected an ASCII VTK file, found {head[2].strip()!r}.", file=path, line=3,
+                               fix="give a file written by yade.export.VTKExporter (ASCII).")
+    tokens = head[3].split()
+    pos = 0
+
+    def numbers(count: int, what: str) -> np.ndarray:
+        nonlocal pos
+        block = tokens[pos:pos + count]
+        if len(block) < count:
+            raise InputFormatError(f"{what}: expected {count} numbers, the file ends after {len(block)}.",
+                                   file=path, fix="the export was cut short; export again.")
+        try:
+            values = np.array(block, dtype=np.float64)
+        except ValueError:
+            bad = next(t for t in block if not _is_number(t))
+            raise InputFormatError(f"{what}: expected {count} numbers, found {bad!r} among them.",
+                                   file=path, fix="the file is damaged or not VTKExporter's; export again.") from None
+        pos += count
+        return values
+
+    points = lines = None
+    point_data: dict[str, np.ndarray] = {}
+    cell_data: dict[str, np.ndarray] = {}
+    target, n_target = None, 0
+    while pos < len(tokens):
+        key = tokens[pos]
+        if key == "DATASET":
+            if tokens[pos + 1] != "POLYDATA":
+                raise InputFormatError(f"expected DATASET POLYDATA, found DATASET {tokens[pos + 1]}.", file=path,
+                                       fix="give a sphere or interaction file of yade.export.VTKExporter.")
+            pos += 2
+        elif key == "POINTS":
+            n = int(tokens[pos + 1])
+            pos += 3
+            points = numbers(3 * n, "POINTS").reshape(n, 3)
+        elif key == "LINES":
+            n, size = int(tokens[pos + 1]), int(tokens[pos + 2])
+            pos += 3
+            conn = numbers(size, "LINES").astype(np.int64).reshape(n, size // n)
+            if (conn[:, 0] != 2).any():
+                raise InputFormatError("LINES with other than 2 points per line.", file=path,
+                                       fix="give an interaction file of yade.export.VTKExporter.")
+            lines = conn[:, 1:]
+        elif key in ("POINT_DATA", "CELL_DATA"):
+            n_target = int(tokens[pos + 1])
+            target = point_data if key == "POINT_DATA" else cell_data
+            pos += 2
+        elif key in _COMPONENTS:
+            if target is None:
+                raise InputFormatError(f"{key} before POINT_DATA/CELL_DATA.", file=path,
+                                       fix="give a file written by yade.export.VTKExporter.")
+            name = tokens[pos + 1]
+            ncomp = _COMPONENTS[key]
+            pos += 3
+            if key == "SCALARS":
+                if tokens[pos] != "LOOKUP_TABLE":  # optional component count
+                    ncomp = int(tokens[pos])
+                    pos += 1
+                pos += 2  # LOOKUP_TABLE default
+            values = numbers(ncomp * n_target, f"{key} {name}")
+            shape = {1: (n_target,), 3: (n_target, 3), 9: (n_target, 3, 3)}.get(ncomp, (n_target, ncomp))
+            target[name] = values.reshape(shape)
+        else:
+            raise InputFormatError(f"unexpected keyword {key!r} in the VTK body.", file=path,
+                                   fix="give a sphere or interaction file of yade.export.VTKExporter.")
+    if points is None:
+        raise InputFormatError("no POINTS section.", file=path, fix="give a file written by yade.export.VTKExporter.")
+    return VtkPolyData(path, head[1], points, lines, point_data, cell_data)
+
+
+def _is_number(token: str) -> bool:
+    try:
+        float(token)
+    except ValueError:
+        return False
+    return True
+
+
+# --------------------------------------------------------------------------
+# Precision of %g numbers
+# --------------------------------------------------------------------------
+
+def percent_g_unit(x: np.ndarray) -> np.ndarray:
+    """Value of the last printed digit of ``%g`` numbers: 10^(floor(log10|x|) - 5) (same units as x)."""
+    ax = np.abs(np.asarray(x, dtype=np.float64))
+    return np.where(ax > 0, 10.0 ** (np.floor(np.log10(np.where(ax > 0, ax, 1.0))) - (PERCENT_G_DIGITS - 1)), 0.0)
+
+
+def overlap_error_bound(x1: np.ndarray, x2: np.ndarray, delta: np.ndarray) -> np.ndarray:
+    """Relative error bound sqrt(3) h / delta of overlaps recomputed from ``%g``
+    centres ``x1``, ``x2`` (shape (n, 3), m), with h the last printed digit of
+    the largest coordinate of the pair (inf where delta <= 0)."""
+    h = percent_g_unit(np.maximum(np.abs(x1).max(axis=1), np.abs(x2).max(axis=1)))
+    with np.errstate(divide="ignore"):
+        return np.where(delta > 0, np.sqrt(3.0) * h / np.where(delta > 0, delta, 1.0), np.inf)
+
+
+def check_overlap_precision(bound: np.ndarray, tolerance: float, *, path: Path, step: int | None,
+                            what: str) -> None:
+    """Raise :class:`PrecisionError` when the worst relative bound exceeds ``tolerance``."""
+    if len(bound) and bound.max() > tolerance:
+        worst = int(np.argmax(bound))
+        raise PrecisionError(
+            f"overlaps recomputed from {what} ({PERCENT_G_DIGITS} significant digits) carry a relative error "
+            f"up to {bound[worst]:.3g} (contact row {worst}; {int((bound > tolerance).sum())} of {len(bound)} "
+            f"contacts above the tolerance {tolerance:g}).",
+            file=path, step=step, fix=SNAPSHOT_FIX + ".")
+
+
+def check_percent_g_ids(ids: np.ndarray, *, path: Path, what: str) -> np.ndarray:
+    """Ids printed with ``%g`` as int64; refuse ids that %g has destroyed."""
+    ids = np.asarray(ids, dtype=np.float64)
+    if (ids > PERCENT_G_MAX_INT).any() or (ids != np.rint(ids)).any():
+        raise PrecisionError(
+            f"{what} are printed with %g, which keeps 6 digits: ids above {PERCENT_G_MAX_INT} are destroyed "
+            f"(largest here {ids.max():g}).", file=path, fix=SNAPSHOT_FIX.split(", or")[0] + ".")
+    return ids.astype(np.int64)
+
+
+# --------------------------------------------------------------------------
+# Frames from VTKExporter files
+# --------------------------------------------------------------------------
+
+def _missing(have: dict, need: tuple[str, ...], *, path: Path, what: str, fix: str) -> None:
+    missing = [n for n in need if n not in have]
+    if missing:
+        raise InputFormatError(f"the {what} lacks the field(s) {missing} (it has {sorted(have)}).",
+                               file=path, fix=fix + ".")
+
+
+def vtk_particles(spheres: VtkPolyData, *, default_type: int | None = None) -> Table:
+    """Particles table from an ``exportSpheres`` file with ``id`` and
+    ``matId`` (or ``materialId``) point fields; ``default_type`` stands in for
+    a missing material field."""
+    pdata = spheres.point_data
+    _missing(pdata, ("radius", "id"), path=spheres.path, what="sphere file", fix=VTK_ID_FIX)
+    mat_field = next((k for k in ("matId", "materialId", "material") if k in pdata), None)
+    if mat_field is None and default_type is None:
+        raise MaterialError(
+            f"the sphere file has no material id field (fields: {sorted(pdata)}), so the material of each "
+            "sphere is unknown.", file=spheres.path, fix=VTK_ID_FIX + ", or pass default_type=")
+    n = len(spheres.points)
+    types = (check_percent_g_ids(pdata[mat_field], path=spheres.path, what="material ids")
+             if mat_field else np.full(n, default_type))
+    return {
+        "id": check_percent_g_ids(pdata["id"], path=spheres.path, what="sphere ids"),
+        "type": types.astype(np.int32),
+        "x": spheres.points[:, 0], "y": spheres.points[:, 1], "z": spheres.points[:, 2],
+        "radius": pdata["radius"],
+    }
+
+
+def read_vtk_frame(spheres_path: str | Path, interactions_path: str | Path | None = None, *,
+                   tolerance: float = 1e-3, step: int | None = None, default_type: int | None = None,
+                   wall_ids: list[int] | None = None, box: Box | None = None) -> Frame:
+    """One Frame from VTKExporter's sphere file and (optionally) interaction file.
+
+    ``delta`` is the dumped ``penetrationDepth`` field when present (``%g`` of
+    delta: error <= 5e-6 relative), otherwise recomputed from the two printed
+    centres and the sphere radii (refused above ``tolerance``, see the module
+    docstring). Contacts whose partner is not in the sphere file are wall,
+    facet or box contacts: they need ``penetrationDepth``, ``normal``,
+    ``refR1`` and ``refR2`` fields; their wall index is the position of the
+    body id in ``wall_ids`` (default: the sorted non-sphere ids found).
+    ``step`` defaults to the number in the file name (VTKExporter's numLabel).
+    """
+    spheres = read_vtk(spheres_path)
+    if step is None:
+        digits = "".join(c for c in Path(spheres_path).stem.rsplit("-", 1)[-1] if c.isdigit())
+        step = int(digits) if digits else 0
+    particles = vtk_particles(spheres, default_type=default_type)
+    notes = ["YADE VTKExporter export (%g)"]
+    if interactions_path is None:
+        return Frame(step=step, particles=particles, contacts={}, box=box, source=(str(spheres_path),),
+                     notes=notes + ["no interaction file: no contacts"])
+    inter = read_vtk(interactions_path)
+    path = inter.path
+    cdata = inter.cell_data
+    _missing(cdata, ("id1", "id2"), path=path, what="interaction file", fix=VTK_ID_FIX)
+    id1 = check_percent_g_ids(cdata["id1"], path=path, what="interaction id1 values")
+    id2 = check_percent_g_ids(cdata["id2"], path=path, what="interaction id2 values")
+    p = inter.points[inter.lines] if inter.lines is not None else inter.points.reshape(-1, 2, 3)
+    xa, xb = p[:, 0], p[:, 1]
+
+    sorted_ids = np.sort(particles["id"])
+    order = np.argsort(particles["id"])
+
+    def sphere_row(ids: np.ndarray) -> np.ndarray:
+        k = np.clip(np.searchsorted(sorted_ids, ids), 0, max(len(sorted_ids) - 1, 0))
+        found = sorted_ids[k] == ids if len(sorted_ids) else np.zeros(len(ids), bool)
+        return np.where(found, order[k], -1)
+
+    ra, rb = sphere_row(id1), sphere_row(id2)
+    sa, sb = ra >= 0, rb >= 0
+    pair = sa & sb
+    if not (sa | sb).all():
+        i = int(np.flatnonzero(~(sa | sb))[0])
+        raise InputFormatError(f"interaction {id1[i]}-{id2[i]}: neither body is in the sphere file.",
+                               file=path, step=step, fix="export all spheres (ids='all') at the same iteration.")
+    if not pair.all():
+        _missing(cdata, ("penetrationDepth", "normal", "refR1", "refR2"), path=path,
+                 what="interaction file (needed for wall/facet/box contacts, whose geometry is not exported)",
+                 fix=VTK_ID_FIX)
+    others = np.concatenate([id1[~sa], id2[~sb]])
+    wall_ids = np.unique(others) if wall_ids is None else np.asarray(wall_ids, dtype=np.int64)
+    unknown = np.setdiff1d(others, wall_ids)
+    if len(unknown):
+        raise InputFormatError(f"bodies {unknown.tolist()} are neither spheres of the sphere file nor in wall_ids.",
+                               file=path, step=step, fix="list every wall, facet and box body id in wall_ids.")
+    wall_order = np.argsort(wall_ids)
+
+    def wall_index(ids: np.ndarray, is_sphere: np.ndarray) -> np.ndarray:
+        k = np.searchsorted(wall_ids[wall_order], ids) if len(wall_ids) else np.zeros(len(ids), np.int64)
+        return np.where(is_sphere, -1, wall_order[np.clip(k, 0, max(len(wall_ids) - 1, 0))] if len(wall_ids) else -1)
+
+    wall1, wall2 = wall_index(id1, sa), wall_index(id2, sb)
+
+    radius = particles["radius"]
+    refR1 = cdata["refR1"] if "refR1" in cdata else radius[np.maximum(ra, 0)]
+    refR2 = cdata["refR2"] if "refR2" in cdata else radius[np.maximum(rb, 0)]
+    if "penetrationDepth" in cdata:
+        delta = cdata["penetrationDepth"]
+        overlap_source = "VTK penetrationDepth field (%g: <= 5e-6 relative)"
+        bound = np.full(len(delta), 5e-6)
+    else:
+        delta = refR1 + refR2 - np.linalg.norm(xb - xa, axis=1)
+        bound = overlap_error_bound(xa, xb, delta)
+        check_overlap_precision(bound, tolerance, path=path, step=step, what="VTKExporter's %g centres")
+        overlap_source = "recomputed from VTK %g centres"
+    if "normal" in cdata:
+        normal = cdata["normal"]
+    else:
+        d = xb - xa
+        normal = d / np.linalg.norm(d, axis=1)[:, None]
+    t = {"id1": id1, "id2": id2, "delta": delta, "nx": normal[:, 0], "ny": normal[:, 1], "nz": normal[:, 2],
+         "refR1": refR1, "refR2": refR2, "xa": xa[:, 0], "ya": xa[:, 1], "za": xa[:, 2],
+         "xb": xb[:, 0], "yb": xb[:, 1], "zb": xb[:, 2]}
+    for vec, prefix in (("normalForce", "fn"), ("shearForce", "fs"), ("contactPoint", "cp")):
+        if vec in cdata:
+            t.update({prefix + a: cdata[vec][:, k] for k, a in enumerate("xyz")})
+    t.update({c: cdata[c] for c in ("kn", "ks", "kno", "kso") if c in cdata})
+    if "cpx" in t:
+        t["cpx"], t["cpy"], t["cpz"] = t.pop("cpx"), t.pop("cpy"), t.pop("cpz")
+    contacts = particle_first(t, sa, wall1, wall2)
+    types = particles["type"]
+    contacts["type1"] = types[np.where(sa, ra, rb)]
+    # wall types are not in the export: they come from the scene's wall list
+    keep = contacts["delta"] >= 0
+    if not keep.all():
+        notes.append(f"{int((~keep).sum())} interaction(s) with negative overlap left out (no elastic energy)")
+        contacts = {c: v[keep] for c, v in contacts.items()}
+        bound = bound[keep]
+    if len(wall_ids):
+        notes.append(f"wall index k is YADE body wall_ids[k], wall_ids = {wall_ids.tolist()}")
+    return Frame(step=step, particles=particles, contacts=contacts, box=box,
+                 source=(str(spheres_path), str(interactions_path)), overlap_source=overlap_source,
+                 overlap_error=bound, notes=notes)
+
+
+# --------------------------------------------------------------------------
+# export.text / textExt
+# --------------------------------------------------------------------------
+
+TEXT_FORMATS = {"x_y_z_r": ("x", "y", "z", "radius"),
+                "x_y_z_r_matId": ("x", "y", "z", "radius", "type"),
+                "id_x_y_z_r_matId": ("id", "x", "y", "z", "radius", "type")}
+
+
+def overlapping_pairs(x: np.ndarray, radius: np.ndarray, box: Box | None = None,
+                      chunk: int = 2048) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """All pairs i < j of spheres that overlap (delta > 0): ``(i, j, d)`` with
+    d = x_j - x_i (minimum image in a periodic ``box``).
+
+    Sweep along x: spheres sorted by x, each compared with the followers
+    within r_i + r_max (vectorised over chunks of spheres).
+    """
+    n = len(x)
+    order = np.argsort(x[:, 0], kind="stable")
+    xs, rs = x[order], radius[order]
+    rmax = rs.max() if n else 0.0
+    periodic_x = box is not None and box.periodic[0]
+    I, J = [], []
+    for lo in range(0, n, chunk):
+        hi = min(n, lo + chunk)
+        i = np.arange(lo, hi)
+        if periodic_x:  # every pair is a candidate along a periodic x: compare with all followers
+            end = np.full(len(i), n)
+        else:
+            end = np.searchsorted(xs[:, 0], xs[i, 0] + rs[i] + rmax, side="right")
+        counts = end - i - 1
+        ii = np.repeat(i, counts)
+        jj = ii + 1 + (np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts))
+        d = xs[jj] - xs[ii]
+        if box is not None:
+            d = box.minimum_image(d)
+        hit = np.einsum("ij,ij->i", d, d) < (rs[ii] + rs[jj]) ** 2
+        I.append(ii[hit])
+        J.append(jj[hit])
+    ii, jj = (np.concatenate(I), np.concatenate(J)) if I else (np.zeros(0, np.int64),) * 2
+    d = xs[jj] - xs[ii]
+    if box is not None:
+        d = box.minimum_image(d)
+    return order[ii], order[jj], d
+
+
+def read_export_text(path: str | Path, *, tolerance: float = 1e-3, step: int = 0,
+                     default_type: int | None = None, sequential_ids: bool = False,
+                     box: Box | None = None) -> Frame:
+    """One Frame from an ``export.text``/``textExt`` sphere file.
+
+    Formats ``x_y_z_r``, ``x_y_z_r_matId``, ``id_x_y_z_r_matId``. Without ids
+    the file cannot be related to YADE's bodies: pass ``sequential_ids=True``
+    to number the spheres 0, 1, ... in file order. Without material ids pass
+    ``default_type``. Contacts are the overlapping sphere pairs recomputed from
+    the ``%g`` positions (walls are not in the file); they are refused with
+    :class:`PrecisionError` when the error bound exceeds ``tolerance``. Pass
+    the periodic cell as ``box`` for periodic runs (positions are unwrapped).
+    """
+    path = Path(path)
+    with open(path) as f:
+        first = f.readline()
+    if not first.startswith("#format "):
+        raise InputFormatError(f"expected the '#format <name>' line of yade.export.textExt, found {first[:40]!r}.",
+                               file=path, line=1, fix="give a file written by yade.export.text or textExt.")
+    fmt = first.split()[1]
+    if fmt not in TEXT_FORMATS:
+        raise InputFormatError(f"format {fmt!r} is not readable (readable: {sorted(TEXT_FORMATS)}).", file=path,
+                               line=1, fix="export with textExt(format='id_x_y_z_r_matId').")
+    cols = TEXT_FORMATS[fmt]
+    try:
+        data = np.loadtxt(path, comments="#", ndmin=2)
+    except ValueError as err:
+        raise InputFormatError(f"a sphere line is not {len(cols)} numbers ({err}).", file=path,
+                               fix="the file is damaged; export again.") from None
+    if data.size and data.shape[1] != len(cols):
+        raise InputFormatError(f"format {fmt} has {len(cols)} columns, the file has {data.shape[1]}.", file=path,
+                               fix="export again with textExt.")
+    table = {c: data[:, k] for k, c in enumerate(cols)}
+    missing = [fact for fact, ok in (("sphere ids", "id" in table or sequential_ids),
+                                     ("material ids", "type" in table or default_type is not None)) if not ok]
+    if missing:
+        raise InputFormatError(
+            f"format {fmt} lacks {' and '.join(missing)}.", file=path, line=1,
+            fix="export with textExt(format='id_x_y_z_r_matId'), or pass sequential_ids=True / default_type=.")
+    n = len(data)
+    ids = (check_percent_g_ids(table["id"], path=path, what="sphere ids") if "id" in table
+           else np.arange(n, dtype=np.int64))
+    types = (check_percent_g_ids(table["type"], path=path, what="material ids") if "type" in table
+             else np.full(n, default_type, dtype=np.int64))
+    x = np.stack([table["x"], table["y"], table["z"]], axis=-1)
+    particles = {"id": ids, "type": types.astype(np.int32), "x": x[:, 0], "y": x[:, 1], "z": x[:, 2],
+                 "radius": table["radius"]}
+    i, j, d = overlapping_pairs(x, table["radius"], box)
+    dist = np.linalg.norm(d, axis=1)
+    delta = table["radius"][i] + table["radius"][j] - dist
+    bound = overlap_error_bound(x[i], x[i] + d, delta)
+    check_overlap_precision(bound, tolerance, path=path, step=step, what="export.text's %g positions")
+    n_vec = d / dist[:, None]
+    contacts = {"id1": ids[i], "id2": ids[j], "wall": np.full(len(i), -1, dtype=np.int64), "delta": delta,
+                "nx": n_vec[:, 0], "ny": n_vec[:, 1], "nz": n_vec[:, 2],
+                "x1": x[i, 0], "y1": x[i, 1], "z1": x[i, 2], "r1": table["radius"][i], "r2": table["radius"][j],
+                "type1": types[i].astype(np.int32), "type2": types[j].astype(np.int32)}
+    notes = ["YADE export.text (%g): sphere-sphere overlaps recomputed from positions; wall contacts are not in the file"]
+    if "id" not in table:
+        notes.append("ids are the sphere order in the file, not YADE body ids")
+    return Frame(step=step, particles=particles, contacts=contacts, box=box, source=(str(path),),
+                 overlap_source="recomputed from export.text %g positions", overlap_error=bound, notes=notes)
