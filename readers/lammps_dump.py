@@ -1,0 +1,780 @@
+"""Low-level readers of LAMMPS/LIGGGHTS dump files: per-frame column arrays.
+
+``open_dump(path)`` sniffs the file and returns a :class:`DumpFile`:
+
+* text ``dump custom`` atom dumps (``ITEM: ATOMS id type x ...``, kind ``'atoms'``),
+* text ``dump local`` dumps (``ITEM: ENTRIES c_cpgl[1] ...`` or any other
+  label set with ``dump_modify label``, kind ``'local'``),
+* the same text compressed with gzip, bzip2 or xz (recognised by the magic
+  bytes, whatever the suffix),
+* LAMMPS binary ``dump custom`` files (``*.bin``, native byte order; layout in
+  ``/work/shared/reference/liggghts.md`` §1). They carry no column names: pass
+  ``open_dump(path, columns=[...])`` or get ``col1..colN``.
+
+The reader does not interpret columns (which ``c_cpgl[k]`` is a force is
+decided elsewhere, from the input script). It parses fast, streams one frame at
+a time and reports bad input precisely.
+
+Index
+    The first access to ``n_frames``/``steps``/``frame(k)`` scans the
+    (decompressed) file once in 64 MiB chunks with ``bytes.find`` for
+    ``ITEM: TIMESTEP`` and ``bytes.count`` for newlines: no per-line Python.
+    Each frame's entry holds its step, header row count, box, column names,
+    the byte range of its rows and their line numbers. The index is cached on
+    the object. Binary files are indexed by hopping from header to header.
+
+Random access and compression
+    ``frame(k)`` of a plain file maps the file (``mmap``) and hands the frame's
+    byte range, without copying, to the parser. A compressed file has no
+    random access: ``frame(k)`` re-decompresses from the start up to frame k
+    (gzip/bz2/xz ``seek``); iteration (``for f in dump``) reads the stream once,
+    forwards, so streaming a compressed dump costs one decompression.
+
+Parser (measured)
+    Rows are parsed by ``pyarrow.csv.read_csv`` (space delimiter, one name per
+    field including the empty field after the trailing space, only the
+    requested columns converted). Measured with
+    ``python benchmarks/parse_engines.py`` (2 cores, Python 3.11.7, pyarrow
+    14, pandas 2, polars 1; best of 2 runs, seconds to numpy arrays):
+
+    =====================  ======  ===========  ========  ======  =============
+    frame / columns        pandas  pandas       pyarrow   polars  numpy
+                           C       (pyarrow)                      loadtxt
+    =====================  ======  ===========  ========  ======  =============
+    local 2e6 x 41, all    BENCH_LOCAL_ALL
+    local 2e6 x 41, 6      BENCH_LOCAL_6
+    atoms 1e6 x 16, all    BENCH_ATOM_ALL
+    atoms 1e6 x 16, 6      BENCH_ATOM_6
+    =====================  ======  ===========  ========  ======  =============
+
+    pyarrow also rejects ragged rows, which pandas and polars silently pad with
+    NaN. Peak memory above the imports is in the benchmark's output.
+
+Validation (every frame that is read)
+    * the header's ``NUMBER OF ATOMS/ENTRIES`` equals the number of lines
+      before the next ``ITEM: TIMESTEP`` (counted by the index scan); at the
+      end of the file a shortfall or a last line without newline is a
+      :class:`~demsplit.errors.TruncatedFileError`;
+    * every row has as many values as the header has names (pyarrow);
+    * every value is a number (pyarrow), and every value of the columns read is
+      finite (``numpy.isfinite``).
+    When one of these fails, a diagnostic pass over that frame alone finds the
+    first offending line (1-based, in the decompressed file) and column.
+    NaN/inf in columns that were not requested are not seen.
+
+Printed precision (``DumpFrame.digits``)
+    Columns parsed as exact integers (every token an integer literal: ``%d``,
+    or ``%g`` integers below 1e6) get ``None`` (exact), as do all binary
+    columns. For the others, the significant mantissa digits of each token of
+    the frame's first 1 MiB of rows are counted with vectorised byte
+    arithmetic (leading zeros and the exponent excluded), the maximum taken per
+    column (``observed``), and the frame's precision ``P`` = the largest
+    ``observed`` over all real-valued columns. A column whose sampled values
+    take at most 16 distinct values (a radius 0.001, a mass, zeros), which
+    therefore print with fewer digits than the format allows, gets ``P``;
+    every other column keeps its own ``observed`` (6 for ``%g``, 17 for
+    ``%.17g``). This assumes a low-variety column was printed with the frame's
+    finest float format.
+"""
+
+from __future__ import annotations
+
+import bz2
+import gzip
+import io
+import lzma
+import mmap
+import struct
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import BinaryIO
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.csv as pacsv
+
+from demsplit.errors import DemsplitError, InputFormatError, PrecisionError, TruncatedFileError
+from demsplit.frame import Box
+
+__all__ = ["open_dump", "DumpFile", "DumpFrame"]
+
+MARKER = b"ITEM: TIMESTEP"
+HEADER_LINES = 9            # TIMESTEP, step, NUMBER OF, n, BOX BOUNDS, 3 bounds, ITEM: <label> names
+HEADER_MAX = 1 << 16        # bytes a header may occupy (hundreds of column names fit)
+CHUNK = 1 << 26             # index scan chunk (64 MiB)
+DIGITS_SAMPLE = 1 << 20     # bytes of rows sampled per frame for DumpFrame.digits
+LOW_VARIETY = 16            # distinct values at or below which a column gets the frame's precision
+
+_MAGIC = {b"\x1f\x8b": gzip.open, b"BZh": bz2.open, b"\xfd7zXZ\x00": lzma.open}
+_BOUNDARY = {0: "p", 1: "f", 2: "s", 3: "m"}  # LAMMPS binary boundary codes
+
+FIX_COUNT = ("rewrite the dump, or cut the damaged frame with a text editor; the header count "
+             "and the rows of a frame must agree")
+FIX_TRUNCATED = ("the run was interrupted while writing: rerun, or drop the incomplete last frame "
+                 "(truncate the file before its last 'ITEM: TIMESTEP')")
+
+
+# --------------------------------------------------------------------------- frames
+
+@dataclass
+class DumpFrame:
+    """One frame of a dump: its step, box and the requested columns.
+
+    ``columns`` maps header names to arrays of length ``n_rows`` (float64, or
+    int64 for columns whose text is all integer literals). ``first_line`` is
+    the 1-based line number of the frame's first data row in the
+    (decompressed) file (``None`` for binary dumps), so row ``i`` is line
+    ``first_line + i``. ``digits`` gives the significant digits printed per
+    column (``None`` = exact / full precision; see the module docstring).
+    """
+
+    step: int
+    n_rows: int
+    box: Box
+    columns: dict[str, np.ndarray]
+    file: str
+    first_line: int | None
+    digits: dict[str, int | None]
+
+    def line_of(self, row: int) -> int | None:
+        """1-based file line of data row ``row`` (``None`` for binary dumps)."""
+        return None if self.first_line is None else self.first_line + int(row)
+
+    def int_column(self, name: str) -> np.ndarray:
+        """Column ``name`` as int64, refusing values that are not exact integers.
+
+        Ids written as doubles with ``%g`` (LIGGGHTS ``dump local``) keep only
+        ``digits`` significant digits: 1234567 prints as ``1.23457e+06``. A value
+        is accepted when it is integral and, for a column printed with ``P``
+        digits, below 10**P in magnitude (so no digit was rounded away).
+
+        Raises
+        ------
+        PrecisionError
+            naming the file, step and line of the first value that is not an
+            exact integer.
+        """
+        col = self.columns[name]
+        if col.dtype.kind in "iu":
+            return col.astype(np.int64, copy=False)
+        p = self.digits.get(name)
+        limit = np.inf if p is None else 10.0 ** p
+        bad = (col != np.rint(col)) | ~(np.abs(col) < min(limit, 2.0 ** 53))
+        if bad.any():
+            row = int(np.flatnonzero(bad)[0])
+            raise PrecisionError(
+                f"column '{name}' must hold integer ids but row {row + 1} of the frame holds "
+                f"{col[row]!r}, which is not an exact integer"
+                + (f" at the {p} significant digits printed" if p is not None else "")
+                + "; ids printed with %g above 999999 are destroyed",
+                file=self.file, step=self.step, line=self.line_of(row),
+                fix="write ids with dump_modify format using %d (dump custom) or %.17g (dump local), "
+                    "or use a binary dump")
+        return col.astype(np.int64)
+
+
+# --------------------------------------------------------------------------- index entries
+
+@dataclass(frozen=True)
+class _TextEntry:
+    """Where one text frame lives in the (decompressed) file."""
+
+    step: int
+    n_rows: int                 # header count
+    box: Box
+    label: str
+    names: tuple[str, ...]
+    header_line: int            # 1-based line of 'ITEM: TIMESTEP'
+    data_start: int             # byte offset of the first row
+    data_end: int               # byte offset after the last row
+    n_lines: int                # lines found between data_start and data_end
+    last: bool                  # last frame of the file
+    ends_with_newline: bool
+
+    @property
+    def first_line(self) -> int:
+        return self.header_line + HEADER_LINES
+
+
+@dataclass(frozen=True)
+class _BinaryEntry:
+    step: int
+    n_rows: int
+    box: Box
+    n_cols: int
+    chunks: tuple[tuple[int, int], ...]     # (byte offset of the doubles, number of doubles)
+
+
+# --------------------------------------------------------------------------- opening
+
+def open_dump(path: str | Path, columns: Sequence[str] | None = None) -> "DumpFile":
+    """Open a LAMMPS/LIGGGHTS dump, sniffing its format from its first bytes.
+
+    ``columns`` names the columns of a binary dump (which carries none); for a
+    text dump it must equal the header's names if given.
+
+    Raises
+    ------
+    InputFormatError
+        empty file, unknown format, or a binary header that is not LAMMPS's.
+    """
+    path = Path(path)
+    with open(path, "rb") as f:
+        head = f.read(HEADER_MAX)
+    if not head:
+        raise InputFormatError("the file is empty; expected a LAMMPS dump starting with 'ITEM: TIMESTEP'",
+                               file=path, line=1, fix="check that the run wrote this dump (dump every N, run length)")
+    opener = next((op for magic, op in _MAGIC.items() if head.startswith(magic)), None)
+    if opener is not None:
+        with opener(path, "rb") as f:
+            head = f.read(HEADER_MAX)
+        if not head.startswith(MARKER):
+            raise InputFormatError(
+                "the decompressed file does not start with 'ITEM: TIMESTEP'; compressed binary dumps are not "
+                "supported", file=path, line=1, fix="decompress it, or write a text dump")
+        return TextDump(path, opener, head, columns)
+    if head.startswith(MARKER):
+        return TextDump(path, None, head, columns)
+    if path.suffix == ".bin" or not _looks_like_text(head):
+        return BinaryDump(path, columns)
+    first = head.split(b"\n", 1)[0][:80].decode("utf-8", "replace")
+    raise InputFormatError(f"expected a LAMMPS dump starting with 'ITEM: TIMESTEP', found '{first}'",
+                           file=path, line=1, fix="pass a file written by the dump command")
+
+
+def _looks_like_text(head: bytes) -> bool:
+    sample = head[:4096]
+    return b"\0" not in sample
+
+
+class DumpFile:
+    """A dump file: an index of its frames and readers for them.
+
+    Attributes: ``path`` (str), ``kind`` (``'atoms'`` or ``'local'``),
+    ``label`` (``'ATOMS'``, ``'ENTRIES'``, ...), ``columns`` (header names of
+    the first frame; for binary the names given to :func:`open_dump`).
+    """
+
+    path: str
+    kind: str
+    label: str
+    columns: list[str] | None
+
+    def __init__(self, path: Path) -> None:
+        self.path = str(path)
+        self._entries: list | None = None
+        self._tail_error: DemsplitError | None = None
+
+    # -- index
+    def _index(self) -> list:
+        if self._entries is None:
+            self._entries, self._tail_error = self._build_index()
+        return self._entries
+
+    def _build_index(self) -> tuple[list, DemsplitError | None]:
+        raise NotImplementedError
+
+    @property
+    def n_frames(self) -> int:
+        """Number of frames whose header is complete (a damaged header at the
+        end of the file is raised by iteration after the last good frame)."""
+        return len(self._index())
+
+    @property
+    def steps(self) -> np.ndarray:
+        """Timestep of each frame (int64)."""
+        return np.array([e.step for e in self._index()], dtype=np.int64)
+
+    def __len__(self) -> int:
+        return self.n_frames
+
+    # -- reading
+    def frame(self, k: int, columns: Sequence[str] | None = None) -> DumpFrame:
+        """Frame ``k`` (0-based, negative counts from the end), parsing only that frame."""
+        entries = self._index()
+        if not -len(entries) <= k < len(entries):
+            raise IndexError(f"{self.path}: frame {k} out of range ({len(entries)} frames)")
+        return self._read(entries[k], columns, None)
+
+    def frame_at_step(self, step: int, columns: Sequence[str] | None = None) -> DumpFrame:
+        """The first frame written at timestep ``step``."""
+        hits = np.flatnonzero(self.steps == step)
+        if hits.size == 0:
+            raise InputFormatError(f"no frame at timestep {step}; the dump has steps {_span(self.steps)}",
+                                   file=self.path, step=step, fix="pick one of the dumped timesteps")
+        return self.frame(int(hits[0]), columns)
+
+    def frames(self, columns: Sequence[str] | None = None) -> Iterator[DumpFrame]:
+        """Stream the frames in file order, one in memory at a time; then raise
+        the error of a damaged trailing header, if any."""
+        entries = self._index()
+        with self._stream() as stream:
+            for e in entries:
+                yield self._read(e, columns, stream)
+        if self._tail_error is not None:
+            raise self._tail_error
+
+    def __iter__(self) -> Iterator[DumpFrame]:
+        return self.frames()
+
+    def _stream(self):
+        """Context manager: a handle reused across frames by ``frames()``."""
+        return open(self.path, "rb")
+
+    def _read(self, entry, columns: Sequence[str] | None, stream: BinaryIO | None) -> DumpFrame:
+        raise NotImplementedError
+
+    def _pick(self, names: Sequence[str], columns: Sequence[str] | None, step: int) -> list[int]:
+        """Indices of the requested columns in ``names`` (all when None)."""
+        if columns is None:
+            return list(range(len(names)))
+        missing = [c for c in columns if c not in names]
+        if missing:
+            raise InputFormatError(f"no column {missing} in this frame; its columns are {list(names)}",
+                                   file=self.path, step=step, fix="request columns the dump line writes")
+        return [names.index(c) for c in columns]
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.path!r}, kind={self.kind!r}, label={self.label!r})"
+
+
+def _span(steps: np.ndarray) -> str:
+    if steps.size == 0:
+        return "none"
+    return f"{steps[0]}..{steps[-1]} ({steps.size} frames)"
+
+
+# --------------------------------------------------------------------------- text dumps
+
+class TextDump(DumpFile):
+    """A text dump (plain or compressed)."""
+
+    def __init__(self, path: Path, opener, head: bytes, columns: Sequence[str] | None) -> None:
+        super().__init__(path)
+        self._opener = opener
+        first = _parse_header(head[:HEADER_MAX].split(b"\n")[:HEADER_LINES], self.path, 1, last=True)
+        self.label = first["label"]
+        self.kind = "atoms" if self.label == "ATOMS" else "local"
+        self.columns = list(first["names"])
+        if columns is not None and list(columns) != self.columns:
+            raise InputFormatError(f"columns {list(columns)} given, but the header names {self.columns}",
+                                   file=self.path, line=HEADER_LINES,
+                                   fix="omit columns= for text dumps (the header names them)")
+
+    def _stream(self):
+        return (self._opener or open)(self.path, "rb")
+
+    # -- index
+    def _build_index(self) -> tuple[list[_TextEntry], DemsplitError | None]:
+        with self._stream() as f:
+            markers, headers, lines_before, total, total_newlines, last_byte = _scan(f)
+        entries: list[_TextEntry] = []
+        for i, (pos, head, nl_before) in enumerate(zip(markers, headers, lines_before)):
+            last = i == len(markers) - 1
+            header_line = nl_before + 1
+            hl = head.split(b"\n")
+            try:
+                if len(hl) <= HEADER_LINES:  # fewer than 9 complete lines before the next frame / EOF
+                    raise _header_short(self.path, header_line, len(hl) - 1, last)
+                h = _parse_header(hl[:HEADER_LINES], self.path, header_line, last)
+            except DemsplitError as err:
+                return entries, err
+            data_start = pos + sum(len(x) + 1 for x in hl[:HEADER_LINES])
+            data_end = markers[i + 1] if not last else total
+            end_newlines = lines_before[i + 1] if not last else total_newlines
+            n_lines = end_newlines - (nl_before + HEADER_LINES)
+            ends_nl = last_byte == b"\n" if last else True
+            if data_end > data_start and not ends_nl:
+                n_lines += 1
+            entries.append(_TextEntry(h["step"], h["n"], h["box"], h["label"], h["names"], header_line,
+                                      data_start, data_end, n_lines, last, ends_nl))
+        return entries, None
+
+    # -- frames
+    def _read(self, e: _TextEntry, columns: Sequence[str] | None, stream: BinaryIO | None) -> DumpFrame:
+        idx = self._pick(e.names, columns, e.step)
+        self._check_count(e)
+        if self._opener is None:
+            with open(self.path, "rb") as f:
+                if e.data_end == e.data_start:
+                    return self._parse(e, b"", idx)
+                mm = mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ)
+                try:
+                    return self._parse(e, pa.py_buffer(mm).slice(e.data_start, e.data_end - e.data_start), idx)
+                finally:
+                    try:
+                        mm.close()
+                    except BufferError:  # a traceback still holds the slice; the map goes with it
+                        pass
+        if stream is None:
+            with self._stream() as s:
+                return self._read(e, columns, s)
+        stream.seek(e.data_start)
+        return self._parse(e, stream.read(e.data_end - e.data_start), idx)
+
+    def _check_count(self, e: _TextEntry) -> None:
+        """Header count against the lines the index found."""
+        what = f"NUMBER OF {e.label}"
+        if e.last and not e.ends_with_newline:
+            raise TruncatedFileError(
+                f"the file ends in the middle of a row (line {e.first_line + e.n_lines - 1}, row {e.n_lines} "
+                f"of the {e.n_rows} the header announces; no newline at the end)",
+                file=self.path, step=e.step, line=e.first_line + e.n_lines - 1, fix=FIX_TRUNCATED)
+        if e.n_lines == e.n_rows:
+            return
+        if e.last and e.n_lines < e.n_rows:
+            raise TruncatedFileError(
+                f"the file ends after {e.n_lines} of the {e.n_rows} rows announced by '{what}' "
+                f"(line {e.header_line + 3})", file=self.path, step=e.step,
+                line=e.first_line + e.n_lines, fix=FIX_TRUNCATED)
+        if e.n_lines > e.n_rows:
+            raise InputFormatError(
+                f"'{what}' (line {e.header_line + 3}) says {e.n_rows} rows but {e.n_lines} lines follow "
+                f"before the next frame; the first extra row is this line",
+                file=self.path, step=e.step, line=e.first_line + e.n_rows, fix=FIX_COUNT)
+        raise InputFormatError(
+            f"'{what}' (line {e.header_line + 3}) says {e.n_rows} rows but only {e.n_lines} lines follow "
+            f"before the next 'ITEM: TIMESTEP', which is this line",
+            file=self.path, step=e.step, line=e.first_line + e.n_lines, fix=FIX_COUNT)
+
+    def _parse(self, e: _TextEntry, buf, idx: list[int]) -> DumpFrame:
+        names = [e.names[i] for i in idx]
+        if e.n_rows == 0:
+            return DumpFrame(e.step, 0, e.box, {n: np.empty(0) for n in names}, self.path,
+                             e.first_line, {n: None for n in names})
+        data = buf if isinstance(buf, pa.Buffer) else pa.py_buffer(buf)
+        head = data.slice(0, min(DIGITS_SAMPLE, data.size)).to_pybytes()
+        first_row = head.split(b"\n", 1)[0]
+        trailing = first_row.endswith(b" ")
+        fields = [f"f{k}" for k in range(len(e.names) + trailing)]
+        sample = head[: head.rfind(b"\n") + 1] or head
+        int_like = _integer_columns(sample, len(e.names))
+        types = {fields[i]: (pa.int64() if int_like[i] else pa.float64()) for i in idx}
+        try:
+            table = _csv(data, fields, types)
+        except pa.ArrowInvalid as err:
+            if "conversion error to int64" not in str(err):
+                raise self._diagnose(e, data, trailing) from err
+            # an integer-looking column holds a real later on: read them all as float64
+            types = {f: pa.float64() for f in types}
+            try:
+                table = _csv(data, fields, types)
+            except pa.ArrowInvalid as err2:
+                raise self._diagnose(e, data, trailing) from err2
+        cols = {n: table.column(fields[i]).to_numpy() for n, i in zip(names, idx)}
+        del table
+        for n, i in zip(names, idx):
+            bad = ~np.isfinite(cols[n]) if cols[n].dtype.kind == "f" else None
+            if bad is not None and bad.any():
+                row = int(np.flatnonzero(bad)[0])
+                raise InputFormatError(
+                    f"column {i + 1} ('{n}') of row {row + 1} is {cols[n][row]!r}; expected a finite number",
+                    file=self.path, step=e.step, line=e.first_line + row,
+                    fix="the simulation produced NaN/inf (unstable run: smaller timestep, check materials); "
+                        "dump a frame before it diverged")
+        digits = _digits(sample, len(e.names), idx, cols, int_like)
+        return DumpFrame(e.step, e.n_rows, e.box, cols, self.path, e.first_line,
+                         {n: digits[i] for n, i in zip(names, idx)})
+
+    def _diagnose(self, e: _TextEntry, data, trailing: bool) -> DemsplitError:
+        """Slow pass over one frame that failed the fast parse: first bad line."""
+        text = data.to_pybytes() if isinstance(data, pa.Buffer) else bytes(data)
+        ncols = len(e.names)
+        for k, raw in enumerate(text.split(b"\n")[: e.n_rows]):
+            line = e.first_line + k
+            tokens = raw.split(b" ")
+            if trailing and tokens and tokens[-1] == b"":
+                tokens = tokens[:-1]
+            if len(tokens) != ncols or b"" in tokens:
+                return InputFormatError(
+                    f"row {k + 1} has {len([t for t in tokens if t])} values, expected {ncols} (one per header "
+                    f"name{', then a trailing space' if trailing else ''}, single spaces between)",
+                    file=self.path, step=e.step, line=line, fix=FIX_COUNT)
+            for c, tok in enumerate(tokens):
+                try:
+                    float(tok)
+                except ValueError:
+                    return InputFormatError(
+                        f"column {c + 1} ('{e.names[c]}') of row {k + 1} is '{tok.decode('utf-8', 'replace')}'; "
+                        f"expected a number", file=self.path, step=e.step, line=line, fix=FIX_COUNT)
+        return InputFormatError("the rows of this frame could not be parsed", file=self.path, step=e.step,
+                                line=e.first_line, fix=FIX_COUNT)
+
+
+def _csv(data: pa.Buffer, fields: list[str], types: dict[str, pa.DataType]) -> pa.Table:
+    return pacsv.read_csv(
+        pa.BufferReader(data),
+        read_options=pacsv.ReadOptions(column_names=fields),
+        parse_options=pacsv.ParseOptions(delimiter=" ", quote_char=False),
+        convert_options=pacsv.ConvertOptions(include_columns=list(types), column_types=types,
+                                             null_values=[], strings_can_be_null=False))
+
+
+def _scan(f: BinaryIO) -> tuple[list[int], list[bytes], list[int], int, int, bytes]:
+    """One pass over a (decompressed) stream in CHUNK pieces.
+
+    Returns the byte offsets of the ``ITEM: TIMESTEP`` lines, up to
+    ``HEADER_MAX`` bytes of text from each (cut at the next marker), the number
+    of newlines before each, the total size, the total number of newlines and
+    the last byte.
+    """
+    markers: list[int] = []
+    headers: list[bytes] = []
+    lines_before: list[int] = []
+    buf, buf_start, newlines, last_byte = b"", 0, 0, b""
+    while True:
+        chunk = f.read(CHUNK)
+        eof = not chunk
+        if chunk:
+            last_byte = chunk[-1:]
+        buf += chunk
+        # search and count up to `limit`; keep the rest so that a header is never cut
+        limit = len(buf) if eof else max(len(buf) - HEADER_MAX, 0)
+        pos, counted = buf.find(MARKER, 0, limit + len(MARKER) - 1), 0
+        while pos != -1 and pos < limit:
+            newlines += buf.count(b"\n", counted, pos)
+            counted = pos
+            nxt = buf.find(MARKER, pos + 1, pos + HEADER_MAX)
+            markers.append(buf_start + pos)
+            headers.append(buf[pos: nxt if nxt != -1 else pos + HEADER_MAX])
+            lines_before.append(newlines)
+            pos = buf.find(MARKER, pos + 1, limit + len(MARKER) - 1)
+        newlines += buf.count(b"\n", counted, limit)
+        buf, buf_start = buf[limit:], buf_start + limit
+        if eof:
+            return markers, headers, lines_before, buf_start, newlines, last_byte
+
+
+def _header_short(path: str, header_line: int, n_complete: int, last: bool) -> DemsplitError:
+    msg = (f"the frame header starting at line {header_line} has {n_complete} complete lines, expected "
+           f"{HEADER_LINES} (TIMESTEP, step, NUMBER OF, count, BOX BOUNDS, 3 bounds, the column names)")
+    if last:
+        return TruncatedFileError(msg + " before the end of the file", file=path,
+                                  line=header_line + n_complete, fix=FIX_TRUNCATED)
+    return InputFormatError(msg, file=path, line=header_line + n_complete, fix=FIX_COUNT)
+
+
+def _parse_header(lines: list[bytes], path: str, line0: int, last: bool) -> dict:
+    """Parse the 9 header lines of a frame (``line0`` = line of 'ITEM: TIMESTEP')."""
+    if len(lines) < HEADER_LINES:
+        raise _header_short(path, line0, len(lines), last)
+    text = [x.decode("utf-8", "replace").rstrip("\r") for x in lines]
+
+    def bad(k: int, expected: str, step: int | None = None) -> InputFormatError:
+        return InputFormatError(f"expected {expected}, found '{text[k][:120]}'", file=path, step=step,
+                                line=line0 + k, fix="the frame header is damaged; rewrite the dump")
+
+    if text[0].strip() != "ITEM: TIMESTEP":
+        raise bad(0, "'ITEM: TIMESTEP'")
+    try:
+        step = int(text[1])
+    except ValueError:
+        raise bad(1, "an integer timestep") from None
+    if not text[2].startswith("ITEM: NUMBER OF "):
+        raise bad(2, "'ITEM: NUMBER OF <label>'", step)
+    try:
+        n = int(text[3])
+    except ValueError:
+        raise bad(3, "an integer row count", step) from None
+    if n < 0:
+        raise bad(3, "a row count >= 0", step)
+    if not text[4].startswith("ITEM: BOX BOUNDS"):
+        raise bad(4, "'ITEM: BOX BOUNDS [xy xz yz] <flags>'", step)
+    flags = text[4][len("ITEM: BOX BOUNDS"):].split()
+    triclinic = flags[:3] == ["xy", "xz", "yz"]
+    flags = flags[3:] if triclinic else flags
+    if flags and (len(flags) != 3 or any(len(f) != 2 or set(f) - set("pfsm") for f in flags)):
+        raise bad(4, "three boundary flags such as 'pp pp ff'", step)
+    try:
+        b = np.array([[float(v) for v in text[5 + a].split()] for a in range(3)], dtype=np.float64)
+        if b.shape != (3, 3 if triclinic else 2):
+            raise ValueError
+    except ValueError:
+        raise bad(5, f"three lines of {3 if triclinic else 2} box numbers", step) from None
+    if not text[8].startswith("ITEM: "):
+        raise bad(8, "'ITEM: <label> <column names>'", step)
+    words = text[8][len("ITEM: "):].split()
+    label, names = words[0], tuple(words[1:])
+    if text[2][len("ITEM: NUMBER OF "):].strip() != label:
+        raise bad(8, f"'ITEM: {text[2][len('ITEM: NUMBER OF '):].strip()} ...' to match line {line0 + 2}", step)
+    if not names:
+        raise bad(8, "column names after the label", step)
+    periodic = tuple(f == "pp" for f in flags) if flags else (False, False, False)
+    return {"step": step, "n": n, "label": label, "names": names,
+            "box": _box(b[:, 0], b[:, 1], periodic, b[:, 2] if triclinic else None)}
+
+
+def _box(lo_bound: np.ndarray, hi_bound: np.ndarray, periodic, tilt: np.ndarray | None) -> Box:
+    """Box from dumped bounds. A triclinic dump writes the bounding box
+    (``xlo_bound`` ...) and ``xy xz yz``; LAMMPS (``dump`` docs, "triclinic")
+    recovers the box as xlo = xlo_bound - min(0, xy, xz, xy+xz),
+    xhi = xhi_bound - max(0, xy, xz, xy+xz), ylo = ylo_bound - min(0, yz),
+    yhi = yhi_bound - max(0, yz), z unchanged."""
+    if tilt is None:
+        return Box(lo_bound, hi_bound, periodic)
+    xy, xz, yz = tilt
+    lo = lo_bound - np.array([min(0.0, xy, xz, xy + xz), min(0.0, yz), 0.0])
+    hi = hi_bound - np.array([max(0.0, xy, xz, xy + xz), max(0.0, yz), 0.0])
+    return Box(lo, hi, periodic, tilt)
+
+
+def _tokens(sample: bytes, ncols: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Byte-level view of whole rows: per byte, its token number (-1 on
+    separators), and per token its column. Vectorised; ``sample`` ends with a newline."""
+    a = np.frombuffer(sample, dtype=np.uint8)
+    sep = (a == 32) | (a == 10) | (a == 13) | (a == 9)
+    start = ~sep & np.concatenate(([True], sep[:-1]))
+    tok = np.cumsum(start) - 1
+    tok[sep] = -1
+    line_of_tok = np.cumsum(a == 10)[start] if start.any() else np.empty(0, np.int64)
+    first_tok_of_line = np.searchsorted(line_of_tok, line_of_tok, side="left")
+    col = np.arange(line_of_tok.size) - first_tok_of_line
+    return a, tok, np.minimum(col, ncols)  # col == ncols collects stray extra tokens
+
+
+def _integer_columns(sample: bytes, ncols: int) -> np.ndarray:
+    """Per column: True when every sampled token is an integer literal
+    (digits with an optional sign), i.e. the column can be read as int64."""
+    if not sample:
+        return np.zeros(ncols, dtype=bool)
+    a, tok, col = _tokens(sample, ncols)
+    inside = tok >= 0
+    is_digit = (a >= 48) & (a <= 57)
+    non_int = inside & ~is_digit & (a != 45) & (a != 43)
+    tok_non_int = np.bincount(tok[non_int], minlength=col.size) > 0
+    col_non_int = np.bincount(col, weights=tok_non_int.astype(np.float64), minlength=ncols + 1)[:ncols] > 0
+    present = np.bincount(col, minlength=ncols + 1)[:ncols] > 0
+    return present & ~col_non_int
+
+
+def _digits(sample: bytes, ncols: int, idx: list[int], cols: dict[str, np.ndarray],
+            int_like: np.ndarray) -> dict[int, int | None]:
+    """Printed significant digits of the requested columns (module docstring)."""
+    a, tok, col = _tokens(sample, ncols)
+    inside = tok >= 0
+    is_digit = (a >= 48) & (a <= 57)
+    is_exp = inside & ((a == 101) | (a == 69))
+    ntok = col.size
+    # per byte: has this token seen an exponent marker / a nonzero digit up to here?
+    first_byte = np.concatenate(([0], np.flatnonzero(np.diff(tok) != 0) + 1))
+    def seen(mask: np.ndarray) -> np.ndarray:
+        c = np.cumsum(mask)
+        base = np.repeat(c[first_byte] - mask[first_byte], np.diff(np.append(first_byte, a.size)))
+        return c - base > 0
+    significant = inside & is_digit & ~seen(is_exp) & seen(inside & (a >= 49) & (a <= 57))
+    per_tok = np.bincount(tok[significant], minlength=ntok)
+    observed = np.zeros(ncols + 1, dtype=np.int64)
+    np.maximum.at(observed, col, per_tok)
+    real = ~int_like
+    precision = int(observed[:ncols][real].max()) if real.any() else 0
+    out: dict[int, int | None] = {}
+    for (name, values), i in zip(cols.items(), idx):
+        if values.dtype.kind in "iu":
+            out[i] = None
+        elif np.unique(values[: max(1, int(np.count_nonzero(col == i)))]).size <= LOW_VARIETY:
+            out[i] = max(int(observed[i]), precision)
+        else:
+            out[i] = int(observed[i])
+    return out
+
+
+# --------------------------------------------------------------------------- binary dumps
+
+_BIN_HEAD = struct.Struct("=qqi6i")     # step, n, triclinic, boundary[6]
+
+
+class BinaryDump(DumpFile):
+    """A LAMMPS binary ``dump custom`` file (native byte order, no names)."""
+
+    def __init__(self, path: Path, columns: Sequence[str] | None) -> None:
+        super().__init__(path)
+        self.kind, self.label = "atoms", "ATOMS"
+        self._given = list(columns) if columns is not None else None
+        with open(path, "rb") as f:
+            entry, _ = self._header(f, 0, _file_size(path))
+        if self._given is not None and len(self._given) != entry.n_cols:
+            raise InputFormatError(f"{len(self._given)} column names given but the binary frame has "
+                                   f"{entry.n_cols} columns", file=path, step=entry.step,
+                                   fix="pass one name per keyword of the dump custom line, in order")
+        self.columns = self._given or [f"col{k + 1}" for k in range(entry.n_cols)]
+
+    def _header(self, f: BinaryIO, offset: int, size: int) -> tuple[_BinaryEntry, int]:
+        """Parse the frame header at ``offset``; return it and the next frame's offset."""
+        f.seek(offset)
+        raw = f.read(_BIN_HEAD.size)
+
+        def fail(what: str, step: int | None = None, truncated: bool = False) -> DemsplitError:
+            cls = TruncatedFileError if truncated else InputFormatError
+            return cls(f"binary frame at byte {offset}: {what}", file=self.path, step=step,
+                       fix=FIX_TRUNCATED if truncated else
+                       "this is not a LAMMPS binary dump custom file (or not in this machine's byte order)")
+
+        if len(raw) < _BIN_HEAD.size:
+            raise fail(f"file ends inside the header ({len(raw)} of {_BIN_HEAD.size} bytes)", truncated=True)
+        step, n, tri, *bnd = _BIN_HEAD.unpack(raw)
+        if step < 0:
+            raise fail(f"timestep {step} < 0 (newer LAMMPS binary dumps start with a magic string; "
+                       "only the LIGGGHTS/old LAMMPS layout is supported)")
+        if tri not in (0, 1) or any(b not in _BOUNDARY for b in bnd) or n < 0:
+            raise fail(f"expected triclinic flag 0/1, boundary codes 0-3 and rows >= 0, found "
+                       f"triclinic={tri}, boundary={bnd}, rows={n}", step)
+        nb = 9 if tri else 6
+        raw = f.read(8 * nb + 8)
+        if len(raw) < 8 * nb + 8:
+            raise fail("file ends inside the header", step, truncated=True)
+        bounds = np.frombuffer(raw, dtype="=f8", count=nb)
+        ncols, nchunk = struct.unpack_from("=ii", raw, 8 * nb)
+        if ncols <= 0 or nchunk < 0:
+            raise fail(f"expected columns > 0 and chunks >= 0, found {ncols} and {nchunk}", step)
+        pos = offset + _BIN_HEAD.size + 8 * nb + 8
+        chunks, total = [], 0
+        for _ in range(nchunk):  # one chunk per MPI rank that wrote
+            f.seek(pos)
+            raw = f.read(4)
+            if len(raw) < 4:
+                raise fail("file ends before a chunk size", step, truncated=True)
+            (m,) = struct.unpack("=i", raw)
+            if m < 0:
+                raise fail(f"chunk of {m} values", step)
+            chunks.append((pos + 4, m))
+            pos += 4 + 8 * m
+            total += m
+        if pos > size:
+            raise fail(f"file ends inside the rows ({size} bytes, frame needs {pos})", step, truncated=True)
+        if total != n * ncols:
+            raise fail(f"chunks hold {total} values, expected rows x columns = {n} x {ncols}", step)
+        periodic = (bnd[0] == 0, bnd[2] == 0, bnd[4] == 0)
+        lo, hi = bounds[0:6:2], bounds[1:6:2]
+        box = _box(lo, hi, periodic, bounds[6:9] if tri else None)
+        return _BinaryEntry(step, n, box, ncols, tuple(chunks)), pos
+
+    def _build_index(self) -> tuple[list[_BinaryEntry], DemsplitError | None]:
+        size = _file_size(self.path)
+        entries, pos = [], 0
+        with open(self.path, "rb") as f:
+            while pos < size:
+                try:
+                    e, pos = self._header(f, pos, size)
+                except DemsplitError as err:
+                    return entries, err
+                entries.append(e)
+        return entries, None
+
+    def _read(self, e: _BinaryEntry, columns: Sequence[str] | None, stream: BinaryIO | None) -> DumpFrame:
+        names = self.columns if e.n_cols == len(self.columns) else [f"col{k + 1}" for k in range(e.n_cols)]
+        idx = self._pick(names, columns, e.step)
+        if stream is None:
+            with open(self.path, "rb") as f:
+                return self._read(e, columns, f)
+        parts = []
+        for off, m in e.chunks:
+            stream.seek(off)
+            parts.append(np.frombuffer(stream.read(8 * m), dtype="=f8"))
+        rows = (np.concatenate(parts) if parts else np.empty(0)).reshape(e.n_rows, e.n_cols)
+        cols = {names[i]: np.ascontiguousarray(rows[:, i]) for i in idx}
+        return DumpFrame(e.step, e.n_rows, e.box, cols, self.path, None, {names[i]: None for i in idx})
+
+
+def _file_size(path: str | Path) -> int:
+    return Path(path).stat().st_size
