@@ -161,7 +161,11 @@ class ResultWriter:
                     fix=f"resume it (resume=True, demsplit run --resume), or delete {self.parts_dir} to start over.",
                 )
             self._lock()
-            self._adopt_parts(manifest)
+            try:
+                self._adopt_parts(manifest)
+            except StoreError:
+                (self.parts_dir / _LOCK).unlink(missing_ok=True)
+                raise
         else:
             self.parts_dir.mkdir()
             self._lock()
