@@ -355,14 +355,14 @@ def npy_records(path: Path) -> tuple[list[tuple[int, int]], str | None]:
             head = f.read(RECORD_HEAD)
             k = len(records)
             if len(head) < RECORD_HEAD or not head.startswith(b"DSREC ") or head[-1:] != b"\n":
-                return records, f"snapshot {k} at byte {offset}: record header is cut short or damaged ({head!r})"
+                return records, f"snapshot {k} at byte {offset} is cut short or damaged: its record header reads {head[:24]!r}"
             length = int(head[6:22])
             end = offset + RECORD_HEAD + length
             f.seek(end)
             tail = f.read(RECORD_TAIL)
             if len(tail) < RECORD_TAIL or not tail.startswith(b"DSEND ") or tail[-1:] != b"\n":
-                return records, (f"snapshot {k} at byte {offset}: declares {length} bytes but the file "
-                                 f"ends or is damaged before its end marker")
+                return records, (f"snapshot {k} at byte {offset} is cut short or damaged: it declares {length} "
+                                 f"bytes but the file ends or is damaged before its end marker")
             records.append((offset + RECORD_HEAD, length))
             offset = end + RECORD_TAIL
     return records, None

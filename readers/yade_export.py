@@ -216,6 +216,7 @@ def vtk_particles(spheres: VtkPolyData, *, default_type: int | None = None) -> T
     a missing material field."""
     pdata = spheres.point_data
     _missing(pdata, ("radius", "id"), path=spheres.path, what="sphere file", fix=VTK_ID_FIX)
+    ids = check_percent_g_ids(pdata["id"], path=spheres.path, what="sphere ids")
     mat_field = next((k for k in ("matId", "materialId", "material") if k in pdata), None)
     if mat_field is None and default_type is None:
         raise MaterialError(
@@ -225,7 +226,7 @@ def vtk_particles(spheres: VtkPolyData, *, default_type: int | None = None) -> T
     types = (check_percent_g_ids(pdata[mat_field], path=spheres.path, what="material ids")
              if mat_field else np.full(n, default_type))
     return {
-        "id": check_percent_g_ids(pdata["id"], path=spheres.path, what="sphere ids"),
+        "id": ids,
         "type": types.astype(np.int32),
         "x": spheres.points[:, 0], "y": spheres.points[:, 1], "z": spheres.points[:, 2],
         "radius": pdata["radius"],
@@ -433,6 +434,9 @@ def read_export_text(path: str | Path, *, tolerance: float = 1e-3, step: int = 0
     particles = {"id": ids, "type": types.astype(np.int32), "x": x[:, 0], "y": x[:, 1], "z": x[:, 2],
                  "radius": table["radius"]}
     i, j, d = overlapping_pairs(x, table["radius"], box)
+    flip = ids[i] > ids[j]  # id1 < id2, as YADE orders sphere pairs
+    i, j = np.where(flip, j, i), np.where(flip, i, j)
+    d = np.where(flip[:, None], -d, d)
     dist = np.linalg.norm(d, axis=1)
     delta = table["radius"][i] + table["radius"][j] - dist
     bound = overlap_error_bound(x[i], x[i] + d, delta)

@@ -52,7 +52,13 @@ class _Hdf5Store:
         import h5py
 
         self.path = path
-        self._file = h5py.File(path, "r")
+        try:
+            self._file = h5py.File(path, "r")
+        except OSError as err:
+            raise TruncatedFileError(f"the HDF5 snapshot file cannot be opened ({err}); it is cut short or damaged.",
+                                     file=path, fix="rerun the simulation to rewrite it; the numpy-only format "
+                                     "(snapshot(..., format='npy')) keeps the complete snapshots readable "
+                                     "after a crash.") from None
         if self._file.attrs.get("format") != FORMAT_NAME:
             raise InputFormatError(
                 f"HDF5 file without the {FORMAT_NAME!r} format attribute "
