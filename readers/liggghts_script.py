@@ -1,0 +1,1135 @@
+"""Read a LIGGGHTS 3.8 input script: materials, contact models, walls, dumps,
+and the meaning of every column of its contact dumps.
+
+``read_script(path, variables)`` interprets the script the way LIGGGHTS'
+``Input`` class reads it (``input.cpp``): a trailing ``&`` joins the next
+physical line, ``#`` outside quotes starts a comment, ``$x``, ``${name}`` and
+``$(expr)`` are substituted outside quotes before the line is split into words,
+quoted text is one word, ``include FILE`` reads another file. Only the commands
+that describe the run are interpreted; the result is a :class:`LiggghtsScript`.
+Relative paths (``include``, mesh and dump files) are taken from the main
+script's directory: LIGGGHTS opens them from its working directory, which is
+where the main script is run from. ``jump``, ``if``, ``next`` and ``label`` are
+not followed (a warning says so).
+
+Contact dump columns
+--------------------
+``compute pair/gran/local`` and ``compute wall/gran/local`` write their blocks
+in a fixed order set by the code (``compute_pair_gran_local.cpp``, ``add_pair``
+and ``add_wall_1``/``add_wall_2``), whatever order the keywords are typed in.
+With no keyword the blocks ``pos vel id force torque history contactArea`` are
+written; with keywords, only those listed. Canonical names, block by block:
+
+=================  ==========================================  ==============================================
+keyword            pair row                                    wall row (mesh walls only)
+=================  ==========================================  ==============================================
+pos                x1 y1 z1 x2 y2 z2 (both remapped into box)  wall_cpx wall_cpy wall_cpz (contact point on the
+                                                               wall), x1 y1 z1 (particle centre)
+vel                vx1 vy1 vz1 vx2 vy2 vz2                     wall_vx wall_vy wall_vz, vx1 vy1 vz1
+id                 id1 id2 periodic                            mesh_index tri_id id1 (0-based mesh in the wall
+                                                               fix's ``meshes`` list, 0-based triangle, particle)
+force              fx fy fz (total, on body 1)                 fx fy fz (on the particle)
+force_normal       fnx fny fnz                                 fnx fny fnz
+force_tangential   ftx fty ftz                                 ftx fty ftz
+torque             tqx tqy tqz                                 tqx tqy tqz
+torque_normal      tqnx tqny tqnz                              tqnx tqny tqnz
+torque_tangential  tqtx tqty tqtz                              tqtx tqty tqtz
+history            see :func:`history_columns`                 same
+contactArea        area                                        area
+delta              delta                                       delta
+contactPoint       cpx cpy cpz                                 unwritten_cpx unwritten_cpy unwritten_cpz
+                                                               (the code never fills them)
+heatFlux           heat_flux (always the last column)          heat_flux
+=================  ==========================================  ==============================================
+
+Body 1 is the particle ``i`` of the pair (the particle, for a wall row), so the
+names match the canonical ``contacts`` table of :mod:`demsplit.frame`.
+``ms_id`` (multisphere) is refused: LIGGGHTS-PUBLIC has no multisphere and
+the Debian 3.8.0 binary crashes on it.
+
+History columns (measured on Debian's LIGGGHTS 3.8.0, pair rows): ``shearx
+sheary shearz`` with ``tangential history``; then ``rolling_torquex ..z`` with
+``rolling_friction epsd|epsd2|epsd3``; then 10 (pair) / 14 (wall) columns with
+``computeElasticPotential on`` (``elastic_potential`` then ``elastic_history2``
+...); nothing with ``tangential no_history`` (the default).
+
+Precision
+---------
+A dump is ``full_precision`` when it is a ``dump custom`` to a ``.bin`` file,
+or when every float conversion of its ``dump_modify format`` carries at least
+15 significant digits (``%.15g`` and up, ``%.14e`` and up; ``%f`` is never
+counted, its significant digits depend on the magnitude). ``dump local`` to a
+``.bin`` file is *not*: Debian's 3.8.0 writes the text headers and replaces
+every row by a stray byte (measured). A ``%d`` conversion in a ``dump local``
+format prints garbage, because every ``c_`` value is a double (measured:
+``596240344`` for an id of 1); the parser warns about it.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Iterator, Sequence
+
+import numpy as np
+
+from ..errors import DemsplitError, MaterialError, ScriptError, UnsupportedModelError
+from ..scene import ContactModel, Material, Scene, Wall
+
+__all__ = ["read_script", "LiggghtsScript", "DumpSpec", "LocalLayout", "local_layout", "history_columns"]
+
+# --------------------------------------------------------------------------
+# Column layouts of compute pair/gran/local and wall/gran/local
+# --------------------------------------------------------------------------
+
+CODE_ORDER = ("pos", "vel", "id", "force", "force_normal", "force_tangential", "torque",
+              "torque_normal", "torque_tangential", "history", "contactArea", "delta", "contactPoint")
+"""Blocks in the order ``add_pair``/``add_wall_2`` write them (``heatFlux`` goes last)."""
+
+DEFAULT_KEYWORDS = ("pos", "vel", "id", "force", "torque", "history", "contactArea")
+"""Blocks written when the compute is given no keyword."""
+
+_KEYWORDS = set(CODE_ORDER) | {"heatFlux", "ms_id", "verbose"}
+
+
+def _xyz(prefix: str, suffix: str = "") -> list[str]:
+    return [f"{prefix}{c}{suffix}" for c in "xyz"]
+
+
+_PAIR_BLOCKS: dict[str, list[str]] = {
+    "pos": ["x1", "y1", "z1", "x2", "y2", "z2"],
+    "vel": ["vx1", "vy1", "vz1", "vx2", "vy2", "vz2"],
+    "id": ["id1", "id2", "periodic"],
+    "force": _xyz("f"),
+    "force_normal": _xyz("fn"),
+    "force_tangential": _xyz("ft"),
+    "torque": _xyz("tq"),
+    "torque_normal": _xyz("tqn"),
+    "torque_tangential": _xyz("tqt"),
+    "contactArea": ["area"],
+    "delta": ["delta"],
+    "contactPoint": _xyz("cp"),
+}
+_WALL_BLOCKS: dict[str, list[str]] = {
+    **_PAIR_BLOCKS,
+    "pos": _xyz("wall_cp") + ["x1", "y1", "z1"],
+    "vel": _xyz("wall_v") + ["vx1", "vy1", "vz1"],
+    "id": ["mesh_index", "tri_id", "id1"],
+    "contactPoint": _xyz("unwritten_cp"),
+}
+
+SHEAR_COLUMNS = ("shearx", "sheary", "shearz")
+
+_ROLLING_HISTORY = {"off": 0, "cdt": 0, "epsd": 3, "epsd2": 3, "epsd3": 3}
+"""History values each rolling-friction model adds (``r_torque{x,y,z}_old``)."""
+
+_ELASTIC_POTENTIAL_HISTORY = {"pair": 10, "wall": 14}
+"""History values ``computeElasticPotential on`` adds (pair measured; wall: 17 - 3)."""
+
+
+def history_columns(kind: str, *, tangential: str = "history", rolling: str = "off",
+                    elastic_potential: bool = False) -> list[str]:
+    """Names of the ``history`` block for a model: shear (tangential history),
+    then rolling-friction torque, then the ``computeElasticPotential`` values.
+
+    ``tangential`` is demsplit's name (``history`` or ``none``); ``rolling`` the
+    LIGGGHTS ``rolling_friction`` model.
+    """
+    names = list(SHEAR_COLUMNS) if tangential == "history" else []
+    if _ROLLING_HISTORY[rolling]:
+        names += _xyz("rolling_torque")
+    if elastic_potential:
+        n = _ELASTIC_POTENTIAL_HISTORY[kind]
+        names += ["elastic_potential"] + [f"elastic_history{k}" for k in range(2, n + 1)]
+    return names
+
+
+def local_layout(kind: str, keywords: Sequence[str], dnum: int = 3, *,
+                 history: Sequence[str] | None = None) -> list[str]:
+    """Canonical name of every column of a ``compute pair/gran/local``
+    (``kind='pair'``) or ``wall/gran/local`` (``kind='wall'``) with these
+    keywords, in the order the code writes them (see the module docstring).
+
+    ``dnum`` is the width of the ``history`` block; ``history`` optionally names
+    its columns (default: ``shearx sheary shearz`` when ``dnum == 3``, else
+    ``history1`` ... ``history<dnum>``). Bad keywords raise :class:`ScriptError`
+    without a location (the caller adds it with ``.located``).
+    """
+    if kind not in ("pair", "wall"):
+        raise ValueError(f"kind must be 'pair' or 'wall', got {kind!r}")
+    unknown = [k for k in keywords if k not in _KEYWORDS]
+    if unknown:
+        raise ScriptError(
+            f"compute {kind}/gran/local: unknown keyword(s) {unknown}; LIGGGHTS 3.8 knows "
+            f"{sorted(_KEYWORDS)}.", fix="correct the compute line (LIGGGHTS refuses it too).")
+    if "ms_id" in keywords:
+        raise UnsupportedModelError(
+            f"compute {kind}/gran/local ms_id needs fix multisphere, which LIGGGHTS-PUBLIC does not have "
+            "(Debian's 3.8.0 crashes on it).", fix="remove ms_id from the compute.")
+    if history is None:
+        history = list(SHEAR_COLUMNS) if dnum == 3 else [f"history{k}" for k in range(1, dnum + 1)]
+    elif len(history) != dnum:
+        raise ValueError(f"history names {list(history)} do not match dnum = {dnum}")
+    flags = set(keywords) if keywords else set(DEFAULT_KEYWORDS)
+    if "history" in flags and dnum == 0:
+        raise ScriptError(
+            f"compute {kind}/gran/local asks for 'history' but the contact model stores none "
+            "(tangential no_history).",
+            fix="use 'tangential history', or drop 'history' from the compute.")
+    blocks = _PAIR_BLOCKS if kind == "pair" else _WALL_BLOCKS
+    columns: list[str] = []
+    for block in CODE_ORDER:
+        if block in flags:
+            columns += list(history) if block == "history" else blocks[block]
+    if "heatFlux" in flags:  # add_heat / add_heat_wall write array[.][nvalues - 1]
+        columns.append("heat_flux")
+    return columns
+
+
+@dataclass
+class LocalLayout:
+    """Meaning of every column of a ``dump local`` of a granular local compute.
+
+    kind : ``'pair'`` or ``'wall'``.
+    columns : canonical name of each dumped column, in file order.
+    """
+
+    kind: str
+    columns: list[str]
+
+
+@dataclass
+class DumpSpec:
+    """One ``dump`` command with its ``dump_modify`` settings.
+
+    file : resolved against the script's directory; LAMMPS's ``*`` (timestep)
+        and ``%`` (processor) patterns are kept as they are.
+    keywords : the tokens after the file name.
+    compute : for ``dump local``, the compute all its ``c_ID[k]`` columns read.
+    layout : for ``dump local`` of a granular local compute, the name of every
+        dumped column.
+    full_precision : see the module docstring.
+    """
+
+    id: str
+    style: str
+    every: int
+    file: str
+    keywords: list[str]
+    compute: str | None = None
+    layout: LocalLayout | None = None
+    format: str | None = None
+    label: str | None = None
+    sort: str | None = None
+    full_precision: bool = False
+
+
+@dataclass
+class LiggghtsScript:
+    """What :func:`read_script` found in a LIGGGHTS input script.
+
+    scene : materials per atom type (1-based), the pair contact model, walls.
+    periodic : periodicity per axis from ``boundary``.
+    dumps : every ``dump`` command, in script order.
+    gravity : m/s^2, magnitude x unit direction, or ``None``.
+    coefficients : every ``fix property/global`` value: ``peratomtype`` as a 1-D
+        array (index type-1), ``peratomtypepair`` as an (N, N) array
+        ([i-1][j-1]), ``scalar`` as a float, ``vector`` as a 1-D array.
+    local_computes : full layout of every granular local compute, by id.
+    dumped_mesh_walls : index in ``scene.walls`` of each entry of the
+        ``mesh_index`` column of a ``wall/gran/local`` dump (LIGGGHTS attaches
+        the compute to the last mesh ``fix wall/gran``).
+    warnings : what was ignored or is doubtful, and why.
+    """
+
+    path: Path
+    scene: Scene
+    periodic: tuple[bool, bool, bool]
+    dumps: list[DumpSpec]
+    gravity: np.ndarray | None
+    coefficients: dict
+    ntypes: int | None
+    timestep: float | None
+    run_steps: list[int]
+    local_computes: dict[str, LocalLayout]
+    dumped_mesh_walls: list[int]
+    variables: dict[str, str]
+    warnings: list[str]
+
+
+# --------------------------------------------------------------------------
+# Lines, quotes, substitution
+# --------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class _Where:
+    file: Path
+    line: int
+
+
+class _Unevaluable(Exception):
+    """A variable whose value demsplit cannot know (thermo keywords, atom styles...)."""
+
+
+def _logical_lines(path: Path) -> Iterator[tuple[int, str]]:
+    """(first physical line number, text) of each command: a line whose last
+    non-blank character is ``&`` continues on the next one (``input.cpp``
+    ``file()``: the ``&`` is dropped, the next line appended as is)."""
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise ScriptError(f"cannot read the input script ({exc.strerror}).", file=path,
+                          fix="check the path.") from None
+    start, pending = 0, ""
+    for number, raw in enumerate(text.splitlines(), start=1):
+        body = raw.rstrip()
+        if not pending:
+            start = number
+        if body.endswith("&"):
+            pending += body[:-1]
+            continue
+        yield start, pending + body
+        pending = ""
+    if pending:
+        yield start, pending
+
+
+def _strip_comment(text: str) -> str:
+    quote = ""
+    for i, ch in enumerate(text):
+        if ch == "#" and not quote:
+            return text[:i]
+        if ch == quote:
+            quote = ""
+        elif not quote and ch in "\"'":
+            quote = ch
+    return text
+
+
+def _split_words(text: str, where: _Where) -> list[str]:
+    """Words of a line; quoted text is one word, quotes stripped (``nextword``)."""
+    words, i, n = [], 0, len(text)
+    while True:
+        while i < n and text[i].isspace():
+            i += 1
+        if i >= n:
+            return words
+        if text[i] in "\"'":
+            stop = text.find(text[i], i + 1)
+            if stop < 0:
+                raise ScriptError(f"unbalanced quotes in: {text.strip()!r}.", file=where.file,
+                                  line=where.line, fix="close the quote.")
+            if stop + 1 < n and not text[stop + 1].isspace():
+                raise ScriptError(f"a closing quote must be followed by a blank: {text.strip()!r}.",
+                                  file=where.file, line=where.line, fix="add a space after the quote.")
+            words.append(text[i + 1:stop])
+            i = stop + 1
+        else:
+            j = i
+            while j < n and not text[j].isspace():
+                j += 1
+            words.append(text[i:j])
+            i = j
+
+
+# --------------------------------------------------------------------------
+# Variables and a small arithmetic evaluator for equal-style formulas
+# --------------------------------------------------------------------------
+
+_TOKEN = re.compile(r"\s*(?:(?P<num>(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)|(?P<name>[A-Za-z_]\w*)|(?P<op>[-+*/^(),]))")
+_FUNCTIONS = {"sqrt": math.sqrt, "exp": math.exp, "ln": math.log, "log": math.log10, "abs": abs,
+              "sin": math.sin, "cos": math.cos, "tan": math.tan, "asin": math.asin,
+              "acos": math.acos, "atan": math.atan, "floor": math.floor, "ceil": math.ceil,
+              "round": round}
+_CONSTANTS = {"PI": math.pi}
+
+
+class _Variables:
+    """LAMMPS variables as LIGGGHTS' ``Variable`` class keeps them: ``index``,
+    ``loop``, ``world``, ``universe``, ``uloop`` (first value), ``string``,
+    ``equal`` (a formula, evaluated when used), ``getenv``. Command-line values
+    are index variables defined first, so the script cannot redefine them."""
+
+    def __init__(self, cli: dict[str, str]) -> None:
+        self.values: dict[str, tuple[str, str]] = {k: ("index", str(v)) for k, v in cli.items()}
+        self.cli = set(cli)
+
+    def define(self, words: list[str], where: _Where) -> None:
+        if len(words) < 2:
+            raise ScriptError(f"variable command needs NAME STYLE ARGS, got {words}.",
+                              file=where.file, line=where.line, fix="complete the variable command.")
+        name, style, args = words[0], words[1], words[2:]
+        if name in self.cli:
+            return
+        if style == "delete":
+            self.values.pop(name, None)
+            return
+        if style in ("index", "loop", "world", "universe", "uloop") and name in self.values:
+            return  # the first definition wins (variable.cpp: "if (find(arg[0]) >= 0) return")
+        if style in ("index", "loop", "world", "universe", "uloop", "string", "equal", "getenv") and not args:
+            raise ScriptError(f"variable {name} {style} needs a value.", file=where.file,
+                              line=where.line, fix=f"give variable {name} a value.")
+        if style == "loop":  # loop N [pad] counts from 1, loop N1 N2 [pad] from N1
+            value = "1" if len(args) == 1 or args[1] == "pad" else args[0]
+        elif style in ("index", "world", "universe", "uloop", "string"):
+            value = args[0]
+        elif style == "equal":
+            value = " ".join(args)
+        elif style == "getenv":
+            value = os.environ.get(args[0], "")
+        else:  # atom, atomfile, file, python...: values demsplit cannot know
+            value = ""
+        self.values[name] = (style, value)
+
+    def retrieve(self, name: str, where: _Where, depth: int = 0) -> str:
+        """Text a ``${name}`` reference becomes (equal-style: ``%.15g``)."""
+        if name not in self.values:
+            raise ScriptError(
+                f"variable {name!r} is used but not defined.", file=where.file, line=where.line,
+                fix=f"define it in the script ('variable {name} index VALUE') or pass "
+                f"variables={{'{name}': VALUE}} (LIGGGHTS: -var {name} VALUE).")
+        style, value = self.values[name]
+        if style == "equal":
+            return f"{self.evaluate(value, where, depth + 1):.15g}"
+        if style not in ("index", "loop", "world", "universe", "uloop", "string", "getenv"):
+            raise _Unevaluable(f"variable {name} is {style}-style")
+        return value
+
+    def evaluate(self, expr: str, where: _Where, depth: int = 0) -> float:
+        """Value of an equal-style formula: numbers, ``+ - * / ^``, parentheses,
+        ``v_name``, ``PI`` and the functions in ``_FUNCTIONS``. Unary minus
+        binds tighter than ``^`` in LIGGGHTS 3.8 (measured: ``-2^2`` is 4)."""
+        if depth > 50:
+            raise ScriptError(f"variables refer to each other in a loop ({expr!r}).", file=where.file,
+                              line=where.line, fix="break the circular variable definitions.")
+        tokens, pos = [], 0
+        expr = expr.strip()
+        while pos < len(expr):
+            m = _TOKEN.match(expr, pos)
+            if not m or m.end() == pos:
+                raise _Unevaluable(f"cannot evaluate {expr!r}")
+            tokens.append((m.lastgroup, m.group(m.lastgroup)))
+            pos = m.end()
+            while pos < len(expr) and expr[pos].isspace():
+                pos += 1
+        return _Evaluator(tokens, self, where, depth).run(expr)
+
+
+class _Evaluator:
+    """Recursive descent: sum := product (('+'|'-') product)*;
+    product := power (('*'|'/') power)*; power := unary ('^' power)?;
+    unary := '-' unary | '+' unary | atom."""
+
+    def __init__(self, tokens: list[tuple[str, str]], variables: _Variables, where: _Where, depth: int):
+        self.tokens, self.i, self.vars, self.where, self.depth = tokens, 0, variables, where, depth
+
+    def run(self, expr: str) -> float:
+        value = self.sum()
+        if self.i != len(self.tokens):
+            raise _Unevaluable(f"cannot evaluate {expr!r}")
+        return value
+
+    def peek(self) -> str | None:
+        return self.tokens[self.i][1] if self.i < len(self.tokens) else None
+
+    def take(self) -> tuple[str, str]:
+        if self.i >= len(self.tokens):
+            raise _Unevaluable("formula ends too early")
+        self.i += 1
+        return self.tokens[self.i - 1]
+
+    def sum(self) -> float:
+        value = self.product()
+        while self.peek() in ("+", "-"):
+            op = self.take()[1]
+            value = value + self.product() if op == "+" else value - self.product()
+        return value
+
+    def product(self) -> float:
+        value = self.power()
+        while self.peek() in ("*", "/"):
+            op = self.take()[1]
+            right = self.power()
+            if op == "/" and right == 0:
+                raise ScriptError("division by zero in a variable formula.", file=self.where.file,
+                                  line=self.where.line, fix="correct the formula.")
+            value = value * right if op == "*" else value / right
+        return value
+
+    def power(self) -> float:
+        base = self.unary()
+        if self.peek() == "^":
+            self.take()
+            return base ** self.power()
+        return base
+
+    def unary(self) -> float:
+        if self.peek() == "-":
+            self.take()
+            return -self.unary()
+        if self.peek() == "+":
+            self.take()
+            return self.unary()
+        return self.atom()
+
+    def atom(self) -> float:
+        kind, text = self.take()
+        if kind == "num":
+            return float(text)
+        if text == "(":
+            value = self.sum()
+            if self.take()[1] != ")":
+                raise _Unevaluable("missing ')'")
+            return value
+        if kind == "name":
+            if text.startswith("v_"):
+                return float(self.vars.retrieve(text[2:], self.where, self.depth))
+            if text in _CONSTANTS:
+                return _CONSTANTS[text]
+            if text in _FUNCTIONS and self.peek() == "(":
+                self.take()
+                value = self.sum()
+                if self.take()[1] != ")":
+                    raise _Unevaluable(f"{text}() takes one argument here")
+                return float(_FUNCTIONS[text](value))
+        raise _Unevaluable(f"{text!r} is not known before the run")
+
+
+def _substitute(text: str, variables: _Variables, where: _Where) -> str:
+    """Replace ``${name}``, ``$x`` and ``$(expr)`` outside quotes (``Input::substitute``)."""
+    out, i, quote, n = [], 0, "", len(text)
+    while i < n:
+        ch = text[i]
+        if ch == "$" and not quote:
+            if text.startswith("{", i + 1):
+                end = text.find("}", i + 2)
+                if end < 0:
+                    raise ScriptError(f"'${{' without '}}' in: {text.strip()!r}.", file=where.file,
+                                      line=where.line, fix="close the variable name with '}'.")
+                out.append(variables.retrieve(text[i + 2:end], where))
+                i = end + 1
+            elif text.startswith("(", i + 1):
+                level, j = 0, i + 2
+                while j < n and not (text[j] == ")" and level == 0):
+                    level += {"(": 1, ")": -1}.get(text[j], 0)
+                    j += 1
+                if j >= n:
+                    raise ScriptError(f"'$(' without ')' in: {text.strip()!r}.", file=where.file,
+                                      line=where.line, fix="close the immediate variable with ')'.")
+                out.append(f"{variables.evaluate(text[i + 2:j], where):.20g}")
+                i = j + 1
+            elif i + 1 < n:
+                out.append(variables.retrieve(text[i + 1], where))
+                i += 2
+            else:
+                raise ScriptError("'$' at the end of a line.", file=where.file, line=where.line,
+                                  fix="remove the '$' or name a variable after it.")
+            continue
+        if ch == quote:
+            quote = ""
+        elif not quote and ch in "\"'":
+            quote = ch
+        out.append(ch)
+        i += 1
+    return "".join(out)
+
+
+# --------------------------------------------------------------------------
+# Contact models
+# --------------------------------------------------------------------------
+
+NORMAL = {"hertz": "hertz", "hooke": "hooke"}
+TANGENTIAL = {"history": "history", "no_history": "none"}
+_MODEL_KEYS = ("model", "tangential", "cohesion", "rolling_friction", "surface")
+
+
+@dataclass
+class _ModelSpec:
+    """A ``pair_style gran`` or ``fix wall/gran`` model, before the
+    characteristic velocity is known."""
+
+    normal: str
+    tangential: str
+    rolling: str
+    settings: dict[str, str]
+    where: _Where
+
+    def on(self, name: str) -> bool:
+        return self.settings.get(name, "off") in ("on", "yes")
+
+    def history(self, kind: str) -> list[str]:
+        return history_columns(kind, tangential=self.tangential, rolling=self.rolling,
+                               elastic_potential=self.on("computeElasticPotential"))
+
+
+def _parse_model(words: list[str], stop: tuple[str, ...], where: _Where,
+                 warnings: list[str], what: str) -> tuple[_ModelSpec, int]:
+    """Parse ``model X tangential Y [cohesion C] [rolling_friction R] [surface S]
+    [setting on|off ...]`` up to a word in ``stop``; return the spec and the
+    index of that word."""
+    kinds: dict[str, str] = {}
+    settings: dict[str, str] = {}
+    i = 0
+    while i < len(words) and words[i] not in stop:
+        if i + 1 >= len(words):
+            raise ScriptError(f"{what}: '{words[i]}' needs a value.", file=where.file, line=where.line,
+                              fix="complete the command.")
+        (kinds if words[i] in _MODEL_KEYS else settings)[words[i]] = words[i + 1]
+        i += 2
+
+    def unsupported(message: str, supported: str) -> UnsupportedModelError:
+        return UnsupportedModelError(f"{what}: {message} Supported: {supported}.", file=where.file,
+                                     line=where.line, fix="rerun with a supported model, or describe "
+                                     "the contact energy yourself.")
+
+    normal = kinds.get("model")
+    if normal is None:
+        raise ScriptError(f"{what}: no 'model' keyword.", file=where.file, line=where.line,
+                          fix="give 'model hertz' or 'model hooke'.")
+    if normal not in NORMAL:
+        raise unsupported(f"normal model {normal!r} is not supported.", "model hertz, model hooke")
+    tangential = kinds.get("tangential", "no_history")  # LIGGGHTS' default (measured)
+    if tangential not in TANGENTIAL:
+        raise unsupported(f"tangential model {tangential!r} is not supported.",
+                          "tangential history, tangential no_history")
+    cohesion = kinds.get("cohesion", "off")
+    if cohesion != "off":
+        raise unsupported(f"cohesion model {cohesion!r} changes the elastic contact energy and "
+                          "demsplit does not implement it.", "no cohesion")
+    rolling = kinds.get("rolling_friction", "off")
+    if rolling not in _ROLLING_HISTORY:
+        raise unsupported(f"rolling friction model {rolling!r} is not supported.",
+                          ", ".join(f"rolling_friction {r}" for r in _ROLLING_HISTORY))
+    if rolling != "off":
+        warnings.append(f"{where.file}:{where.line}: {what} uses rolling_friction {rolling}: its "
+                        "rolling torque is not counted, demsplit's energy is the normal and tangential "
+                        "elastic energy of the contact only.")
+    surface = kinds.get("surface", "default")
+    if surface != "default":
+        raise unsupported(f"surface model {surface!r} is not supported.", "surface default")
+    return _ModelSpec(NORMAL[normal], TANGENTIAL[tangential], rolling, settings, where), i
+
+
+# --------------------------------------------------------------------------
+# The interpreter
+# --------------------------------------------------------------------------
+
+_INTERPRETED = {"units", "boundary", "create_box", "variable", "include", "fix", "pair_style",
+                "compute", "dump", "dump_modify", "timestep", "run", "create_atoms", "unfix"}
+_CONTROL_FLOW = {"jump", "if", "next", "label", "clear"}
+_BENIGN_FIXES = {"nve/sphere", "nve", "nve/limit", "property/atom", "particledistribution/discrete",
+                 "insert/pack", "insert/stream", "insert/rate/region", "print", "ave/time", "ave/atom",
+                 "ave/histo", "ave/spatial", "ave/euler", "check/timestep/gran", "viscous", "freeze",
+                 "enforce2d", "momentum", "heat/gran", "heat/gran/conduction", "property/global"}
+_PLANES = {"xplane": 0, "yplane": 1, "zplane": 2}
+_CYLINDERS = {"xcylinder": 0, "ycylinder": 1, "zcylinder": 2}
+_MATERIAL_PROPERTIES = ("youngsModulus", "poissonsRatio")
+_DUMP_MODIFY_ARITY = {"format": 1, "label": 1, "sort": 1, "append": 1, "buffer": 1, "every": 1,
+                      "fileper": 1, "first": 1, "flush": 1, "header": 1, "image": 1, "nfile": 1,
+                      "pad": 1, "precision": 1, "region": 1, "scale": 1, "unwrap": 1, "thresh": 3}
+_CONVERSION = re.compile(r"%[-+ #0]*\d*(?:\.(\d*))?[hlLqjzt]*([diouxXeEfFgGaAcsp%])")
+
+
+def _format_conversions(fmt: str) -> list[tuple[str, int | None]]:
+    """(conversion letter, precision or None) of each conversion of a printf format."""
+    return [(m.group(2), None if m.group(1) is None else int(m.group(1) or 0))
+            for m in _CONVERSION.finditer(fmt) if m.group(2) != "%"]
+
+
+def _format_full_precision(fmt: str, local: bool) -> bool:
+    """True when every float conversion keeps >= 15 significant digits (and,
+    for a ``dump local``, there is no integer conversion: its values are doubles)."""
+    conversions = _format_conversions(fmt)
+    floats = [(c, p) for c, p in conversions if c in "eEfFgGaA"]
+    if not floats or (local and len(floats) < len(conversions)):
+        return False
+    for conv, prec in floats:
+        prec = 6 if prec is None else prec
+        digits = {"e": prec + 1, "g": max(prec, 1)}.get(conv.lower())
+        if conv in "aA":
+            digits = 17
+        if digits is None or digits < 15:
+            return False
+    return True
+
+
+class _Reader:
+    def __init__(self, path: Path, variables: dict[str, str]) -> None:
+        self.root = path
+        self.vars = _Variables(variables)
+        self.warnings: list[str] = []
+        self.units: str | None = None
+        self.periodic = (False, False, False)
+        self.ntypes: int | None = None
+        self.ntypes_where: _Where | None = None
+        self.properties: dict[str, tuple[str, object, _Where]] = {}
+        self.pair: _ModelSpec | None = None
+        self.walls: dict[str, tuple[list[Wall], _ModelSpec, bool]] = {}
+        self.meshes: dict[str, tuple[Wall, _Where]] = {}
+        self.computes: dict[str, tuple[str, list[str], _Where]] = {}
+        self.dumps: dict[str, DumpSpec] = {}
+        self.dump_where: dict[str, _Where] = {}
+        self.gravity: np.ndarray | None = None
+        self.timestep: float | None = None
+        self.run_steps: list[int] = []
+        self.type_uses: list[tuple[int, str, _Where]] = []
+        self.include_stack: list[Path] = []
+
+    # -- driver ------------------------------------------------------------
+
+    def read(self, path: Path) -> None:
+        if path in self.include_stack:
+            raise ScriptError(f"{path} includes itself.", file=self.include_stack[-1],
+                              fix="remove the circular include.")
+        self.include_stack.append(path)
+        for number, text in _logical_lines(path):
+            self.command(text, _Where(path, number))
+        self.include_stack.pop()
+
+    def command(self, text: str, where: _Where) -> None:
+        stripped = _strip_comment(text)
+        words0 = stripped.split()
+        if not words0:
+            return
+        try:
+            words = _split_words(_substitute(stripped, self.vars, where), where)
+        except _Unevaluable as exc:
+            if words0[0] in _INTERPRETED:
+                raise ScriptError(f"{exc}: its value is only known while LIGGGHTS runs.",
+                                  file=where.file, line=where.line,
+                                  fix="replace it by a number, or pass the value with variables=.") from None
+            self.warnings.append(f"{where.file}:{where.line}: '{words0[0]}' ignored ({exc}).")
+            return
+        if not words:
+            return
+        name, args = words[0], words[1:]
+        handler = getattr(self, "cmd_" + name, None)
+        if handler is not None:
+            handler(args, where)
+        elif name in _CONTROL_FLOW:
+            self.warnings.append(f"{where.file}:{where.line}: '{name}' is not followed; demsplit reads "
+                                 "the script once, top to bottom.")
+
+    def error(self, cls: type[DemsplitError], message: str, where: _Where, fix: str) -> DemsplitError:
+        return cls(message, file=where.file, line=where.line, fix=fix)
+
+    def number(self, text: str, where: _Where, what: str) -> float:
+        try:
+            return float(text)
+        except ValueError:
+            raise self.error(ScriptError, f"{what}: expected a number, found {text!r}.", where,
+                             "write a number (or a variable that holds one).") from None
+
+    def integer(self, text: str, where: _Where, what: str) -> int:
+        try:
+            return int(text)
+        except ValueError:
+            raise self.error(ScriptError, f"{what}: expected an integer, found {text!r}.", where,
+                             "write an integer.") from None
+
+    def need(self, args: list[str], n: int, where: _Where, what: str, syntax: str) -> None:
+        if len(args) < n:
+            raise self.error(ScriptError, f"{what}: expected '{syntax}', found {' '.join(args)!r}.",
+                             where, f"write '{syntax}'.")
+
+    # -- commands ----------------------------------------------------------
+
+    def cmd_variable(self, args: list[str], where: _Where) -> None:
+        self.vars.define(args, where)
+
+    def cmd_include(self, args: list[str], where: _Where) -> None:
+        self.need(args, 1, where, "include", "include FILE")
+        target = Path(args[0])
+        if not target.is_absolute():
+            target = self.root.parent / target
+        if not target.is_file():
+            raise self.error(ScriptError, f"include: no file {target}.", where,
+                             "check the path (relative paths are taken from the main script's directory).")
+        self.read(target)
+
+    def cmd_units(self, args: list[str], where: _Where) -> None:
+        self.need(args, 1, where, "units", "units si")
+        if args[0] != "si":
+            raise self.error(UnsupportedModelError, f"units {args[0]!r}: demsplit reads SI runs only.",
+                             where, "run the simulation with 'units si'.")
+        self.units = "si"
+
+    def cmd_boundary(self, args: list[str], where: _Where) -> None:
+        self.need(args, 3, where, "boundary", "boundary X Y Z")
+        self.periodic = tuple("p" in a for a in args[:3])
+
+    def cmd_create_box(self, args: list[str], where: _Where) -> None:
+        self.need(args, 1, where, "create_box", "create_box NTYPES REGION")
+        self.ntypes = self.integer(args[0], where, "create_box")
+        self.ntypes_where = where
+
+    def cmd_timestep(self, args: list[str], where: _Where) -> None:
+        self.need(args, 1, where, "timestep", "timestep DT")
+        self.timestep = self.number(args[0], where, "timestep")
+
+    def cmd_run(self, args: list[str], where: _Where) -> None:
+        self.need(args, 1, where, "run", "run N")
+        self.run_steps.append(self.integer(args[0], where, "run"))
+
+    def cmd_create_atoms(self, args: list[str], where: _Where) -> None:
+        if args and args[0].isdigit():
+            self.type_uses.append((int(args[0]), "create_atoms", where))
+
+    def cmd_pair_style(self, args: list[str], where: _Where) -> None:
+        self.need(args, 1, where, "pair_style", "pair_style gran model hertz tangential history")
+        if args[0] != "gran":
+            raise self.error(UnsupportedModelError, f"pair_style {args[0]!r} is not supported.", where,
+                             "use 'pair_style gran model hertz|hooke tangential history|no_history'.")
+        self.pair, _ = _parse_model(args[1:], (), where, self.warnings, "pair_style gran")
+
+    def cmd_unfix(self, args: list[str], where: _Where) -> None:
+        if args and args[0] in self.walls:
+            self.warnings.append(f"{where.file}:{where.line}: wall fix {args[0]} is removed here; it "
+                                 "stays in the scene's wall list for the frames before.")
+
+    def cmd_fix(self, args: list[str], where: _Where) -> None:
+        self.need(args, 3, where, "fix", "fix ID GROUP STYLE ...")
+        fid, style, rest = args[0], args[2], args[3:]
+        if style == "property/global":
+            self.property_global(fid, rest, where)
+        elif style == "wall/gran":
+            self.wall_gran(fid, rest, where)
+        elif style in ("mesh/surface", "mesh/surface/stress"):
+            self.mesh_surface(fid, rest, where)
+        elif style == "gravity":
+            self.fix_gravity(rest, where)
+        elif style.startswith("particletemplate/"):
+            if style != "particletemplate/sphere":
+                self.warnings.append(f"{where.file}:{where.line}: fix {style}: only spheres are handled.")
+            if "atom_type" in rest[:-1]:
+                t = rest[rest.index("atom_type") + 1]
+                self.type_uses.append((self.integer(t, where, f"fix {style} atom_type"), f"fix {fid} {style}", where))
+        elif style == "move/mesh":
+            self.warnings.append(f"{where.file}:{where.line}: fix {fid} move/mesh moves a mesh: its "
+                                 "geometry from the mesh file is only valid before it moves.")
+        elif style not in _BENIGN_FIXES:
+            self.warnings.append(f"{where.file}:{where.line}: fix style {style} ({fid}) is not "
+                                 "interpreted by demsplit; check that it does not change the contacts.")
+
+    def property_global(self, fid: str, rest: list[str], where: _Where) -> None:
+        self.need(rest, 2, where, f"fix {fid} property/global", "NAME STYLE VALUES")
+        name, style, values = rest[0], rest[1], rest[2:]
+        what = f"fix {fid} property/global {name}"
+        if style == "peratomtypepair":
+            self.need(values, 1, where, what, f"{name} peratomtypepair N V11 V12 ... VNN")
+            n = self.integer(values[0], where, what)
+            nums = [self.number(v, where, what) for v in values[1:]]
+            if self.ntypes is not None and n != self.ntypes:
+                raise self.error(MaterialError, f"{what}: N = {n}, but create_box defines {self.ntypes} "
+                                 "atom types.", where, f"give a {self.ntypes} x {self.ntypes} table.")
+            if len(nums) != n * n:
+                raise self.error(MaterialError, f"{what}: expected {n}x{n} = {n * n} values, found "
+                                 f"{len(nums)}.", where, "give one value per pair of types, row by row.")
+            value: object = np.array(nums).reshape(n, n)
+        elif style == "scalar":
+            self.need(values, 1, where, what, f"{name} scalar VALUE")
+            value = self.number(values[0], where, what)
+        else:
+            nums = [self.number(v, where, what) for v in values]
+            if style == "peratomtype" and self.ntypes is not None and len(nums) != self.ntypes:
+                raise self.error(MaterialError, f"{what}: expected {self.ntypes} values (one per atom "
+                                 f"type, create_box {self.ntypes}), found {len(nums)}.", where,
+                                 "give one value per atom type, wall types included.")
+            value = np.array(nums)
+        self.properties[name] = (style, value, where)
+
+    def fix_gravity(self, rest: list[str], where: _Where) -> None:
+        self.need(rest, 2, where, "fix gravity", "fix ID GROUP gravity G vector X Y Z")
+        if rest[1] != "vector" or len(rest) < 5:
+            self.warnings.append(f"{where.file}:{where.line}: fix gravity style {rest[1]!r} is not read; "
+                                 "script.gravity is None.")
+            return
+        try:
+            g = float(rest[0])
+            d = np.array([float(v) for v in rest[2:5]])
+        except ValueError:
+            self.warnings.append(f"{where.file}:{where.line}: fix gravity with a variable "
+                                 f"({' '.join(rest)}) is not read; script.gravity is None.")
+            return
+        norm = float(np.linalg.norm(d))
+        if norm == 0.0:
+            raise self.error(ScriptError, "fix gravity: the direction vector is zero.", where,
+                             "give a non-zero direction.")
+        self.gravity = g * d / norm
+
+    def mesh_surface(self, fid: str, rest: list[str], where: _Where) -> None:
+        syntax = "fix ID GROUP mesh/surface file FILE type T [scale S] [move DX DY DZ] [rotate axis AX AY AZ angle DEG]"
+        self.need(rest, 4, where, f"fix {fid} mesh/surface", syntax)
+        if rest[0] != "file" or rest[2] != "type":
+            raise self.error(ScriptError, f"fix {fid} mesh/surface: expected 'file FILE type T', found "
+                             f"{' '.join(rest[:4])!r}.", where, f"write '{syntax}'.")
+        file = Path(rest[1])
+        if not file.is_absolute():
+            file = self.root.parent / file
+        wall_type = self.integer(rest[3], where, f"fix {fid} mesh/surface type")
+        transforms: list[tuple[str, tuple[float, ...]]] = []
+        i = 4
+        while i < len(rest):
+            word = rest[i]
+            what = f"fix {fid} mesh/surface {word}"
+            if word == "scale":
+                self.need(rest[i + 1:], 1, where, what, "scale S")
+                transforms.append(("scale", (self.number(rest[i + 1], where, what),)))
+                i += 2
+            elif word == "move":
+                self.need(rest[i + 1:], 3, where, what, "move DX DY DZ")
+                transforms.append(("move", tuple(self.number(v, where, what) for v in rest[i + 1:i + 4])))
+                i += 4
+            elif word == "rotate":
+                part = rest[i + 1:i + 7]
+                if len(part) < 6 or part[0] != "axis" or part[4] != "angle":
+                    raise self.error(ScriptError, f"{what}: expected 'rotate axis AX AY AZ angle DEG'.",
+                                     where, "write 'rotate axis AX AY AZ angle DEG'.")
+                transforms.append(("rotate", tuple(self.number(v, where, what)
+                                                   for v in (part[1], part[2], part[3], part[5]))))
+                i += 7
+            else:
+                i += 1
+        wall = Wall(name=fid, kind="mesh", type=wall_type, file=str(file), transforms=tuple(transforms))
+        self.meshes[fid] = (wall, where)
+        self.type_uses.append((wall_type, f"fix {fid} mesh/surface", where))
+
+    def wall_gran(self, fid: str, rest: list[str], where: _Where) -> None:
+        what = f"fix {fid} wall/gran"
+        spec, i = _parse_model(rest, ("primitive", "mesh"), where, self.warnings, what)
+        if i >= len(rest):
+            raise self.error(ScriptError, f"{what}: expected 'primitive type T ...' or 'mesh n_meshes K "
+                             "meshes M1 ...'.", where, "complete the wall/gran command.")
+        walls: list[Wall] = []
+        if rest[i] == "primitive":
+            geo = rest[i + 1:]
+            syntax = "primitive type T xplane|yplane|zplane C  or  primitive type T zcylinder R C1 C2"
+            self.need(geo, 4, where, what, syntax)
+            if geo[0] != "type":
+                raise self.error(ScriptError, f"{what}: expected 'primitive type T', found {geo[0]!r}.",
+                                 where, f"write '{syntax}'.")
+            wall_type = self.integer(geo[1], where, f"{what} type")
+            shape = geo[2]
+            if shape in _PLANES:
+                wall = Wall(name=fid, kind="plane", type=wall_type, axis=_PLANES[shape],
+                            position=self.number(geo[3], where, f"{what} {shape}"))
+            elif shape in _CYLINDERS:
+                self.need(geo, 6, where, what, f"primitive type T {shape} RADIUS C1 C2")
+                r, c1, c2 = (self.number(v, where, f"{what} {shape}") for v in geo[3:6])
+                wall = Wall(name=fid, kind="cylinder", type=wall_type, axis=_CYLINDERS[shape],
+                            radius=r, center=(c1, c2))
+            else:
+                raise self.error(UnsupportedModelError, f"{what}: primitive {shape!r} is not supported.",
+                                 where, "use xplane|yplane|zplane or xcylinder|ycylinder|zcylinder, or a mesh.")
+            self.type_uses.append((wall_type, what, where))
+            walls.append(wall)
+            tail = geo[6 if shape in _CYLINDERS else 4:]
+        else:
+            geo = rest[i + 1:]
+            if len(geo) < 3 or geo[0] != "n_meshes" or geo[2] != "meshes":
+                raise self.error(ScriptError, f"{what}: expected 'mesh n_meshes K meshes M1 ...'.", where,
+                                 "write 'mesh n_meshes K meshes M1 ... MK'.")
+            k = self.integer(geo[1], where, f"{what} n_meshes")
+            names = geo[3:3 + k]
+            if len(names) != k:
+                raise self.error(ScriptError, f"{what}: n_meshes {k} but {len(names)} mesh ids follow.",
+                                 where, "list exactly n_meshes mesh fix ids after 'meshes'.")
+            for m in names:
+                if m not in self.meshes:
+                    raise self.error(ScriptError, f"{what}: mesh {m!r} is not a fix mesh/surface defined "
+                                     "before.", where, "define 'fix M all mesh/surface file F type T' first.")
+                walls.append(self.meshes[m][0])
+            tail = geo[3 + k:]
+        # fix wall/gran takes its on/off settings after the geometry (measured:
+        # 'computeElasticPotential on' before 'mesh' is "wrong keyword order")
+        spec.settings.update({a: b for a, b in zip(tail, tail[1:]) if b in ("on", "off")})
+        self.walls[fid] = (walls, spec, rest[i] == "mesh")
+
+    def cmd_compute(self, args: list[str], where: _Where) -> None:
+        self.need(args, 3, where, "compute", "compute ID GROUP STYLE ...")
+        style = args[2]
+        if style in ("pair/gran/local", "wall/gran/local"):
+            self.computes[args[0]] = (style.split("/")[0], args[3:], where)
+
+    def cmd_dump(self, args: list[str], where: _Where) -> None:
+        self.need(args, 5, where, "dump", "dump ID GROUP STYLE N FILE ...")
+        did, style = args[0], args[2]
+        every = self.integer(args[3], where, f"dump {did} N")
+        file = Path(args[4])
+        if not file.is_absolute():
+            file = self.root.parent / file
+        self.dumps[did] = DumpSpec(id=did, style=style, every=every, file=str(file), keywords=args[5:])
+        self.dump_where[did] = where
+
+    def cmd_dump_modify(self, args: list[str], where: _Where) -> None:
+        self.need(args, 1, where, "dump_modify", "dump_modify ID KEYWORD VALUE ...")
+        dump = self.dumps.get(args[0])
+        if dump is None:
+            raise self.error(ScriptError, f"dump_modify: no dump with id {args[0]!r} is defined before.",
+                             where, "define the dump before modifying it.")
+        i, rest = 0, args[1:]
+        while i < len(rest):
+            key = rest[i]
+            arity = _DUMP_MODIFY_ARITY.get(key)
+            if arity is None:
+                self.warnings.append(f"{where.file}:{where.line}: dump_modify keyword {key!r} not "
+                                     "understood; the rest of the line is ignored.")
+                return
+            self.need(rest[i + 1:], arity, where, f"dump_modify {key}", f"{key} VALUE")
+            if key in ("format", "label", "sort"):
+                setattr(dump, key, rest[i + 1])
+            i += 1 + arity
+
+    # -- assembly ----------------------------------------------------------
+
+    def model(self, spec: _ModelSpec) -> ContactModel:
+        params: dict = {}
+        if spec.normal == "hooke":
+            v = self.properties.get("characteristicVelocity")
+            if v is None:
+                raise self.error(ScriptError, "model hooke needs 'fix ID all property/global "
+                                 "characteristicVelocity scalar V', which the script does not define.",
+                                 spec.where, "add the characteristicVelocity the run used.")
+            params["characteristic_velocity"] = float(v[1])
+            params["kt_to_kn"] = 2.0 / 7.0 if spec.on("ktToKnUser") else 1.0
+        return ContactModel(normal=spec.normal, tangential=spec.tangential, params=params)
+
+    def materials(self) -> dict[int, Material]:
+        found = {name: self.properties.get(name) for name in _MATERIAL_PROPERTIES}
+        missing = [name for name, p in found.items() if p is None]
+        if missing:
+            if self.pair is None and not self.walls:
+                return {}
+            raise ScriptError(f"the script defines no {' and no '.join(missing)}.", file=self.root,
+                              fix="add 'fix ID all property/global youngsModulus|poissonsRatio "
+                              "peratomtype V1 ... VN'.")
+        for name, (style, values, where) in found.items():
+            if style != "peratomtype":
+                raise self.error(MaterialError, f"{name} must be given 'peratomtype', found {style!r}.",
+                                 where, f"write 'property/global {name} peratomtype V1 ... VN'.")
+        (_, E, wE), (_, nu, wnu) = found["youngsModulus"], found["poissonsRatio"]
+        if len(E) != len(nu):
+            raise self.error(MaterialError, f"youngsModulus has {len(E)} values (line {wE.line}) but "
+                             f"poissonsRatio has {len(nu)}.", wnu, "give both one value per atom type.")
+        for k in range(len(E)):
+            if not E[k] > 0:
+                raise self.error(MaterialError, f"youngsModulus of type {k + 1} is {float(E[k])!r}; it must be "
+                                 "> 0.", wE, "correct the Young's modulus.")
+            if not 0.0 <= nu[k] <= 0.5:
+                raise self.error(MaterialError, f"poissonsRatio of type {k + 1} is {float(nu[k])!r}; LIGGGHTS "
+                                 "accepts 0 <= nu <= 0.5.", wnu, "correct the Poisson's ratio.")
+        return {k + 1: Material(float(E[k]), float(nu[k])) for k in range(len(E))}
+
+    def local_layouts(self, pair_model: _ModelSpec | None,
+                      mesh_fix: tuple | None) -> dict[str, LocalLayout]:
+        layouts = {}
+        for cid, (kind, keywords, where) in self.computes.items():
+            spec = pair_model if kind == "pair" else (mesh_fix[1] if mesh_fix else None)
+            if spec is None:
+                raise self.error(ScriptError, f"compute {cid} {kind}/gran/local needs "
+                                 + ("a 'pair_style gran'." if kind == "pair" else "a mesh 'fix wall/gran'."),
+                                 where, "define it before the compute, as LIGGGHTS requires.")
+            history = spec.history(kind)
+            try:
+                columns = local_layout(kind, keywords, len(history), history=history)
+            except DemsplitError as exc:
+                raise exc.located(file=where.file, line=where.line) from None
+            layouts[cid] = LocalLayout(kind, columns)
+        return layouts
+
+    def finish_dump(self, dump: DumpSpec, layouts: dict[str, LocalLayout]) -> None:
+        where = self.dump_where[dump.id]
+        binary = dump.file.endswith(".bin")
+        if dump.style == "local" and binary:
+            self.warnings.append(f"dump {dump.id}: dump local to a .bin file writes text headers and "
+                                 "unreadable rows in LIGGGHTS 3.8.0; use a text file and dump_modify format.")
+        dump.full_precision = (binary and dump.style != "local") or (
+            dump.format is not None and _format_full_precision(dump.format, dump.style == "local"))
+        if dump.format is not None:
+            conversions = _format_conversions(dump.format)
+            if len(conversions) != len(dump.keywords):
+                self.warnings.append(f"dump {dump.id}: the format has {len(conversions)} conversions for "
+                                     f"{len(dump.keywords)} columns.")
+            if dump.style == "local":
+                ints = [k + 1 for k, (c, _) in enumerate(conversions) if c in "diouxXc"]
+                if ints:
+                    self.warnings.append(f"dump {dump.id}: format column(s) {ints} use an integer "
+                                         "conversion, but dump local passes doubles: those columns are garbage.")
+        if dump.style != "local":
+            return
+        refs = [re.fullmatch(r"c_([^\[\]]+)(?:\[(\d+)\])?", k) for k in dump.keywords]
+        used = {m.group(1) for m in refs if m and m.group(1) in layouts}
+        if len(used) > 1:
+            raise self.error(ScriptError, f"dump {dump.id} mixes columns of computes {sorted(used)}.",
+                             where, "dump each granular local compute to its own file.")
+        if not used:
+            return
+        dump.compute = used.pop()
+        full = layouts[dump.compute].columns
+        names = []
+        for keyword, m in zip(dump.keywords, refs):
+            if m is None or m.group(1) != dump.compute:
+                names.append(keyword)
+                continue
+            if m.group(2) is None:
+                raise self.error(ScriptError, f"dump {dump.id}: {keyword} is an array; dump local needs "
+                                 "one column per c_ID[k].", where, f"write {keyword}[1] {keyword}[2] ...")
+            k = int(m.group(2))
+            if not 1 <= k <= len(full):
+                raise self.error(ScriptError, f"dump {dump.id}: {keyword} is out of range; compute "
+                                 f"{dump.compute} has {len(full)} columns ({' '.join(full)}).", where,
+                                 "correct the column index.")
+            names.append(full[k - 1])
+        dump.layout = LocalLayout(layouts[dump.compute].kind, names)
+
+    def result(self) -> LiggghtsScript:
+        if self.units is None:
+            self.warnings.append("no 'units' command; demsplit assumes units si.")
+        materials = self.materials()
+        pair_model = self.model(self.pair) if self.pair else ContactModel()
+        walls: list[Wall] = []
+        mesh_fix, dumped_mesh_walls = None, []
+        for fid, (entries, spec, is_mesh) in self.walls.items():
+            model = self.model(spec)
+            first = len(walls)
+            walls += [replace(wall, model=None if model == pair_model else model) for wall in entries]
+            if is_mesh:
+                mesh_fix = (fid, spec)
+                dumped_mesh_walls = list(range(first, len(walls)))
+        for t, what, where in self.type_uses:
+            if materials and t not in materials:
+                raise self.error(MaterialError, f"{what} uses type {t}, which has no material (materials "
+                                 f"are defined for types {sorted(materials)}).", where,
+                                 "give youngsModulus and poissonsRatio one value per type, this one included.")
+        layouts = self.local_layouts(self.pair, mesh_fix)
+        for dump in self.dumps.values():
+            self.finish_dump(dump, layouts)
+        scene = Scene(materials=materials, model=pair_model, walls=walls, units="si", source=str(self.root))
+        coefficients = {name: value for name, (_, value, _) in self.properties.items()}
+        variables = {}
+        for name in self.vars.values:
+            try:
+                variables[name] = self.vars.retrieve(name, _Where(self.root, 0))
+            except (_Unevaluable, DemsplitError):
+                continue
+        return LiggghtsScript(
+            path=self.root, scene=scene, periodic=self.periodic, dumps=list(self.dumps.values()),
+            gravity=self.gravity, coefficients=coefficients, ntypes=self.ntypes, timestep=self.timestep,
+            run_steps=self.run_steps, local_computes=layouts, dumped_mesh_walls=dumped_mesh_walls,
+            variables=variables, warnings=self.warnings)
+
+
+def read_script(path: str | Path, variables: dict[str, str] | None = None) -> LiggghtsScript:
+    """Read a LIGGGHTS input script (see the module docstring).
+
+    ``variables`` are the run's ``-var NAME VALUE`` command-line values; they
+    win over the script's own definitions, as in LIGGGHTS.
+    """
+    path = Path(path).resolve()
+    reader = _Reader(path, dict(variables or {}))
+    reader.read(path)
+    return reader.result()
