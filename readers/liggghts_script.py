@@ -95,8 +95,8 @@ DEFAULT_KEYWORDS = ("pos", "vel", "id", "force", "torque", "history", "contactAr
 _KEYWORDS = set(CODE_ORDER) | {"heatFlux", "ms_id", "verbose"}
 
 
-def _xyz(prefix: str, suffix: str = "") -> list[str]:
-    return [f"{prefix}{c}{suffix}" for c in "xyz"]
+def _xyz(prefix: str) -> list[str]:
+    return [f"{prefix}{c}" for c in "xyz"]
 
 
 _PAIR_BLOCKS: dict[str, list[str]] = {
@@ -665,11 +665,10 @@ class _Reader:
         self.units: str | None = None
         self.periodic = (False, False, False)
         self.ntypes: int | None = None
-        self.ntypes_where: _Where | None = None
         self.properties: dict[str, tuple[str, object, _Where]] = {}
         self.pair: _ModelSpec | None = None
         self.walls: dict[str, tuple[list[Wall], _ModelSpec, bool]] = {}
-        self.meshes: dict[str, tuple[Wall, _Where]] = {}
+        self.meshes: dict[str, Wall] = {}
         self.computes: dict[str, tuple[str, list[str], _Where]] = {}
         self.dumps: dict[str, DumpSpec] = {}
         self.dump_where: dict[str, _Where] = {}
@@ -765,7 +764,6 @@ class _Reader:
     def cmd_create_box(self, args: list[str], where: _Where) -> None:
         self.need(args, 1, where, "create_box", "create_box NTYPES REGION")
         self.ntypes = self.integer(args[0], where, "create_box")
-        self.ntypes_where = where
 
     def cmd_timestep(self, args: list[str], where: _Where) -> None:
         self.need(args, 1, where, "timestep", "timestep DT")
@@ -895,7 +893,7 @@ class _Reader:
             else:
                 i += 1
         wall = Wall(name=fid, kind="mesh", type=wall_type, file=str(file), transforms=tuple(transforms))
-        self.meshes[fid] = (wall, where)
+        self.meshes[fid] = wall
         self.type_uses.append((wall_type, f"fix {fid} mesh/surface", where))
 
     def wall_gran(self, fid: str, rest: list[str], where: _Where) -> None:
@@ -942,7 +940,7 @@ class _Reader:
                 if m not in self.meshes:
                     raise self.error(ScriptError, f"{what}: mesh {m!r} is not a fix mesh/surface defined "
                                      "before.", where, "define 'fix M all mesh/surface file F type T' first.")
-                walls.append(self.meshes[m][0])
+                walls.append(self.meshes[m])
             tail = geo[3 + k:]
         # fix wall/gran takes its on/off settings after the geometry (measured:
         # 'computeElasticPotential on' before 'mesh' is "wrong keyword order")

@@ -216,7 +216,7 @@ def test_variables_continuation_comments_quotes_include(tmp_path):
     s = script(tmp_path, """\
         variable nuOne index 0.25
         variable nuOne index 0.4          # an index variable keeps its first value
-        variable E equal 2*v_half^2+sqrt(4)*1e6   # 2*(2.5e3)^2 ... see below
+        variable E equal 2*v_half^2+sqrt(4)*1e6   # uses v_half, defined below
         variable half equal 2.5e3
         variable d index dumps
         variable n equal (3+1)*250
@@ -229,7 +229,7 @@ def test_variables_continuation_comments_quotes_include(tmp_path):
         dump_modify d1 label "C # not a comment ${d}"
     """)
     E1 = 2 * 2.5e3 ** 2 + 2e6
-    assert s.scene.materials[1] .E == pytest.approx(E1, rel=1e-15)
+    assert s.scene.materials[1].E == pytest.approx(E1, rel=1e-15)
     assert s.scene.materials[2].E == pytest.approx(1.5 * E1, rel=1e-15)
     assert s.scene.materials[1].nu == 0.25 and s.scene.materials[2].nu == 0.3
     (d1,) = s.dumps
