@@ -32,23 +32,36 @@ Random access and compression
 
 Parser (measured)
     Rows are parsed by ``pyarrow.csv.read_csv`` (space delimiter, one name per
-    field including the empty field after the trailing space, only the
-    requested columns converted). Measured with
-    ``python benchmarks/parse_engines.py`` (2 cores, Python 3.11.7, pyarrow
-    14, pandas 2, polars 1; best of 2 runs, seconds to numpy arrays):
+    field including the empty field after the trailing space, explicit column
+    types, only the requested columns converted). Measured with
+    ``python benchmarks/parse_engines.py`` (2 cores shared with other jobs,
+    load average 2-3, so expect +-50 % between runs; Python 3.11.7, pandas
+    2.x, pyarrow, polars 1.x; best of 2 runs, seconds until numpy arrays).
+    Run A, all engines::
 
-    =====================  ======  ===========  ========  ======  =============
-    frame / columns        pandas  pandas       pyarrow   polars  numpy
-                           C       (pyarrow)                      loadtxt
-    =====================  ======  ===========  ========  ======  =============
-    local 2e6 x 41, all    BENCH_LOCAL_ALL
-    local 2e6 x 41, 6      BENCH_LOCAL_6
-    atoms 1e6 x 16, all    BENCH_ATOM_ALL
-    atoms 1e6 x 16, 6      BENCH_ATOM_6
-    =====================  ======  ===========  ========  ======  =============
+        frame / columns       pandas-C  pandas(pyarrow)  pyarrow  polars  np.loadtxt
+        local 2e6 x 41, all     6.37       6.39            5.90     2.77    18.99
+        local 2e6 x 41, 6       2.75       3.04            3.08     1.66     5.02
+        atoms 1e6 x 16, all     0.76       0.47            0.40     0.59     3.29
+        atoms 1e6 x 16, 6       0.30       0.26            0.21     0.26     1.45
 
-    pyarrow also rejects ragged rows, which pandas and polars silently pad with
-    NaN. Peak memory above the imports is in the benchmark's output.
+    Run B (``--engines pyarrow,polars,demsplit``; ``demsplit`` is
+    ``open_dump(p).frame(0, columns)``: index scan, parse, validation, digits)::
+
+        frame / columns       pyarrow  polars  demsplit   peak RSS above imports (MiB)
+        local 2e6 x 41, all     2.96     3.92    8.98      2926 / 2050 / 2192
+        local 2e6 x 41, 6       1.64     1.72    3.34      2281 /  918 / 1633
+        atoms 1e6 x 16, all     0.46     0.46    0.85       387 /  234 /  370
+        atoms 1e6 x 16, 6       0.19     0.38    1.05       296 /   78 /  287
+
+    pyarrow and polars trade first place with the load (polars led run A on
+    the big contact frame, pyarrow run B); pyarrow is the one that rejects
+    ragged rows (pandas and polars silently pad short rows with NaN/null and
+    drop or add columns for long ones) and parses a zero-copy ``mmap`` slice,
+    so it is used. Where the reader's time goes (cProfile, atoms 1e6 rows, 6
+    columns, same shared machine): index scan 0.24 s, the pyarrow call 0.61 s
+    (its options differ from the bare benchmark only by explicit types, no
+    quoting and no null strings), digit count 0.02 s, the rest < 0.03 s.
 
 Validation (every frame that is read)
     * the header's ``NUMBER OF ATOMS/ENTRIES`` equals the number of lines
@@ -448,7 +461,7 @@ class TextDump(DumpFile):
         first_row = head.split(b"\n", 1)[0]
         trailing = first_row.endswith(b" ")
         fields = [f"f{k}" for k in range(len(e.names) + trailing)]
-        sample = head[: head.rfind(b"\n") + 1] or head
+        sample = _tokens(head[: head.rfind(b"\n") + 1] or head, len(e.names))
         int_like = _integer_columns(sample, len(e.names))
         types = {fields[i]: (pa.int64() if int_like[i] else pa.float64()) for i in idx}
         try:
@@ -620,8 +633,9 @@ def _box(lo_bound: np.ndarray, hi_bound: np.ndarray, periodic, tilt: np.ndarray 
 
 
 def _tokens(sample: bytes, ncols: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Byte-level view of whole rows: per byte, its token number (-1 on
-    separators), and per token its column. Vectorised; ``sample`` ends with a newline."""
+    """Byte-level view of whole rows: the bytes, per byte its token number (-1
+    on separators), and per token its column (``ncols`` for stray extra
+    tokens). Vectorised; ``sample`` holds whole lines."""
     a = np.frombuffer(sample, dtype=np.uint8)
     sep = (a == 32) | (a == 10) | (a == 13) | (a == 9)
     start = ~sep & np.concatenate(([True], sep[:-1]))
@@ -630,15 +644,13 @@ def _tokens(sample: bytes, ncols: int) -> tuple[np.ndarray, np.ndarray, np.ndarr
     line_of_tok = np.cumsum(a == 10)[start] if start.any() else np.empty(0, np.int64)
     first_tok_of_line = np.searchsorted(line_of_tok, line_of_tok, side="left")
     col = np.arange(line_of_tok.size) - first_tok_of_line
-    return a, tok, np.minimum(col, ncols)  # col == ncols collects stray extra tokens
+    return a, tok, np.minimum(col, ncols)
 
 
-def _integer_columns(sample: bytes, ncols: int) -> np.ndarray:
-    """Per column: True when every sampled token is an integer literal
-    (digits with an optional sign), i.e. the column can be read as int64."""
-    if not sample:
-        return np.zeros(ncols, dtype=bool)
-    a, tok, col = _tokens(sample, ncols)
+def _integer_columns(sample: tuple[np.ndarray, np.ndarray, np.ndarray], ncols: int) -> np.ndarray:
+    """Per column: True when every sampled token (``_tokens`` of whole rows) is
+    an integer literal (digits with an optional sign): it can be read as int64."""
+    a, tok, col = sample
     inside = tok >= 0
     is_digit = (a >= 48) & (a <= 57)
     non_int = inside & ~is_digit & (a != 45) & (a != 43)
@@ -648,10 +660,10 @@ def _integer_columns(sample: bytes, ncols: int) -> np.ndarray:
     return present & ~col_non_int
 
 
-def _digits(sample: bytes, ncols: int, idx: list[int], cols: dict[str, np.ndarray],
-            int_like: np.ndarray) -> dict[int, int | None]:
+def _digits(sample: tuple[np.ndarray, np.ndarray, np.ndarray], ncols: int, idx: list[int],
+            cols: dict[str, np.ndarray], int_like: np.ndarray) -> dict[int, int | None]:
     """Printed significant digits of the requested columns (module docstring)."""
-    a, tok, col = _tokens(sample, ncols)
+    a, tok, col = sample
     inside = tok >= 0
     is_digit = (a >= 48) & (a <= 57)
     is_exp = inside & ((a == 101) | (a == 69))
