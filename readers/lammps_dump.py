@@ -94,7 +94,6 @@ from __future__ import annotations
 
 import bz2
 import gzip
-import io
 import lzma
 import mmap
 import struct
