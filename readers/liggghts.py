@@ -1,0 +1,425 @@
+"""A LIGGGHTS run: the input script plus its dumps, assembled into Frames.
+
+:class:`LiggghtsRun` reads the script (:mod:`.liggghts_script`) for the
+materials, the contact model, the walls and the meaning of every contact-dump
+column, then joins per timestep
+
+* the atom dump (``dump custom``: ids, types, positions, radii, masses),
+* the pair contact dump (``dump local`` of ``compute pair/gran/local``),
+* the mesh-wall contact dump (``dump local`` of ``compute wall/gran/local``),
+* the primitive-wall contacts, rebuilt from positions (LIGGGHTS never dumps
+  them; :mod:`demsplit.walls`),
+
+into one :class:`~demsplit.frame.Frame`. Geometry comes from the atom dump
+(minimum image across periodic boundaries); the overlap from the best source
+the run offers, chosen per run and reported (``overlap_source``):
+
+1. the dumped ``delta`` column (%g keeps it to 5e-6 relative);
+2. positions at full precision (``%.17g`` format or a binary dump);
+3. positions at printed precision, only when the error bound
+   sqrt(3) h / delta (h = the printed step of the coordinates) stays below
+   ``overlap_tolerance`` for every contact, or when ``force_positions`` is set
+   (the bound is then reported per contact); else :class:`PrecisionError`.
+
+Dump files are the ones the script's ``dump`` lines write (a ``.gz``, ``.bz2``
+or ``.xz`` copy is found too) unless given as ``atoms=``, ``contacts=``,
+``walls=``. Column names of a contact dump come from its own header
+(``c_ID[k]``) mapped through that compute's layout in the script.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterator
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputFormatError, PrecisionError
+from ..frame import Box, Frame, ParticleIndex, Table
+from ..scene import Material, Scene
+from ..walls import primitive_wall_contacts
+from .lammps_dump import DumpFile, DumpFrame, open_dump
+from .liggghts_script import LiggghtsScript, read_script
+
+DEFAULT_OVERLAP_TOLERANCE = 1e-3
+"""Largest accepted relative error bound of an overlap recomputed from printed positions."""
+
+ATOM_COLUMNS = ("id", "type", "x", "y", "z", "radius")
+_COMPRESSED = (".gz", ".bz2", ".xz")
+_LOCAL_TOKEN = re.compile(r"^c_(\w+)\[(\d+)\]$")
+
+
+def existing_file(path: str | Path) -> Path | None:
+    """``path`` if it exists, else its compressed copy (.gz/.bz2/.xz), else None."""
+    path = Path(path)
+    for candidate in (path, *(path.with_name(path.name + s) for s in _COMPRESSED)):
+        if candidate.is_file():
+            return candidate
+    return None
+
+
+def printed_step(x: np.ndarray, digits: int | None) -> np.ndarray:
+    """Step h of the last printed digit of values ``x`` printed with ``digits``
+    significant digits: h = 10^(floor(log10|x|) - digits + 1) (m); 0 at full precision."""
+    if digits is None or digits >= 15:
+        return np.zeros(np.shape(x))
+    with np.errstate(divide="ignore"):
+        exponent = np.floor(np.log10(np.abs(x)))
+    return np.where(np.isfinite(exponent), 10.0 ** (exponent - digits + 1), 0.0)
+
+
+def position_error(h: np.ndarray, delta: np.ndarray) -> np.ndarray:
+    """Relative error bound sqrt(3) h / delta of an overlap recomputed from
+    positions printed with step h (inf where delta <= 0: the printed positions
+    do not even show the contact)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(delta > 0, np.sqrt(3.0) * h / delta, np.where(h > 0, np.inf, 0.0))
+
+
+def relative_rounding(digits: int | None) -> float:
+    """Largest relative rounding error of a value printed with ``digits`` significant digits."""
+    return 0.0 if digits is None or digits >= 15 else 0.5 * 10.0 ** (1 - digits)
+
+
+class LiggghtsRun:
+    """A LIGGGHTS run opened for reading (see the module docstring)."""
+
+    def __init__(self, script: str | Path, *, atoms: str | Path | None = None,
+                 contacts: str | Path | None = None, walls: str | Path | None = None,
+                 variables: dict[str, str] | None = None, materials: dict[int, Material] | None = None,
+                 overlap_tolerance: float | None = None, force_positions: bool = False) -> None:
+        self.script: LiggghtsScript = read_script(script, variables)
+        base = self.script.scene
+        self.scene = Scene({**base.materials, **(materials or {})}, base.model, base.walls, base.units,
+                           base.source) if materials else base
+        self.overlap_tolerance = DEFAULT_OVERLAP_TOLERANCE if overlap_tolerance is None else overlap_tolerance
+        self.force_positions = force_positions
+        self.atoms = self._open_atoms(atoms)
+        self.pairs = self._open_local(contacts, "pair")
+        self.walls = self._open_local(walls, "wall")
+        self._pair_names = self._local_names(self.pairs, "pair")
+        self._wall_names = self._local_names(self.walls, "wall")
+        mesh = [w for w in self.scene.walls if w.kind == "mesh"]
+        self.notes: list[str] = list(self.script.warnings)
+        if mesh and self.walls is None:
+            self.notes.append(f"the run has {len(mesh)} mesh wall(s) but no wall/gran/local dump was found: "
+                              "contacts with mesh walls are missing from the energies")
+        self.steps = np.asarray(self.atoms.steps, dtype=np.int64)
+        self.sources = [self.script.path] + [d.path for d in (self.atoms, self.pairs, self.walls) if d is not None]
+
+    # -- finding and opening the dumps -----------------------------------------------------
+
+    def _candidates(self, kind: str) -> list:
+        """The script's dumps of one kind, full precision first."""
+        if kind == "atoms":
+            specs = [d for d in self.script.dumps
+                     if d.style == "custom" and all(c in d.keywords for c in ATOM_COLUMNS)]
+        else:
+            specs = [d for d in self.script.dumps if d.layout is not None and d.layout.kind == kind]
+        return sorted(specs, key=lambda d: not d.full_precision)
+
+    def _open_atoms(self, given) -> DumpFile:
+        if given is not None:
+            path = existing_file(given)
+            if path is None:
+                raise InputFormatError("atom dump not found.", file=given, fix="check the --atoms path.")
+            spec = next((d for d in self._candidates("atoms") if existing_file(d.file) == path), None)
+            return open_dump(path, columns=spec.keywords if spec else None)
+        for spec in self._candidates("atoms"):
+            path = existing_file(spec.file)
+            if path is not None:
+                return open_dump(path, columns=spec.keywords)
+        raise InputFormatError(
+            "no atom dump found: the script has no 'dump ... custom' with id type x y z radius whose file exists.",
+            file=self.script.path,
+            fix="add 'dump D all custom N atoms.txt id type x y z radius mass' to the script, or pass --atoms FILE.")
+
+    def _open_local(self, given, kind: str) -> DumpFile | None:
+        if given is not None:
+            path = existing_file(given)
+            if path is None:
+                raise InputFormatError(f"{kind} contact dump not found.", file=given,
+                                       fix=f"check the --{'contacts' if kind == 'pair' else 'walls'} path.")
+            return open_dump(path)
+        for spec in self._candidates(kind):
+            if "*" in spec.file or "%" in spec.file:
+                raise InputFormatError(
+                    f"dump {spec.id} writes one file per step or processor ({spec.file}); demsplit reads one "
+                    "file holding all frames.", file=self.script.path,
+                    fix="concatenate the files in step order into one file and pass it with --contacts/--walls.")
+            path = existing_file(spec.file)
+            if path is not None:
+                return open_dump(path)
+        if kind == "pair":
+            raise InputFormatError(
+                "no pair contact dump found: the script has no 'dump ... local' of a compute pair/gran/local "
+                "whose file exists.", file=self.script.path,
+                fix="add 'compute cpgl all pair/gran/local id pos delta history' and "
+                    "'dump dc all local N pairs.txt c_cpgl[1] ...' to the script, or pass --contacts FILE.")
+        return None
+
+    def _local_names(self, dump: DumpFile | None, kind: str) -> dict[str, str]:
+        """Canonical name -> header token for every column of a local dump, from
+        the header's ``c_ID[k]`` through compute ID's layout in the script."""
+        if dump is None:
+            return {}
+        names: dict[str, str] = {}
+        for token in dump.columns or []:
+            m = _LOCAL_TOKEN.match(token)
+            if m is None:
+                continue  # 'index' or another non-compute column
+            cid, k = m.group(1), int(m.group(2))
+            layout = self.script.local_computes.get(cid)
+            if layout is None:
+                raise InputFormatError(
+                    f"column {token} reads compute '{cid}', which the script does not define.",
+                    file=dump.path, fix="pass the input script that wrote this dump.")
+            if layout.kind != kind:
+                raise InputFormatError(
+                    f"this dump holds {layout.kind} contacts (compute {cid}), given as the {kind} contact dump.",
+                    file=dump.path, fix="swap --contacts and --walls.")
+            if k > len(layout.columns):
+                raise InputFormatError(
+                    f"column {token} is beyond the {len(layout.columns)} columns compute {cid} writes "
+                    "with the keywords in the script.", file=dump.path,
+                    fix="pass the input script that wrote this dump (its compute keywords decide the columns).")
+            names[layout.columns[k - 1]] = token
+        required = ("id1", "id2") if kind == "pair" else ("id1", "mesh_index")
+        missing = [c for c in required if c not in names]
+        if missing:
+            raise InputFormatError(
+                f"the {kind} contact dump lacks the columns {missing} (its compute needs the 'id' keyword).",
+                file=dump.path, fix="add 'id' to the compute's keywords and dump all its columns.")
+        return names
+
+    # -- frames ------------------------------------------------------------------------------
+
+    def __len__(self) -> int:
+        return len(self.steps)
+
+    def frame(self, k: int) -> Frame:
+        step = int(self.steps[k])
+        af = self.atoms.frame(k, columns=self._atom_columns())
+        pf = self._local_at(self.pairs, step, self._pair_names)
+        wf = self._local_at(self.walls, step, self._wall_names) if self.walls is not None else None
+        return self._assemble(af, pf, wf)
+
+    def __iter__(self) -> Iterator[Frame]:
+        """Stream the three dumps side by side (one decompression each)."""
+        pairs = self._stream(self.pairs, self._pair_names)
+        walls = self._stream(self.walls, self._wall_names) if self.walls is not None else None
+        for af in self.atoms.frames(columns=self._atom_columns()):
+            pf = self._advance(pairs, af.step, self.pairs)
+            wf = self._advance(walls, af.step, self.walls) if walls is not None else None
+            yield self._assemble(af, pf, wf)
+
+    def _atom_columns(self) -> list[str]:
+        cols = list(ATOM_COLUMNS)
+        if self.scene.model.normal == "hooke" or any(w.model is not None and w.model.normal == "hooke"
+                                                      for w in self.scene.walls):
+            cols.append("mass")
+        missing = [c for c in cols if c not in (self.atoms.columns or [])]
+        if missing:
+            raise InputFormatError(f"the atom dump lacks the columns {missing}.", file=self.atoms.path,
+                                   fix="add them to the 'dump ... custom' line.")
+        return cols
+
+    @staticmethod
+    def _wanted(names: dict[str, str]) -> list[str]:
+        keep = ("id1", "id2", "mesh_index", "delta", "shearx", "sheary", "shearz", "cpx", "cpy", "cpz",
+                "wall_cpx", "wall_cpy", "wall_cpz")
+        return [names[c] for c in keep if c in names]
+
+    def _local_at(self, dump: DumpFile, step: int, names: dict[str, str]) -> DumpFrame:
+        if step not in set(int(s) for s in dump.steps):
+            raise InputFormatError(
+                f"the contact dump has no frame at timestep {step}, which the atom dump has.",
+                file=dump.path, step=step,
+                fix="write the atom and contact dumps every N steps with the same N (dump ... N ...).")
+        return dump.frame_at_step(step, columns=self._wanted(names))
+
+    def _stream(self, dump: DumpFile, names: dict[str, str]) -> Iterator[DumpFrame]:
+        return iter(dump.frames(columns=self._wanted(names)))
+
+    @staticmethod
+    def _advance(stream: Iterator[DumpFrame], step: int, dump: DumpFile) -> DumpFrame:
+        for f in stream:
+            if f.step == step:
+                return f
+            if f.step > step:
+                break
+        raise InputFormatError(
+            f"the contact dump has no frame at timestep {step}, which the atom dump has.",
+            file=dump.path, step=step,
+            fix="write the atom and contact dumps every N steps with the same N (dump ... N ...).")
+
+    # -- assembly ----------------------------------------------------------------------------
+
+    def _assemble(self, af: DumpFrame, pf: DumpFrame, wf: DumpFrame | None) -> Frame:
+        step = af.step
+        box = Box(af.box.lo, af.box.hi, tuple(p or q for p, q in zip(af.box.periodic, self.script.periodic)),
+                  af.box.tilt)
+        particles: Table = {"id": af.int_column("id"), "type": af.int_column("type").astype(np.int32),
+                            "x": af.columns["x"], "y": af.columns["y"], "z": af.columns["z"],
+                            "radius": af.columns["radius"]}
+        if "mass" in af.columns:
+            particles["mass"] = af.columns["mass"]
+        if np.any(~(particles["radius"] > 0)):
+            row = int(np.flatnonzero(~(particles["radius"] > 0))[0])
+            raise InputFormatError(f"particle radius must be > 0, found {particles['radius'][row]!r}.",
+                                   file=af.file, step=step, line=af.line_of(row),
+                                   fix="check the atom dump's radius column.")
+        index = ParticleIndex(particles["id"], file=af.file, step=step)
+        xyz = np.stack([particles["x"], particles["y"], particles["z"]], axis=-1)
+        # printed step of every particle's coordinates (0 at full precision)
+        h = np.max([printed_step(particles[c], af.digits.get(c)) for c in ("x", "y", "z")], axis=0)
+        parts = [self._pairs(pf, particles, index, xyz, h, box)]
+        if wf is not None:
+            parts.append(self._mesh_walls(wf, particles, index, xyz, h))
+        primitive = primitive_wall_contacts(particles, self.scene.walls)
+        notes = []
+        if primitive:
+            rows = index.rows(primitive["id1"])
+            primitive["bound"] = position_error(h[rows], primitive["delta"])
+            primitive["cpx"], primitive["cpy"], primitive["cpz"] = (
+                (np.stack([primitive[c] for c in ("x1", "y1", "z1")], -1)
+                 + (primitive["r1"] - primitive["delta"])[:, None]
+                 * np.stack([primitive[c] for c in ("nx", "ny", "nz")], -1)).T)
+            if "shearx" in parts[0]:
+                for c in ("shearx", "sheary", "shearz"):
+                    primitive[c] = np.zeros(len(primitive["delta"]))
+                notes.append("tangential energy of primitive-wall contacts is not computed (0): "
+                              "LIGGGHTS does not dump their shear history")
+            parts.append(primitive)
+        contacts = {c: np.concatenate([p[c] for p in parts]) for c in parts[0]}
+        source, error = self._overlap_policy(contacts, contacts.pop("bound"), af, pf, step)
+        time = None if self.script.timestep is None else step * self.script.timestep
+        return Frame(step=step, particles=particles, contacts=contacts, box=box, time=time,
+                     source=(str(af.file), str(pf.file)) + ((str(wf.file),) if wf is not None else ()),
+                     overlap_source=source, overlap_error=error, notes=notes)
+
+    def _pairs(self, pf: DumpFrame, particles: Table, index: ParticleIndex, xyz: np.ndarray, h: np.ndarray,
+               box: Box) -> Table:
+        names = self._pair_names
+        col = {c: pf.columns[t] for c, t in names.items() if t in pf.columns}
+        id1, id2 = pf.int_column(names["id1"]), pf.int_column(names["id2"])
+        rows1, rows2 = index.rows(id1), index.rows(id2)
+        d = xyz[rows2] - xyz[rows1]
+        if box.any_periodic:
+            d = box.minimum_image(d)
+        dist = np.sqrt(np.einsum("ij,ij->i", d, d))
+        n = d / np.where(dist > 0, dist, 1.0)[:, None]
+        r1, r2 = particles["radius"][rows1], particles["radius"][rows2]
+        out: Table = {"id1": id1, "id2": id2, "wall": np.full(len(id1), -1, np.int64),
+                      "delta": col["delta"] if "delta" in col else r1 + r2 - dist,
+                      "nx": n[:, 0], "ny": n[:, 1], "nz": n[:, 2],
+                      "x1": xyz[rows1, 0], "y1": xyz[rows1, 1], "z1": xyz[rows1, 2], "r1": r1, "r2": r2}
+        out["bound"] = self._delta_error(pf, names, np.maximum(h[rows1], h[rows2]), r1 + r2 - dist)
+        if all(c in col for c in ("shearx", "sheary", "shearz")):
+            out.update(shearx=col["shearx"], sheary=col["sheary"], shearz=col["shearz"])
+        if all(c in col for c in ("cpx", "cpy", "cpz")):
+            cp = np.stack([col["cpx"], col["cpy"], col["cpz"]], axis=-1)
+        else:  # LIGGGHTS' own radius-weighted point, (x1 r2 + x2 r1)/(r1 + r2)
+            cp = xyz[rows1] + (r1 / (r1 + r2))[:, None] * d
+        if box.any_periodic:
+            cp = box.wrap(cp)
+        out.update(cpx=cp[:, 0], cpy=cp[:, 1], cpz=cp[:, 2])
+        return out
+
+    def _mesh_walls(self, wf: DumpFrame, particles: Table, index: ParticleIndex, xyz: np.ndarray,
+                    h: np.ndarray) -> Table:
+        names = self._wall_names
+        col = {c: wf.columns[t] for c, t in names.items() if t in wf.columns}
+        pid = wf.int_column(names["id1"])
+        mesh = wf.int_column(names["mesh_index"])
+        wall_of_mesh = np.asarray(self.script.dumped_mesh_walls, dtype=np.int64)
+        if len(mesh) and (mesh.min() < 0 or mesh.max() >= len(wall_of_mesh)):
+            row = int(np.flatnonzero((mesh < 0) | (mesh >= len(wall_of_mesh)))[0])
+            raise InputFormatError(
+                f"mesh index {int(mesh[row])} is not one of the {len(wall_of_mesh)} meshes of the script's "
+                "last mesh 'fix wall/gran'.", file=wf.file, step=wf.step, line=wf.line_of(row),
+                fix="pass the input script that wrote this dump.")
+        rows = index.rows(pid)
+        r = particles["radius"][rows]
+        if all(c in col for c in ("wall_cpx", "wall_cpy", "wall_cpz")):
+            on_wall = np.stack([col["wall_cpx"], col["wall_cpy"], col["wall_cpz"]], axis=-1)
+        else:
+            raise InputFormatError("the wall contact dump lacks the 'pos' columns, so the wall normal is unknown.",
+                                   file=wf.file, step=wf.step,
+                                   fix="add 'pos' to the compute wall/gran/local keywords.")
+        d = on_wall - xyz[rows]
+        dist = np.sqrt(np.einsum("ij,ij->i", d, d))
+        n = d / np.where(dist > 0, dist, 1.0)[:, None]
+        out: Table = {"id1": pid, "id2": np.full(len(pid), -1, np.int64), "wall": wall_of_mesh[mesh],
+                      "delta": col["delta"] if "delta" in col else r - dist,
+                      "nx": n[:, 0], "ny": n[:, 1], "nz": n[:, 2],
+                      "x1": xyz[rows, 0], "y1": xyz[rows, 1], "z1": xyz[rows, 2],
+                      "r1": r, "r2": np.full(len(pid), np.inf)}
+        wall_digits = min((wf.digits.get(names[c]) or 17) for c in ("wall_cpx", "wall_cpy", "wall_cpz"))
+        h_wall = np.max(printed_step(on_wall, wall_digits), axis=1)
+        out["bound"] = self._delta_error(wf, names, np.maximum(h[rows], h_wall), r - dist)
+        if all(c in col for c in ("shearx", "sheary", "shearz")):
+            out.update(shearx=col["shearx"], sheary=col["sheary"], shearz=col["shearz"])
+        out.update(cpx=on_wall[:, 0], cpy=on_wall[:, 1], cpz=on_wall[:, 2])
+        return out
+
+    @staticmethod
+    def _delta_error(f: DumpFrame, names: dict[str, str], h: np.ndarray, delta_from_positions: np.ndarray) -> np.ndarray:
+        """Relative error bound of each contact's overlap: the rounding of the
+        dumped ``delta`` column, or the position bound when there is none."""
+        token = names.get("delta")
+        if token is not None:
+            return np.full(len(h), relative_rounding(f.digits.get(token)))
+        return position_error(h, delta_from_positions)
+
+    def _overlap_policy(self, contacts: Table, error: np.ndarray, af: DumpFrame, pf: DumpFrame,
+                        step: int) -> tuple[str, np.ndarray | None]:
+        """Where the overlaps come from, their per-contact relative error bound,
+        and refusal when overlaps recomputed from printed positions are too imprecise."""
+        delta = self._pair_names.get("delta")
+        digits = af.digits.get("x")
+        positions = "full precision" if relative_rounding(digits) == 0 else f"printed precision ({digits} digits)"
+        parts = [f"pairs: {'dumped delta' if delta else 'positions, ' + positions}"]
+        if self.walls is not None:
+            parts.append(f"mesh walls: {'dumped delta' if 'delta' in self._wall_names else 'positions'}")
+        if any(w.kind in ("plane", "cylinder") for w in self.scene.walls):
+            parts.append(f"primitive walls: positions, {positions}")
+        source = "; ".join(parts)
+        if not np.any(error > 0):
+            return source, None
+        worst = error > self.overlap_tolerance
+        if worst.any() and not self.force_positions:
+            k = int(np.count_nonzero(worst))
+            raise PrecisionError(
+                f"{k} of {len(error)} overlaps have an error bound above the tolerance {self.overlap_tolerance:g} "
+                f"(median {np.median(error):.2g}, max {np.max(error):.2g}): they were recomputed from positions "
+                f"printed with {digits} significant digits ({source}); their energies would be unreliable.",
+                file=af.file, step=step,
+                fix="dump the overlap ('delta' keyword of compute pair/gran/local and wall/gran/local), or write "
+                    "positions at full precision (dump_modify ID format with %.17g, or a binary .bin atom dump); "
+                    "primitive-wall overlaps always come from positions. Or raise --overlap-tolerance, or use "
+                    "--force-positions to accept the error, which is then reported per contact.")
+        return source, error
+
+    # -- description -------------------------------------------------------------------------
+
+    def describe(self) -> dict:
+        """Files, kinds and precision, for provenance and ``demsplit check``."""
+        def info(d):
+            return None if d is None else {"path": str(d.path), "frames": len(d.steps)}
+        return {"kind": "liggghts", "script": str(self.script.path), "atoms": info(self.atoms),
+                "pairs": info(self.pairs), "walls": info(self.walls),
+                "model": {"normal": self.scene.model.normal, "tangential": self.scene.model.tangential},
+                "overlap_tolerance": self.overlap_tolerance, "force_positions": self.force_positions,
+                "notes": self.notes}
+
+    def close(self) -> None:
+        for d in (self.atoms, self.pairs, self.walls):
+            if d is not None and hasattr(d, "close"):
+                d.close()
+
+
+def open_liggghts_run(script: str | Path, **options) -> LiggghtsRun:
+    """Open a LIGGGHTS run from its input script (see :class:`LiggghtsRun`)."""
+    return LiggghtsRun(script, **options)
