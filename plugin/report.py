@@ -54,8 +54,8 @@ def text_summary(results: Results, step: int | None = None) -> str:
     lines = [
         f"demsplit results: {len(results.steps)} frame(s); frame at timestep {step}"
         + (f" (t = {fr['time']:.6g} s)" if np.isfinite(fr.get("time", np.nan)) else ""),
-        f"  {int(fr['n_particles'])} particles, {int(fr['n_contacts'])} pair contacts, "
-        f"{int(fr['n_wall_contacts'])} wall contacts; contact energy {u_total:.6g} J "
+        f"  {int(fr['n_particles'])} particles, {int(fr['n_contacts'])} contacts "
+        f"({int(fr['n_wall_contacts'])} with walls); contact energy {u_total:.6g} J "
         f"(normal {fr['u_n']:.6g} J, tangential {fr['u_t']:.6g} J)",
     ]
     model = results.provenance.get("model")
@@ -227,7 +227,9 @@ def write_html(results: Results, path: str | Path, step: int | None = None) -> P
         body += ["<h2>Split comparison</h2>", "<figure>", _png(_fig_split(sc, step)),
                  "<figcaption>Energy held per type under the material law, the 50/50 split and the "
                  "radius-weighted split; misattribution = (split total - material total)/material total.</figcaption>"
-                 "</figure>", _table(sc)]
+                 "</figure>", _table(sc[["step", "type", "count", "total_material", "total_equal", "total_radius",
+                                         "misattribution_equal_pct", "misattribution_radius_pct", "gini_material",
+                                         "gini_equal", "gini_radius"]])]
     if len(one.walls):
         body += ["<h2>Walls</h2>", _table(one.wall_energy())]
     if {"cpx_sim", "cpy_sim", "cpz_sim"} <= set(one.contacts.columns):

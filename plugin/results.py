@@ -16,8 +16,8 @@
     one row per wall and frame: ``step``, ``wall``, ``u``, ``u_n``, ``u_t`` (J),
     ``n_contacts``.
 ``frames``
-    one row per frame: ``step``, ``time`` (s), ``n_particles``, ``n_contacts``,
-    ``n_wall_contacts``, ``u_n``, ``u_t`` (J), ``overlap_max_rel_error``.
+    one row per frame: ``step``, ``time`` (s), ``n_particles``, ``n_contacts``
+    (all contacts, wall contacts included), ``n_wall_contacts``, ``u_n``, ``u_t`` (J), ``overlap_max_rel_error``.
 
 Every DataFrame carries ``df.attrs['units']``, a mapping column -> unit
 (``"1"`` for dimensionless numbers and counts). Rows are ordered by ``step``

@@ -44,6 +44,9 @@ COMPRESSION = "gzip"
 COMPRESSION_OPTS = {"gzip": 4, "lzf": None, None: None}
 CHUNK_ROWS = 65536
 """Rows per HDF5 chunk (512 KiB of float64 before compression)."""
+BUFFER_ROWS = CHUNK_ROWS
+"""close() buffers at most about this many rows per table (plus one frame)
+before writing them, so its memory does not grow with the number of frames."""
 
 RESUME_KEYS = ("inputs", "options", "scene", "model", "demsplit_version")
 """Provenance entries that must be equal for parts to be resumed; ``inputs``
@@ -301,8 +304,7 @@ class ResultWriter:
 
 
 class _TableSink:
-    """Streams one table's rows into resizable datasets, whole chunks at a time
-    (memory: at most CHUNK_ROWS rows per column)."""
+    """Streams one table's rows into resizable datasets, BUFFER_ROWS at a time."""
 
     def __init__(self, h5, name: str, schema: dict[str, str], compression: str | None) -> None:
         self.name, self.schema = name, schema
@@ -328,7 +330,7 @@ class _TableSink:
         for col in self.schema:
             self.buffer[col].append(table[col])
         self.buffered += n
-        if self.buffered >= CHUNK_ROWS:
+        if self.buffered >= BUFFER_ROWS:
             self.flush()
         return n
 

@@ -183,3 +183,21 @@ def test_file_fingerprint(tmp_path):
     assert fp["sha256"] == "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"  # FIPS 180-2 "abc"
     with pytest.raises(StoreError, match="cannot read input"):
         file_fingerprint(tmp_path / "missing")
+
+
+def test_assembly_memory_does_not_grow_with_frames(tmp_path, monkeypatch):
+    """close() streams part by part: its peak allocation is the same for 4 and 24 frames."""
+    import tracemalloc
+
+    monkeypatch.setattr(store, "BUFFER_ROWS", 512)
+    peaks = []
+    for n in (4, 24):
+        w = ResultWriter(tmp_path / f"out{n}.h5", PROVENANCE)
+        for s in range(n):
+            w.append(synthetic_frame(s, n_particles=400, n_pairs=1500))
+        tracemalloc.start()
+        w.close()
+        peaks.append(tracemalloc.get_traced_memory()[1])
+        tracemalloc.stop()
+        assert len(read_store(tmp_path / f"out{n}.h5").frames) == n
+    assert peaks[1] < 1.5 * peaks[0], peaks
