@@ -186,15 +186,15 @@ def test_file_fingerprint(tmp_path):
 
 
 def test_assembly_memory_does_not_grow_with_frames(tmp_path, monkeypatch):
-    """close() streams part by part: its peak allocation is the same for 4 and 24 frames."""
+    """close() streams part by part: its peak allocation is the same for 3 and 12 frames."""
     import tracemalloc
 
     monkeypatch.setattr(store, "BUFFER_ROWS", 512)
     peaks = []
-    for n in (4, 24):
+    for n in (3, 12):
         w = ResultWriter(tmp_path / f"out{n}.h5", PROVENANCE)
         for s in range(n):
-            w.append(synthetic_frame(s, n_particles=400, n_pairs=1500))
+            w.append(synthetic_frame(s, n_particles=300, n_pairs=1000))
         tracemalloc.start()
         w.close()
         peaks.append(tracemalloc.get_traced_memory()[1])
