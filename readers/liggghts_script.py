@@ -284,6 +284,11 @@ def _logical_lines(path: Path) -> Iterator[tuple[int, str]]:
     except OSError as exc:
         raise ScriptError(f"cannot read the input script ({exc.strerror}).", file=path,
                           fix="check the path.") from None
+    except UnicodeDecodeError as exc:
+        line = exc.object[: exc.start].count(b"\n") + 1
+        raise ScriptError(f"byte 0x{exc.object[exc.start]:02x} at offset {exc.start} is not UTF-8 text; "
+                          "expected a LIGGGHTS input script.", file=path, line=line,
+                          fix="pass the input script (a text file), or remove the damaged bytes.") from None
     start, pending = 0, ""
     for number, raw in enumerate(text.splitlines(), start=1):
         body = raw.rstrip()
