@@ -249,11 +249,10 @@ def process_run(run, options: Options = Options(), *, jobs: int = 1, dask: str |
 
 
 def run_steps(run) -> list:
-    """Timestep of every frame of ``run`` (from the reader's index when it has one)."""
-    steps = getattr(run, "steps", None)
-    if steps is not None:
-        return [int(s) for s in steps]
-    return [None] * len(run)
+    """Timestep of every frame of ``run`` (from the reader's index when it has one;
+    ``None`` for frames past it, e.g. a LIGGGHTS frame with a damaged header)."""
+    steps = [int(s) for s in getattr(run, "steps", ())]
+    return steps + [None] * (len(run) - len(steps))  # None: frames whose step cannot be read
 
 
 def analyze(path: str | Path, *, options: Options = Options(), jobs: int = 1, dask: str | None = None,

@@ -276,22 +276,30 @@ class DumpFile:
     def __init__(self, path: Path) -> None:
         self.path = str(path)
         self._entries: list | None = None
-        self._tail_error: DemsplitError | None = None
+        self._damaged: list[DemsplitError] = []
 
     # -- index
     def _index(self) -> list:
         if self._entries is None:
-            self._entries, self._tail_error = self._build_index()
+            self._entries, self._damaged = self._build_index()
         return self._entries
 
-    def _build_index(self) -> tuple[list, DemsplitError | None]:
+    def _build_index(self) -> tuple[list, list[DemsplitError]]:
         raise NotImplementedError
 
     @property
     def n_frames(self) -> int:
-        """Number of frames whose header is complete (a damaged header at the
-        end of the file is raised by iteration after the last good frame)."""
+        """Number of frames whose header is complete (frames with a damaged
+        header are in :attr:`damaged`, and raised by iteration after the last good frame)."""
         return len(self._index())
+
+    @property
+    def damaged(self) -> list[DemsplitError]:
+        """The error of each frame whose header cannot be read (not in ``steps``).
+        A text dump lists every damaged header and indexes the frames after it;
+        a binary dump stops at the first (the next header's offset is unknown)."""
+        self._index()
+        return list(self._damaged)
 
     @property
     def steps(self) -> np.ndarray:
@@ -319,13 +327,13 @@ class DumpFile:
 
     def frames(self, columns: Sequence[str] | None = None) -> Iterator[DumpFrame]:
         """Stream the frames in file order, one in memory at a time; then raise
-        the error of a damaged trailing header, if any."""
+        the error of the first damaged header, if any."""
         entries = self._index()
         with self._stream() as stream:
             for e in entries:
                 yield self._read(e, columns, stream)
-        if self._tail_error is not None:
-            raise self._tail_error
+        if self._damaged:
+            raise self._damaged[0]
 
     def __iter__(self) -> Iterator[DumpFrame]:
         return self.frames()
@@ -378,10 +386,11 @@ class TextDump(DumpFile):
         return (self._opener or open)(self.path, "rb")
 
     # -- index
-    def _build_index(self) -> tuple[list[_TextEntry], DemsplitError | None]:
+    def _build_index(self) -> tuple[list[_TextEntry], list[DemsplitError]]:
         with self._stream() as f:
             markers, headers, lines_before, total, total_newlines, last_byte = _scan(f)
         entries: list[_TextEntry] = []
+        damaged: list[DemsplitError] = []
         for i, (pos, head, nl_before) in enumerate(zip(markers, headers, lines_before)):
             last = i == len(markers) - 1
             header_line = nl_before + 1
@@ -390,8 +399,9 @@ class TextDump(DumpFile):
                 if len(hl) <= HEADER_LINES:  # fewer than 9 complete lines before the next frame / EOF
                     raise _header_short(self.path, header_line, len(hl) - 1, last)
                 h = _parse_header(hl[:HEADER_LINES], self.path, header_line, last)
-            except DemsplitError as err:
-                return entries, err
+            except DemsplitError as err:  # this frame is unreadable; the next marker starts a new one
+                damaged.append(err)
+                continue
             data_start = pos + sum(len(x) + 1 for x in hl[:HEADER_LINES])
             data_end = markers[i + 1] if not last else total
             end_newlines = lines_before[i + 1] if not last else total_newlines
@@ -401,7 +411,7 @@ class TextDump(DumpFile):
                 n_lines += 1
             entries.append(_TextEntry(h["step"], h["n"], h["box"], h["label"], h["names"], header_line,
                                       data_start, data_end, n_lines, last, ends_nl))
-        return entries, None
+        return entries, damaged
 
     # -- frames
     def _read(self, e: _TextEntry, columns: Sequence[str] | None, stream: BinaryIO | None) -> DumpFrame:
@@ -760,7 +770,7 @@ class BinaryDump(DumpFile):
         box = _box(lo, hi, periodic, bounds[6:9] if tri else None)
         return _BinaryEntry(step, n, box, ncols, tuple(chunks)), pos
 
-    def _build_index(self) -> tuple[list[_BinaryEntry], DemsplitError | None]:
+    def _build_index(self) -> tuple[list[_BinaryEntry], list[DemsplitError]]:
         size = _file_size(self.path)
         entries, pos = [], 0
         with open(self.path, "rb") as f:
@@ -768,9 +778,9 @@ class BinaryDump(DumpFile):
                 try:
                     e, pos = self._header(f, pos, size)
                 except DemsplitError as err:
-                    return entries, err
+                    return entries, [err]
                 entries.append(e)
-        return entries, None
+        return entries, []
 
     def _read(self, e: _BinaryEntry, columns: Sequence[str] | None, stream: BinaryIO | None) -> DumpFrame:
         names = self.columns if e.n_cols == len(self.columns) else [f"col{k + 1}" for k in range(e.n_cols)]

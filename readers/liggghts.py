@@ -35,11 +35,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputFormatError, PrecisionError
+from ..errors import ContactError, InputFormatError, MaterialError, PrecisionError
 from ..frame import Box, Frame, ParticleIndex, Table
 from ..scene import Material, Scene
 from ..walls import primitive_wall_contacts
-from .lammps_dump import DumpFile, DumpFrame, open_dump
+from .lammps_dump import HEADER_LINES, DumpFile, DumpFrame, open_dump
 from .liggghts_script import LiggghtsScript, read_script
 
 DEFAULT_OVERLAP_TOLERANCE = 1e-3
@@ -77,6 +77,21 @@ def position_error(h: np.ndarray, delta: np.ndarray) -> np.ndarray:
         return np.where(delta > 0, np.sqrt(3.0) * h / delta, np.where(h > 0, np.inf, 0.0))
 
 
+def repeated_pair(id1: np.ndarray, id2: np.ndarray) -> tuple[int, int] | None:
+    """Rows ``(first, repeat)`` of the earliest-repeated particle pair listed twice
+    (in either order) or of a particle paired with itself (``(row, row)``); None
+    when every row is a distinct pair. Vectorised (one lexsort)."""
+    same = np.flatnonzero(id1 == id2)
+    a, b = np.minimum(id1, id2), np.maximum(id1, id2)
+    order = np.lexsort((b, a))  # stable: equal pairs stay in row order
+    dup = np.flatnonzero((a[order][1:] == a[order][:-1]) & (b[order][1:] == b[order][:-1]))
+    candidates = [(int(same[0]), int(same[0]))] if same.size else []
+    if dup.size:
+        k = int(np.argmin(order[dup + 1]))
+        candidates.append((int(order[dup[k]]), int(order[dup[k] + 1])))
+    return min(candidates, key=lambda rows: rows[1]) if candidates else None
+
+
 def relative_rounding(digits: int | None) -> float:
     """Largest relative rounding error of a value printed with ``digits`` significant digits."""
     return 0.0 if digits is None or digits >= 15 else 0.5 * 10.0 ** (1 - digits)
@@ -106,6 +121,7 @@ class LiggghtsRun:
             self.notes.append(f"the run has {len(mesh)} mesh wall(s) but no wall/gran/local dump was found: "
                               "contacts with mesh walls are missing from the energies")
         self.steps = np.asarray(self.atoms.steps, dtype=np.int64)
+        self.damaged = self.atoms.damaged  # atom frames whose header is unreadable: frames len(steps)...
         self.sources = [self.script.path] + [d.path for d in (self.atoms, self.pairs, self.walls) if d is not None]
 
     # -- finding and opening the dumps -----------------------------------------------------
@@ -165,6 +181,9 @@ class LiggghtsRun:
         if dump is None:
             return {}
         names: dict[str, str] = {}
+        # the column names are those of the first frame's header (its line HEADER_LINES)
+        where = {"file": dump.path, "step": int(dump.steps[0]) if len(dump.steps) else None,
+                 "line": HEADER_LINES}
         for token in dump.columns or []:
             m = _LOCAL_TOKEN.match(token)
             if m is None:
@@ -174,15 +193,15 @@ class LiggghtsRun:
             if layout is None:
                 raise InputFormatError(
                     f"column {token} reads compute '{cid}', which the script does not define.",
-                    file=dump.path, fix="pass the input script that wrote this dump.")
+                    **where, fix="pass the input script that wrote this dump.")
             if layout.kind != kind:
                 raise InputFormatError(
                     f"this dump holds {layout.kind} contacts (compute {cid}), given as the {kind} contact dump.",
-                    file=dump.path, fix="swap --contacts and --walls.")
+                    **where, fix="swap --contacts and --walls.")
             if k > len(layout.columns):
                 raise InputFormatError(
                     f"column {token} is beyond the {len(layout.columns)} columns compute {cid} writes "
-                    "with the keywords in the script.", file=dump.path,
+                    "with the keywords in the script.", **where,
                     fix="pass the input script that wrote this dump (its compute keywords decide the columns).")
             names[layout.columns[k - 1]] = token
         required = ("id1", "id2") if kind == "pair" else ("id1", "mesh_index")
@@ -190,15 +209,20 @@ class LiggghtsRun:
         if missing:
             raise InputFormatError(
                 f"the {kind} contact dump lacks the columns {missing} (its compute needs the 'id' keyword).",
-                file=dump.path, fix="add 'id' to the compute's keywords and dump all its columns.")
+                **where, fix="add 'id' to the compute's keywords and dump all its columns.")
         return names
 
     # -- frames ------------------------------------------------------------------------------
 
     def __len__(self) -> int:
-        return len(self.steps)
+        return len(self.steps) + len(self.damaged)
 
     def frame(self, k: int) -> Frame:
+        """Frame ``k``: the k-th readable atom frame; ``k >= len(steps)`` raises the
+        error of the (k - len(steps))-th damaged atom frame header, so that a
+        damaged frame is stopped at or listed as skipped, never silently lost."""
+        if k >= len(self.steps):
+            raise self.damaged[k - len(self.steps)]
         step = int(self.steps[k])
         af = self.atoms.frame(k, columns=self._atom_columns())
         pf = self._local_at(self.pairs, step, self._pair_names)
@@ -233,10 +257,14 @@ class LiggghtsRun:
 
     def _local_at(self, dump: DumpFile, step: int, names: dict[str, str]) -> DumpFrame:
         if step not in set(int(s) for s in dump.steps):
+            damaged = dump.damaged
             raise InputFormatError(
-                f"the contact dump has no frame at timestep {step}, which the atom dump has.",
+                f"the contact dump has no frame at timestep {step}, which the atom dump has"
+                + (f"; it has {len(damaged)} frame(s) with a damaged header, the first: {damaged[0]}"
+                   if damaged else "."),
                 file=dump.path, step=step,
-                fix="write the atom and contact dumps every N steps with the same N (dump ... N ...).")
+                fix="write the atom and contact dumps every N steps with the same N (dump ... N ...)."
+                if not damaged else "repair or rewrite the contact dump.")
         return dump.frame_at_step(step, columns=self._wanted(names))
 
     def _stream(self, dump: DumpFile, names: dict[str, str]) -> Iterator[DumpFrame]:
@@ -270,6 +298,14 @@ class LiggghtsRun:
             raise InputFormatError(f"particle radius must be > 0, found {particles['radius'][row]!r}.",
                                    file=af.file, step=step, line=af.line_of(row),
                                    fix="check the atom dump's radius column.")
+        unknown = ~np.isin(particles["type"], list(self.scene.materials))
+        if unknown.any():
+            row = int(np.flatnonzero(unknown)[0])
+            raise MaterialError(f"particle type {int(particles['type'][row])} has no material (materials are "
+                                f"defined for types {sorted(self.scene.materials)}).",
+                                file=af.file, step=step, line=af.line_of(row),
+                                fix="define youngsModulus and poissonsRatio for every type in the input script, "
+                                    "or pass --material TYPE:E:NU.")
         index = ParticleIndex(particles["id"], file=af.file, step=step)
         xyz = np.stack([particles["x"], particles["y"], particles["z"]], axis=-1)
         # printed step of every particle's coordinates (0 at full precision)
@@ -277,7 +313,8 @@ class LiggghtsRun:
         parts = [self._pairs(pf, particles, index, xyz, h, box)]
         if wf is not None:
             parts.append(self._mesh_walls(wf, particles, index, xyz, h))
-        primitive = primitive_wall_contacts(particles, self.scene.walls)
+        # printed positions can hide a contact: keep those within their uncertainty (bound inf)
+        primitive = primitive_wall_contacts(particles, self.scene.walls, margin=np.sqrt(3.0) * h)
         notes = []
         if primitive:
             rows = index.rows(primitive["id1"])
@@ -304,7 +341,17 @@ class LiggghtsRun:
         names = self._pair_names
         col = {c: pf.columns[t] for c, t in names.items() if t in pf.columns}
         id1, id2 = pf.int_column(names["id1"]), pf.int_column(names["id2"])
-        rows1, rows2 = index.rows(id1), index.rows(id2)
+        twice = repeated_pair(id1, id2)
+        if twice is not None:
+            first, repeat = twice
+            raise ContactError(
+                f"particle {int(id1[first])} is paired with itself." if first == repeat else
+                f"the contact of particles {int(id1[repeat])} and {int(id2[repeat])} is listed twice in this frame "
+                f"(rows {first + 1} and {repeat + 1}, lines {pf.line_of(first)} and {pf.line_of(repeat)}).",
+                file=pf.file, step=pf.step, line=pf.line_of(repeat),
+                fix="each contact must appear once per frame: check that the dump is not the concatenation of "
+                    "two runs or of two MPI ranks' output for the same step.")
+        rows1, rows2 = self._rows(index, pf, id1, id2)
         d = xyz[rows2] - xyz[rows1]
         if box.any_periodic:
             d = box.minimum_image(d)
@@ -340,7 +387,7 @@ class LiggghtsRun:
                 f"mesh index {int(mesh[row])} is not one of the {len(wall_of_mesh)} meshes of the script's "
                 "last mesh 'fix wall/gran'.", file=wf.file, step=wf.step, line=wf.line_of(row),
                 fix="pass the input script that wrote this dump.")
-        rows = index.rows(pid)
+        (rows,) = self._rows(index, wf, pid)
         r = particles["radius"][rows]
         if all(c in col for c in ("wall_cpx", "wall_cpy", "wall_cpz")):
             on_wall = np.stack([col["wall_cpx"], col["wall_cpy"], col["wall_cpz"]], axis=-1)
@@ -363,6 +410,17 @@ class LiggghtsRun:
             out.update(shearx=col["shearx"], sheary=col["sheary"], shearz=col["shearz"])
         out.update(cpx=on_wall[:, 0], cpy=on_wall[:, 1], cpz=on_wall[:, 2])
         return out
+
+    @staticmethod
+    def _rows(index: ParticleIndex, f: DumpFrame, *ids: np.ndarray) -> list[np.ndarray]:
+        """Particle rows of each id column of contact dump frame ``f``; an unknown id is a
+        ContactError naming the contact dump and the line of its first row."""
+        try:
+            return [index.rows(i) for i in ids]
+        except ContactError as exc:
+            known = np.logical_and.reduce([np.isin(i, index.ids) for i in ids])
+            row = int(np.flatnonzero(~known)[0])
+            raise ContactError(exc.message, file=f.file, step=f.step, line=f.line_of(row), fix=exc.fix) from None
 
     @staticmethod
     def _delta_error(f: DumpFrame, names: dict[str, str], h: np.ndarray, delta_from_positions: np.ndarray) -> np.ndarray:
