@@ -232,10 +232,14 @@ class ResultWriter:
             self.abandon()
 
     def abandon(self) -> None:
-        """Stop without writing the store; the parts stay for a resume."""
+        """Stop without writing the store; the parts stay for a resume (a parts
+        directory that holds no frame is removed: there is nothing to resume)."""
         if not self._closed:
             self._closed = True
-            (self.parts_dir / _LOCK).unlink(missing_ok=True)
+            if self._parts:
+                (self.parts_dir / _LOCK).unlink(missing_ok=True)
+            else:
+                shutil.rmtree(self.parts_dir, ignore_errors=True)
 
     # -- writing ---------------------------------------------------------
     def append(self, tables: Mapping[str, Mapping[str, np.ndarray]]) -> None:
