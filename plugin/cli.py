@@ -16,6 +16,7 @@ message naming the file, timestep and line and how to fix it, and exit 2;
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 import traceback
 from pathlib import Path
@@ -25,6 +26,16 @@ from .scene import Material
 
 EXIT_ERROR = 2
 EXIT_BUG = 3
+EXIT_INTERRUPTED = 130  # 128 + SIGINT
+EXIT_TERMINATED = 143   # 128 + SIGTERM
+
+
+class Terminated(BaseException):
+    """SIGTERM arrived: unwinds like Ctrl-C (an open result store keeps its parts for --resume)."""
+
+
+def _raise_terminated(signum, frame) -> None:
+    raise Terminated()
 
 
 def _material(text: str) -> tuple[int, Material]:
@@ -209,6 +220,7 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    previous = signal.signal(signal.SIGTERM, _raise_terminated)
     try:
         return args.func(args)
     except DemsplitError as exc:
@@ -216,16 +228,19 @@ def main(argv: list[str] | None = None) -> int:
             traceback.print_exc()
         print(f"demsplit: error: {exc}", file=sys.stderr)
         return EXIT_ERROR
-    except KeyboardInterrupt:
-        print("demsplit: interrupted; run again with --resume to continue from the last complete frame.",
-              file=sys.stderr)
-        return 130
+    except (KeyboardInterrupt, Terminated) as exc:
+        what = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
+        resume = "; run again with --resume to continue from the last complete frame" if args.command == "run" else ""
+        print(f"demsplit: {what}{resume}.", file=sys.stderr)
+        return EXIT_TERMINATED if isinstance(exc, Terminated) else EXIT_INTERRUPTED
     except Exception as exc:  # a bug: say so, keep the CLI's promise of one message
         if args.debug:
             traceback.print_exc()
         print(f"demsplit: internal error ({type(exc).__name__}: {exc}). This is a bug in demsplit; "
               "rerun with --debug and report the traceback.", file=sys.stderr)
         return EXIT_BUG
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":
