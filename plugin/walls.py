@@ -43,19 +43,25 @@ def wall_distance(x: np.ndarray, wall: Wall) -> tuple[np.ndarray, np.ndarray]:
     raise ValueError(f"wall {wall.name!r} of kind {wall.kind!r} is not a primitive wall")
 
 
-def primitive_wall_contacts(particles: Table, walls: list[Wall]) -> Table:
+def primitive_wall_contacts(particles: Table, walls: list[Wall], margin: np.ndarray | float = 0.0) -> Table:
     """Contacts (canonical columns, see :mod:`demsplit.frame`) of the particles
     with every primitive wall (``plane``/``cylinder``) in ``walls``; a contact
-    exists where delta = r - d > 0, as LIGGGHTS decides it."""
+    exists where delta = r - d > 0, as LIGGGHTS decides it.
+
+    ``margin`` (m, scalar or one value per particle): also return the pairs with
+    -margin < delta <= 0, whose contact the uncertainty of printed positions can
+    hide (their delta stays <= 0, so they carry no energy; the caller flags them).
+    """
     x = np.stack([particles["x"], particles["y"], particles["z"]], axis=-1).astype(np.float64)
     r = np.asarray(particles["radius"], dtype=np.float64)
+    margin = np.broadcast_to(np.asarray(margin, dtype=np.float64), r.shape)
     parts: list[Table] = []
     for k, wall in enumerate(walls):
         if wall.kind not in ("plane", "cylinder"):
             continue
         d, n = wall_distance(x, wall)
         delta = r - d
-        hit = np.flatnonzero(delta > 0)
+        hit = np.flatnonzero((delta > 0) | (delta > -margin))
         parts.append({
             "id1": np.asarray(particles["id"], dtype=np.int64)[hit], "id2": np.full(len(hit), -1, np.int64),
             "wall": np.full(len(hit), k, np.int64), "delta": delta[hit],
