@@ -228,6 +228,11 @@ def main(argv: list[str] | None = None) -> int:
             traceback.print_exc()
         print(f"demsplit: error: {exc}", file=sys.stderr)
         return EXIT_ERROR
+    except BrokenPipeError:  # the reader of our output went away (demsplit info F | head): not an error
+        import os
+
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
     except (KeyboardInterrupt, Terminated) as exc:
         what = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
         resume = "; run again with --resume to continue from the last complete frame" if args.command == "run" else ""

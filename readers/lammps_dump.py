@@ -306,6 +306,16 @@ class DumpFile:
         """Timestep of each frame (int64)."""
         return np.array([e.step for e in self._index()], dtype=np.int64)
 
+    @property
+    def rows(self) -> np.ndarray:
+        """Row count of each frame as its header announces it (int64)."""
+        return np.array([e.n_rows for e in self._index()], dtype=np.int64)
+
+    @property
+    def compression(self) -> str | None:
+        """``'gzip'``, ``'bz2'``, ``'xz'`` or None (plain text or binary)."""
+        return None
+
     def __len__(self) -> int:
         return self.n_frames
 
@@ -384,6 +394,10 @@ class TextDump(DumpFile):
 
     def _stream(self):
         return (self._opener or open)(self.path, "rb")
+
+    @property
+    def compression(self) -> str | None:
+        return {gzip.open: "gzip", bz2.open: "bz2", lzma.open: "xz"}.get(self._opener)
 
     # -- index
     def _build_index(self) -> tuple[list[_TextEntry], list[DemsplitError]]:

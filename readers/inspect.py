@@ -1,0 +1,377 @@
+"""``demsplit info FILE`` and ``demsplit check RUN``: look at inputs without computing energies.
+
+:func:`describe_file` says what one file is and holds: a LAMMPS/LIGGGHTS dump
+(kind, label, frames, steps, columns with their printed digits, rows per
+frame, compression), a ``demsplit.yade`` snapshot file (snapshots,
+iterations, bodies, interactions, functors), a demsplit result store (frames,
+tables, provenance) or a LIGGGHTS input script (materials, model, walls,
+dumps).
+
+:func:`check_run` opens a run the way ``demsplit run`` does and validates
+every frame: the readers' own checks (counts, numbers, ids, duplicates,
+unknown particles, contacts listed twice, printed precision) plus the
+consistency of the dumps' timesteps, the overlap range 0 < delta <= min(r1, r2)
+and a material for every type. It ends with what ``run`` would compute from
+which columns. Every problem names its file, timestep and line.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ContactError, DemsplitError, InputFormatError, MaterialError
+from ..frame import Frame
+
+MAX_LISTED = 20
+"""Problems listed by ``check_run`` before the rest is only counted."""
+
+
+# --------------------------------------------------------------------------- info
+
+def describe_file(path: str | Path) -> str:
+    """A human-readable description of ``path`` (see the module docstring)."""
+    from ..yade import HDF5_SIGNATURE, NPY_STREAM_MAGIC
+    from .lammps_dump import MARKER, _MAGIC
+
+    path = Path(path)
+    if not path.is_file():
+        raise InputFormatError("no such file.", file=path, fix="check the path.")
+    with open(path, "rb") as f:
+        head = f.read(4096)
+    if not head:
+        raise InputFormatError("the file is empty.", file=path, fix="check that the program that writes it ran.")
+    if head.startswith(HDF5_SIGNATURE):
+        return _describe_hdf5(path)
+    if head.startswith(NPY_STREAM_MAGIC):
+        return _describe_snapshots(path)
+    if head.startswith(MARKER) or any(head.startswith(m) for m in _MAGIC) or path.suffix == ".bin" \
+            or b"\0" in head:
+        return _describe_dump(path)
+    return _describe_script(path)
+
+
+def _span(steps) -> str:
+    steps = list(steps)
+    if not steps:
+        return "none"
+    gaps = np.unique(np.diff(steps)) if len(steps) > 1 else []
+    every = f", every {int(gaps[0])}" if len(gaps) == 1 else ""
+    return f"{steps[0]}..{steps[-1]}{every}"
+
+
+def _describe_dump(path: Path) -> str:
+    from .lammps_dump import BinaryDump, open_dump
+
+    dump = open_dump(path)
+    binary = isinstance(dump, BinaryDump)
+    form = "binary (LAMMPS dump custom, native byte order; no column names in the file)" if binary else \
+        f"text{', ' + dump.compression + '-compressed' if dump.compression else ''}"
+    rows = dump.rows
+    lines = [f"{path}: LAMMPS/LIGGGHTS dump",
+             f"  format:   {form}",
+             f"  kind:     {dump.kind} (label {dump.label})",
+             f"  frames:   {dump.n_frames}, steps {_span(dump.steps.tolist())}",
+             f"  rows:     {_range(rows)} per frame"]
+    for err in dump.damaged:
+        lines.append(f"  DAMAGED frame header: {err}")
+    if dump.n_frames:
+        first = dump.frame(0)
+        lines.append(f"  box (first frame): lo {first.box.lo.tolist()}, hi {first.box.hi.tolist()}, "
+                     f"periodic {list(first.box.periodic)}")
+        lines.append(f"  columns ({len(first.columns)}), printed significant digits in the first frame "
+                     "('exact': integers or full precision):")
+        for name, values in first.columns.items():
+            d = first.digits.get(name)
+            lines.append(f"    {name:<16} {'exact' if d is None else d:>5}   "
+                         + (f"{np.min(values):.6g} .. {np.max(values):.6g}" if len(values) else "(no rows)"))
+    return "\n".join(lines)
+
+
+def _range(a: np.ndarray) -> str:
+    if len(a) == 0:
+        return "0"
+    lo, hi = int(np.min(a)), int(np.max(a))
+    return str(lo) if lo == hi else f"{lo}..{hi}"
+
+
+def _describe_hdf5(path: Path) -> str:
+    import h5py
+
+    from ..store import FORMAT as STORE_FORMAT
+    from ..yade import FORMAT_NAME
+
+    try:
+        with h5py.File(path, "r") as h5:
+            fmt = h5.attrs.get("format")
+            if fmt == STORE_FORMAT:
+                return _describe_store(path, h5)
+    except OSError as exc:
+        raise InputFormatError(f"not a readable HDF5 file ({exc}).", file=path,
+                               fix="the file is damaged or still being written.") from None
+    if fmt == FORMAT_NAME:
+        return _describe_snapshots(path)
+    return f"{path}: HDF5 file, format attribute {fmt!r} (not a demsplit result store or YADE snapshot file)"
+
+
+def _describe_store(path: Path, h5) -> str:
+    steps = h5["index/step"][()]
+    prov = json.loads(h5.attrs.get("provenance", "{}"))
+    lines = [f"{path}: demsplit result store (format version {int(h5.attrs['format_version'])}, "
+             f"written by demsplit {h5.attrs.get('demsplit_version', '?')})",
+             f"  frames:   {len(steps)}, steps {_span(steps.tolist())}",
+             "  tables:"]
+    for name in ("particles", "contacts", "walls", "frames"):
+        if name in h5:
+            cols = json.loads(h5[name].attrs["columns"])
+            n = h5[name][cols[0]].shape[0] if cols else 0
+            lines.append(f"    {name:<10} {n:>9} rows  {' '.join(cols)}")
+    model = prov.get("model", {})
+    lines.append(f"  model:    {model.get('normal')} / {model.get('tangential')}")
+    for f in prov.get("inputs", []):
+        lines.append(f"  input:    {f.get('path')}  ({f.get('size')} bytes, sha256 {str(f.get('sha256'))[:12]}...)")
+    options = prov.get("options", {})
+    if options:
+        lines.append("  options:  " + ", ".join(f"{k}={v}" for k, v in options.items()))
+    bad = prov.get("bad_frames") or []
+    lines.append(f"  bad frames skipped: {len(bad)}")
+    for b in bad:
+        lines.append(f"    frame {b.get('frame')} (step {b.get('step')}): {b.get('error')}")
+    for note in prov.get("notes") or []:
+        lines.append(f"  note: {note}")
+    return "\n".join(lines)
+
+
+def _describe_snapshots(path: Path) -> str:
+    from .yade_snapshot import open_yade_snapshot
+
+    with open_yade_snapshot(path) as run:
+        lines = [f"{path}: demsplit.yade snapshot file", f"  snapshots: {len(run)}"]
+        meta0 = run.meta(0)
+        lines.append(f"  YADE {meta0.get('yade_version')}, {meta0.get('precision_name')}, "
+                     f"periodic {meta0.get('periodic')}")
+        lines.append(f"  model:    {run.scene.model.normal} / {run.scene.model.tangential}")
+        lines.append("  materials: " + ", ".join(f"{t}: E={m.E:g} Pa nu={m.nu:g}"
+                                                 for t, m in sorted(run.scene.materials.items())))
+        lines.append(f"  walls:    {_walls(run.scene)}")
+        lines.append("  iteration   time (s)       bodies  interactions (real)")
+        for k in range(len(run)):
+            try:
+                meta = run.meta(k)
+                frame = run.frame(k)
+            except DemsplitError as exc:
+                lines.append(f"  snapshot {k}: {exc}")
+                continue
+            lines.append(f"  {meta['iter']:>9}   {meta.get('time', float('nan')):<13.6g}  "
+                         f"{frame.n_particles + len(run.scene.walls):>6}  {frame.n_contacts:>12}")
+        functors = meta0.get("functors")
+        if isinstance(functors, str):
+            functors = _literal(functors)
+        if isinstance(functors, dict):
+            for kind, items in functors.items():
+                lines.append(f"  functors {kind}: " + ", ".join(i.get("class", "?") for i in items))
+    return "\n".join(lines)
+
+
+def _literal(text: str):
+    import ast
+
+    try:
+        return ast.literal_eval(text)
+    except (ValueError, SyntaxError):
+        return None
+
+
+def _walls(scene) -> str:
+    return ", ".join(f"{w.name} ({w.kind}, type {w.type})" for w in scene.walls) or "none"
+
+
+def _describe_script(path: Path) -> str:
+    from .liggghts_script import read_script
+
+    script = read_script(path)
+    scene = script.scene
+    lines = [f"{path}: LIGGGHTS input script",
+             f"  model:    {scene.model.normal} / {scene.model.tangential}"
+             + (f" {scene.model.params}" if scene.model.params else ""),
+             f"  timestep: {script.timestep} s; periodic {list(script.periodic)}",
+             "  materials: " + ", ".join(f"{t}: E={m.E:g} Pa nu={m.nu:g}" for t, m in sorted(scene.materials.items())),
+             f"  walls:    {_walls(scene)}",
+             "  dumps:"]
+    for d in script.dumps:
+        what = d.layout.kind + " contacts" if d.layout is not None else d.style
+        lines.append(f"    {d.id:<10} {what:<15} every {d.every:<7} {d.file}"
+                     f"  ({'full precision' if d.full_precision else 'printed precision'})")
+    for w in script.warnings:
+        lines.append(f"  warning: {w}")
+    return "\n".join(lines)
+
+
+# --------------------------------------------------------------------------- check
+
+def check_run(input: str | Path, **reader_options) -> tuple[str, bool]:
+    """Validate the run ``input`` (a LIGGGHTS script or a YADE snapshot file)
+    without computing energies. Returns the report and whether it found no problem."""
+    from . import open_run
+
+    out = [f"demsplit check {input}"]
+    problems: list[str] = []
+    try:
+        run = open_run(input, **reader_options)
+    except DemsplitError as exc:
+        return _finish(out, [str(exc)])
+    try:
+        scene = run.scene
+        out.append(f"  model:     {scene.model.normal} / {scene.model.tangential}")
+        out.append("  materials: " + ", ".join(f"{t}: E={m.E:g} Pa nu={m.nu:g}"
+                                              for t, m in sorted(scene.materials.items())))
+        out.append(f"  walls:     {_walls(scene)}")
+        if hasattr(run, "atoms"):
+            problems += _check_liggghts_files(run, out)
+        types: set[int] = set()
+        first: Frame | None = None
+        out.append("  frame  step        particles  contacts  wall contacts  overlap bound")
+        for k in range(len(run)):
+            try:
+                frame = run.frame(k)
+            except DemsplitError as exc:
+                out.append(f"  {k:>5}  unreadable: see problems")
+                problems.append(str(exc))
+                continue
+            first = first or frame
+            types.update(np.unique(frame.particles["type"]).tolist())
+            bound = frame.overlap_error
+            out.append(f"  {k:>5}  {frame.step:<10}  {frame.n_particles:>9}  {frame.n_contacts:>8}  "
+                       f"{int(np.count_nonzero(frame.contacts['wall'] >= 0)):>13}  "
+                       + ("exact" if bound is None or len(bound) == 0 else f"{np.max(bound):.2g}"))
+            problems += _check_overlaps(run, frame)
+        problems += _check_materials(scene, types)
+        if first is not None:
+            out += _what_run_computes(run, first)
+    finally:
+        run.close()
+    return _finish(out, problems)
+
+
+def _finish(out: list[str], problems: list[str]) -> tuple[str, bool]:
+    if problems:
+        out.append(f"{len(problems)} problem(s):")
+        out += [f"  - {p}" for p in problems[:MAX_LISTED]]
+        if len(problems) > MAX_LISTED:
+            out.append(f"  ... and {len(problems) - MAX_LISTED} more")
+    else:
+        out.append("OK: no problem found")
+    return "\n".join(out), not problems
+
+
+def _check_liggghts_files(run, out: list[str]) -> list[str]:
+    """Files, their frames, timesteps shared by the atom and contact dumps, damaged headers."""
+    problems = []
+    atom_steps = run.steps
+    for name, dump in (("atoms", run.atoms), ("pairs", run.pairs), ("walls", run.walls)):
+        if dump is None:
+            out.append(f"  {name + ':':<10} none")
+            continue
+        steps = dump.steps
+        out.append(f"  {name + ':':<10} {dump.path} ({len(steps)} frames, steps {_span(steps.tolist())})")
+        values, counts = np.unique(steps, return_counts=True)
+        if np.any(counts > 1):
+            problems.append(str(InputFormatError(
+                f"timestep(s) {values[counts > 1][:5].tolist()} appear more than once in this dump; "
+                "only the first frame of each is read.", file=dump.path,
+                fix="the dump holds two runs appended to one file: keep one of them.")))
+        if dump is not run.atoms:
+            problems += [str(err) for err in dump.damaged]
+            missing = np.setdiff1d(atom_steps, steps)
+            extra = np.setdiff1d(steps, atom_steps)
+            if len(missing):
+                problems.append(str(InputFormatError(
+                    f"{len(missing)} timestep(s) of the atom dump have no frame here, e.g. {missing[:5].tolist()}.",
+                    file=dump.path, step=int(missing[0]),
+                    fix="write the atom and contact dumps every N steps with the same N.")))
+            if len(extra):
+                problems.append(str(InputFormatError(
+                    f"{len(extra)} frame(s) have no atom frame and would be ignored, e.g. steps {extra[:5].tolist()}.",
+                    file=dump.path, step=int(extra[0]),
+                    fix="write the atom and contact dumps every N steps with the same N.")))
+    return problems
+
+
+def _check_overlaps(run, frame: Frame) -> list[str]:
+    """0 < delta <= min(r1, r2) for every contact (first offending row of each kind)."""
+    c = frame.contacts
+    delta = c["delta"]
+    problems = []
+    for bad, what in ((~(delta > 0), "overlap delta <= 0 (not in contact)"),
+                      (delta > np.minimum(c["r1"], c["r2"]), "overlap larger than the smaller radius")):
+        if bad.any():
+            row = int(np.flatnonzero(bad)[0])
+            file, line, who = _locate(run, frame, row)
+            problems.append(str(ContactError(
+                f"{int(np.count_nonzero(bad))} contact(s) with {what}, the first {who} with delta = "
+                f"{delta[row]!r} (r1 = {c['r1'][row]:g}, r2 = {c['r2'][row]:g}).",
+                file=file, step=frame.step, line=line,
+                fix="check that the contact and atom dumps belong to the same run and timestep, and that the "
+                    "run is physically sound (timestep, stiffness).")))
+    return problems
+
+
+def _locate(run, frame: Frame, row: int) -> tuple[str | None, int | None, str]:
+    """File, line and a description of contact ``row`` of a frame (LIGGGHTS:
+    pair rows first, then mesh-wall rows, then primitive-wall rows rebuilt from positions)."""
+    c = frame.contacts
+    who = (f"particles {int(c['id1'][row])}-{int(c['id2'][row])}" if c["wall"][row] < 0
+           else f"particle {int(c['id1'][row])} on wall {run.scene.walls[int(c['wall'][row])].name}")
+    if not hasattr(run, "pairs"):
+        return (frame.source[0] if frame.source else None), None, who
+    offset = 0
+    for dump in (run.pairs, run.walls):
+        if dump is None:
+            continue
+        k = int(np.flatnonzero(dump.steps == frame.step)[0])
+        n = int(dump.rows[k])
+        if row < offset + n:
+            f = dump.frame(k, columns=dump.columns[:1])
+            return dump.path, f.line_of(row - offset), who
+        offset += n
+    return run.atoms.path, None, who + " (primitive wall, rebuilt from positions)"
+
+
+def _check_materials(scene, types: set[int]) -> list[str]:
+    problems = []
+    for what, t in (("particle", sorted(types)), ("wall", scene.wall_types().tolist())):
+        try:
+            scene.lookup(np.asarray(t, dtype=np.int64), what=what)
+        except MaterialError as exc:
+            problems.append(str(exc.located(file=scene.source or None)))
+    return problems
+
+
+def _what_run_computes(run, frame: Frame) -> list[str]:
+    """What ``demsplit run`` would compute from which columns (from the first readable frame)."""
+    from ..partition import contact_energies
+
+    scene = run.scene
+    c = frame.contacts
+    lines = ["run would compute:",
+             f"  overlaps:    {frame.overlap_source or 'as the reader gives them'}"]
+    kno = "kno" in c or "kn" in c
+    lines.append(f"  normal:      {scene.model.normal} energy from "
+                 + ("the simulator's stored stiffness" if kno else "materials and radii"))
+    try:  # the partition's own verdict on what the columns allow (one frame)
+        skipped = contact_energies(c, scene, frame.particles).skipped
+    except DemsplitError as exc:
+        skipped = {"energies": str(exc)}
+    tangential = {"history": "1/2 kt |shear|^2 from the dumped shear history",
+                  "incremental": "1/2 |Ft|^2 / ks from the stored shear force and stiffness",
+                  "none": "none (the model has no tangential spring)"}[scene.model.tangential]
+    lines.append(f"  tangential:  " + (f"NOT available: {skipped['u_t']}" if "u_t" in skipped else tangential))
+    for what, why in skipped.items():
+        if what != "u_t":
+            lines.append(f"  not computed: {what}: {why}")
+    for note in list(getattr(run, "notes", [])) + frame.notes:
+        lines.append(f"  note: {note}")
+    lines.append(f"  walls:       {len(scene.walls)} ({_walls(scene)})")
+    return lines
