@@ -181,7 +181,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_input(p)
     p.add_argument("-o", "--output", required=True, help="output HDF5 file")
     p.add_argument("--jobs", "-j", type=int, default=1, help="worker processes (frames in parallel)")
-    p.add_argument("--dask", metavar="ADDRESS", help="run on a Dask cluster: tcp://HOST:PORT, or local:N")
+    p.add_argument("--dask", metavar="ADDRESS", help="run on a Dask cluster: tcp://HOST:PORT, a scheduler file, or local:N")
     p.add_argument("--resume", action="store_true", help="continue an interrupted run from its last complete frame")
     p.add_argument("--on-bad-frame", choices=("stop", "skip"), default="stop",
                    help="stop at a bad frame (default), or skip it and list it in the output")

@@ -193,6 +193,8 @@ def _dask(run, indices: list[int], options: Options, address: str) -> Iterator[t
         cluster = LocalCluster(n_workers=int(address.split(":", 1)[1]), threads_per_worker=1,
                                processes=True, dashboard_address=None)
         client = Client(cluster)
+    elif Path(address).is_file():  # a scheduler file written by `dask scheduler --scheduler-file`
+        cluster, client = None, Client(scheduler_file=address)
     else:
         cluster, client = None, Client(address)
     try:
@@ -212,7 +214,8 @@ def process_run(run, options: Options = Options(), *, jobs: int = 1, dask: str |
     """Yield the tables of every frame of ``run`` in order.
 
     jobs : worker processes (1: in this process). dask : a Dask scheduler
-        address, or ``local:N`` to start a local cluster of N workers.
+        address (``tcp://HOST:PORT``), a scheduler file, or ``local:N`` to
+        start a local cluster of N workers.
     on_bad_frame : ``"stop"`` raises the first frame's error; ``"skip"`` leaves
         the frame out and lists it in ``report.bad_frames``.
     skip_steps : steps already done (``--resume``); steps : restrict to these.
