@@ -306,7 +306,12 @@ class LiggghtsRun:
                                 file=af.file, step=step, line=af.line_of(row),
                                 fix="define youngsModulus and poissonsRatio for every type in the input script, "
                                     "or pass --material TYPE:E:NU.")
-        index = ParticleIndex(particles["id"], file=af.file, step=step)
+        try:
+            index = ParticleIndex(particles["id"], file=af.file, step=step)
+        except InputFormatError as exc:  # duplicated ids: name the line of the first repeat
+            first = np.zeros(len(particles["id"]), bool)
+            first[np.unique(particles["id"], return_index=True)[1]] = True
+            raise exc.located(line=af.line_of(int(np.flatnonzero(~first)[0]))) from None
         xyz = np.stack([particles["x"], particles["y"], particles["z"]], axis=-1)
         # printed step of every particle's coordinates (0 at full precision)
         h = np.max([printed_step(particles[c], af.digits.get(c)) for c in ("x", "y", "z")], axis=0)
