@@ -1,0 +1,131 @@
+"""Interrupted runs: ``demsplit run`` killed (SIGKILL), terminated (SIGTERM) or
+interrupted (SIGINT) while it writes never leaves a file at the output path
+that is not complete, and ``--resume`` then finishes with results equal to
+an uninterrupted run's.
+
+The run: 60 frames made from the packing sample's 3 (frame j is sample frame
+j mod 3 at step 200000 + 2000 j), in plain text, so that ``demsplit run``
+takes a few seconds and can be interrupted after its first frames.
+"""
+
+from __future__ import annotations
+
+import gzip
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pandas as pd
+import pytest
+
+import demsplit
+
+PACKING = Path(__file__).resolve().parent.parent / "sample_dumps" / "liggghts" / "packing"
+N_FRAMES = 60
+TABLES = ("particles", "contacts", "walls", "frames")
+
+
+def repeat_frames(text: bytes, n: int) -> bytes:
+    """A dump of ``n`` frames: frame j is frame (j mod len) of ``text`` at step 200000 + 2000 j."""
+    frames = [b"ITEM: TIMESTEP" + f for f in text.split(b"ITEM: TIMESTEP")[1:]]
+    out = []
+    for j in range(n):
+        lines = frames[j % len(frames)].split(b"\n", 2)
+        out.append(b"\n".join([lines[0], str(200000 + 2000 * j).encode(), lines[2]]))
+    return b"".join(out)
+
+
+@pytest.fixture(scope="module")
+def long_run(tmp_path_factory) -> Path:
+    d = tmp_path_factory.mktemp("long")
+    for name in ("in.packing", "floor.stl"):
+        shutil.copy(PACKING / name, d / name)
+    for name in ("atoms_full.txt", "pairs_full.txt", "wall_full.txt"):
+        with gzip.open(PACKING / f"{name}.gz", "rb") as f:
+            (d / name).write_bytes(repeat_frames(f.read(), N_FRAMES))
+    return d / "in.packing"
+
+
+def demsplit_run(script: Path, out: Path, *extra: str) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "demsplit.cli", "run", str(script), "-o", str(out), "-q", *extra],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+@pytest.fixture(scope="module")
+def reference(long_run, tmp_path_factory) -> demsplit.Results:
+    out = tmp_path_factory.mktemp("ref") / "ref.h5"
+    proc = demsplit_run(long_run, out)
+    _, err = proc.communicate(timeout=300)
+    assert proc.returncode == 0, err
+    return demsplit.load_results(out)
+
+
+def parts_of(out: Path) -> Path:
+    return out.parent / f".{out.name}.parts"
+
+
+def wait_for_parts(proc: subprocess.Popen, out: Path, n: int) -> None:
+    """Wait until the run has written at least ``n`` frame parts (and is still running)."""
+    deadline = time.monotonic() + 120
+    while len(list(parts_of(out).glob("frame_*.npz"))) < n:
+        assert proc.poll() is None, f"the run ended before it could be interrupted: {proc.communicate()}"
+        assert time.monotonic() < deadline
+        time.sleep(0.01)
+
+
+def assert_complete_or_absent(out: Path) -> None:
+    """Nothing at ``out``, or a store whose frame index is consistent."""
+    if not out.exists():
+        return
+    with h5py.File(out, "r") as h5:
+        steps = h5["index/step"][()]
+        for name in TABLES:
+            offsets = h5[f"index/{name}"][()]
+            assert len(offsets) == len(steps) + 1 and offsets[0] == 0 and np.all(np.diff(offsets) >= 0)
+            for col in h5[name]:
+                assert h5[name][col].shape[0] == offsets[-1]
+
+
+def assert_same_results(a: demsplit.Results, b: demsplit.Results) -> None:
+    for name in TABLES:
+        pd.testing.assert_frame_equal(getattr(a, name), getattr(b, name), check_exact=True)
+
+
+@pytest.mark.parametrize("sig, code, words", [
+    (signal.SIGKILL, -signal.SIGKILL, None),
+    (signal.SIGTERM, 143, "terminated (SIGTERM); run again with --resume"),
+    (signal.SIGINT, 130, "interrupted; run again with --resume"),
+])
+def test_interrupted_run_resumes_to_the_same_results(long_run, reference, tmp_path, sig, code, words):
+    out = tmp_path / "out.h5"
+    proc = demsplit_run(long_run, out)
+    wait_for_parts(proc, out, 3)
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == code, err
+    if words is not None:  # a handled signal: one message, no traceback
+        assert words in err and "Traceback" not in err and err.count("\n") == 1
+    assert_complete_or_absent(out)
+    assert not out.exists()
+    done = sorted(parts_of(out).glob("frame_*.npz"))
+    assert 3 <= len(done) < N_FRAMES
+    assert not list(parts_of(out).glob("*.tmp")) or sig == signal.SIGKILL
+
+    again = demsplit_run(long_run, out)  # without --resume: refused, parts untouched
+    _, err = again.communicate(timeout=120)
+    assert again.returncode == 2 and "--resume" in err
+    assert sorted(parts_of(out).glob("frame_*.npz")) == done
+
+    resumed = subprocess.run([sys.executable, "-m", "demsplit.cli", "run", str(long_run), "-o", str(out),
+                              "--resume"], capture_output=True, text=True, timeout=300)
+    assert resumed.returncode == 0, resumed.stderr
+    assert f"{len(done)} resumed" in resumed.stdout
+    assert not parts_of(out).exists()
+    assert_complete_or_absent(out)
+    assert_same_results(demsplit.load_results(out), reference)
+    assert len(reference.frames) == N_FRAMES
