@@ -402,35 +402,39 @@ def read_store(path: str | Path, *, steps: Iterable[int] | None = None) -> Resul
     except OSError as exc:
         raise StoreError(f"not a readable HDF5 file ({exc}).", file=path,
                          fix="point to a store written by demsplit run.") from exc
-    with h5:
-        if h5.attrs.get("format") != FORMAT:
-            raise StoreError(f"not a demsplit result store (format attribute {h5.attrs.get('format')!r}).",
-                             file=path, fix="point to a store written by demsplit run.")
-        if int(h5.attrs["format_version"]) > FORMAT_VERSION:
-            raise StoreError(f"store format version {int(h5.attrs['format_version'])} is newer than this "
-                             f"demsplit reads ({FORMAT_VERSION}).", file=path, fix="upgrade demsplit.")
-        stored_steps = h5["index/step"][()]
-        frames_k = np.arange(len(stored_steps))
-        if steps is not None:
-            wanted = np.asarray(list(steps), dtype=np.int64)
-            missing = np.setdiff1d(wanted, stored_steps)
-            if len(missing):
-                raise StoreError(f"timestep(s) {missing.tolist()[:10]} are not in the store "
-                                 f"({len(stored_steps)} frames).", file=path, fix="pick stored timesteps.")
-            frames_k = frames_k[np.isin(stored_steps, wanted)]
-        frames = {}
-        for name in TABLES:
-            group = h5[name]
-            columns = json.loads(group.attrs["columns"])
-            off = h5[f"index/{name}"][()]
-            if steps is None:
-                table = {col: group[col][()] for col in columns}
-            else:
-                table = {col: np.concatenate([group[col][off[k]:off[k + 1]] for k in frames_k]
-                                             or [np.empty(0, group[col].dtype)]) for col in columns}
-            frames[name] = to_dataframe(table)
-        return Results(**frames, provenance=json.loads(h5.attrs["provenance"]),
-                       walls_meta=json.loads(h5.attrs["walls_meta"]))
+    try:
+        with h5:
+            if h5.attrs.get("format") != FORMAT:
+                raise StoreError(f"not a demsplit result store (format attribute {h5.attrs.get('format')!r}).",
+                                 file=path, fix="point to a store written by demsplit run.")
+            if int(h5.attrs["format_version"]) > FORMAT_VERSION:
+                raise StoreError(f"store format version {int(h5.attrs['format_version'])} is newer than this "
+                                 f"demsplit reads ({FORMAT_VERSION}).", file=path, fix="upgrade demsplit.")
+            stored_steps = h5["index/step"][()]
+            frames_k = np.arange(len(stored_steps))
+            if steps is not None:
+                wanted = np.asarray(list(steps), dtype=np.int64)
+                missing = np.setdiff1d(wanted, stored_steps)
+                if len(missing):
+                    raise StoreError(f"timestep(s) {missing.tolist()[:10]} are not in the store "
+                                     f"({len(stored_steps)} frames).", file=path, fix="pick stored timesteps.")
+                frames_k = frames_k[np.isin(stored_steps, wanted)]
+            frames = {}
+            for name in TABLES:
+                group = h5[name]
+                columns = json.loads(group.attrs["columns"])
+                off = h5[f"index/{name}"][()]
+                if steps is None:
+                    table = {col: group[col][()] for col in columns}
+                else:
+                    table = {col: np.concatenate([group[col][off[k]:off[k + 1]] for k in frames_k]
+                                                 or [np.empty(0, group[col].dtype)]) for col in columns}
+                frames[name] = to_dataframe(table)
+            return Results(**frames, provenance=json.loads(h5.attrs["provenance"]),
+                           walls_meta=json.loads(h5.attrs["walls_meta"]))
+    except (KeyError, ValueError, OSError) as exc:  # a group, dataset or attribute missing or unreadable
+        raise StoreError(f"the store is damaged or incomplete ({type(exc).__name__}: {exc}).", file=path,
+                         fix="rerun demsplit run to rewrite it.") from exc
 
 
 def export_tables(results: Results, directory: str | Path, fmt: str = "parquet") -> list[Path]:

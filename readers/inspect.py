@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ContactError, DemsplitError, InputFormatError, MaterialError
+from ..errors import ContactError, DemsplitError, InputFormatError, MaterialError, StoreError
 from ..frame import Frame
 
 MAX_LISTED = 20
@@ -108,9 +108,9 @@ def _describe_hdf5(path: Path) -> str:
             fmt = h5.attrs.get("format")
             if fmt == STORE_FORMAT:
                 return _describe_store(path, h5)
-    except OSError as exc:
-        raise InputFormatError(f"not a readable HDF5 file ({exc}).", file=path,
-                               fix="the file is damaged or still being written.") from None
+    except (OSError, KeyError, ValueError) as exc:  # unreadable file, or a group/attribute missing
+        raise StoreError(f"not a readable HDF5 file or result store ({type(exc).__name__}: {exc}).", file=path,
+                         fix="the file is damaged or still being written; rerun demsplit run to rewrite it.") from None
     if fmt == FORMAT_NAME:
         return _describe_snapshots(path)
     return f"{path}: HDF5 file, format attribute {fmt!r} (not a demsplit result store or YADE snapshot file)"
