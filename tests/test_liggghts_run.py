@@ -482,3 +482,171 @@ def test_periodic_contacts_use_the_minimum_image(setup_frame):
     unwrapped = x1 + (r1 - tables["depth1"][pair])[:, None] * n
     assert np.any((unwrapped < box.lo) | (unwrapped >= box.hi))  # so the wrap is exercised
     np.testing.assert_allclose(cp[pair], box.wrap(unwrapped), rtol=0, atol=1e-15)
+
+
+# --------------------------------------------------------------------------- 5. bad inputs
+
+@pytest.fixture(scope="module")
+def packing_copy(tmp_path_factory) -> Path:
+    """packing/ with full-precision atoms (so overlaps are not refused) and the %g pair
+    and wall dumps, as text, in a folder the tests may damage copies in."""
+    folder = tmp_path_factory.mktemp("packing")
+    for name in ("in.packing", "floor.stl", "pairs.txt", "wall.txt"):
+        shutil.copy(SAMPLES / "packing" / name, folder / name)
+    with gzip.open(SAMPLES / "packing" / "atoms_full.txt.gz", "rb") as f:
+        (folder / "atoms_full.txt").write_bytes(f.read())
+    return folder
+
+
+def frame_starts(text: str) -> list[int]:
+    """Character offsets of the frames' 'ITEM: TIMESTEP' lines."""
+    out, at = [], text.find("ITEM: TIMESTEP")
+    while at >= 0:
+        out.append(at)
+        at = text.find("ITEM: TIMESTEP", at + 1)
+    return out
+
+
+def row_line(text: str, frame: int, row: int) -> int:
+    """1-based line number of data row ``row`` (0-based) of frame ``frame``."""
+    return text[:frame_starts(text)[frame]].count("\n") + 1 + 9 + row
+
+
+def with_token(text: str, line: int, column: int, token: str) -> str:
+    """``text`` with field ``column`` (0-based) of 1-based line ``line`` replaced by ``token``."""
+    lines = text.split("\n")
+    words = lines[line - 1].split(" ")
+    words[column] = token
+    lines[line - 1] = " ".join(words)
+    return "\n".join(lines)
+
+
+def analyze_error(folder: Path, cls: type, script_name: str = "in.packing", **files: str):
+    """The error ``demsplit.analyze`` raises on the damaged files ``files`` (written into
+    ``folder``; option name -> (file name, text)), checked to be ``cls``."""
+    options = {}
+    for option, (name, text) in files.items():
+        (folder / name).write_text(text)
+        options[option] = folder / name
+    with pytest.raises(cls) as info:
+        demsplit.analyze(folder / script_name, **options)
+    return info.value
+
+
+def assert_located(err, name: str, step: int | None, line: int | None, *words: str) -> None:
+    text = str(err)
+    assert err.file is not None and Path(err.file).name == name, text
+    assert err.step == step and err.line == line, text
+    assert f"{name}:{line}" in text if line is not None else name in text
+    if step is not None:
+        assert f"timestep {step}" in text
+    assert "Fix:" in text
+    for w in words:
+        assert w in text, f"{w!r} not in {text!r}"
+
+
+def test_pair_dump_cut_mid_row(packing_copy):
+    text = (packing_copy / "pairs.txt").read_text()
+    cut = text[:-100]
+    err = analyze_error(packing_copy, TruncatedFileError, contacts=("cut_row.txt", cut))
+    assert_located(err, "cut_row.txt", 204000, cut.count("\n") + 1, "middle of a row", "rerun")
+
+
+def test_pair_dump_cut_between_frames(packing_copy):
+    text = (packing_copy / "pairs.txt").read_text()
+    last = frame_starts(text)[2]
+    err = analyze_error(packing_copy, InputFormatError, contacts=("cut_frames.txt", text[:last]))
+    assert_located(err, "cut_frames.txt", 204000, None, "no frame at timestep 204000")
+    # cut inside the last frame's header: its own line is named
+    cut = text[:last + len("ITEM: TIMESTEP\n204000\nITEM: NUM")]
+    err = analyze_error(packing_copy, InputFormatError, contacts=("cut_header.txt", cut))
+    assert_located(err, "cut_header.txt", 204000, None, "damaged header",
+                   f"cut_header.txt:{cut.count(chr(10)) + 1}", "expected 9")
+
+
+def test_header_count_disagrees_with_rows(packing_copy):
+    text = (packing_copy / "pairs.txt").read_text()
+    second = frame_starts(text)[1]
+    bad = text[:second] + text[second:].replace("\n555\n", "\n556\n", 1)
+    err = analyze_error(packing_copy, InputFormatError, contacts=("count.txt", bad))
+    assert_located(err, "count.txt", 202000, row_line(text, 2, 0) - 9, "says 556 rows but only 555")
+
+
+@pytest.mark.parametrize("column, token, words", [(37, "abc", "'abc'; expected a number"),
+                                                  (33, "1.2.3", "'1.2.3'; expected a number"),
+                                                  (37, "nan", "expected a finite number")])
+def test_non_numeric_token(packing_copy, column, token, words):
+    text = (packing_copy / "pairs.txt").read_text()
+    line = row_line(text, 1, 2)
+    err = analyze_error(packing_copy, InputFormatError, contacts=("token.txt", with_token(text, line, column, token)))
+    assert_located(err, "token.txt", 202000, line, f"column {column + 1} ('c_cpgl[{column + 1}]')", words)
+
+
+@pytest.mark.parametrize("old, new, words", [
+    ("c_cpgl[41]", "c_cpgl[42]", "c_cpgl[42] is beyond the 41 columns compute cpgl writes"),
+    ("c_cpgl[1] ", "c_nope[1] ", "reads compute 'nope', which the script does not define"),
+])
+def test_local_dump_columns_the_script_does_not_write(packing_copy, old, new, words):
+    text = (packing_copy / "pairs.txt").read_text()
+    err = analyze_error(packing_copy, InputFormatError, contacts=("columns.txt", text.replace(old, new)))
+    assert_located(err, "columns.txt", 200000, 9, words)
+
+
+def test_wall_type_without_material(packing_copy):
+    text = (packing_copy / "in.packing").read_text()
+    bad = text.replace("primitive type 3 xplane -0.02", "primitive type 5 xplane -0.02")
+    (packing_copy / "in.bad").write_text(bad)
+    with pytest.raises(MaterialError) as info:
+        open_run(packing_copy / "in.bad")
+    line = bad[:bad.index("type 5 xplane")].count("\n") + 1
+    assert_located(info.value, "in.bad", None, line, "uses type 5, which has no material", "youngsModulus")
+
+
+def test_particle_type_without_material(packing_copy):
+    text = (packing_copy / "atoms_full.txt").read_text()
+    line = row_line(text, 1, 4)
+    bad = with_token(text, line, 1, "5")
+    err = analyze_error(packing_copy, MaterialError, atoms=("atoms_type5.txt", bad))
+    assert_located(err, "atoms_type5.txt", 202000, line, "particle type 5 has no material", "--material")
+
+
+def test_g_printed_id_above_999999(packing_copy):
+    text = (packing_copy / "pairs.txt").read_text()
+    line = row_line(text, 1, 2)
+    bad = with_token(text, line, 12, "1.23457e+06")  # c_cpgl[13] = id1
+    err = analyze_error(packing_copy, PrecisionError, contacts=("ids.txt", bad))
+    assert_located(err, "ids.txt", 202000, line, "c_cpgl[13]", "not an exact integer", "%.17g")
+
+
+# --------------------------------------------------------------------------- 6. the command
+
+def test_cli_run_writes_the_store(setup_frame, tmp_path):
+    out = tmp_path / "packing.h5"
+    assert cli_main(["run", str(script("packing")), "-o", str(out), "--quiet"]) == 0
+    stored = demsplit.load_results(out)
+    run, frame = setup_frame("packing")
+    np.testing.assert_array_equal(stored.steps, run.steps)
+    first = stored.frame(int(run.steps[0])).particles
+    expected = frame_tables(frame, run.scene)["particles"]
+    np.testing.assert_array_equal(first["id"].to_numpy(), expected["id"])
+    np.testing.assert_allclose(first["u"].to_numpy(), expected["u"], rtol=1e-15)
+    assert out.is_file() and not list(tmp_path.glob("*.tmp*"))
+
+
+def test_cli_run_reports_a_bad_input_in_one_line(packing_copy, tmp_path, capsys):
+    text = (packing_copy / "pairs.txt").read_text()
+    (packing_copy / "cli_cut.txt").write_text(text[:-100])
+    out = tmp_path / "bad.h5"
+    code = cli_main(["run", str(packing_copy / "in.packing"), "--contacts", str(packing_copy / "cli_cut.txt"),
+                     "-o", str(out), "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err.startswith("demsplit: error:") and "cli_cut.txt:" in err and "timestep 204000" in err
+    assert "Traceback" not in err and not out.exists()
+
+
+def test_cli_info(capsys):
+    assert cli_main(["info", str(SAMPLES / "packing" / "pairs.txt")]) == 0
+    text = capsys.readouterr().out
+    for words in ("pairs.txt", "CONTACTS", "200000", "204000", "c_cpgl[38]", "c_cpgl[41]"):
+        assert words in text
