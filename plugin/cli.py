@@ -19,7 +19,6 @@ import argparse
 import signal
 import sys
 import traceback
-from pathlib import Path
 
 from .errors import DemsplitError
 from .scene import Material

@@ -367,7 +367,7 @@ def _what_run_computes(run, frame: Frame) -> list[str]:
     tangential = {"history": "1/2 kt |shear|^2 from the dumped shear history",
                   "incremental": "1/2 |Ft|^2 / ks from the stored shear force and stiffness",
                   "none": "none (the model has no tangential spring)"}[scene.model.tangential]
-    lines.append(f"  tangential:  " + (f"NOT available: {skipped['u_t']}" if "u_t" in skipped else tangential))
+    lines.append("  tangential:  " + (f"NOT available: {skipped['u_t']}" if "u_t" in skipped else tangential))
     for what, why in skipped.items():
         if what != "u_t":
             lines.append(f"  not computed: {what}: {why}")

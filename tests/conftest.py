@@ -7,6 +7,7 @@ the program is absent, and fail instead when ``DEMSPLIT_REQUIRE_SIMULATORS=1``
 
 from __future__ import annotations
 
+import gzip
 import os
 import shutil
 from pathlib import Path
@@ -41,3 +42,15 @@ def yade() -> str:
 @pytest.fixture
 def samples() -> Path:
     return SAMPLES
+
+
+@pytest.fixture
+def run_dir(tmp_path: Path) -> Path:
+    """A plain-text copy of the LIGGGHTS packing run in tmp_path: in.packing, floor.stl,
+    atoms_full.txt (full precision), pairs.txt and wall.txt (%g, with the delta column)."""
+    packing = SAMPLES / "liggghts" / "packing"
+    for name in ("in.packing", "floor.stl", "pairs.txt", "wall.txt"):
+        shutil.copy(packing / name, tmp_path / name)
+    with gzip.open(packing / "atoms_full.txt.gz", "rb") as f:
+        (tmp_path / "atoms_full.txt").write_bytes(f.read())
+    return tmp_path

@@ -4,7 +4,6 @@ good and bad runs, and ``--on-bad-frame skip``."""
 
 from __future__ import annotations
 
-import gzip
 import shutil
 import subprocess
 import sys
@@ -21,16 +20,6 @@ PACKING = SAMPLES / "liggghts" / "packing"
 def demsplit_cli(*args: str) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "demsplit.cli", *map(str, args)], capture_output=True, text=True,
                           timeout=300)
-
-
-@pytest.fixture
-def run_dir(tmp_path: Path) -> Path:
-    """Plain-text copy of the packing run (full-precision atoms, %g contacts)."""
-    for name in ("in.packing", "floor.stl", "pairs.txt", "wall.txt"):
-        shutil.copy(PACKING / name, tmp_path / name)
-    with gzip.open(PACKING / "atoms_full.txt.gz", "rb") as f:
-        (tmp_path / "atoms_full.txt").write_bytes(f.read())
-    return tmp_path
 
 
 def damage_atom_row(run_dir: Path, frame: int) -> int:

@@ -11,8 +11,6 @@ and the line where they apply. Line numbers of the copies: atom frame k
 
 from __future__ import annotations
 
-import gzip
-import shutil
 import struct
 import subprocess
 import sys
@@ -32,16 +30,6 @@ STEPS = (200000, 202000, 204000)
 def atom_row_line(frame: int, row: int) -> int:
     """1-based line of data row ``row`` (0-based) of atom frame ``frame``."""
     return 10 + 309 * frame + row
-
-
-@pytest.fixture
-def run_dir(tmp_path: Path) -> Path:
-    """A plain-text copy of the packing run: in.packing, floor.stl, atoms_full.txt, pairs.txt, wall.txt."""
-    for name in ("in.packing", "floor.stl", "pairs.txt", "wall.txt"):
-        shutil.copy(PACKING / name, tmp_path / name)
-    with gzip.open(PACKING / "atoms_full.txt.gz", "rb") as f:
-        (tmp_path / "atoms_full.txt").write_bytes(f.read())
-    return tmp_path
 
 
 def edit_lines(path: Path, change) -> None:
