@@ -175,6 +175,19 @@ def size_class(radius: np.ndarray, edges: np.ndarray) -> np.ndarray:
     return k
 
 
+def per_clump(particles: pd.DataFrame) -> pd.DataFrame:
+    """Energy of each rigid clump per frame (YADE): the sums of ``u``, ``u_n``,
+    ``u_t`` (J) and ``n_contacts`` over the clump's member spheres (``clump``
+    column, -1 for free particles, which are left out), with ``n_members``."""
+    _require(particles, ["clump", "u", "u_n", "u_t", "n_contacts"], "particles")
+    members = particles[particles["clump"] >= 0]
+    out = (members.groupby(["step", "clump"], sort=True)
+           .agg(n_members=("id", "size"), u=("u", "sum"), u_n=("u_n", "sum"), u_t=("u_t", "sum"),
+                n_contacts=("n_contacts", "sum"))
+           .reset_index())
+    return out
+
+
 def per_size(particles: pd.DataFrame, bins=None, value: str = "u", *, by_frame: bool = True) -> pd.DataFrame:
     """Statistics of ``value`` per radius class (classes from :func:`size_bins`
     over the radii of all frames, so every frame uses the same classes).

@@ -166,6 +166,15 @@ def cmd_convert(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_yade_path(args: argparse.Namespace) -> int:
+    import sysconfig
+
+    # site-packages of the Python demsplit is installed in (a regular or an editable
+    # install): site.addsitedir() it inside YADE (docs/yade.md)
+    print(sysconfig.get_paths()["purelib"])
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="demsplit", description=__doc__.split("\n\n")[0])
     common = argparse.ArgumentParser(add_help=False)
@@ -208,6 +217,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--parquet", metavar="DIR")
     p.add_argument("--csv", metavar="DIR")
     p.set_defaults(func=cmd_export)
+
+    p = add("yade-path", "print the directory to site.addsitedir() inside YADE so that 'import demsplit.yade' works")
+    p.set_defaults(func=cmd_yade_path)
 
     p = add("convert", "write a run's dumps once to an HDF5 ingest cache read much faster later")
     _add_input(p)

@@ -66,6 +66,8 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = Options()) -> Ta
         main = partition(contacts, scene, particles, split="material", tangential_rule=options.tangential_rule,
                          energies=energies, bodies=bodies, index=index)
         ptable, wtable = per_particle(contacts, main, particles, n_walls=len(scene.walls), index=index)
+        if "clump" in particles:  # YADE clump membership, for per-clump sums
+            ptable["clump"] = np.asarray(particles["clump"], dtype=np.int64)
         if options.compare:
             for split in comparison_splits(scene):
                 other = partition(contacts, scene, particles, split=split, energies=energies, bodies=bodies,

@@ -44,12 +44,12 @@ TABLES = ("particles", "contacts", "walls", "frames")
 
 _ENERGY = {c: "J" for c in ("u", "u_n", "u_t", "u_equal", "u_radius", "u_springs", "u1", "u2")}
 _LENGTH = {c: "m" for c in ("radius", "delta", "depth1", "cpx", "cpy", "cpz", "cpx_sim", "cpy_sim", "cpz_sim")}
-_COUNT = {c: "1" for c in ("step", "id", "id1", "id2", "wall", "type", "n_contacts", "n_particles",
+_COUNT = {c: "1" for c in ("step", "id", "clump", "n_members", "id1", "id2", "wall", "type", "n_contacts", "n_particles",
                            "n_wall_contacts", "share_n1", "share_t1", "overlap_max_rel_error")}
 UNITS: dict[str, str] = {**_ENERGY, **_LENGTH, **_COUNT, "time": "s"}
 """Unit of every known column; a column not listed here gets the unit ``""`` (unknown)."""
 
-_INT64 = ("step", "id", "id1", "id2", "wall", "n_contacts", "n_particles", "n_wall_contacts")
+_INT64 = ("step", "id", "clump", "n_members", "id1", "id2", "wall", "n_contacts", "n_particles", "n_wall_contacts")
 _INT32 = ("type",)
 
 
@@ -239,6 +239,12 @@ class Results:
         from .aggregate import contact_point_shift
 
         return contact_point_shift(self.contacts, by_frame=by_frame)
+
+    def per_clump(self) -> pd.DataFrame:
+        """Energy per YADE clump and frame, summed over its member spheres (see :func:`demsplit.aggregate.per_clump`)."""
+        from .aggregate import per_clump
+
+        return per_clump(self.particles)
 
     def wall_energy(self) -> pd.DataFrame:
         """Energy per wall and frame, with the wall names (see :func:`demsplit.aggregate.wall_energy`)."""
