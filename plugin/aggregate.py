@@ -36,10 +36,11 @@ QUANTILES = {"p05": 0.05, "p25": 0.25, "p50": 0.50, "p75": 0.75, "p95": 0.95}
 TOP_FRACTIONS = {"top1_share": 0.01, "top10_share": 0.10}
 STAT_COLUMNS = ("count", "total", "mean", "std", *QUANTILES, *TOP_FRACTIONS, "gini")
 
-SPLITS = {"material": "u", "equal": "u_equal", "radius": "u_radius"}
-"""The three distribution rules compared by :func:`split_comparison`: the
-material (Feng & Gao) law, the 50/50 split (LAMMPS pe/atom, Kratos) and the
-radius-weighted split (Aspherix)."""
+SPLITS = {"material": "u", "equal": "u_equal", "radius": "u_radius", "springs": "u_springs"}
+"""The distribution rules compared by :func:`split_comparison`: the material
+(Feng & Gao) law, the 50/50 split (LAMMPS pe/atom, Kratos), the
+radius-weighted split (Aspherix) and, for YADE's linear law only, the
+series-spring split its own stiffness implies (reported when the column is present)."""
 
 DEFAULT_SIZE_BINS = 8
 """Number of log-spaced radius classes between the smallest and the largest
@@ -244,21 +245,22 @@ SPLIT_STATS = ("total", "mean", "std", "p50", "p95", "top10_share", "gini")
 
 
 def split_comparison(particles: pd.DataFrame, *, by_frame: bool = True) -> pd.DataFrame:
-    """Per-type statistics under the three distribution rules of SPLITS, side by
-    side: columns ``<stat>_<rule>`` for each stat in SPLIT_STATS, and the
+    """Per-type statistics under the distribution rules of SPLITS present in
+    ``particles``, side by side: columns ``<stat>_<rule>`` for each stat in SPLIT_STATS, and the
     misattribution of each simpler rule in percent,
     ``misattribution_equal_pct`` = (sum_type u_equal - sum_type u)/sum_type u * 100,
     ``misattribution_radius_pct`` likewise with u_radius (NaN if sum_type u = 0)."""
-    _require(particles, list(SPLITS.values()), "particles")
+    _require(particles, ["u", "u_equal", "u_radius"], "particles")
+    rules = {rule: column for rule, column in SPLITS.items() if column in particles}
     keys = ["step", "type"] if by_frame else ["type"]
     out = None
-    for rule, column in SPLITS.items():
+    for rule, column in rules.items():
         stats = grouped_stats(particles, keys, column)
         stats = stats[[*keys, *SPLIT_STATS] if out is not None else [*keys, "count", *SPLIT_STATS]]
         stats = stats.rename(columns={s: f"{s}_{rule}" for s in SPLIT_STATS})
         out = stats if out is None else out.merge(stats, on=keys)
     with np.errstate(invalid="ignore", divide="ignore"):
-        for rule in ("equal", "radius"):
+        for rule in list(rules)[1:]:
             out[f"misattribution_{rule}_pct"] = (
                 (out[f"total_{rule}"] - out["total_material"]) / out["total_material"] * 100.0
             )

@@ -67,8 +67,8 @@ def text_summary(results: Results, step: int | None = None) -> str:
     lines += ["", "Energy per particle type (J; material distribution law):",
               _fmt(one.per_type()[cols]).to_string(index=False)]
     if {"u_equal", "u_radius"} <= set(one.particles.columns):
-        sc = one.split_comparison()[["type", "total_material", "total_equal", "total_radius",
-                                     "misattribution_equal_pct", "misattribution_radius_pct"]]
+        sc = one.split_comparison()
+        sc = sc[["type"] + [c for c in sc.columns if c.startswith(("total_", "misattribution_"))]]
         lines += ["", "Split comparison (J; misattribution in % of the material-law total):",
                   _fmt(sc).to_string(index=False)]
     if len(one.walls):
@@ -160,12 +160,15 @@ def _fig_split(sc: pd.DataFrame, step: int):
     fig, ax = plt.subplots(figsize=(7, 4))
     types = sc["type"].astype(str).to_numpy()
     x = np.arange(len(types))
-    for k, (rule, label) in enumerate((("material", "material law (Feng & Gao)"), ("equal", "50/50"),
-                                       ("radius", "radius-weighted"))):
-        ax.bar(x + (k - 1) * 0.27, sc[f"total_{rule}"], width=0.27, label=label)
+    labels = {"material": "material law (Feng & Gao)", "equal": "50/50", "radius": "radius-weighted",
+              "springs": "series springs (YADE linear law)"}
+    rules = [r for r in labels if f"total_{r}" in sc]
+    width = 0.8 / len(rules)
+    for k, rule in enumerate(rules):
+        ax.bar(x + (k - (len(rules) - 1) / 2) * width, sc[f"total_{rule}"], width=width, label=labels[rule])
     ax.set_xticks(x, [f"type {t}" for t in types])
     ax.set_ylabel("energy held by the type (J)")
-    ax.set_title(f"Energy per type under three splits, timestep {step}")
+    ax.set_title(f"Energy per type under {len(rules)} splits, timestep {step}")
     ax.legend()
     return fig
 
@@ -227,9 +230,8 @@ def write_html(results: Results, path: str | Path, step: int | None = None) -> P
         body += ["<h2>Split comparison</h2>", "<figure>", _png(_fig_split(sc, step)),
                  "<figcaption>Energy held per type under the material law, the 50/50 split and the "
                  "radius-weighted split; misattribution = (split total - material total)/material total.</figcaption>"
-                 "</figure>", _table(sc[["step", "type", "count", "total_material", "total_equal", "total_radius",
-                                         "misattribution_equal_pct", "misattribution_radius_pct", "gini_material",
-                                         "gini_equal", "gini_radius"]])]
+                 "</figure>", _table(sc[["step", "type", "count"] + [c for c in sc.columns if c.startswith(
+                     ("total_", "misattribution_", "gini_"))]])]
     if len(one.walls):
         body += ["<h2>Walls</h2>", _table(one.wall_energy())]
     if {"cpx_sim", "cpy_sim", "cpz_sim"} <= set(one.contacts.columns):
