@@ -17,70 +17,54 @@ a time and reports bad input precisely.
 
 Index
     The first access to ``n_frames``/``steps``/``frame(k)`` scans the
-    (decompressed) file once in 64 MiB chunks with ``bytes.find`` for
-    ``ITEM: TIMESTEP`` and ``bytes.count`` for newlines: no per-line Python.
-    Each frame's entry holds its step, header row count, box, column names,
-    the byte range of its rows and their line numbers. The index is cached on
-    the object. Binary files are indexed by hopping from header to header.
+    (decompressed) file once in 64 MiB chunks read into one reused buffer:
+    numpy counts the newlines and finds the ``ITEM: TIMESTEP`` candidates (the
+    letter ``I``, which no number contains) at memory speed; no per-line
+    Python. Each frame's entry holds its step, header row count, box, column
+    names, the byte range of its rows and their line numbers. The index is
+    cached on the object. Binary files are indexed by hopping from header to
+    header.
 
-Random access and compression
-    ``frame(k)`` of a plain file maps the file (``mmap``) and hands the frame's
-    byte range, without copying, to the parser. A compressed file has no
-    random access: ``frame(k)`` re-decompresses from the start up to frame k
-    (gzip/bz2/xz ``seek``); iteration (``for f in dump``) reads the stream once,
-    forwards, so streaming a compressed dump costs one decompression.
+Reading a frame
+    ``frame(k)`` seeks to the frame's rows (a compressed file re-decompresses
+    from the start up to frame k; iteration, ``for f in dump``, reads the
+    stream once, forwards) and reads them in blocks of about 64 MiB of whole
+    rows, each parsed and copied into arrays preallocated from the header's
+    row count: the text of a frame is never in memory at once, so memory is
+    the requested columns plus one block.
 
 Parser (measured)
-    Rows are parsed by ``pyarrow.csv.read_csv`` (space delimiter, one name per
-    field including the empty field after the trailing space, explicit column
-    types, only the requested columns converted). Measured with
-    ``python benchmarks/parse_engines.py`` (2 cores shared with other jobs,
-    load average 2-3, so expect +-50 % between runs; Python 3.11.7, pandas
-    2.x, pyarrow, polars 1.x; best of 2 runs, seconds until numpy arrays).
-    Run A, all engines::
-
-        frame / columns       pandas-C  pandas(pyarrow)  pyarrow  polars  np.loadtxt
-        local 2e6 x 41, all     6.37       6.39            5.90     2.77    18.99
-        local 2e6 x 41, 6       2.75       3.04            3.08     1.66     5.02
-        atoms 1e6 x 16, all     0.76       0.47            0.40     0.59     3.29
-        atoms 1e6 x 16, 6       0.30       0.26            0.21     0.26     1.45
-
-    Run B (``--engines pyarrow,polars,demsplit``; ``demsplit`` is
-    ``open_dump(p).frame(0, columns)``: index scan, parse, validation, digits)::
-
-        frame / columns       pyarrow  polars  demsplit   peak RSS above imports (MiB)
-        local 2e6 x 41, all     2.96     3.92    8.98      2926 / 2050 / 2192
-        local 2e6 x 41, 6       1.64     1.72    3.34      2281 /  918 / 1633
-        atoms 1e6 x 16, all     0.46     0.46    0.85       387 /  234 /  370
-        atoms 1e6 x 16, 6       0.19     0.38    1.05       296 /   78 /  287
-
-    pyarrow and polars trade first place with the load (polars led run A on
-    the big contact frame, pyarrow run B); pyarrow is the one that rejects
-    ragged rows (pandas and polars silently pad short rows with NaN/null and
-    drop or add columns for long ones) and parses a zero-copy ``mmap`` slice,
-    so it is used. Where the reader's time goes (cProfile, atoms 1e6 rows, 6
-    columns, same shared machine): index scan 0.24 s, the pyarrow call 0.61 s
-    (its options differ from the bare benchmark only by explicit types, no
-    quoting and no null strings), digit count 0.02 s, the rest < 0.03 s.
+    Each block is parsed by ``polars.read_csv`` (compiled, multi-threaded;
+    full schema given, only the requested columns converted). polars pads
+    short rows with nulls and ignores extra fields, so every block first
+    passes a vectorised shape check (:func:`_rows_well_formed`: the separators
+    come ``ncols`` (+1 trailing space) per row, newline last, never two
+    adjacent). ``python benchmarks/bench.py`` measures the reader against the
+    bare parsers (``docs/performance.md``). Profiled on the 2e6-contact,
+    41-column benchmark frame (860 MB, 8 columns read): the shape check costs
+    about as much as the polars parse, and the two together beat
+    ``pyarrow.csv.read_csv`` (which checks shapes itself) by about 2x on this
+    shared 2-core machine.
 
 Validation (every frame that is read)
     * the header's ``NUMBER OF ATOMS/ENTRIES`` equals the number of lines
       before the next ``ITEM: TIMESTEP`` (counted by the index scan); at the
       end of the file a shortfall or a last line without newline is a
       :class:`~demsplit.errors.TruncatedFileError`;
-    * every row has as many values as the header has names (pyarrow);
-    * every value is a number (pyarrow), and every value of the columns read is
-      finite (``numpy.isfinite``).
-    When one of these fails, a diagnostic pass over that frame alone finds the
+    * every row has as many values as the header has names, single spaces
+      between (the shape check);
+    * every value of the columns read is a number (polars), and finite
+      (``numpy.isfinite``).
+    When one of these fails, a diagnostic pass over that block alone finds the
     first offending line (1-based, in the decompressed file) and column.
-    NaN/inf in columns that were not requested are not seen.
+    Non-numbers and NaN/inf in columns that were not requested are not seen.
 
 Printed precision (``DumpFrame.digits``)
     Columns parsed as exact integers (every token an integer literal: ``%d``,
     or ``%g`` integers below 1e6) get ``None`` (exact), as do all binary
     columns. For the others, the significant mantissa digits of each token of
-    the frame's first 1 MiB of rows are counted with vectorised byte
-    arithmetic (leading zeros and the exponent excluded), the maximum taken per
+    the frame's first 128 KiB of rows are counted with vectorised byte
+    arithmetic (leading zeros and the exponent excluded; the sample is 128 KiB), the maximum taken per
     column (``observed``), and the frame's precision ``P`` = the largest
     ``observed`` over all real-valued columns. A column whose sampled values
     take at most 16 distinct values (a radius 0.001, a mass, zeros), which
@@ -95,7 +79,6 @@ from __future__ import annotations
 import bz2
 import gzip
 import lzma
-import mmap
 import struct
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
@@ -103,8 +86,7 @@ from pathlib import Path
 from typing import BinaryIO
 
 import numpy as np
-import pyarrow as pa
-import pyarrow.csv as pacsv
+import polars as pl
 
 from demsplit.errors import DemsplitError, InputFormatError, PrecisionError, TruncatedFileError
 from demsplit.frame import Box
@@ -115,7 +97,8 @@ MARKER = b"ITEM: TIMESTEP"
 HEADER_LINES = 9            # TIMESTEP, step, NUMBER OF, n, BOX BOUNDS, 3 bounds, ITEM: <label> names
 HEADER_MAX = 1 << 16        # bytes a header may occupy (hundreds of column names fit)
 CHUNK = 1 << 26             # index scan chunk (64 MiB)
-DIGITS_SAMPLE = 1 << 20     # bytes of rows sampled per frame for DumpFrame.digits
+DIGITS_SAMPLE = 1 << 17     # bytes of rows sampled per frame for DumpFrame.digits
+BLOCK = 1 << 26             # bytes of rows parsed at a time (64 MiB)
 LOW_VARIETY = 16            # distinct values at or below which a column gets the frame's precision
 
 _MAGIC = {b"\x1f\x8b": gzip.open, b"BZh": bz2.open, b"\xfd7zXZ\x00": lzma.open}
@@ -431,23 +414,11 @@ class TextDump(DumpFile):
     def _read(self, e: _TextEntry, columns: Sequence[str] | None, stream: BinaryIO | None) -> DumpFrame:
         idx = self._pick(e.names, columns, e.step)
         self._check_count(e)
-        if self._opener is None:
-            with open(self.path, "rb") as f:
-                if e.data_end == e.data_start:
-                    return self._parse(e, b"", idx)
-                mm = mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ)
-                try:
-                    return self._parse(e, pa.py_buffer(mm).slice(e.data_start, e.data_end - e.data_start), idx)
-                finally:
-                    try:
-                        mm.close()
-                    except BufferError:  # a traceback still holds the slice; the map goes with it
-                        pass
         if stream is None:
             with self._stream() as s:
                 return self._read(e, columns, s)
-        stream.seek(e.data_start)
-        return self._parse(e, stream.read(e.data_end - e.data_start), idx)
+        stream.seek(e.data_start)  # a forward seek in a compressed stream decompresses only the header
+        return self._parse(e, stream, idx)
 
     def _check_count(self, e: _TextEntry) -> None:
         """Header count against the lines the index found."""
@@ -474,77 +445,134 @@ class TextDump(DumpFile):
             f"before the next 'ITEM: TIMESTEP', which is this line",
             file=self.path, step=e.step, line=e.first_line + e.n_lines, fix=FIX_COUNT)
 
-    def _parse(self, e: _TextEntry, buf, idx: list[int]) -> DumpFrame:
+    def _parse(self, e: _TextEntry, stream: BinaryIO, idx: list[int]) -> DumpFrame:
+        """Parse the rows of frame ``e`` from ``stream`` (positioned at its first row)
+        block by block into preallocated arrays of the requested columns."""
         names = [e.names[i] for i in idx]
         if e.n_rows == 0:
             return DumpFrame(e.step, 0, e.box, {n: np.empty(0) for n in names}, self.path,
                              e.first_line, {n: None for n in names})
-        data = buf if isinstance(buf, pa.Buffer) else pa.py_buffer(buf)
-        head = data.slice(0, min(DIGITS_SAMPLE, data.size)).to_pybytes()
-        first_row = head.split(b"\n", 1)[0]
-        trailing = first_row.endswith(b" ")
-        fields = [f"f{k}" for k in range(len(e.names) + trailing)]
-        sample = _tokens(head[: head.rfind(b"\n") + 1] or head, len(e.names))
-        int_like = _integer_columns(sample, len(e.names))
-        types = {fields[i]: (pa.int64() if int_like[i] else pa.float64()) for i in idx}
-        try:
-            table = _csv(data, fields, types)
-        except pa.ArrowInvalid as err:
-            if "conversion error to int64" not in str(err):
-                raise self._diagnose(e, data, trailing) from err
-            # an integer-looking column holds a real later on: read them all as float64
-            types = {f: pa.float64() for f in types}
-            try:
-                table = _csv(data, fields, types)
-            except pa.ArrowInvalid as err2:
-                raise self._diagnose(e, data, trailing) from err2
-        cols = {n: table.column(fields[i]).to_numpy() for n, i in zip(names, idx)}
-        del table
+        ncols = len(e.names)
+        cols: dict[int, np.ndarray] = {}
+        row, sample = 0, None
+        for block in _blocks(stream, e.data_end - e.data_start):
+            if sample is None:  # first block: separators, integer columns and the digits sample
+                head = block[:DIGITS_SAMPLE]
+                trailing = head.split(b"\n", 1)[0].endswith(b" ")
+                sample = _tokens(head[: head.rfind(b"\n") + 1] or head, ncols)
+                int_like = _integer_columns(sample, ncols)
+                cols = {i: np.empty(e.n_rows, np.int64 if int_like[i] else np.float64) for i in idx}
+            n = _rows_well_formed(np.frombuffer(block, dtype=np.uint8), ncols, trailing)
+            if n is None:
+                raise self._diagnose(e, block, row, trailing)
+            table = self._parse_block(e, block, row, trailing, cols)
+            if table.height != n:
+                raise self._diagnose(e, block, row, trailing)
+            for i in idx:
+                cols[i][row: row + n] = table.get_column(f"c{i}").to_numpy()
+            row += n
+        out = {n: cols[i] for n, i in zip(names, idx)}
         for n, i in zip(names, idx):
-            bad = ~np.isfinite(cols[n]) if cols[n].dtype.kind == "f" else None
+            bad = ~np.isfinite(out[n]) if out[n].dtype.kind == "f" else None
             if bad is not None and bad.any():
                 row = int(np.flatnonzero(bad)[0])
                 raise InputFormatError(
-                    f"column {i + 1} ('{n}') of row {row + 1} is {cols[n][row]!r}; expected a finite number",
+                    f"column {i + 1} ('{n}') of row {row + 1} is {out[n][row]!r}; expected a finite number",
                     file=self.path, step=e.step, line=e.first_line + row,
                     fix="the simulation produced NaN/inf (unstable run: smaller timestep, check materials); "
                         "dump a frame before it diverged")
-        digits = _digits(sample, len(e.names), idx, cols, int_like)
-        return DumpFrame(e.step, e.n_rows, e.box, cols, self.path, e.first_line,
+        digits = _digits(sample, ncols, idx, out, int_like)
+        return DumpFrame(e.step, e.n_rows, e.box, out, self.path, e.first_line,
                          {n: digits[i] for n, i in zip(names, idx)})
 
-    def _diagnose(self, e: _TextEntry, data, trailing: bool) -> DemsplitError:
-        """Slow pass over one frame that failed the fast parse: first bad line."""
-        text = data.to_pybytes() if isinstance(data, pa.Buffer) else bytes(data)
+    def _parse_block(self, e: _TextEntry, block: bytes, row: int, trailing: bool,
+                     cols: dict[int, np.ndarray]) -> "pl.DataFrame":
+        """polars parse of one block of whole rows; an integer-looking column that
+        holds a real here turns every integer column of the frame into float64."""
+        for _ in range(2):
+            try:
+                return _csv(block, len(e.names) + trailing, {i: c.dtype for i, c in cols.items()})
+            except (pl.exceptions.ComputeError, pl.exceptions.ShapeError, pl.exceptions.SchemaError) as err:
+                ints = [i for i, c in cols.items() if c.dtype.kind == "i"]
+                if not ints or "i64" not in str(err):
+                    raise self._diagnose(e, block, row, trailing) from err
+                for i in ints:
+                    cols[i] = cols[i].astype(np.float64)
+        raise self._diagnose(e, block, row, trailing)
+
+    def _diagnose(self, e: _TextEntry, text: bytes, row0: int, trailing: bool) -> DemsplitError:
+        """Slow pass over one block (starting at row ``row0``) that failed the fast parse: first bad line."""
         ncols = len(e.names)
-        for k, raw in enumerate(text.split(b"\n")[: e.n_rows]):
-            line = e.first_line + k
+        for k, raw in enumerate(text.split(b"\n")[: e.n_rows - row0]):
+            line = e.first_line + row0 + k
             tokens = raw.split(b" ")
             if trailing and tokens and tokens[-1] == b"":
                 tokens = tokens[:-1]
             if len(tokens) != ncols or b"" in tokens:
                 return InputFormatError(
-                    f"row {k + 1} has {len([t for t in tokens if t])} values, expected {ncols} (one per header "
-                    f"name{', then a trailing space' if trailing else ''}, single spaces between)",
+                    f"row {row0 + k + 1} has {len([t for t in tokens if t])} values, expected {ncols} (one per "
+                    f"header name{', then a trailing space' if trailing else ''}, single spaces between)",
                     file=self.path, step=e.step, line=line, fix=FIX_COUNT)
             for c, tok in enumerate(tokens):
                 try:
                     float(tok)
                 except ValueError:
                     return InputFormatError(
-                        f"column {c + 1} ('{e.names[c]}') of row {k + 1} is '{tok.decode('utf-8', 'replace')}'; "
-                        f"expected a number", file=self.path, step=e.step, line=line, fix=FIX_COUNT)
+                        f"column {c + 1} ('{e.names[c]}') of row {row0 + k + 1} is "
+                        f"'{tok.decode('utf-8', 'replace')}'; expected a number",
+                        file=self.path, step=e.step, line=line, fix=FIX_COUNT)
         return InputFormatError("the rows of this frame could not be parsed", file=self.path, step=e.step,
-                                line=e.first_line, fix=FIX_COUNT)
+                                line=e.first_line + row0, fix=FIX_COUNT)
 
 
-def _csv(data: pa.Buffer, fields: list[str], types: dict[str, pa.DataType]) -> pa.Table:
-    return pacsv.read_csv(
-        pa.BufferReader(data),
-        read_options=pacsv.ReadOptions(column_names=fields),
-        parse_options=pacsv.ParseOptions(delimiter=" ", quote_char=False),
-        convert_options=pacsv.ConvertOptions(include_columns=list(types), column_types=types,
-                                             null_values=[], strings_can_be_null=False))
+def _blocks(stream: BinaryIO, size: int) -> Iterator[bytes]:
+    """The next ``size`` bytes of ``stream`` in pieces of about ``BLOCK`` bytes,
+    each ending with a whole row, so that a frame never sits in memory as text."""
+    while size > 0:
+        data = stream.read(min(BLOCK, size))
+        if not data:
+            return
+        size -= len(data)
+        if size > 0 and not data.endswith(b"\n"):  # complete the row cut by the block's end
+            tail = stream.readline(size)
+            size -= len(tail)
+            data += tail
+        yield data
+
+
+def _csv(block: bytes, n_fields: int, dtypes: dict[int, np.dtype]) -> "pl.DataFrame":
+    """polars (multi-threaded, compiled) parse of whole rows of ``n_fields`` fields: only
+    the columns ``dtypes`` names (0-based) are converted, to Int64 or Float64."""
+    schema = {f"c{k}": pl.String for k in range(n_fields)}
+    schema.update({f"c{i}": pl.Int64 if d.kind == "i" else pl.Float64 for i, d in dtypes.items()})
+    return pl.read_csv(block, separator=" ", has_header=False, quote_char=None, schema=schema,
+                       columns=sorted(dtypes))
+
+
+def _rows_well_formed(raw: np.ndarray, ncols: int, trailing: bool) -> int | None:
+    """Number of rows in ``raw`` when every line holds exactly ``ncols``
+    non-empty fields separated by single spaces, followed by one space when
+    ``trailing``; else None. polars pads short rows and ignores extra fields,
+    so this vectorised check is what makes a ragged or padded row an error.
+
+    The separators (bytes <= 32: spaces, newlines, and any tab or CR, which
+    LAMMPS never writes) must come ``ncols + trailing`` per row, spaces then a
+    newline, and no two may be adjacent (an empty field) except the trailing
+    space and its newline.
+    """
+    per = ncols + trailing
+    sep = np.flatnonzero(raw <= 32)
+    if sep.size == 0 or sep.size % per or sep[0] == 0:
+        return None
+    kind = raw[sep].reshape(-1, per)
+    if np.any(kind[:, -1] != 10) or np.any(kind[:, :-1] != 32):
+        return None
+    gap = np.diff(sep)
+    if trailing:
+        if np.any(gap[per - 2::per] != 1):
+            return None
+        gap[per - 2::per] = 2
+    return kind.shape[0] if np.all(gap > 1) else None
 
 
 def _scan(f: BinaryIO) -> tuple[list[int], list[bytes], list[int], int, int, bytes]:
@@ -553,33 +581,51 @@ def _scan(f: BinaryIO) -> tuple[list[int], list[bytes], list[int], int, int, byt
     Returns the byte offsets of the ``ITEM: TIMESTEP`` lines, up to
     ``HEADER_MAX`` bytes of text from each (cut at the next marker), the number
     of newlines before each, the total size, the total number of newlines and
-    the last byte.
+    the last byte. Newlines are counted and marker candidates (every ``I``, a
+    letter no number contains) found with numpy, at memory speed.
     """
     markers: list[int] = []
     headers: list[bytes] = []
     lines_before: list[int] = []
-    buf, buf_start, newlines, last_byte = b"", 0, 0, b""
+    buf = bytearray(HEADER_MAX + CHUNK)   # the last HEADER_MAX bytes of a chunk move to the front
+    view = memoryview(buf)
+    kept, buf_start, newlines, last_byte = 0, 0, 0, b""
     while True:
-        chunk = f.read(CHUNK)
-        eof = not chunk
-        if chunk:
-            last_byte = chunk[-1:]
-        buf += chunk
+        got = _read_into(f, view[kept:])
+        eof = got == 0
+        size = kept + got
+        if got:
+            last_byte = bytes(buf[size - 1: size])
         # search and count up to `limit`; keep the rest so that a header is never cut
-        limit = len(buf) if eof else max(len(buf) - HEADER_MAX, 0)
-        pos, counted = buf.find(MARKER, 0, limit + len(MARKER) - 1), 0
-        while pos != -1 and pos < limit:
-            newlines += buf.count(b"\n", counted, pos)
-            counted = pos
-            nxt = buf.find(MARKER, pos + 1, pos + HEADER_MAX)
-            markers.append(buf_start + pos)
-            headers.append(buf[pos: nxt if nxt != -1 else pos + HEADER_MAX])
-            lines_before.append(newlines)
-            pos = buf.find(MARKER, pos + 1, limit + len(MARKER) - 1)
-        newlines += buf.count(b"\n", counted, limit)
-        buf, buf_start = buf[limit:], buf_start + limit
+        limit = size if eof else max(size - HEADER_MAX, 0)
+        a = np.frombuffer(buf, dtype=np.uint8, count=limit)
+        is_nl = a == 10
+        found = [p for p in np.flatnonzero(a == MARKER[0]).tolist() if buf.startswith(MARKER, p)]
+        if found:
+            nl = np.flatnonzero(is_nl)
+            for pos in found:
+                nxt = buf.find(MARKER, pos + 1, min(pos + HEADER_MAX, size))
+                markers.append(buf_start + pos)
+                headers.append(bytes(buf[pos: nxt if nxt != -1 else min(pos + HEADER_MAX, size)]))
+                lines_before.append(newlines + int(np.searchsorted(nl, pos)))
+        newlines += int(np.count_nonzero(is_nl))
+        del a, is_nl
         if eof:
-            return markers, headers, lines_before, buf_start, newlines, last_byte
+            view.release()
+            return markers, headers, lines_before, buf_start + size, newlines, last_byte
+        buf[: size - limit] = buf[limit: size]
+        kept, buf_start = size - limit, buf_start + limit
+
+
+def _read_into(f: BinaryIO, view: memoryview) -> int:
+    """Fill ``view`` from ``f`` as far as the stream goes; bytes read (0 at the end)."""
+    total = 0
+    while total < len(view):
+        n = f.readinto(view[total:])
+        if not n:
+            break
+        total += n
+    return total
 
 
 def _header_short(path: str, header_line: int, n_complete: int, last: bool) -> DemsplitError:
@@ -662,7 +708,7 @@ def _tokens(sample: bytes, ncols: int) -> tuple[np.ndarray, np.ndarray, np.ndarr
     a = np.frombuffer(sample, dtype=np.uint8)
     sep = (a == 32) | (a == 10) | (a == 13) | (a == 9)
     start = ~sep & np.concatenate(([True], sep[:-1]))
-    tok = np.cumsum(start) - 1
+    tok = np.cumsum(start, dtype=np.int64) - 1
     tok[sep] = -1
     line_of_tok = np.cumsum(a == 10)[start] if start.any() else np.empty(0, np.int64)
     first_tok_of_line = np.searchsorted(line_of_tok, line_of_tok, side="left")
