@@ -62,11 +62,18 @@ def _reader_options(args: argparse.Namespace) -> dict:
         opts["force_positions"] = True
     if getattr(args, "plane_as_plane", False):
         opts["plane_as_plane"] = True
+    if getattr(args, "input", None) is None:  # no script: the scene comes from these options
+        scene = {k: getattr(args, k) for k in ("columns", "wall_columns", "wall_type", "model", "tangential",
+                                                "characteristic_velocity", "boundary")
+                 if getattr(args, k, None) is not None}
+        opts["scene_options"] = scene
     return opts
 
 
 def _add_input(p: argparse.ArgumentParser) -> None:
-    p.add_argument("input", help="LIGGGHTS input script, or a demsplit.yade snapshot file")
+    p.add_argument("input", nargs="?", default=None,
+                   help="LIGGGHTS input script, or a demsplit.yade snapshot file (omit it to describe the "
+                   "scene with --atoms, --contacts, --material and --columns)")
     g = p.add_argument_group("LIGGGHTS inputs (default: the files the script's dump lines write)")
     g.add_argument("--atoms", help="atom dump (dump custom, text, .bin, or compressed)")
     g.add_argument("--contacts", help="pair contact dump (dump local of compute pair/gran/local)")
@@ -80,6 +87,15 @@ def _add_input(p: argparse.ArgumentParser) -> None:
                    "printed positions (default 1e-3)")
     g.add_argument("--force-positions", action="store_true",
                    help="recompute overlaps from printed positions even above the tolerance (reported)")
+    n = p.add_argument_group("LIGGGHTS without an input script (the scene from these options)")
+    n.add_argument("--columns", metavar="KEYWORDS",
+                   help='keywords of the compute pair/gran/local behind --contacts, e.g. "pos id delta history"')
+    n.add_argument("--wall-columns", metavar="KEYWORDS", help="keywords of the compute wall/gran/local behind --walls")
+    n.add_argument("--wall-type", type=int, metavar="T", help="material type of the mesh walls")
+    n.add_argument("--model", choices=("hertz", "hooke"), help="pair_style gran model (default hertz)")
+    n.add_argument("--tangential", choices=("history", "no_history"), help="tangential model (default history)")
+    n.add_argument("--characteristic-velocity", type=float, metavar="V", help="for model hooke (m/s)")
+    n.add_argument("--boundary", metavar='"X Y Z"', help='boundary as in the script, e.g. "p p f" (default "f f f")')
     y = p.add_argument_group("YADE inputs")
     y.add_argument("--plane-as-plane", action="store_true",
                    help="treat YADE walls/facets/boxes as planes (R = inf) instead of YADE's refR")

@@ -225,6 +225,9 @@ def process_run(run, options: Options = Options(), *, jobs: int = 1, dask: str |
     if on_bad_frame not in ("stop", "skip"):
         raise ValueError(f"on_bad_frame must be 'stop' or 'skip', not {on_bad_frame!r}")
     report = report if report is not None else RunReport()
+    for note in getattr(run, "notes", []):  # what the reader found it could not provide
+        if note not in report.notes:
+            report.notes.append(note)
     all_steps = run_steps(run)
     wanted = set(steps) if steps is not None else None
     indices = [k for k, s in enumerate(all_steps)

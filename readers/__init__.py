@@ -6,8 +6,13 @@
 * a LIGGGHTS input script (the run's dumps are found from its ``dump``
   lines, or given as ``atoms=``, ``contacts=``, ``walls=``):
   :class:`demsplit.readers.liggghts.LiggghtsRun`;
+* ``None``: LIGGGHTS dumps given as ``atoms=``, ``contacts=`` (``walls=``)
+  with the scene as options (``materials=``, ``scene_options=``; see
+  :func:`demsplit.readers.liggghts.scene_script`);
 * a snapshot file written by :func:`demsplit.yade.snapshot`:
-  :class:`demsplit.readers.yade_snapshot.YadeSnapshotRun`.
+  :class:`demsplit.readers.yade_snapshot.YadeSnapshotRun`;
+* an ingest cache written by ``demsplit convert`` (an HDF5 file whose
+  ``format`` attribute says so): :class:`demsplit.readers.cache.CacheRun`.
 
 Format sniffing, column mapping and precision facts live in this package and
 nowhere else.
@@ -22,7 +27,7 @@ from .base import Run
 
 
 def sniff(path: str | Path) -> str:
-    """Kind of run file: ``'yade-snapshot'`` or ``'liggghts-script'``."""
+    """Kind of run file: ``'cache'``, ``'yade-snapshot'`` or ``'liggghts-script'``."""
     from ..yade import HDF5_SIGNATURE, NPY_STREAM_MAGIC
 
     path = Path(path)
@@ -30,7 +35,11 @@ def sniff(path: str | Path) -> str:
         raise InputFormatError("no such file.", file=path, fix="check the path.")
     with open(path, "rb") as f:
         head = f.read(4096)
-    if head.startswith(HDF5_SIGNATURE) or head.startswith(NPY_STREAM_MAGIC):
+    if head.startswith(HDF5_SIGNATURE):
+        from .cache import is_cache
+
+        return "cache" if is_cache(path) else "yade-snapshot"
+    if head.startswith(NPY_STREAM_MAGIC):
         return "yade-snapshot"
     if b"ITEM: TIMESTEP" in head:
         raise InputFormatError(
@@ -44,14 +53,18 @@ def sniff(path: str | Path) -> str:
     return "liggghts-script"
 
 
-def open_run(path: str | Path, **options) -> Run:
+def open_run(path: str | Path | None, **options) -> Run:
     """Open a run (see the module docstring). ``options`` go to the reader.
 
     The returned run remembers ``(path, options)`` as ``run.spec`` so that
     worker processes can open the same run again.
     """
-    kind = sniff(path)
-    if kind == "yade-snapshot":
+    kind = "liggghts-dumps" if path is None else sniff(path)
+    if kind == "cache":
+        from .cache import open_cache
+
+        run = open_cache(path, **options)
+    elif kind == "yade-snapshot":
         from .yade_snapshot import open_yade_snapshot
 
         run = open_yade_snapshot(path, **options)
@@ -59,7 +72,7 @@ def open_run(path: str | Path, **options) -> Run:
         from .liggghts import open_liggghts_run
 
         run = open_liggghts_run(path, **options)
-    run.spec = {"path": str(path), **options}
+    run.spec = {"path": None if path is None else str(path), **options}
     return run
 
 

@@ -30,6 +30,7 @@ or ``.xz`` copy is found too) unless given as ``atoms=``, ``contacts=``,
 from __future__ import annotations
 
 import re
+import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -97,14 +98,83 @@ def relative_rounding(digits: int | None) -> float:
     return 0.0 if digits is None or digits >= 15 else 0.5 * 10.0 ** (1 - digits)
 
 
+def scene_script(*, materials: dict[int, Material], contacts: Path, walls: Path | None = None,
+                 columns: str | None = None, wall_columns: str | None = None, wall_type: int | None = None,
+                 model: str = "hertz", tangential: str = "history", characteristic_velocity: float | None = None,
+                 boundary: str = "f f f") -> str:
+    """The LIGGGHTS input script equivalent to a scene given on the command line.
+
+    Without the run's own script, demsplit still needs its facts: the
+    materials (``--material TYPE:E:NU``, types 1..N), the contact model, and
+    the keywords of the computes whose ``dump local`` files are read
+    (``--columns``, ``--wall-columns``, e.g. ``"pos id delta history"``). They
+    are written as the script lines LIGGGHTS would have read, so the one script
+    parser serves both ways in. Primitive walls cannot be given this way (their
+    contacts are not rebuilt, and a note says so).
+    """
+    missing = []
+    if not materials:
+        missing.append("the materials (--material TYPE:E:NU for every type)")
+    if columns is None:
+        missing.append(f"the keywords of the compute pair/gran/local that wrote {contacts} (--columns)")
+    if walls is not None and (wall_columns is None or wall_type is None):
+        missing.append(f"the keywords of the compute wall/gran/local that wrote {walls} (--wall-columns) "
+                       "and the mesh walls' material type (--wall-type)")
+    if missing:
+        raise InputFormatError(
+            "without the run's input script demsplit cannot know " + "; ".join(missing) + ".",
+            file=contacts, fix="pass the LIGGGHTS input script that made the run, or give those options.")
+    ntypes = max(max(materials), wall_type or 0)
+    absent = sorted(set(range(1, ntypes + 1)) - set(materials))
+    if absent:
+        raise InputFormatError(f"types {absent} have no material (types run from 1 to {ntypes}).",
+                               fix="give --material TYPE:E:NU for every type, walls included.")
+
+    def compute_id(path: Path) -> str:
+        token = next((t for t in open_dump(path).columns or [] if _LOCAL_TOKEN.match(t)), None)
+        if token is None:
+            raise InputFormatError("the contact dump's header names no c_ID[k] column.", file=path,
+                                   fix="dump the compute's columns (dump ID all local N FILE c_ID[1] ...).")
+        return _LOCAL_TOKEN.match(token).group(1)
+
+    E = " ".join(repr(materials[t].E) for t in range(1, ntypes + 1))
+    nu = " ".join(repr(materials[t].nu) for t in range(1, ntypes + 1))
+    lines = ["# demsplit: the scene given on the command line, as the script lines LIGGGHTS reads",
+             "units si", f"boundary {boundary}", f"create_box {ntypes} domain",
+             f"fix m1 all property/global youngsModulus peratomtype {E}",
+             f"fix m2 all property/global poissonsRatio peratomtype {nu}"]
+    if characteristic_velocity is not None:
+        lines.append(f"fix m3 all property/global characteristicVelocity scalar {characteristic_velocity!r}")
+    lines += [f"pair_style gran model {model} tangential {tangential}",
+              f"compute {compute_id(contacts)} all pair/gran/local {columns}"]
+    if walls is not None:
+        lines += [f"fix mesh all mesh/surface file mesh.stl type {wall_type}",
+                  f"fix wmesh all wall/gran model {model} tangential {tangential} mesh n_meshes 1 meshes mesh",
+                  f"compute {compute_id(walls)} all wall/gran/local {wall_columns}"]
+    return "\n".join(lines) + "\n"
+
+
 class LiggghtsRun:
     """A LIGGGHTS run opened for reading (see the module docstring)."""
 
-    def __init__(self, script: str | Path, *, atoms: str | Path | None = None,
+    def __init__(self, script: str | Path | None, *, atoms: str | Path | None = None,
                  contacts: str | Path | None = None, walls: str | Path | None = None,
                  variables: dict[str, str] | None = None, materials: dict[int, Material] | None = None,
-                 overlap_tolerance: float | None = None, force_positions: bool = False) -> None:
-        self.script: LiggghtsScript = read_script(script, variables)
+                 overlap_tolerance: float | None = None, force_positions: bool = False,
+                 scene_options: dict | None = None) -> None:
+        self.script_text = None
+        if script is None:  # the scene comes from the command line (scene_script)
+            if atoms is None or contacts is None:
+                raise InputFormatError("without an input script, the atom and pair contact dumps must be given.",
+                                       fix="pass --atoms FILE and --contacts FILE (or the input script).")
+            self.script_text = scene_script(materials=materials or {}, contacts=Path(contacts),
+                                            walls=None if walls is None else Path(walls), **(scene_options or {}))
+            with tempfile.TemporaryDirectory() as tmp:
+                (Path(tmp) / "in.demsplit").write_text(self.script_text)
+                self.script = read_script(Path(tmp) / "in.demsplit")
+            materials = None
+        else:
+            self.script = read_script(script, variables)
         base = self.script.scene
         self.scene = Scene({**base.materials, **(materials or {})}, base.model, base.walls, base.units,
                            base.source) if materials else base
@@ -120,9 +190,13 @@ class LiggghtsRun:
         if mesh and self.walls is None:
             self.notes.append(f"the run has {len(mesh)} mesh wall(s) but no wall/gran/local dump was found: "
                               "contacts with mesh walls are missing from the energies")
+        if script is None:
+            self.notes.append("no input script: primitive walls (never dumped by LIGGGHTS) are unknown, "
+                              "so contacts with them are not included")
         self.steps = np.asarray(self.atoms.steps, dtype=np.int64)
         self.damaged = self.atoms.damaged  # atom frames whose header is unreadable: frames len(steps)...
-        self.sources = [self.script.path] + [d.path for d in (self.atoms, self.pairs, self.walls) if d is not None]
+        self.sources = ([] if script is None else [self.script.path]) + [
+            d.path for d in (self.atoms, self.pairs, self.walls) if d is not None]
 
     # -- finding and opening the dumps -----------------------------------------------------
 
@@ -471,7 +545,7 @@ class LiggghtsRun:
         """Files, kinds and precision, for provenance and ``demsplit check``."""
         def info(d):
             return None if d is None else {"path": str(d.path), "frames": len(d.steps)}
-        return {"kind": "liggghts", "script": str(self.script.path), "atoms": info(self.atoms),
+        return {"kind": "liggghts", "script": self.script_text or str(self.script.path), "atoms": info(self.atoms),
                 "pairs": info(self.pairs), "walls": info(self.walls),
                 "model": {"normal": self.scene.model.normal, "tangential": self.scene.model.tangential},
                 "overlap_tolerance": self.overlap_tolerance, "force_positions": self.force_positions,
@@ -483,6 +557,7 @@ class LiggghtsRun:
                 d.close()
 
 
-def open_liggghts_run(script: str | Path, **options) -> LiggghtsRun:
-    """Open a LIGGGHTS run from its input script (see :class:`LiggghtsRun`)."""
+def open_liggghts_run(script: str | Path | None, **options) -> LiggghtsRun:
+    """Open a LIGGGHTS run from its input script, or (``script=None``) from
+    dumps and a scene given as options (see :class:`LiggghtsRun` and :func:`scene_script`)."""
     return LiggghtsRun(script, **options)
