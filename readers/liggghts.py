@@ -41,7 +41,7 @@ from ..frame import Box, Frame, ParticleIndex, Table
 from ..scene import Material, Scene
 from ..walls import primitive_wall_contacts
 from .lammps_dump import HEADER_LINES, DumpFile, DumpFrame, open_dump
-from .liggghts_script import LiggghtsScript, read_script
+from .liggghts_script import read_script
 
 DEFAULT_OVERLAP_TOLERANCE = 1e-3
 """Largest accepted relative error bound of an overlap recomputed from printed positions."""
