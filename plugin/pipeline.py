@@ -193,7 +193,7 @@ def _dask(run, indices: list[int], options: Options, address: str) -> Iterator[t
     key = _spec_key(spec)
     if address.startswith("local:"):
         cluster = LocalCluster(n_workers=int(address.split(":", 1)[1]), threads_per_worker=1,
-                               processes=True, dashboard_address=None)
+                               processes=True, dashboard_address=":0")
         client = Client(cluster)
     elif Path(address).is_file():  # a scheduler file written by `dask scheduler --scheduler-file`
         cluster, client = None, Client(scheduler_file=address)

@@ -1,0 +1,228 @@
+"""Ingest cache: a run's frames converted once to HDF5, read back much faster.
+
+``demsplit convert IN -o CACHE.h5`` (:func:`convert_run`) opens any run
+:func:`demsplit.readers.open_run` reads (a LIGGGHTS script with its dumps, a
+YADE snapshot), and writes every frame exactly as the reader built it: the
+canonical ``particles`` and ``contacts`` tables, box, step, time, overlap
+source and per-contact error bound, notes and source files, plus the
+:class:`~demsplit.scene.Scene`. ``open_run(CACHE.h5)`` then returns a
+:class:`CacheRun` whose frames equal the text reader's, bit for bit, without
+parsing, index scan or geometry rebuild (``benchmarks/bench.py`` measures the
+speed-up).
+
+Layout (root attribute ``format`` = ``"demsplit-ingest-cache"``, ``version``)::
+
+    /                attrs: format, version, scene (JSON), describe (JSON), sources (JSON),
+                            n_frames, steps (int64 array)
+    /frames/000000   attrs: step, time (NaN if unknown), source (JSON), overlap_source, notes (JSON),
+                            box_lo, box_hi, box_periodic, box_tilt (absent without a box),
+                            error (JSON: class, message, file, step, line, fix) for a frame
+                            the reader refused
+        particles/<column>   one contiguous, uncompressed dataset per column
+        contacts/<column>
+        overlap_error        (absent when the frame has none)
+
+The file is written to a temporary name in the same directory and renamed
+when complete, so a cache is either whole or absent. A frame the reader
+refused (damaged dump frame) is stored as its error and raised again, with
+the same class and message, by :meth:`CacheRun.frame`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+from collections.abc import Iterator
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from .. import errors
+from ..errors import DemsplitError, InputFormatError
+from ..frame import Box, Frame
+from ..scene import ContactModel, Material, Scene, Wall
+
+FORMAT = "demsplit-ingest-cache"
+VERSION = 1
+
+
+# --------------------------------------------------------------------------- scene <-> JSON
+
+def scene_to_json(scene: Scene) -> str:
+    """The scene as JSON (materials, contact model, walls, units, source)."""
+    return json.dumps({
+        "materials": {str(t): dataclasses.asdict(m) for t, m in scene.materials.items()},
+        "model": dataclasses.asdict(scene.model),
+        "walls": [dataclasses.asdict(w) for w in scene.walls],
+        "units": scene.units,
+        "source": scene.source,
+    })
+
+
+def scene_from_json(text: str) -> Scene:
+    """Inverse of :func:`scene_to_json`."""
+    d = json.loads(text)
+
+    def wall(w: dict) -> Wall:
+        w = dict(w)
+        w["center"] = tuple(w["center"])
+        w["transforms"] = tuple((op, tuple(args)) for op, args in w["transforms"])
+        w["model"] = None if w["model"] is None else ContactModel(**w["model"])
+        return Wall(**w)
+
+    return Scene({int(t): Material(**m) for t, m in d["materials"].items()}, ContactModel(**d["model"]),
+                 [wall(w) for w in d["walls"]], d["units"], d["source"])
+
+
+# --------------------------------------------------------------------------- writing
+
+def convert_run(input: str | Path, output: str | Path, **reader_options) -> Path:
+    """Write every frame of the run ``input`` to the cache ``output`` (atomically).
+
+    ``reader_options`` go to :func:`demsplit.readers.open_run`. Frames are
+    streamed: one in memory at a time. Returns the path written.
+    """
+    from . import open_run
+
+    output = Path(output)
+    if output.resolve() == Path(input).resolve():
+        raise InputFormatError("the cache would overwrite its own input.", file=output,
+                               fix="give another output path with -o.")
+    run = open_run(input, **reader_options)
+    tmp = output.with_name(f".{output.name}.{os.getpid()}.tmp")
+    try:
+        with h5py.File(tmp, "w") as h5:
+            h5.attrs["format"] = FORMAT
+            h5.attrs["version"] = VERSION
+            h5.attrs["scene"] = scene_to_json(run.scene)
+            h5.attrs["describe"] = json.dumps(run.describe() if hasattr(run, "describe") else {}, default=str)
+            h5.attrs["sources"] = json.dumps([str(s) for s in getattr(run, "sources", [input])])
+            frames = h5.create_group("frames")
+            steps = []
+            for k in range(len(run)):
+                g = frames.create_group(f"{k:06d}")
+                try:
+                    frame = run.frame(k)
+                except DemsplitError as exc:  # kept, and raised again when the frame is read
+                    g.attrs["error"] = json.dumps({"class": type(exc).__name__, "message": exc.message,
+                                                   "file": exc.file, "step": exc.step, "line": exc.line,
+                                                   "fix": exc.fix})
+                    steps.append(exc.step if exc.step is not None else _run_step(run, k))
+                    continue
+                _write_frame(g, frame)
+                steps.append(frame.step)
+            h5.attrs["n_frames"] = len(steps)
+            h5.attrs["steps"] = np.array([-1 if s is None else s for s in steps], dtype=np.int64)
+        os.replace(tmp, output)
+    finally:
+        run.close()
+        if tmp.exists():
+            tmp.unlink()
+    return output
+
+
+def _run_step(run, k: int) -> int | None:
+    steps = getattr(run, "steps", None)
+    return None if steps is None else int(steps[k])
+
+
+def _write_frame(g: h5py.Group, frame: Frame) -> None:
+    g.attrs["step"] = int(frame.step)
+    g.attrs["time"] = np.nan if frame.time is None else float(frame.time)
+    g.attrs["source"] = json.dumps(list(frame.source))
+    g.attrs["overlap_source"] = frame.overlap_source
+    g.attrs["notes"] = json.dumps(list(frame.notes))
+    if frame.box is not None:
+        g.attrs["box_lo"], g.attrs["box_hi"] = frame.box.lo, frame.box.hi
+        g.attrs["box_periodic"] = np.array(frame.box.periodic, dtype=bool)
+        g.attrs["box_tilt"] = frame.box.tilt
+    for name, table in (("particles", frame.particles), ("contacts", frame.contacts)):
+        t = g.create_group(name)
+        t.attrs["order"] = json.dumps(list(table))  # column order, as the reader built it
+        for col, values in table.items():
+            t.create_dataset(col, data=np.ascontiguousarray(values))
+    if frame.overlap_error is not None:
+        g.create_dataset("overlap_error", data=frame.overlap_error)
+
+
+# --------------------------------------------------------------------------- reading
+
+def is_cache(path: str | Path) -> bool:
+    """True when ``path`` is an HDF5 file written by :func:`convert_run`."""
+    try:
+        with h5py.File(path, "r") as h5:
+            return h5.attrs.get("format") == FORMAT
+    except OSError:
+        return False
+
+
+class CacheRun:
+    """A run read from an ingest cache (see the module docstring); implements
+    :class:`demsplit.readers.base.Run`."""
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = str(path)
+        self._h5 = h5py.File(path, "r")
+        attrs = self._h5.attrs
+        if attrs.get("format") != FORMAT:
+            raise InputFormatError(f"not a demsplit ingest cache (format attribute {attrs.get('format')!r}).",
+                                   file=path, fix="write one with 'demsplit convert RUN -o CACHE.h5'.")
+        if int(attrs["version"]) > VERSION:
+            raise InputFormatError(f"cache format version {int(attrs['version'])} is newer than this demsplit "
+                                   f"reads ({VERSION}).", file=path,
+                                   fix="upgrade demsplit, or convert the run again with this version.")
+        self.scene = scene_from_json(attrs["scene"])
+        self.steps = np.asarray(attrs["steps"], dtype=np.int64)
+        self.sources = [self.path] + json.loads(attrs["sources"])
+        self._describe = json.loads(attrs["describe"])
+        self._frames = self._h5["frames"]
+
+    def __len__(self) -> int:
+        return len(self.steps)
+
+    def frame(self, k: int) -> Frame:
+        """Frame ``k`` exactly as the original reader built it."""
+        if not -len(self) <= k < len(self):
+            raise IndexError(f"{self.path}: frame {k} out of range ({len(self)} frames)")
+        g = self._frames[f"{k % len(self):06d}"]
+        a = g.attrs
+        if "error" in a:
+            e = json.loads(a["error"])
+            cls = getattr(errors, e["class"], DemsplitError)
+            raise cls(e["message"], file=e["file"], step=e["step"], line=e["line"], fix=e["fix"])
+        box = None
+        if "box_lo" in a:
+            box = Box(np.array(a["box_lo"]), np.array(a["box_hi"]),
+                      tuple(bool(p) for p in a["box_periodic"]), np.array(a["box_tilt"]))
+        time = float(a["time"])
+        return Frame(step=int(a["step"]), particles=_table(g["particles"]), contacts=_table(g["contacts"]),
+                     box=box, time=None if np.isnan(time) else time, source=tuple(json.loads(a["source"])),
+                     overlap_source=str(a["overlap_source"]),
+                     overlap_error=g["overlap_error"][()] if "overlap_error" in g else None,
+                     notes=json.loads(a["notes"]))
+
+    def __iter__(self) -> Iterator[Frame]:
+        for k in range(len(self)):
+            yield self.frame(k)
+
+    def describe(self) -> dict:
+        """The original reader's description, with the cache named."""
+        return {**self._describe, "cache": self.path}
+
+    def close(self) -> None:
+        self._h5.close()
+
+
+def _table(g: h5py.Group) -> dict[str, np.ndarray]:
+    return {col: g[col][()] for col in json.loads(g.attrs["order"])}
+
+
+def open_cache(path: str | Path, **options) -> CacheRun:
+    """Open an ingest cache; reader options are not accepted (they were applied by ``convert``)."""
+    if options:
+        raise InputFormatError(f"reader options {sorted(options)} do not apply to an ingest cache: they were "
+                               "fixed when it was written.", file=path,
+                               fix="convert the run again with these options, or pass the original run.")
+    return CacheRun(path)

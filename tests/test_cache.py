@@ -1,0 +1,105 @@
+"""The ingest cache: ``convert_run`` then ``open_run(CACHE.h5)`` gives the
+frames of the original reader exactly, and the pipeline the same results."""
+
+from __future__ import annotations
+
+import shutil
+
+import h5py
+import numpy as np
+import pytest
+
+from demsplit.cli import main
+from demsplit.errors import DemsplitError, InputFormatError
+from demsplit.pipeline import analyze
+from demsplit.readers import open_run, sniff
+from demsplit.readers.cache import FORMAT, CacheRun, convert_run
+
+from test_parallel import assert_same_results
+
+
+def assert_same_frames(a, b) -> None:
+    assert len(a) == len(b) > 0
+    for k in range(len(a)):
+        fa, fb = a.frame(k), b.frame(k)
+        assert (fa.step, fa.time, fa.source, fa.overlap_source, fa.notes) == \
+               (fb.step, fb.time, fb.source, fb.overlap_source, fb.notes)
+        for table in ("particles", "contacts"):
+            ta, tb = getattr(fa, table), getattr(fb, table)
+            assert list(ta) == list(tb), table
+            for col in ta:
+                assert ta[col].dtype == tb[col].dtype, (table, col)
+                np.testing.assert_array_equal(ta[col], tb[col], err_msg=f"{table}.{col}")
+        if fa.overlap_error is None:
+            assert fb.overlap_error is None
+        else:
+            np.testing.assert_array_equal(fa.overlap_error, fb.overlap_error)
+        assert (fa.box is None) == (fb.box is None)
+        if fa.box is not None:
+            for attr in ("lo", "hi", "tilt"):
+                np.testing.assert_array_equal(getattr(fa.box, attr), getattr(fb.box, attr))
+            assert fa.box.periodic == fb.box.periodic
+
+
+@pytest.mark.parametrize("run", ["liggghts/packing/in.packing", "liggghts/periodic/in.periodic",
+                                 "yade/mindlin_box.h5", "yade/cundall_periodic.h5"])
+def test_cache_frames_equal_the_original_reader(run, samples, tmp_path):
+    cache = convert_run(samples / run, tmp_path / "cache.h5")
+    assert sniff(cache) == "cache"
+    original, cached = open_run(samples / run), open_run(cache)
+    assert isinstance(cached, CacheRun)
+    assert cached.scene == original.scene
+    assert_same_frames(original, cached)
+    assert [f.step for f in cached] == [f.step for f in original] == list(cached.steps)
+
+
+def test_cache_results_equal_text_results_and_work_in_workers(samples, tmp_path):
+    script = samples / "liggghts" / "packing" / "in.packing"
+    cache = tmp_path / "cache.h5"
+    assert main(["convert", str(script), "-o", str(cache), "-q"]) == 0
+    text = analyze(script)
+    assert_same_results(analyze(cache), text)
+    assert_same_results(analyze(cache, jobs=2), text)
+
+
+def test_cache_is_written_atomically(samples, tmp_path, monkeypatch):
+    """A conversion that fails leaves neither the cache nor its temporary file."""
+    import demsplit.readers.cache as cache_module
+
+    def fail(*args, **kwargs):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(cache_module, "_write_frame", fail)
+    with pytest.raises(OSError):
+        convert_run(samples / "liggghts" / "packing" / "in.packing", tmp_path / "cache.h5")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_refused_frames_are_kept_as_their_error(run_dir, tmp_path):
+    """A damaged contact frame is stored as its error and raised again from the cache."""
+    pairs = run_dir / "pairs.txt"
+    lines = pairs.read_bytes().split(b"\n")
+    second = [i for i, line in enumerate(lines) if line == b"ITEM: TIMESTEP"][1]
+    lines[second + 10] = b" ".join(lines[second + 10].split(b" ")[:5])  # a short row in frame 2
+    pairs.write_bytes(b"\n".join(lines))
+    script = run_dir / "in.packing"
+    with pytest.raises(DemsplitError) as direct:
+        open_run(script).frame(1)
+    cached = open_run(convert_run(script, tmp_path / "cache.h5"))
+    cached.frame(0)
+    with pytest.raises(type(direct.value)) as again:
+        cached.frame(1)
+    assert str(again.value) == str(direct.value)
+
+
+def test_reader_options_are_refused_and_foreign_hdf5_is_not_a_cache(samples, tmp_path):
+    cache = convert_run(samples / "yade" / "mindlin_box.h5", tmp_path / "cache.h5")
+    with pytest.raises(InputFormatError, match="fixed when it was written"):
+        open_run(cache, overlap_tolerance=1e-2)
+    other = tmp_path / "other.h5"
+    with h5py.File(other, "w") as h5:
+        h5.attrs["format"] = "something else"
+    assert sniff(other) != "cache"
+    shutil.copy(cache, tmp_path / "copy.h5")
+    with h5py.File(tmp_path / "copy.h5", "r") as h5:
+        assert h5.attrs["format"] == FORMAT
