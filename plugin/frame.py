@@ -200,7 +200,9 @@ class ParticleIndex:
     def rows(self, query: np.ndarray, *, what: str = "contact") -> np.ndarray:
         """Row of each id in ``query``; unknown ids are a ContactError naming them."""
         q = np.asarray(query, dtype=np.int64)
-        if self._dense:
+        if self._dense and (q.size == 0 or (q.min() >= 0 and q.max() < len(self._row))):
+            rows = self._row.take(q)  # every id inside the table: one gather
+        elif self._dense:
             inside = (q >= 0) & (q < len(self._row))
             rows = np.full(q.shape, -1, dtype=np.int64)
             rows[inside] = self._row[q[inside]]

@@ -165,6 +165,7 @@ class ContactBodies:
     E2: np.ndarray | float
     nu2: np.ndarray | float
     single_material: bool
+    scene: Scene | None = None
 
     @classmethod
     def build(cls, contacts: Table, scene: Scene, particles: Table | None = None,
@@ -175,7 +176,23 @@ class ContactBodies:
         type1, type2 = contact_types(contacts, scene, particles, index)
         E1, nu1 = scene.lookup(type1, what="particle")
         E2, nu2 = scene.lookup(type2, what="particle or wall")
-        return cls(type1, type2, E1, nu1, E2, nu2, False)
+        return cls(type1, type2, E1, nu1, E2, nu2, False, scene)
+
+    def per_pair(self, f) -> np.ndarray | float:
+        """``f(E1, nu1, E2, nu2)`` for every contact, evaluated once per pair of
+        material types present and gathered (a few types, millions of contacts)."""
+        if self.single_material or self.scene is None:
+            return f(self.E1, self.nu1, self.E2, self.nu2)
+        E, nu = self.scene.material_tables()
+        n_types = len(E)
+        code = self.type1 * n_types + self.type2
+        present = np.zeros(n_types * n_types, dtype=bool)
+        present[code] = True
+        pairs = np.flatnonzero(present)
+        t1, t2 = pairs // n_types, pairs % n_types
+        table = np.zeros(n_types * n_types)
+        table[pairs] = f(E[t1], nu[t1], E[t2], nu[t2])
+        return table.take(code)
 
 
 def contact_types(contacts: Table, scene: Scene, particles: Table | None = None,
@@ -264,6 +281,8 @@ def _model_groups(contacts: Table, scene: Scene) -> list[tuple[ContactModel, np.
         else:
             groups.append((w.model, mask))
     groups.append((scene.model, default))
+    if len(groups) == 1:  # one law for every contact: a slice, so that x[rows] is a view, not a copy
+        return [(scene.model, slice(None))] if len(wall) else []
     return [(m, np.flatnonzero(mask)) for m, mask in groups if mask.any()]
 
 
@@ -292,22 +311,28 @@ def contact_energies(contacts: Table, scene: Scene, particles: Table | None = No
     def pick(x, rows):
         return x if np.ndim(x) == 0 else x[rows]
 
+    moduli: dict = {}
+
+    def modulus(f):  # E* or G* of every contact, once per pair of types
+        if f not in moduli:
+            moduli[f] = bodies.per_pair(f)
+        return moduli[f]
+
     for model, rows in _model_groups(contacts, scene):
         d = delta[rows]
-        E1, nu1, E2, nu2 = (pick(v, rows) for v in (bodies.E1, bodies.nu1, bodies.E2, bodies.nu2))
         R_eff = laws.effective_radius(contacts["r1"][rows], contacts["r2"][rows])
         kn = None
         if model.normal == "hertz":
             if "kno" in contacts:
                 u_n[rows] = laws.hertz_energy_from_kno(d, contacts["kno"][rows])
             else:
-                u_n[rows] = laws.hertz_energy_from_moduli(d, R_eff, laws.effective_modulus(E1, nu1, E2, nu2))
+                u_n[rows] = laws.hertz_energy_from_moduli(d, R_eff, pick(modulus(laws.effective_modulus), rows))
         elif model.normal == "hooke":
             v = model.params.get("characteristic_velocity")
             if v is None:
                 raise InputFormatError("model hooke needs characteristicVelocity, which the scene does not give.",
                                        fix="define 'fix ... property/global characteristicVelocity scalar V'.")
-            kn = laws.liggghts_hooke_kn(R_eff, laws.effective_modulus(E1, nu1, E2, nu2),
+            kn = laws.liggghts_hooke_kn(R_eff, pick(modulus(laws.effective_modulus), rows),
                                         _reduced_mass(contacts, rows, particles, index), v)
             u_n[rows] = laws.hooke_energy(d, kn)
         elif model.normal == "linear":
@@ -321,7 +346,7 @@ def contact_energies(contacts: Table, scene: Scene, particles: Table | None = No
                                   "so tangential elastic energy is not computed (0)")
                 continue
             if model.normal == "hertz":
-                kt = laws.liggghts_hertz_kt(d, R_eff, laws.effective_shear_modulus(E1, nu1, E2, nu2))
+                kt = laws.liggghts_hertz_kt(d, R_eff, pick(modulus(laws.effective_shear_modulus), rows))
             elif kn is not None:
                 kt = model.params.get("kt_to_kn", 1.0) * kn
             else:
@@ -384,9 +409,9 @@ def contact_shares(contacts: Table, bodies: ContactBodies, *, split: str = "mate
         if bodies.single_material:
             half = np.full(n, 0.5)
             return half, half
-        return (np.broadcast_to(normal_share(bodies.E1, bodies.nu1, bodies.E2, bodies.nu2), (n,)),
-                np.broadcast_to(tangential_share(bodies.E1, bodies.nu1, bodies.E2, bodies.nu2,
-                                                 rule=tangential_rule), (n,)))
+        return (np.broadcast_to(bodies.per_pair(normal_share), (n,)),
+                np.broadcast_to(bodies.per_pair(lambda E1, nu1, E2, nu2: tangential_share(
+                    E1, nu1, E2, nu2, rule=tangential_rule)), (n,)))
     if split == "equal":
         s = np.full(n, 0.5)
     elif split == "radius":
@@ -427,10 +452,12 @@ def partition(contacts: Table, scene: Scene, particles: Table | None = None, *,
     u1 = s_n * energies.u_n + s_t * energies.u_t
     u2 = (1.0 - s_n) * energies.u_n + (1.0 - s_t) * energies.u_t
     delta = np.asarray(contacts["delta"], dtype=np.float64)
-    x1 = np.stack([contacts["x1"], contacts["y1"], contacts["z1"]], axis=-1)
-    normal = np.stack([contacts["nx"], contacts["ny"], contacts["nz"]], axis=-1)
-    depth1, _ = overlap_depths(delta, s_n)
-    cp = contact_point(x1, normal, contacts["r1"], delta, s_n)
+    depth1 = np.asarray(s_n, dtype=np.float64) * delta  # overlap_depths, eq. (31)
+    arm = np.asarray(contacts["r1"], dtype=np.float64) - depth1
+    cp = np.empty((n, 3))  # contact_point, x_c = x1 + (r1 - depth1) n, one component at a time
+    for k, (x, nn) in enumerate((("x1", "nx"), ("y1", "ny"), ("z1", "nz"))):
+        np.multiply(arm, contacts[nn], out=cp[:, k])
+        cp[:, k] += contacts[x]
     return ContactEnergy(energies.u_n, energies.u_t, np.asarray(s_n), np.asarray(s_t), u1, u2, depth1, cp,
                          delta < 0, split, dict(energies.skipped))
 
@@ -448,20 +475,15 @@ def per_particle(contacts: Table, energy: ContactEnergy, particles: Table, n_wal
     n = table_length(particles)
     wall = contacts["wall"]
     pair = wall < 0
-    rows1 = index.rows(contacts["id1"])
-    rows2 = index.rows(contacts["id2"][pair])
+    body_sum = _BodySum(contacts, index, n)
     un1 = energy.share_n1 * energy.u_n
     ut1 = energy.share_t1 * energy.u_t
     un2 = energy.u_n - un1
     ut2 = energy.u_t - ut1
-
-    def body_sum(w1: np.ndarray, w2: np.ndarray) -> np.ndarray:
-        return (np.bincount(rows1, weights=w1, minlength=n)
-                + np.bincount(rows2, weights=w2[pair], minlength=n))
-
     u_n = body_sum(un1, un2)
     u_t = body_sum(ut1, ut2)
-    n_contacts = (np.bincount(rows1, minlength=n) + np.bincount(rows2, minlength=n)).astype(np.int64)
+    n_contacts = (np.bincount(body_sum.rows1, minlength=n)
+                  + np.bincount(body_sum.rows2, minlength=n)).astype(np.int64)
     ptable = {
         "id": np.asarray(particles["id"], dtype=np.int64),
         "type": np.asarray(particles["type"], dtype=np.int32),
@@ -475,3 +497,30 @@ def per_particle(contacts: Table, energy: ContactEnergy, particles: Table, n_wal
     wtable = {"wall": np.arange(n_walls, dtype=np.int64), "u": wu_n + wu_t, "u_n": wu_n, "u_t": wu_t,
               "n_contacts": np.bincount(w, minlength=n_walls).astype(np.int64)}
     return ptable, wtable
+
+
+class _BodySum:
+    """Sums per particle over its contacts: weight w1 where it is body 1, w2 where it is
+    body 2 of a particle-particle contact (np.bincount over the dense particle index)."""
+
+    def __init__(self, contacts: Table, index: ParticleIndex, n: int) -> None:
+        self.pair = contacts["wall"] < 0
+        self.all_pairs = bool(self.pair.all())
+        self.rows1 = index.rows(contacts["id1"])
+        self.rows2 = index.rows(contacts["id2"] if self.all_pairs else contacts["id2"][self.pair])
+        self.n = n
+
+    def __call__(self, w1: np.ndarray, w2: np.ndarray) -> np.ndarray:
+        return (np.bincount(self.rows1, weights=w1, minlength=self.n)
+                + np.bincount(self.rows2, weights=w2 if self.all_pairs else w2[self.pair], minlength=self.n))
+
+
+def particle_energy(contacts: Table, energies: ContactLawEnergy, bodies: ContactBodies, particles: Table, *,
+                    split: str, index: ParticleIndex | None = None) -> np.ndarray:
+    """Energy of every particle (J, particles' row order) under ``split``: the
+    ``u`` column of :func:`per_particle` without the per-contact table, for the
+    comparison splits. u1 = s_n u_n + s_t u_t, u2 = u_n + u_t - u1."""
+    index = index or ParticleIndex(particles["id"])
+    s_n, s_t = contact_shares(contacts, bodies, split=split)
+    u1 = s_n * energies.u_n + s_t * energies.u_t
+    return _BodySum(contacts, index, table_length(particles))(u1, energies.u_n + energies.u_t - u1)

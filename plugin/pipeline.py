@@ -20,7 +20,7 @@ import numpy as np
 
 from .errors import DemsplitError
 from .frame import Frame, ParticleIndex
-from .partition import ContactBodies, contact_energies, partition, per_particle
+from .partition import ContactBodies, contact_energies, partition, particle_energy, per_particle
 from .scene import Scene
 
 Tables = dict[str, dict[str, np.ndarray]]
@@ -70,10 +70,8 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = Options()) -> Ta
             ptable["clump"] = np.asarray(particles["clump"], dtype=np.int64)
         if options.compare:
             for split in comparison_splits(scene):
-                other = partition(contacts, scene, particles, split=split, energies=energies, bodies=bodies,
-                                  index=index)
-                ptable[f"u_{split}"] = per_particle(contacts, other, particles, n_walls=len(scene.walls),
-                                                    index=index)[0]["u"]
+                ptable[f"u_{split}"] = particle_energy(contacts, energies, bodies, particles, split=split,
+                                                       index=index)
     except DemsplitError as exc:
         raise exc.located(file=source, step=frame.step) from None
     for what, why in main.skipped.items():

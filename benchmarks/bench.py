@@ -1,0 +1,323 @@
+"""demsplit against the bare parsers and the usual tools, on the same files, in the same run.
+
+Run (the dumps come from ``benchmarks/generate.py``)::
+
+    python benchmarks/generate.py /tmp/bench_big          # 1e6 particles, 2e6 contacts, 3 frames
+    python benchmarks/bench.py /tmp/bench_big [--repeat 1] [--skip ovito,mdanalysis]
+
+Every measurement runs in its own Python process, started fresh; its wall
+time (interpreter start and imports included: what a user waits for) is taken
+by this parent, and its peak RSS is the child's own ``VmHWM`` (high-water
+mark of its resident memory, from ``/proc/self/status``; ``ru_maxrss`` would
+carry the parent's high-water mark across fork and exec). With ``--repeat N`` the rounds are interleaved and the best
+time kept (the machine is shared; ratios from the same round are the figures
+to quote). Measurements:
+
+``demsplit run`` / ``demsplit run --no-compare``
+    end to end: read, partition, aggregate, write the HDF5 store.
+``demsplit read``
+    the reader alone: every Frame of the run (atoms + contacts joined).
+``demsplit atoms``
+    the reader alone on the atom dump (the like-for-like of MDAnalysis).
+``polars`` / ``pandas-c``
+    bare parse of both dumps, every frame, every column, to numpy arrays; the
+    frames' byte ranges are handed over for free (found by demsplit's index in
+    this parent), so this is the fastest parse the ecosystem offers.
+``ovito``
+    ``ovito.io.import_file`` of the atom dump plus a ``LoadTrajectoryModifier``
+    with OVITO's LAMMPS dump local reader for the contacts (every column
+    mapped; ids to the bond property ``Particle Identifiers.1/.2``), every frame
+    computed and its arrays taken to numpy.
+``mdanalysis``
+    ``MDAnalysis.Universe(atoms, format="LAMMPSDUMP")``, every frame's positions.
+``convert`` / ``cache read`` / ``text read``
+    ``demsplit convert`` to the ingest cache, then every Frame from the cache
+    and from the text (the same as ``demsplit read``).
+``imports``
+    a process that imports what ``demsplit run`` imports and exits: its peak
+    RSS is subtracted to give the memory above the interpreter and libraries.
+``kernel`` (in one process, after loading frame 0 into memory)
+    ``partition`` + ``per_particle`` on the arrays, ``frame_tables`` without
+    and with the comparison splits: contacts per second, one core (numpy
+    runs these single-threaded), best of 3.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+CHILDREN = ("imports", "demsplit-run", "demsplit-run-nocompare", "demsplit-read", "demsplit-atoms", "polars",
+            "pandas-c", "ovito", "mdanalysis", "convert", "cache-read", "kernel")
+
+
+# --------------------------------------------------------------------------- children
+
+def _frames(index_file: str, name: str) -> list[tuple[int, int]]:
+    return [tuple(r) for r in json.loads(Path(index_file).read_text())[name]]
+
+
+def child(name: str, d: Path, work: Path, index_file: str) -> dict:
+    """Run one measurement in this (fresh) process; return what it wants reported."""
+    script, atoms, pairs = d / "in.bench", d / "atoms.txt", d / "pairs.txt"
+    if name == "imports":
+        import demsplit.cli  # noqa: F401
+        import demsplit.pipeline  # noqa: F401
+        import demsplit.readers.liggghts  # noqa: F401
+        import demsplit.store  # noqa: F401
+        return {}
+    if name in ("demsplit-run", "demsplit-run-nocompare"):
+        from demsplit.cli import main
+
+        out = work / f"{name}.h5"
+        args = ["run", str(script), "-o", str(out), "-q"] + (["--no-compare"] if name.endswith("nocompare") else [])
+        rc = main(args)
+        out.unlink(missing_ok=True)
+        return {"rc": rc}
+    if name in ("demsplit-read", "cache-read"):
+        from demsplit.readers import open_run
+
+        run = open_run(work / "cache.h5" if name == "cache-read" else script)
+        n = sum(len(f.contacts["delta"]) for f in (run.frame(k) for k in range(len(run))))
+        return {"contacts": n}
+    if name == "demsplit-atoms":
+        from demsplit.readers.lammps_dump import open_dump
+
+        n = sum(f.n_rows for f in open_dump(atoms).frames(["id", "type", "x", "y", "z", "radius"]))
+        return {"rows": n}
+    if name == "convert":
+        from demsplit.cli import main
+
+        return {"rc": main(["convert", str(script), "-o", str(work / "cache.h5"), "-q"])}
+    if name in ("polars", "pandas-c"):
+        return _bare_parse(name, {atoms: _frames(index_file, "atoms"), pairs: _frames(index_file, "pairs")})
+    if name == "ovito":
+        return _ovito(atoms, pairs)
+    if name == "mdanalysis":
+        import MDAnalysis as mda
+
+        u = mda.Universe(str(atoms), format="LAMMPSDUMP")
+        total = 0.0
+        for ts in u.trajectory:
+            total += float(ts.positions[:, 0].sum())
+        return {"frames": len(u.trajectory), "atoms": len(u.atoms)}
+    if name == "kernel":
+        return _kernel(script, work)
+    raise ValueError(name)
+
+
+def _bare_parse(engine: str, files: dict[Path, list[tuple[int, int]]]) -> dict:
+    import io
+
+    import numpy as np
+
+    rows = 0
+    for path, ranges in files.items():
+        with open(path, "rb") as f:
+            for start, end in ranges:
+                f.seek(start)
+                data = f.read(end - start)
+                if engine == "polars":
+                    import polars as pl
+
+                    df = pl.read_csv(data, separator=" ", has_header=False, quote_char=None)
+                    arrays = [s.to_numpy() for s in df.iter_columns()]
+                else:
+                    import pandas as pd
+
+                    df = pd.read_csv(io.BytesIO(data), sep=" ", header=None, engine="c")
+                    arrays = [df[c].to_numpy() for c in df.columns]
+                rows += len(arrays[0])
+                del data, df, arrays
+    return {"rows": rows, "numpy": np.__version__}
+
+
+def _ovito(atoms: Path, pairs: Path) -> dict:
+    import numpy as np
+    from ovito.io import import_file
+    from ovito.modifiers import LoadTrajectoryModifier
+
+    pipeline = import_file(str(atoms))
+    traj = LoadTrajectoryModifier()
+    columns = [f"c{k}" for k in range(1, 42)]
+    columns[12], columns[13] = "Particle Identifiers.1", "Particle Identifiers.2"
+    traj.source.load(str(pairs), columns=columns)
+    pipeline.modifiers.append(traj)
+    bonds = 0
+    for frame in range(pipeline.source.num_frames):
+        data = pipeline.compute(frame)
+        arrays = [np.asarray(data.particles[p]) for p in data.particles.keys()]
+        b = data.particles.bonds
+        arrays += [np.asarray(b[p]) for p in b.keys()]
+        bonds += b.count
+    import ovito
+
+    return {"bonds": bonds, "version": ".".join(map(str, ovito.version))}
+
+
+def _kernel(script: Path, work: Path) -> dict:
+    import numpy as np
+
+    from demsplit.frame import ParticleIndex
+    from demsplit.partition import ContactBodies, contact_energies, partition, per_particle
+    from demsplit.pipeline import Options, frame_tables
+    from demsplit.readers import open_run
+
+    cache = work / "cache.h5"
+    run = open_run(cache if cache.exists() else script)
+    frame = run.frame(0)
+    scene, p, c = run.scene, frame.particles, frame.contacts
+    n = len(c["delta"])
+    frame_bytes = sum(v.nbytes for v in p.values()) + sum(v.nbytes for v in c.values())
+
+    def kernels():
+        index = ParticleIndex(p["id"])
+        bodies = ContactBodies.build(c, scene, p, index)
+        energies = contact_energies(c, scene, p, bodies, index)
+        e = partition(c, scene, p, energies=energies, bodies=bodies, index=index)
+        per_particle(c, e, p, n_walls=len(scene.walls), index=index)
+
+    def best(f) -> float:
+        times = []
+        for _ in range(3):
+            t = time.perf_counter()
+            f()
+            times.append(time.perf_counter() - t)
+        return min(times)
+
+    out = {"contacts": n, "particles": len(p["id"]), "frame_bytes": frame_bytes,
+           "frame_columns": {"particles": list(p), "contacts": list(c)}}
+    for label, f in (("partition+per_particle", kernels),
+                     ("frame_tables --no-compare", lambda: frame_tables(frame, scene, Options(compare=False))),
+                     ("frame_tables", lambda: frame_tables(frame, scene, Options()))):
+        t = best(f)
+        out[label] = {"seconds": t, "contacts_per_s": n / t}
+    np.seterr(all="ignore")
+    return out
+
+
+# --------------------------------------------------------------------------- parent
+
+def measure(name: str, d: Path, work: Path, index_file: str) -> dict:
+    """Run child ``name`` in a fresh process: wall time, peak RSS, its report."""
+    cmd = [sys.executable, __file__, "--child", name, str(d), "--work", str(work), "--index", index_file]
+    t = time.perf_counter()
+    proc = subprocess.run(cmd, capture_output=True)
+    seconds = time.perf_counter() - t
+    if proc.returncode != 0:
+        return {"name": name, "error": proc.stderr.decode(errors="replace").strip().splitlines()[-1:] or ["failed"]}
+    report = json.loads(proc.stdout.decode().strip().splitlines()[-1])
+    return {"name": name, "seconds": seconds, **report}
+
+
+def _vm_hwm_mb() -> float:
+    """Peak resident memory of this process (MiB)."""
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith("VmHWM:"):
+            return int(line.split()[1]) / 1024
+    return float("nan")
+
+
+def frame_ranges(d: Path) -> dict:
+    """Byte range of every frame's rows in both dumps (demsplit's index)."""
+    from demsplit.readers.lammps_dump import open_dump
+
+    out = {}
+    for name in ("atoms", "pairs"):
+        dump = open_dump(d / f"{name}.txt")
+        out[name] = [(e.data_start, e.data_end) for e in dump._index()]
+    return out
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("dir", type=Path, help="directory written by benchmarks/generate.py")
+    ap.add_argument("--repeat", type=int, default=1)
+    ap.add_argument("--skip", default="", help="comma-separated measurements to leave out")
+    ap.add_argument("--child", help=argparse.SUPPRESS)
+    ap.add_argument("--work", type=Path, help=argparse.SUPPRESS)
+    ap.add_argument("--index", help=argparse.SUPPRESS)
+    ap.add_argument("--json", type=Path, help="also write the raw measurements here")
+    a = ap.parse_args(argv)
+    if a.child:
+        out = child(a.child, a.dir, a.work, a.index)
+        print(json.dumps({**out, "peak_rss_mb": _vm_hwm_mb()}))
+        return
+    skip = set(filter(None, a.skip.split(",")))
+    names = [n for n in CHILDREN if n not in skip]
+    with tempfile.TemporaryDirectory(prefix="demsplit-bench-") as work:
+        index_file = str(Path(work) / "index.json")
+        Path(index_file).write_text(json.dumps(frame_ranges(a.dir)))
+        load0 = os.getloadavg()
+        rounds = []
+        for _ in range(a.repeat):
+            rounds.append({n: measure(n, a.dir, Path(work), index_file) for n in names})
+            print(f"round {len(rounds)}: " + ", ".join(f"{n} {r.get('seconds', float('nan')):.1f} s"
+                                                       for n, r in rounds[-1].items()), file=sys.stderr)
+        load1 = os.getloadavg()
+    best = {n: min((r[n] for r in rounds), key=lambda x: x.get("seconds", float("inf"))) for n in names}
+    report(best, a.dir, load0, load1, a.repeat)
+    if a.json:
+        a.json.write_text(json.dumps({"rounds": rounds, "load": [load0, load1], "nproc": os.cpu_count()},
+                                     indent=1, default=str))
+
+
+def report(m: dict, d: Path, load0, load1, repeat: int) -> None:
+    sizes = {f: (d / f).stat().st_size / 1e6 for f in ("atoms.txt", "pairs.txt")}
+    k = m.get("kernel", {})
+    print(f"machine: {os.cpu_count()} cores (nproc), load average {load0[0]:.2f} before / {load1[0]:.2f} after; "
+          f"Python {sys.version.split()[0]}; best of {repeat}")
+    print(f"files: atoms.txt {sizes['atoms.txt']:.0f} MB, pairs.txt {sizes['pairs.txt']:.0f} MB; "
+          f"{k.get('particles', '?')} particles, {k.get('contacts', '?')} contacts per frame")
+    print()
+    print(f"{'measurement':28s} {'wall s':>8s} {'peak RSS MB':>12s}")
+    for n, r in m.items():
+        if n == "kernel":
+            continue
+        if "error" in r:
+            print(f"{n:28s} failed: {r['error']}")
+        else:
+            print(f"{n:28s} {r['seconds']:8.2f} {r['peak_rss_mb']:12.0f}")
+
+    def t(n):
+        return m.get(n, {}).get("seconds")
+
+    def ratio(label, a, b):
+        if t(a) and t(b):
+            print(f"  {label:58s} {t(b) / t(a):6.2f}x")
+        else:
+            print(f"  {label:58s}   n/a ({a if not t(a) else b} not measured)")
+
+    print("\nspeed ratios (> 1: demsplit faster)")
+    ratio("demsplit run vs polars bare parse of both files", "demsplit-run", "polars")
+    ratio("demsplit run --no-compare vs polars bare parse", "demsplit-run-nocompare", "polars")
+    ratio("demsplit run vs pandas C engine bare parse", "demsplit-run", "pandas-c")
+    ratio("demsplit run vs OVITO loading atoms + contacts", "demsplit-run", "ovito")
+    ratio("demsplit run vs MDAnalysis reading the atom dump only", "demsplit-run", "mdanalysis")
+    ratio("demsplit reader on the atom dump vs MDAnalysis (like for like)", "demsplit-atoms", "mdanalysis")
+    ratio("cache read vs text read (every Frame)", "cache-read", "demsplit-read")
+    if k and "frame_bytes" in k and "imports" in m and "error" not in m["imports"]:
+        fb = k["frame_bytes"] / 2**20
+        base = m["imports"]["peak_rss_mb"]
+        print(f"\npeak memory above imports ({base:.0f} MB), in units of one frame's arrays "
+              f"({fb:.0f} MiB: particles + contacts tables)")
+        for n in ("demsplit-run", "demsplit-run-nocompare", "demsplit-read", "cache-read", "convert"):
+            if n in m and "error" not in m[n]:
+                print(f"  {n:28s} {(m[n]['peak_rss_mb'] - base) / fb:6.2f}x")
+    if k and "error" not in k:
+        print("\nin-memory kernels, frame 0, one core (best of 3)")
+        for label in ("partition+per_particle", "frame_tables --no-compare", "frame_tables"):
+            r = k[label]
+            print(f"  {label:28s} {r['seconds']:7.3f} s  {r['contacts_per_s'] / 1e6:6.2f} M contacts/s")
+    elif k:
+        print(f"\nkernel failed: {k['error']}")
+
+
+if __name__ == "__main__":
+    main()
