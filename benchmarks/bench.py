@@ -13,8 +13,13 @@ carry the parent's high-water mark across fork and exec). With ``--repeat N`` th
 time kept (the machine is shared; ratios from the same round are the figures
 to quote). Measurements:
 
-``demsplit run`` / ``demsplit run --no-compare``
-    end to end: read, partition, aggregate, write the HDF5 store.
+``demsplit run`` / ``demsplit run --no-compare`` / ``--no-contacts``
+    end to end: read, partition, aggregate, write the HDF5 store (gzip level
+    4 + shuffle, the store's default; ``--no-contacts`` leaves out the
+    per-contact table, by far the largest).
+``demsplit compute``
+    the same pipeline without the store: every frame's tables computed
+    (``demsplit.pipeline.process_run``) and dropped.
 ``demsplit read``
     the reader alone: every Frame of the run (atoms + contacts joined).
 ``demsplit atoms``
@@ -53,7 +58,8 @@ import tempfile
 import time
 from pathlib import Path
 
-CHILDREN = ("imports", "demsplit-run", "demsplit-run-nocompare", "demsplit-read", "demsplit-atoms", "polars",
+CHILDREN = ("imports", "demsplit-run", "demsplit-run-nocompare", "demsplit-run-nocontacts", "demsplit-compute",
+            "demsplit-read", "demsplit-atoms", "polars",
             "pandas-c", "ovito", "mdanalysis", "convert", "cache-read", "kernel")
 
 
@@ -72,14 +78,20 @@ def child(name: str, d: Path, work: Path, index_file: str) -> dict:
         import demsplit.readers.liggghts  # noqa: F401
         import demsplit.store  # noqa: F401
         return {}
-    if name in ("demsplit-run", "demsplit-run-nocompare"):
+    if name.startswith("demsplit-run"):
         from demsplit.cli import main
 
         out = work / f"{name}.h5"
-        args = ["run", str(script), "-o", str(out), "-q"] + (["--no-compare"] if name.endswith("nocompare") else [])
-        rc = main(args)
+        extra = {"demsplit-run": [], "demsplit-run-nocompare": ["--no-compare"],
+                 "demsplit-run-nocontacts": ["--no-contacts"]}[name]
+        rc = main(["run", str(script), "-o", str(out), "-q", *extra])
         out.unlink(missing_ok=True)
         return {"rc": rc}
+    if name == "demsplit-compute":
+        from demsplit.pipeline import process_run
+        from demsplit.readers import open_run
+
+        return {"frames": sum(1 for _ in process_run(open_run(script), progress=False))}
     if name in ("demsplit-read", "cache-read"):
         from demsplit.readers import open_run
 
@@ -297,8 +309,12 @@ def report(m: dict, d: Path, load0, load1, repeat: int) -> None:
     print("\nspeed ratios (> 1: demsplit faster)")
     ratio("demsplit run vs polars bare parse of both files", "demsplit-run", "polars")
     ratio("demsplit run --no-compare vs polars bare parse", "demsplit-run-nocompare", "polars")
+    ratio("demsplit run --no-contacts vs polars bare parse", "demsplit-run-nocontacts", "polars")
+    ratio("demsplit compute (no store) vs polars bare parse", "demsplit-compute", "polars")
+    ratio("demsplit reader (every Frame) vs polars bare parse", "demsplit-read", "polars")
     ratio("demsplit run vs pandas C engine bare parse", "demsplit-run", "pandas-c")
     ratio("demsplit run vs OVITO loading atoms + contacts", "demsplit-run", "ovito")
+    ratio("demsplit compute (no store) vs OVITO", "demsplit-compute", "ovito")
     ratio("demsplit run vs MDAnalysis reading the atom dump only", "demsplit-run", "mdanalysis")
     ratio("demsplit reader on the atom dump vs MDAnalysis (like for like)", "demsplit-atoms", "mdanalysis")
     ratio("cache read vs text read (every Frame)", "cache-read", "demsplit-read")
@@ -307,7 +323,8 @@ def report(m: dict, d: Path, load0, load1, repeat: int) -> None:
         base = m["imports"]["peak_rss_mb"]
         print(f"\npeak memory above imports ({base:.0f} MB), in units of one frame's arrays "
               f"({fb:.0f} MiB: particles + contacts tables)")
-        for n in ("demsplit-run", "demsplit-run-nocompare", "demsplit-read", "cache-read", "convert"):
+        for n in ("demsplit-run", "demsplit-run-nocompare", "demsplit-run-nocontacts", "demsplit-compute",
+                  "demsplit-read", "cache-read", "convert"):
             if n in m and "error" not in m[n]:
                 print(f"  {n:28s} {(m[n]['peak_rss_mb'] - base) / fb:6.2f}x")
     if k and "error" not in k:

@@ -17,7 +17,7 @@ a time and reports bad input precisely.
 
 Index
     The first access to ``n_frames``/``steps``/``frame(k)`` scans the
-    (decompressed) file once in 64 MiB chunks read into one reused buffer:
+    (decompressed) file once in 16 MiB chunks read into one reused buffer:
     numpy counts the newlines and finds the ``ITEM: TIMESTEP`` candidates (the
     letter ``I``, which no number contains) at memory speed; no per-line
     Python. Each frame's entry holds its step, header row count, box, column
@@ -28,7 +28,7 @@ Index
 Reading a frame
     ``frame(k)`` seeks to the frame's rows (a compressed file re-decompresses
     from the start up to frame k; iteration, ``for f in dump``, reads the
-    stream once, forwards) and reads them in blocks of about 64 MiB of whole
+    stream once, forwards) and reads them in blocks of about 16 MiB of whole
     rows, each parsed and copied into arrays preallocated from the header's
     row count: the text of a frame is never in memory at once, so memory is
     the requested columns plus one block.
@@ -96,9 +96,9 @@ __all__ = ["open_dump", "DumpFile", "DumpFrame"]
 MARKER = b"ITEM: TIMESTEP"
 HEADER_LINES = 9            # TIMESTEP, step, NUMBER OF, n, BOX BOUNDS, 3 bounds, ITEM: <label> names
 HEADER_MAX = 1 << 16        # bytes a header may occupy (hundreds of column names fit)
-CHUNK = 1 << 26             # index scan chunk (64 MiB)
+CHUNK = 1 << 24             # index scan chunk (16 MiB)
 DIGITS_SAMPLE = 1 << 17     # bytes of rows sampled per frame for DumpFrame.digits
-BLOCK = 1 << 26             # bytes of rows parsed at a time (64 MiB)
+BLOCK = 1 << 24             # bytes of rows parsed at a time (16 MiB)
 LOW_VARIETY = 16            # distinct values at or below which a column gets the frame's precision
 
 _MAGIC = {b"\x1f\x8b": gzip.open, b"BZh": bz2.open, b"\xfd7zXZ\x00": lzma.open}

@@ -408,7 +408,7 @@ class LiggghtsRun:
                 notes.append("tangential energy of primitive-wall contacts is not computed (0): "
                               "LIGGGHTS does not dump their shear history")
             parts.append(primitive)
-        contacts = {c: np.concatenate([p[c] for p in parts]) for c in parts[0]}
+        contacts = {c: np.concatenate([p[c] for p in parts]) if len(parts) > 1 else parts[0][c] for c in parts[0]}
         source, error = self._overlap_policy(contacts, contacts.pop("bound"), af, pf, step)
         time = None if self.script.timestep is None else step * self.script.timestep
         return Frame(step=step, particles=particles, contacts=contacts, box=box, time=time,
