@@ -166,6 +166,7 @@ class ContactBodies:
     nu2: np.ndarray | float
     single_material: bool
     scene: Scene | None = None
+    _pairs: tuple | None = field(default=None, repr=False, compare=False)
 
     @classmethod
     def build(cls, contacts: Table, scene: Scene, particles: Table | None = None,
@@ -185,10 +186,12 @@ class ContactBodies:
             return f(self.E1, self.nu1, self.E2, self.nu2)
         E, nu = self.scene.material_tables()
         n_types = len(E)
-        code = self.type1 * n_types + self.type2
-        present = np.zeros(n_types * n_types, dtype=bool)
-        present[code] = True
-        pairs = np.flatnonzero(present)
+        if self._pairs is None:  # code of each contact's (type1, type2), and the codes present
+            code = self.type1 * n_types + self.type2
+            present = np.zeros(n_types * n_types, dtype=bool)
+            present[code] = True
+            self._pairs = (code, np.flatnonzero(present))
+        code, pairs = self._pairs
         t1, t2 = pairs // n_types, pairs % n_types
         table = np.zeros(n_types * n_types)
         table[pairs] = f(E[t1], nu[t1], E[t2], nu[t2])
