@@ -22,7 +22,7 @@ Engines: pandas' C engine (``read_csv`` on a seeked file with ``nrows``),
 pandas with ``engine="pyarrow"``, ``pyarrow.csv.read_csv`` on a zero-copy
 ``mmap`` slice, ``polars.read_csv`` on the frame's bytes, and
 ``numpy.loadtxt`` (compiled since numpy 1.23) for reference, and ``demsplit``:
-``open_dump(path).frame(0, columns)`` (pyarrow plus the index scan, the
+``open_dump(path).frame(0, columns)`` (the index scan, polars per block with the shape check, the
 validation and the digit count).
 """
 
