@@ -28,7 +28,7 @@ from demsplit.errors import (ContactError, InputFormatError, MaterialError, Trun
                              UnsupportedModelError)
 from demsplit.frame import Box, Frame, Table
 from demsplit.scene import ContactModel, Material, Scene, Wall
-from demsplit.yade import (CUNDALL_LAW, FORMAT_NAME, FORMAT_VERSION, MINDLIN_LAW, NPY_STREAM_MAGIC,
+from demsplit.yade import (CUNDALL_LAW, FORMAT_NAME, FORMAT_VERSION, MINDLIN_LAW,
                            RECORD_TAIL, npy_records, sniff_format)
 
 LAW_MODELS = {
