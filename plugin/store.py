@@ -24,7 +24,6 @@ removed. Nothing exists at ``OUT.h5`` until it is complete. With
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import re
@@ -34,6 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .fingerprint import file_fingerprint  # noqa: F401  (part of this module's API)
 from .errors import StoreError
 from .results import TABLES, UNITS, Results, Table, canonical_table, to_dataframe
 
@@ -65,20 +65,6 @@ def demsplit_version() -> str:
         return version("demsplit")
     except PackageNotFoundError:
         return "unknown"
-
-
-def file_fingerprint(path: str | Path) -> dict:
-    """``{"path", "size" (bytes), "sha256"}`` of an input file, hashed in 1 MiB blocks."""
-    path = Path(path)
-    digest = hashlib.sha256()
-    try:
-        with open(path, "rb") as f:
-            for block in iter(lambda: f.read(1 << 20), b""):
-                digest.update(block)
-    except OSError as exc:
-        raise StoreError(f"cannot read input file to fingerprint it: {exc.strerror}.", file=path,
-                         fix="check that the file exists and is readable.") from exc
-    return {"path": str(path.resolve()), "size": path.stat().st_size, "sha256": digest.hexdigest()}
 
 
 def build_provenance(inputs: Iterable[str | Path], *, scene=None, options: dict | None = None, **extra) -> dict:

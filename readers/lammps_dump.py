@@ -78,9 +78,11 @@ from __future__ import annotations
 
 import bz2
 import gzip
+import hashlib
 import lzma
 import struct
 from collections.abc import Iterator, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import BinaryIO
@@ -88,6 +90,7 @@ from typing import BinaryIO
 import numpy as np
 import polars as pl
 
+from demsplit import fingerprint
 from demsplit.errors import DemsplitError, InputFormatError, PrecisionError, TruncatedFileError
 from demsplit.frame import Box
 
@@ -384,8 +387,12 @@ class TextDump(DumpFile):
 
     # -- index
     def _build_index(self) -> tuple[list[_TextEntry], list[DemsplitError]]:
+        # a plain file is hashed during the scan (provenance then needs no second read)
+        digest = hashlib.sha256() if self._opener is None else None
         with self._stream() as f:
-            markers, headers, lines_before, total, total_newlines, last_byte = _scan(f)
+            markers, headers, lines_before, total, total_newlines, last_byte = _scan(f, digest)
+        if digest is not None:
+            fingerprint.record(self.path, digest.hexdigest())
         entries: list[_TextEntry] = []
         damaged: list[DemsplitError] = []
         for i, (pos, head, nl_before) in enumerate(zip(markers, headers, lines_before)):
@@ -575,8 +582,11 @@ def _rows_well_formed(raw: np.ndarray, ncols: int, trailing: bool) -> int | None
     return kind.shape[0] if np.all(gap > 1) else None
 
 
-def _scan(f: BinaryIO) -> tuple[list[int], list[bytes], list[int], int, int, bytes]:
+def _scan(f: BinaryIO, digest=None) -> tuple[list[int], list[bytes], list[int], int, int, bytes]:
     """One pass over a (decompressed) stream in CHUNK pieces.
+
+    ``digest`` (a hashlib object), if given, is updated with every byte read, in
+    a second thread (hashlib releases the GIL) while this one scans.
 
     Returns the byte offsets of the ``ITEM: TIMESTEP`` lines, up to
     ``HEADER_MAX`` bytes of text from each (cut at the next marker), the number
@@ -590,10 +600,16 @@ def _scan(f: BinaryIO) -> tuple[list[int], list[bytes], list[int], int, int, byt
     buf = bytearray(HEADER_MAX + CHUNK)   # the last HEADER_MAX bytes of a chunk move to the front
     view = memoryview(buf)
     kept, buf_start, newlines, last_byte = 0, 0, 0, b""
+    hasher = ThreadPoolExecutor(max_workers=1) if digest is not None else None
+    hashing = None
     while True:
         got = _read_into(f, view[kept:])
         eof = got == 0
         size = kept + got
+        if hasher is not None:
+            if hashing is not None:
+                hashing.result()  # in order, one chunk at a time
+            hashing = hasher.submit(digest.update, bytes(view[kept:size]))
         if got:
             last_byte = bytes(buf[size - 1: size])
         # search and count up to `limit`; keep the rest so that a header is never cut
@@ -612,6 +628,9 @@ def _scan(f: BinaryIO) -> tuple[list[int], list[bytes], list[int], int, int, byt
         del a, is_nl
         if eof:
             view.release()
+            if hasher is not None:
+                hashing.result()
+                hasher.shutdown()
             return markers, headers, lines_before, buf_start + size, newlines, last_byte
         buf[: size - limit] = buf[limit: size]
         kept, buf_start = size - limit, buf_start + limit
