@@ -58,7 +58,8 @@ import tempfile
 import time
 from pathlib import Path
 
-CHILDREN = ("imports", "demsplit-run", "demsplit-run-nocompare", "demsplit-run-nocontacts", "demsplit-compute",
+CHILDREN = ("imports", "demsplit-run", "demsplit-run-lzf", "demsplit-run-nocompress", "demsplit-run-nocompare",
+            "demsplit-run-nocontacts", "demsplit-compute",
             "demsplit-read", "demsplit-atoms", "polars",
             "pandas-c", "ovito", "mdanalysis", "convert", "cache-read", "kernel")
 
@@ -82,7 +83,8 @@ def child(name: str, d: Path, work: Path, index_file: str) -> dict:
         from demsplit.cli import main
 
         out = work / f"{name}.h5"
-        extra = {"demsplit-run": [], "demsplit-run-nocompare": ["--no-compare"],
+        extra = {"demsplit-run": [], "demsplit-run-lzf": ["--compression", "lzf"],
+                 "demsplit-run-nocompress": ["--compression", "none"], "demsplit-run-nocompare": ["--no-compare"],
                  "demsplit-run-nocontacts": ["--no-contacts"]}[name]
         rc = main(["run", str(script), "-o", str(out), "-q", *extra])
         out.unlink(missing_ok=True)
@@ -308,6 +310,9 @@ def report(m: dict, d: Path, load0, load1, repeat: int) -> None:
 
     print("\nspeed ratios (> 1: demsplit faster)")
     ratio("demsplit run vs polars bare parse of both files", "demsplit-run", "polars")
+    ratio("demsplit run --compression lzf vs polars bare parse", "demsplit-run-lzf", "polars")
+    ratio("demsplit run --compression none vs polars bare parse", "demsplit-run-nocompress", "polars")
+    ratio("demsplit run --compression none vs OVITO", "demsplit-run-nocompress", "ovito")
     ratio("demsplit run --no-compare vs polars bare parse", "demsplit-run-nocompare", "polars")
     ratio("demsplit run --no-contacts vs polars bare parse", "demsplit-run-nocontacts", "polars")
     ratio("demsplit compute (no store) vs polars bare parse", "demsplit-compute", "polars")
@@ -323,7 +328,7 @@ def report(m: dict, d: Path, load0, load1, repeat: int) -> None:
         base = m["imports"]["peak_rss_mb"]
         print(f"\npeak memory above imports ({base:.0f} MB), in units of one frame's arrays "
               f"({fb:.0f} MiB: particles + contacts tables)")
-        for n in ("demsplit-run", "demsplit-run-nocompare", "demsplit-run-nocontacts", "demsplit-compute",
+        for n in ("demsplit-run", "demsplit-run-lzf", "demsplit-run-nocompress", "demsplit-run-nocompare", "demsplit-run-nocontacts", "demsplit-compute",
                   "demsplit-read", "cache-read", "convert"):
             if n in m and "error" not in m[n]:
                 print(f"  {n:28s} {(m[n]['peak_rss_mb'] - base) / fb:6.2f}x")

@@ -115,6 +115,7 @@ def cmd_run(args: argparse.Namespace) -> int:
 
     report, _ = run_to_store(args.input, args.output, options=_options(args), jobs=args.jobs, dask=args.dask,
                              resume=args.resume, on_bad_frame=args.on_bad_frame,
+                             compression=None if args.compression == "none" else args.compression,
                              progress=False if args.quiet else None, **_reader_options(args))
     if not args.quiet:
         print(text_summary(load_results(args.output)))
@@ -213,6 +214,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="tangential split factor: Mindlin (2-nu)/G (default) or the paper's eq. 22 (1-2nu)/G")
     p.add_argument("--no-compare", action="store_true", help="skip the 50/50 and radius-weighted splits")
     p.add_argument("--no-contacts", action="store_true", help="do not store the per-contact table")
+    p.add_argument("--compression", choices=("gzip", "lzf", "none"), default="gzip",
+                   help="HDF5 compression of the output: gzip (default; smallest, any HDF5 tool reads it), "
+                   "lzf (faster, h5py only), none (fastest, largest)")
     p.set_defaults(func=cmd_run)
 
     p = add("info", "describe a dump or snapshot file: kind, frames, columns, precision")

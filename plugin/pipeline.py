@@ -292,10 +292,16 @@ def _report_provenance(run, report: RunReport) -> dict:
 
 def run_to_store(path: str | Path, out: str | Path, *, options: Options = Options(), jobs: int = 1,
                  dask: str | None = None, resume: bool = False, on_bad_frame: str = "stop",
-                 progress: bool | None = None, **reader_options) -> tuple[RunReport, Scene]:
+                 progress: bool | None = None, compression: str | None = "gzip",
+                 **reader_options) -> tuple[RunReport, Scene]:
     """Analyse a run and stream the results into the HDF5 store ``out``
     (written to a temporary name and renamed when complete; ``resume``
-    continues an interrupted run from its last complete frame)."""
+    continues an interrupted run from its last complete frame).
+
+    compression : ``"gzip"`` (smallest, readable by every HDF5 tool),
+        ``"lzf"`` (faster, h5py only) or ``None`` (fastest, largest); see
+        ``docs/performance.md`` for the measured cost of each.
+    """
     from .readers import open_run
     from .results import walls_meta_from_scene
     from .store import ResultWriter, build_provenance
@@ -305,7 +311,8 @@ def run_to_store(path: str | Path, out: str | Path, *, options: Options = Option
         report = RunReport()
         provenance = build_provenance(getattr(run, "sources", [path]), scene=run.scene, options=asdict(options),
                                       run=run.describe() if hasattr(run, "describe") else {})
-        with ResultWriter(out, provenance, resume=resume, walls_meta=walls_meta_from_scene(run.scene)) as writer:
+        with ResultWriter(out, provenance, resume=resume, walls_meta=walls_meta_from_scene(run.scene),
+                          compression=compression) as writer:
             for tables in process_run(run, options, jobs=jobs, dask=dask, on_bad_frame=on_bad_frame,
                                       skip_steps=writer.done_steps, progress=progress, report=report):
                 writer.append(tables)
