@@ -455,12 +455,10 @@ def partition(contacts: Table, scene: Scene, particles: Table | None = None, *,
     u1 = s_n * energies.u_n + s_t * energies.u_t
     u2 = (1.0 - s_n) * energies.u_n + (1.0 - s_t) * energies.u_t
     delta = np.asarray(contacts["delta"], dtype=np.float64)
-    depth1 = np.asarray(s_n, dtype=np.float64) * delta  # overlap_depths, eq. (31)
-    arm = np.asarray(contacts["r1"], dtype=np.float64) - depth1
-    cp = np.empty((n, 3))  # contact_point, x_c = x1 + (r1 - depth1) n, one component at a time
-    for k, (x, nn) in enumerate((("x1", "nx"), ("y1", "ny"), ("z1", "nz"))):
-        np.multiply(arm, contacts[nn], out=cp[:, k])
-        cp[:, k] += contacts[x]
+    depth1, _ = overlap_depths(delta, s_n)
+    x1 = np.stack([contacts["x1"], contacts["y1"], contacts["z1"]], axis=-1)
+    normal = np.stack([contacts["nx"], contacts["ny"], contacts["nz"]], axis=-1)
+    cp = contact_point(x1, normal, contacts["r1"], delta, s_n)
     return ContactEnergy(energies.u_n, energies.u_t, np.asarray(s_n), np.asarray(s_t), u1, u2, depth1, cp,
                          delta < 0, split, dict(energies.skipped))
 
