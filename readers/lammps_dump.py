@@ -81,6 +81,7 @@ import gzip
 import hashlib
 import lzma
 import struct
+from abc import ABC, abstractmethod
 from collections.abc import Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -246,7 +247,7 @@ def _looks_like_text(head: bytes) -> bool:
     return b"\0" not in sample
 
 
-class DumpFile:
+class DumpFile(ABC):
     """A dump file: an index of its frames and readers for them.
 
     Attributes: ``path`` (str), ``kind`` (``'atoms'`` or ``'local'``),
@@ -270,8 +271,9 @@ class DumpFile:
             self._entries, self._damaged = self._build_index()
         return self._entries
 
+    @abstractmethod
     def _build_index(self) -> tuple[list, list[DemsplitError]]:
-        raise NotImplementedError
+        """Index entries of the readable frames, and the errors of the damaged ones."""
 
     @property
     def n_frames(self) -> int:
@@ -338,8 +340,9 @@ class DumpFile:
         """Context manager: a handle reused across frames by ``frames()``."""
         return open(self.path, "rb")
 
+    @abstractmethod
     def _read(self, entry, columns: Sequence[str] | None, stream: BinaryIO | None) -> DumpFrame:
-        raise NotImplementedError
+        """Parse the frame of index ``entry`` (from ``stream`` when streaming)."""
 
     def _pick(self, names: Sequence[str], columns: Sequence[str] | None, step: int) -> list[int]:
         """Indices of the requested columns in ``names`` (all when None)."""
