@@ -28,7 +28,9 @@ import json
 import os
 import re
 import shutil
+import zlib
 from collections.abc import Iterable, Mapping
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -45,8 +47,9 @@ COMPRESSION_OPTS = {"gzip": 4, "lzf": None, None: None}
 CHUNK_ROWS = 65536
 """Rows per HDF5 chunk (512 KiB of float64 before compression)."""
 BUFFER_ROWS = CHUNK_ROWS
-"""close() buffers at most about this many rows per table (plus one frame)
-before writing them, so its memory does not grow with the number of frames."""
+"""close() writes a table's buffered whole chunks once this many rows are
+buffered; it holds at most about BUFFER_ROWS + CHUNK_ROWS rows per table plus
+one frame, so its memory does not grow with the number of frames."""
 
 RESUME_KEYS = ("inputs", "options", "scene", "model", "demsplit_version")
 """Provenance entries that must be equal for parts to be resumed; ``inputs``
@@ -275,7 +278,8 @@ class ResultWriter:
             h5.attrs.update(format=FORMAT, format_version=FORMAT_VERSION, demsplit_version=demsplit_version(),
                             provenance=_to_json(self.provenance, "provenance"),
                             walls_meta=_to_json(self.walls_meta, "walls_meta"))
-            sinks = {name: _TableSink(h5, name, schema.get(name, {}), self.compression) for name in TABLES}
+            pool = ThreadPoolExecutor(max_workers=os.cpu_count() or 1)
+            sinks = {name: _TableSink(h5, name, schema.get(name, {}), self.compression, pool) for name in TABLES}
             offsets = {name: np.zeros(len(order) + 1, np.int64) for name in TABLES}
             for k, (_, (_, part)) in enumerate(order):
                 frame = _load_part(part)
@@ -284,8 +288,9 @@ class ResultWriter:
             index = h5.create_group("index")
             index.create_dataset("step", data=np.array([s for s, _ in order], dtype=np.int64))
             for name, sink in sinks.items():
-                sink.flush()
+                sink.flush(final=True)
                 index.create_dataset(name, data=offsets[name])
+            pool.shutdown()
         with open(tmp, "rb") as f:
             os.fsync(f.fileno())
         os.replace(tmp, self.path)
@@ -294,10 +299,21 @@ class ResultWriter:
 
 
 class _TableSink:
-    """Streams one table's rows into resizable datasets, BUFFER_ROWS at a time."""
+    """Streams one table's rows into resizable datasets, whole chunks at a time.
 
-    def __init__(self, h5, name: str, schema: dict[str, str], compression: str | None) -> None:
+    With gzip the chunks are filtered here rather than by HDF5: the shuffle
+    filter is a byte transpose and deflate is ``zlib.compress``, which releases
+    the GIL, so a thread pool compresses the chunks of a buffer on every core;
+    ``write_direct_chunk`` stores the result. The datasets carry the same
+    shuffle + gzip filters as an ordinary h5py dataset, so every HDF5 reader
+    decodes them as usual. Rows that do not fill a chunk wait in the buffer
+    until the next flush, or the last one (``final``), which pads the chunk.
+    """
+
+    def __init__(self, h5, name: str, schema: dict[str, str], compression: str | None,
+                 pool: ThreadPoolExecutor | None = None) -> None:
         self.name, self.schema = name, schema
+        self.compression, self.pool = compression, pool
         self.group = h5.create_group(name)
         self.group.attrs["columns"] = json.dumps(list(schema))
         self.group.attrs["units"] = json.dumps({c: UNITS.get(c, "") for c in schema})
@@ -324,17 +340,37 @@ class _TableSink:
             self.flush()
         return n
 
-    def flush(self) -> None:
-        if not self.buffered:
+    def flush(self, final: bool = False) -> None:
+        """Write the buffered whole chunks (and, if ``final``, the rest)."""
+        n = self.buffered if final else self.buffered // CHUNK_ROWS * CHUNK_ROWS
+        if not n:
             return
         for col, chunks in self.buffer.items():
-            data = np.concatenate(chunks)
-            ds = self.group[col]
-            start = ds.shape[0]
-            ds.resize((start + len(data),))
+            data = np.concatenate(chunks) if len(chunks) > 1 else chunks[0]
+            self._write(self.group[col], data[:n])
+            chunks[:] = [data[n:]] if n < len(data) else []
+        self.buffered -= n
+
+    def _write(self, ds, data: np.ndarray) -> None:
+        start = ds.shape[0]  # a multiple of CHUNK_ROWS: only the final flush writes a partial chunk
+        ds.resize((start + len(data),))
+        if self.compression != "gzip" or self.pool is None:
             ds[start:] = data
-            chunks.clear()
-        self.buffered = 0
+            return
+        level = COMPRESSION_OPTS["gzip"]
+        offsets = range(0, len(data), CHUNK_ROWS)
+        blobs = self.pool.map(lambda k: _shuffle_deflate(data[k: k + CHUNK_ROWS], level), offsets)
+        for k, blob in zip(offsets, blobs):
+            ds.id.write_direct_chunk((start + k,), blob)
+
+
+def _shuffle_deflate(values: np.ndarray, level: int) -> bytes:
+    """One chunk as HDF5's shuffle + deflate filters store it: the bytes of the
+    CHUNK_ROWS values (zero-padded) grouped by byte position, then zlib."""
+    if len(values) < CHUNK_ROWS:
+        values = np.concatenate([values, np.zeros(CHUNK_ROWS - len(values), values.dtype)])
+    shuffled = np.ascontiguousarray(values).view(np.uint8).reshape(CHUNK_ROWS, values.itemsize).T.tobytes()
+    return zlib.compress(shuffled, level)
 
 
 def _alive(pid: int) -> bool:

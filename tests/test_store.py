@@ -190,6 +190,7 @@ def test_assembly_memory_does_not_grow_with_frames(tmp_path, monkeypatch):
     import tracemalloc
 
     monkeypatch.setattr(store, "BUFFER_ROWS", 512)
+    monkeypatch.setattr(store, "CHUNK_ROWS", 512)  # whole chunks are written as soon as they are full
     peaks = []
     for n in (3, 12):
         w = ResultWriter(tmp_path / f"out{n}.h5", PROVENANCE)
@@ -201,3 +202,21 @@ def test_assembly_memory_does_not_grow_with_frames(tmp_path, monkeypatch):
         tracemalloc.stop()
         assert len(read_store(tmp_path / f"out{n}.h5").frames) == n
     assert peaks[1] < 1.5 * peaks[0], peaks
+
+
+def test_gzip_chunks_compressed_in_threads_decode_as_ordinary_hdf5(tmp_path, monkeypatch):
+    """The gzip store writes pre-filtered chunks (shuffle + zlib, in a thread pool):
+    HDF5 itself must decode them to the same values, across whole and partial chunks."""
+    monkeypatch.setattr(store, "CHUNK_ROWS", 512)
+    frames = [synthetic_frame(s, n_particles=700, n_pairs=1300) for s in range(3)]
+    w = ResultWriter(tmp_path / "o.h5", PROVENANCE, compression="gzip")
+    for f in frames:
+        w.append(f)
+    w.close()
+    with h5py.File(tmp_path / "o.h5") as h5:
+        for table in ("particles", "contacts"):
+            for col in frames[0][table]:
+                ds = h5[f"{table}/{col}"]
+                assert ds.compression == "gzip" and ds.shuffle and ds.chunks == (512,)
+                expected = np.concatenate([np.asarray(f[table][col]) for f in frames]).astype(ds.dtype)
+                np.testing.assert_array_equal(ds[()], expected, err_msg=f"{table}/{col}")
