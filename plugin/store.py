@@ -348,7 +348,7 @@ class _TableSink:
         for col, chunks in self.buffer.items():
             data = np.concatenate(chunks) if len(chunks) > 1 else chunks[0]
             self._write(self.group[col], data[:n])
-            chunks[:] = [data[n:]] if n < len(data) else []
+            chunks[:] = [data[n:].copy()] if n < len(data) else []  # a copy: a view would keep all of data
         self.buffered -= n
 
     def _write(self, ds, data: np.ndarray) -> None:
