@@ -38,24 +38,20 @@ Table = dict[str, np.ndarray]
 PARTICLE_REQUIRED = ("id", "type", "x", "y", "z", "radius")
 CONTACT_REQUIRED = ("id1", "id2", "wall", "delta", "nx", "ny", "nz", "x1", "y1", "z1", "r1", "r2")
 
-_INT_COLUMNS = {"id": np.int64, "id1": np.int64, "id2": np.int64, "wall": np.int64,
-                "type": np.int32, "type1": np.int32, "type2": np.int32}
-
-
-def as_column(name: str, values: np.ndarray | list | float) -> np.ndarray:
-    """Return ``values`` as the canonical dtype of column ``name``.
-
-    Ids become int64, types int32, everything else float64 (float32 input is
-    upcast before any arithmetic).
-    """
-    return np.asarray(values, dtype=_INT_COLUMNS.get(name, np.float64))
-
-
 def table_length(table: Table) -> int:
     """Number of rows of a table (0 for an empty table)."""
     for col in table.values():
         return len(col)
     return 0
+
+
+def require_columns(table: Table, required: tuple[str, ...], what: str, *, file: str | None = None,
+                    step: int | None = None) -> None:
+    """Raise :class:`InputFormatError` naming the canonical columns ``table`` lacks."""
+    missing = [c for c in required if c not in table]
+    if missing:
+        raise InputFormatError(f"the {what} table lacks the columns {missing}.", file=file, step=step,
+                               fix="this is a reader's output: report it, with the input that caused it.")
 
 
 def take_rows(table: Table, rows: np.ndarray) -> Table:

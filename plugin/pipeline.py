@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import DemsplitError
-from .frame import Frame, ParticleIndex
+from .frame import CONTACT_REQUIRED, PARTICLE_REQUIRED, Frame, ParticleIndex, require_columns
 from .partition import ContactBodies, contact_energies, partition, particle_energy, per_particle
 from .scene import Scene
 
@@ -59,6 +59,8 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = Options()) -> Ta
     """
     source = frame.source[0] if frame.source else None
     particles, contacts = frame.particles, frame.contacts
+    require_columns(particles, PARTICLE_REQUIRED, "particles", file=source, step=frame.step)
+    require_columns(contacts, CONTACT_REQUIRED, "contacts", file=source, step=frame.step)
     index = ParticleIndex(particles["id"], file=source, step=frame.step)
     try:
         bodies = ContactBodies.build(contacts, scene, particles, index)

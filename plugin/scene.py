@@ -8,7 +8,6 @@ LIGGGHTS atom type (walls use their ``type T``), or the YADE material id.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -50,10 +49,6 @@ class Material:
                 f"Poisson's ratio must lie in (-1, 0.5], got nu = {self.nu!r}.",
                 fix="correct poissonsRatio in the input script or the --material option.",
             )
-
-    @property
-    def rigid(self) -> bool:
-        return math.isinf(self.E)
 
 
 @dataclass(frozen=True)
