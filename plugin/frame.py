@@ -38,6 +38,17 @@ Table = dict[str, np.ndarray]
 PARTICLE_REQUIRED = ("id", "type", "x", "y", "z", "radius")
 CONTACT_REQUIRED = ("id1", "id2", "wall", "delta", "nx", "ny", "nz", "x1", "y1", "z1", "r1", "r2")
 
+def describe_steps(steps) -> str:
+    """Human-readable range of timesteps: ``"first..last, every N"`` (``every``
+    only when the spacing is regular), or ``"none"``."""
+    steps = [int(x) for x in steps]
+    if not steps:
+        return "none"
+    gaps = np.unique(np.diff(steps)) if len(steps) > 1 else []
+    every = f", every {int(gaps[0])}" if len(gaps) == 1 else ""
+    return f"{steps[0]}..{steps[-1]}{every}"
+
+
 def table_length(table: Table) -> int:
     """Number of rows of a table (0 for an empty table)."""
     for col in table.values():

@@ -36,6 +36,7 @@ import numpy as np
 import pandas as pd
 
 from .errors import StoreError
+from .frame import describe_steps
 
 Table = dict[str, np.ndarray]
 
@@ -199,7 +200,7 @@ class Results:
     def frame(self, step: int) -> "Results":
         """The results of one frame (timestep ``step``)."""
         if step not in set(self.steps.tolist()):
-            raise StoreError(f"no frame with timestep {step}; the results hold {_describe_steps(self.steps)}.",
+            raise StoreError(f"no frame with timestep {step}; the results hold {len(self.steps)} frame(s), timesteps {describe_steps(self.steps)}.",
                              fix="pick one of the stored timesteps.")
         pick = {name: getattr(self, name) for name in TABLES}
         return Results(
@@ -256,12 +257,6 @@ class Results:
 def _with_units(df: pd.DataFrame, like: pd.DataFrame) -> pd.DataFrame:
     df.attrs["units"] = dict(like.attrs.get("units", {}))
     return df
-
-
-def _describe_steps(steps: np.ndarray) -> str:
-    if len(steps) == 0:
-        return "no frames"
-    return f"{len(steps)} frame(s), timesteps {steps.min()}..{steps.max()}"
 
 
 def load_results(path: str | Path, *, steps: Iterable[int] | None = None) -> Results:

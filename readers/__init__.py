@@ -26,15 +26,20 @@ from ..errors import InputFormatError
 from .base import Run
 
 
+def read_head(path: Path, size: int = 4096) -> bytes:
+    """The first ``size`` bytes of ``path``, for sniffing its kind; a missing file is an error."""
+    if not path.is_file():
+        raise InputFormatError("no such file.", file=path, fix="check the path.")
+    with open(path, "rb") as f:
+        return f.read(size)
+
+
 def sniff(path: str | Path) -> str:
     """Kind of run file: ``'cache'``, ``'yade-snapshot'`` or ``'liggghts-script'``."""
     from ..yade import HDF5_SIGNATURE, NPY_STREAM_MAGIC
 
     path = Path(path)
-    if not path.is_file():
-        raise InputFormatError("no such file.", file=path, fix="check the path.")
-    with open(path, "rb") as f:
-        head = f.read(4096)
+    head = read_head(path)
     if head.startswith(HDF5_SIGNATURE):
         from .cache import is_cache
 

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ContactError, DemsplitError, InputFormatError, MaterialError, StoreError
-from ..frame import Frame
+from ..frame import Frame, describe_steps
 
 MAX_LISTED = 20
 """Problems listed by ``check_run`` before the rest is only counted."""
@@ -34,13 +34,11 @@ MAX_LISTED = 20
 def describe_file(path: str | Path) -> str:
     """A human-readable description of ``path`` (see the module docstring)."""
     from ..yade import HDF5_SIGNATURE, NPY_STREAM_MAGIC
+    from . import read_head
     from .lammps_dump import MARKER, _MAGIC
 
     path = Path(path)
-    if not path.is_file():
-        raise InputFormatError("no such file.", file=path, fix="check the path.")
-    with open(path, "rb") as f:
-        head = f.read(4096)
+    head = read_head(path)
     if not head:
         raise InputFormatError("the file is empty.", file=path, fix="check that the program that writes it ran.")
     if head.startswith(HDF5_SIGNATURE):
@@ -51,15 +49,6 @@ def describe_file(path: str | Path) -> str:
             or b"\0" in head:
         return _describe_dump(path)
     return _describe_script(path)
-
-
-def _span(steps) -> str:
-    steps = list(steps)
-    if not steps:
-        return "none"
-    gaps = np.unique(np.diff(steps)) if len(steps) > 1 else []
-    every = f", every {int(gaps[0])}" if len(gaps) == 1 else ""
-    return f"{steps[0]}..{steps[-1]}{every}"
 
 
 def _describe_dump(path: Path) -> str:
@@ -73,7 +62,7 @@ def _describe_dump(path: Path) -> str:
     lines = [f"{path}: LAMMPS/LIGGGHTS dump",
              f"  format:   {form}",
              f"  kind:     {dump.kind} (label {dump.label})",
-             f"  frames:   {dump.n_frames}, steps {_span(dump.steps.tolist())}",
+             f"  frames:   {dump.n_frames}, steps {describe_steps(dump.steps)}",
              f"  rows:     {_range(rows)} per frame"]
     for err in dump.damaged:
         lines.append(f"  DAMAGED frame header: {err}")
@@ -121,7 +110,7 @@ def _describe_store(path: Path, h5) -> str:
     prov = json.loads(h5.attrs.get("provenance", "{}"))
     lines = [f"{path}: demsplit result store (format version {int(h5.attrs['format_version'])}, "
              f"written by demsplit {h5.attrs.get('demsplit_version', '?')})",
-             f"  frames:   {len(steps)}, steps {_span(steps.tolist())}",
+             f"  frames:   {len(steps)}, steps {describe_steps(steps)}",
              "  tables:"]
     for name in ("particles", "contacts", "walls", "frames"):
         if name in h5:
@@ -275,7 +264,7 @@ def _check_liggghts_files(run, out: list[str]) -> list[str]:
             out.append(f"  {name + ':':<10} none")
             continue
         steps = dump.steps
-        out.append(f"  {name + ':':<10} {dump.path} ({len(steps)} frames, steps {_span(steps.tolist())})")
+        out.append(f"  {name + ':':<10} {dump.path} ({len(steps)} frames, steps {describe_steps(steps)})")
         values, counts = np.unique(steps, return_counts=True)
         if np.any(counts > 1):
             problems.append(str(InputFormatError(

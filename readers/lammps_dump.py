@@ -93,7 +93,7 @@ import polars as pl
 
 from demsplit import fingerprint
 from demsplit.errors import DemsplitError, InputFormatError, PrecisionError, TruncatedFileError
-from demsplit.frame import Box
+from demsplit.frame import Box, describe_steps
 
 __all__ = ["open_dump", "DumpFile", "DumpFrame"]
 
@@ -319,7 +319,7 @@ class DumpFile(ABC):
         """The first frame written at timestep ``step``."""
         hits = np.flatnonzero(self.steps == step)
         if hits.size == 0:
-            raise InputFormatError(f"no frame at timestep {step}; the dump has steps {_span(self.steps)}",
+            raise InputFormatError(f"no frame at timestep {step}; the dump has {len(self.steps)} frame(s), steps {describe_steps(self.steps)}",
                                    file=self.path, step=step, fix="pick one of the dumped timesteps")
         return self.frame(int(hits[0]), columns)
 
@@ -356,12 +356,6 @@ class DumpFile(ABC):
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.path!r}, kind={self.kind!r}, label={self.label!r})"
-
-
-def _span(steps: np.ndarray) -> str:
-    if steps.size == 0:
-        return "none"
-    return f"{steps[0]}..{steps[-1]} ({steps.size} frames)"
 
 
 # --------------------------------------------------------------------------- text dumps
