@@ -15,12 +15,12 @@ import base64
 import html
 import io
 import json
-import os
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from .atomic import atomic_path
 from .results import Results
 
 SCATTER_MAX_POINTS = 100_000
@@ -243,7 +243,6 @@ def write_html(results: Results, path: str | Path, step: int | None = None) -> P
     page = ("<!DOCTYPE html><html><head><meta charset='utf-8'><title>demsplit report</title>"
             f"<style>{_CSS}</style></head><body>{''.join(body)}</body></html>")
     path = Path(path)
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(page, encoding="utf-8")
-    os.replace(tmp, path)
+    with atomic_path(path) as tmp:
+        tmp.write_text(page, encoding="utf-8")
     return path

@@ -35,6 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .atomic import atomic_path
 from .fingerprint import file_fingerprint  # noqa: F401  (part of this module's API)
 from .errors import StoreError
 from .results import TABLES, UNITS, Results, Table, canonical_table, to_dataframe
@@ -106,13 +107,9 @@ def _to_json(obj, what: str) -> str:
 
 
 def _write_atomic(path: Path, write) -> None:
-    """Call ``write(file)`` on ``path.tmp``, fsync, then rename to ``path``."""
-    tmp = path.with_name(path.name + ".tmp")
-    with open(tmp, "wb") as f:
+    """Call ``write(file)`` on a temporary file renamed to ``path`` when complete."""
+    with atomic_path(path) as tmp, open(tmp, "wb") as f:
         write(f)
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
 
 
 class ResultWriter:
@@ -271,14 +268,13 @@ class ResultWriter:
             return
         import h5py
 
-        tmp = self.path.with_name(self.path.name + ".tmp")
         order = sorted(self._parts.items(), key=lambda kv: (kv[0], kv[1][0]))
         schema = self._schema or {}
-        with h5py.File(tmp, "w") as h5:
+        with atomic_path(self.path) as tmp, h5py.File(tmp, "w") as h5, \
+                ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
             h5.attrs.update(format=FORMAT, format_version=FORMAT_VERSION, demsplit_version=demsplit_version(),
                             provenance=_to_json(self.provenance, "provenance"),
                             walls_meta=_to_json(self.walls_meta, "walls_meta"))
-            pool = ThreadPoolExecutor(max_workers=os.cpu_count() or 1)
             sinks = {name: _TableSink(h5, name, schema.get(name, {}), self.compression, pool) for name in TABLES}
             offsets = {name: np.zeros(len(order) + 1, np.int64) for name in TABLES}
             for k, (_, (_, part)) in enumerate(order):
@@ -290,10 +286,6 @@ class ResultWriter:
             for name, sink in sinks.items():
                 sink.flush(final=True)
                 index.create_dataset(name, data=offsets[name])
-            pool.shutdown()
-        with open(tmp, "rb") as f:
-            os.fsync(f.fileno())
-        os.replace(tmp, self.path)
         self._closed = True
         shutil.rmtree(self.parts_dir)
 

@@ -32,7 +32,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import os
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -40,6 +39,7 @@ import h5py
 import numpy as np
 
 from .. import errors
+from ..atomic import atomic_path
 from ..errors import DemsplitError, InputFormatError
 from ..frame import Box, Frame
 from ..scene import ContactModel, Material, Scene, Wall
@@ -91,9 +91,8 @@ def convert_run(input: str | Path, output: str | Path, **reader_options) -> Path
         raise InputFormatError("the cache would overwrite its own input.", file=output,
                                fix="give another output path with -o.")
     run = open_run(input, **reader_options)
-    tmp = output.with_name(f".{output.name}.{os.getpid()}.tmp")
     try:
-        with h5py.File(tmp, "w") as h5:
+        with atomic_path(output) as tmp, h5py.File(tmp, "w") as h5:
             h5.attrs["format"] = FORMAT
             h5.attrs["version"] = VERSION
             h5.attrs["scene"] = scene_to_json(run.scene)
@@ -115,11 +114,8 @@ def convert_run(input: str | Path, output: str | Path, **reader_options) -> Path
                 steps.append(frame.step)
             h5.attrs["n_frames"] = len(steps)
             h5.attrs["steps"] = np.array([-1 if s is None else s for s in steps], dtype=np.int64)
-        os.replace(tmp, output)
     finally:
         run.close()
-        if tmp.exists():
-            tmp.unlink()
     return output
 
 
