@@ -8,7 +8,7 @@ LIGGGHTS atom type (walls use their ``type T``), or the YADE material id.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
@@ -173,3 +173,29 @@ class Scene:
     def wall_types(self) -> np.ndarray:
         """Material type of each wall, indexed like ``walls``."""
         return np.array([w.type for w in self.walls], dtype=np.int64)
+
+
+def scene_to_dict(scene: Scene) -> dict:
+    """The scene as plain JSON-ready data: ``materials`` (type -> E, nu),
+    ``model``, ``walls`` (every field), ``units``, ``source``."""
+    return {
+        "materials": {str(t): asdict(m) for t, m in sorted(scene.materials.items())},
+        "model": asdict(scene.model),
+        "walls": [asdict(w) for w in scene.walls],
+        "units": scene.units,
+        "source": scene.source,
+    }
+
+
+def scene_from_dict(d: dict) -> Scene:
+    """Inverse of :func:`scene_to_dict` (e.g. after a JSON round trip)."""
+
+    def wall(w: dict) -> Wall:
+        w = dict(w)
+        w["center"] = tuple(w["center"])
+        w["transforms"] = tuple((op, tuple(args)) for op, args in w["transforms"])
+        w["model"] = None if w["model"] is None else ContactModel(**w["model"])
+        return Wall(**w)
+
+    return Scene({int(t): Material(**m) for t, m in d["materials"].items()}, ContactModel(**d["model"]),
+                 [wall(w) for w in d["walls"]], d["units"], d["source"])

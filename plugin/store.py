@@ -38,6 +38,7 @@ import numpy as np
 from .atomic import atomic_path
 from .fingerprint import file_fingerprint  # noqa: F401  (part of this module's API)
 from .errors import StoreError
+from .scene import scene_to_dict
 from .results import TABLES, UNITS, Results, Table, canonical_table, to_dataframe
 
 FORMAT = "demsplit-results"
@@ -79,13 +80,8 @@ def build_provenance(inputs: Iterable[str | Path], *, scene=None, options: dict 
     prov: dict = {"inputs": [file_fingerprint(p) for p in inputs], "options": dict(options or {}),
                   "demsplit_version": demsplit_version()}
     if scene is not None:
-        prov["scene"] = {
-            "materials": {str(t): {"E": m.E, "nu": m.nu} for t, m in sorted(scene.materials.items())},
-            "walls": [{"name": w.name, "kind": w.kind, "type": w.type} for w in scene.walls],
-            "source": scene.source,
-        }
-        prov["model"] = {"normal": scene.model.normal, "tangential": scene.model.tangential,
-                         "params": dict(scene.model.params)}
+        prov["scene"] = scene_to_dict(scene)
+        prov["model"] = prov["scene"].pop("model")
     prov.update(extra)
     _to_json(prov, "provenance")
     return prov

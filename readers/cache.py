@@ -30,7 +30,6 @@ the same class and message, by :meth:`CacheRun.frame`.
 
 from __future__ import annotations
 
-import dataclasses
 import json
 from collections.abc import Iterator
 from pathlib import Path
@@ -42,39 +41,13 @@ from .. import errors
 from ..atomic import atomic_path
 from ..errors import DemsplitError, InputFormatError
 from ..frame import Box, Frame
-from ..scene import ContactModel, Material, Scene, Wall
+from ..scene import scene_from_dict, scene_to_dict
 
 FORMAT = "demsplit-ingest-cache"
 VERSION = 1
 
 
 # --------------------------------------------------------------------------- scene <-> JSON
-
-def scene_to_json(scene: Scene) -> str:
-    """The scene as JSON (materials, contact model, walls, units, source)."""
-    return json.dumps({
-        "materials": {str(t): dataclasses.asdict(m) for t, m in scene.materials.items()},
-        "model": dataclasses.asdict(scene.model),
-        "walls": [dataclasses.asdict(w) for w in scene.walls],
-        "units": scene.units,
-        "source": scene.source,
-    })
-
-
-def scene_from_json(text: str) -> Scene:
-    """Inverse of :func:`scene_to_json`."""
-    d = json.loads(text)
-
-    def wall(w: dict) -> Wall:
-        w = dict(w)
-        w["center"] = tuple(w["center"])
-        w["transforms"] = tuple((op, tuple(args)) for op, args in w["transforms"])
-        w["model"] = None if w["model"] is None else ContactModel(**w["model"])
-        return Wall(**w)
-
-    return Scene({int(t): Material(**m) for t, m in d["materials"].items()}, ContactModel(**d["model"]),
-                 [wall(w) for w in d["walls"]], d["units"], d["source"])
-
 
 # --------------------------------------------------------------------------- writing
 
@@ -95,7 +68,7 @@ def convert_run(input: str | Path, output: str | Path, **reader_options) -> Path
         with atomic_path(output) as tmp, h5py.File(tmp, "w") as h5:
             h5.attrs["format"] = FORMAT
             h5.attrs["version"] = VERSION
-            h5.attrs["scene"] = scene_to_json(run.scene)
+            h5.attrs["scene"] = json.dumps(scene_to_dict(run.scene))
             h5.attrs["describe"] = json.dumps(run.describe() if hasattr(run, "describe") else {}, default=str)
             h5.attrs["sources"] = json.dumps([str(s) for s in getattr(run, "sources", [input])])
             frames = h5.create_group("frames")
@@ -169,7 +142,7 @@ class CacheRun:
             raise InputFormatError(f"cache format version {int(attrs['version'])} is newer than this demsplit "
                                    f"reads ({VERSION}).", file=path,
                                    fix="upgrade demsplit, or convert the run again with this version.")
-        self.scene = scene_from_json(attrs["scene"])
+        self.scene = scene_from_dict(json.loads(attrs["scene"]))
         self.steps = np.asarray(attrs["steps"], dtype=np.int64)
         self.sources = [self.path] + json.loads(attrs["sources"])
         self._describe = json.loads(attrs["describe"])
