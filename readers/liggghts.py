@@ -39,6 +39,7 @@ import numpy as np
 from ..errors import ContactError, InputFormatError, MaterialError, PrecisionError
 from ..frame import Box, Frame, ParticleIndex, Table
 from ..scene import Material, Scene
+from ..partition import contact_point
 from ..walls import primitive_wall_contacts
 from .lammps_dump import HEADER_LINES, DumpFile, DumpFrame, open_dump
 from .liggghts_script import read_script
@@ -398,10 +399,11 @@ class LiggghtsRun:
         if primitive:
             rows = index.rows(primitive["id1"])
             primitive["bound"] = position_error(h[rows], primitive["delta"])
-            primitive["cpx"], primitive["cpy"], primitive["cpz"] = (
-                (np.stack([primitive[c] for c in ("x1", "y1", "z1")], -1)
-                 + (primitive["r1"] - primitive["delta"])[:, None]
-                 * np.stack([primitive[c] for c in ("nx", "ny", "nz")], -1)).T)
+            # LIGGGHTS' own point for a wall contact is on the wall: the particle takes the whole overlap
+            primitive["cpx"], primitive["cpy"], primitive["cpz"] = contact_point(
+                np.stack([primitive[c] for c in ("x1", "y1", "z1")], -1),
+                np.stack([primitive[c] for c in ("nx", "ny", "nz")], -1),
+                primitive["r1"], primitive["delta"], 1.0).T
             if "shearx" in parts[0]:
                 for c in ("shearx", "sheary", "shearz"):
                     primitive[c] = np.zeros(len(primitive["delta"]))
