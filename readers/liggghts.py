@@ -43,6 +43,7 @@ from ..partition import contact_point
 from ..walls import primitive_wall_contacts
 from .lammps_dump import HEADER_LINES, DumpFile, DumpFrame, open_dump
 from .liggghts_script import read_script
+from .precision import position_error, printed_step, relative_rounding
 
 DEFAULT_OVERLAP_TOLERANCE = 1e-3
 """Largest accepted relative error bound of an overlap recomputed from printed positions."""
@@ -61,24 +62,6 @@ def existing_file(path: str | Path) -> Path | None:
     return None
 
 
-def printed_step(x: np.ndarray, digits: int | None) -> np.ndarray:
-    """Step h of the last printed digit of values ``x`` printed with ``digits``
-    significant digits: h = 10^(floor(log10|x|) - digits + 1) (m); 0 at full precision."""
-    if digits is None or digits >= 15:
-        return np.zeros(np.shape(x))
-    with np.errstate(divide="ignore"):
-        exponent = np.floor(np.log10(np.abs(x)))
-    return np.where(np.isfinite(exponent), 10.0 ** (exponent - digits + 1), 0.0)
-
-
-def position_error(h: np.ndarray, delta: np.ndarray) -> np.ndarray:
-    """Relative error bound sqrt(3) h / delta of an overlap recomputed from
-    positions printed with step h (inf where delta <= 0: the printed positions
-    do not even show the contact)."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(delta > 0, np.sqrt(3.0) * h / delta, np.where(h > 0, np.inf, 0.0))
-
-
 def repeated_pair(id1: np.ndarray, id2: np.ndarray) -> tuple[int, int] | None:
     """Rows ``(first, repeat)`` of the earliest-repeated particle pair listed twice
     (in either order) or of a particle paired with itself (``(row, row)``); None
@@ -92,11 +75,6 @@ def repeated_pair(id1: np.ndarray, id2: np.ndarray) -> tuple[int, int] | None:
         k = int(np.argmin(order[dup + 1]))
         candidates.append((int(order[dup[k]]), int(order[dup[k] + 1])))
     return min(candidates, key=lambda rows: rows[1]) if candidates else None
-
-
-def relative_rounding(digits: int | None) -> float:
-    """Largest relative rounding error of a value printed with ``digits`` significant digits."""
-    return 0.0 if digits is None or digits >= 15 else 0.5 * 10.0 ** (1 - digits)
 
 
 def scene_script(*, materials: dict[int, Material], contacts: Path, walls: Path | None = None,

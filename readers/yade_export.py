@@ -37,6 +37,7 @@ import numpy as np
 from demsplit.errors import InputFormatError, MaterialError, PrecisionError
 from demsplit.frame import Box, Frame, Table
 
+from .precision import position_error, printed_step
 from .yade_snapshot import particle_first
 
 SNAPSHOT_FIX = ("write full-precision snapshots with demsplit.yade.snapshot() from a PyRunner "
@@ -162,19 +163,12 @@ def _is_number(token: str) -> bool:
 # Precision of %g numbers
 # --------------------------------------------------------------------------
 
-def percent_g_unit(x: np.ndarray) -> np.ndarray:
-    """Value of the last printed digit of ``%g`` numbers: 10^(floor(log10|x|) - 5) (same units as x)."""
-    ax = np.abs(np.asarray(x, dtype=np.float64))
-    return np.where(ax > 0, 10.0 ** (np.floor(np.log10(np.where(ax > 0, ax, 1.0))) - (PERCENT_G_DIGITS - 1)), 0.0)
-
-
 def overlap_error_bound(x1: np.ndarray, x2: np.ndarray, delta: np.ndarray) -> np.ndarray:
     """Relative error bound sqrt(3) h / delta of overlaps recomputed from ``%g``
     centres ``x1``, ``x2`` (shape (n, 3), m), with h the last printed digit of
     the largest coordinate of the pair (inf where delta <= 0)."""
-    h = percent_g_unit(np.maximum(np.abs(x1).max(axis=1), np.abs(x2).max(axis=1)))
-    with np.errstate(divide="ignore"):
-        return np.where(delta > 0, np.sqrt(3.0) * h / np.where(delta > 0, delta, 1.0), np.inf)
+    h = printed_step(np.maximum(np.abs(x1).max(axis=1), np.abs(x2).max(axis=1)), PERCENT_G_DIGITS)
+    return position_error(h, delta)
 
 
 def check_overlap_precision(bound: np.ndarray, tolerance: float, *, path: Path, step: int | None,

@@ -321,7 +321,7 @@ def test_g_energies_match_full_precision_within_the_reported_bound(packing_g, ca
     U_t = ½ kt |shear|², kt ∝ √δ: <= U_t,g ((1 + b)^{1/2} (1 + ρ)² - 1), ρ = %g rounding
     of the shear. A contact whose printed positions do not show it has b = inf; it must
     then carry no energy, and the full-precision δ must be below √3 h."""
-    from demsplit.readers.liggghts import printed_step
+    from demsplit.readers.precision import printed_step
 
     full = open_run(script("packing"))
     low = open_run(script("packing"), force_positions=True, **packing_g[case])
