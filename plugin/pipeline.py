@@ -151,9 +151,13 @@ def _serial(run, indices: list[int], options: Options) -> Iterator[tuple[int, Ta
     for k in indices:
         try:
             frame = run.frame(k)
-            yield k, frame_tables(frame, run.scene, options), frame.notes
+            out: Tables | DemsplitError = frame_tables(frame, run.scene, options)
+            notes = frame.notes
+            del frame  # the input arrays go before the next frame is read (peak memory)
         except DemsplitError as exc:
-            yield k, exc, []
+            out, notes = exc, []
+        yield k, out, notes
+        del out  # held by the consumer until it is done with it; not by this generator
 
 
 def _windowed(submit: Callable[[int], object], result: Callable[[object], tuple], indices: list[int],
@@ -172,6 +176,7 @@ def _windowed(submit: Callable[[int], object], result: Callable[[object], tuple]
         if nxt is not None:
             pending.append(submit(nxt))
         yield result(fut)
+        del fut  # its result is the consumer's now
 
 
 def _processes(run, indices: list[int], options: Options, jobs: int) -> Iterator[tuple]:
@@ -242,18 +247,26 @@ def process_run(run, options: Options = Options(), *, jobs: int = 1, dask: str |
     from tqdm import tqdm
 
     show = sys.stderr.isatty() if progress is None else progress
-    for k, out, notes in tqdm(results, total=len(indices), unit="frame", disable=not show, desc="demsplit"):
-        if isinstance(out, DemsplitError):
-            if on_bad_frame == "stop":
-                raise out
-            report.bad_frames.append({"frame": k, "step": int(all_steps[k]) if all_steps[k] is not None else None,
-                                      "error": str(out)})
-            continue
-        for note in notes:
-            if note not in report.notes:
-                report.notes.append(note)
-        report.frames_done += 1
-        yield out
+    # a bar updated by hand: tqdm's iterator wrapper would keep each frame's tables alive
+    # while the next frame is computed
+    bar = tqdm(total=len(indices), unit="frame", disable=not show, desc="demsplit")
+    try:
+        for k, out, notes in results:
+            bar.update()
+            if isinstance(out, DemsplitError):
+                if on_bad_frame == "stop":
+                    raise out
+                report.bad_frames.append({"frame": k, "step": int(all_steps[k]) if all_steps[k] is not None else None,
+                                          "error": str(out)})
+                continue
+            for note in notes:
+                if note not in report.notes:
+                    report.notes.append(note)
+            report.frames_done += 1
+            yield out
+            del out  # not kept alive while the next frame is computed (peak memory: one frame in flight)
+    finally:
+        bar.close()
 
 
 def run_steps(run) -> list:
@@ -318,6 +331,7 @@ def run_to_store(path: str | Path, out: str | Path, *, options: Options = Option
             for tables in process_run(run, options, jobs=jobs, dask=dask, on_bad_frame=on_bad_frame,
                                       skip_steps=writer.done_steps, progress=progress, report=report):
                 writer.append(tables)
+                del tables  # stored: free it before the next frame is computed
             writer.provenance.update(bad_frames=report.bad_frames, notes=report.notes)
         return report, run.scene
     finally:
