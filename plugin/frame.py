@@ -175,12 +175,17 @@ class ParticleIndex:
     Uses a direct lookup array when ids are compact (the usual 1..N of
     LIGGGHTS and 0..N-1 of YADE), binary search otherwise. Duplicate ids are
     an error: one id must mean one particle.
+
+    :meth:`contact_rows` keeps its last answer: the rows of the same id arrays
+    (the same objects, not modified in place) are gathered once per frame,
+    however many sums use them.
     """
 
     def __init__(self, ids: np.ndarray, *, file: str | None = None, step: int | None = None) -> None:
         ids = np.asarray(ids, dtype=np.int64)
         self.ids = ids
         self.file, self.step = file, step
+        self._last: tuple | None = None
         n = len(ids)
         lo = int(ids.min()) if n else 0
         hi = int(ids.max()) if n else -1
@@ -229,3 +234,24 @@ class ParticleIndex:
                 "(both dumps must be written every N steps with the same N).",
             )
         return rows
+
+    def contact_rows(self, id1: np.ndarray, id2: np.ndarray, wall: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Rows of body 1 and body 2 of every contact; rows2 is -1 for wall contacts
+        (``wall >= 0``). An unknown id is the ContactError of :meth:`rows`."""
+        last = self._last
+        if last is not None and last[0] is id1 and last[1] is id2 and last[2] is wall:
+            return last[3]
+        if self._dense:
+            from .kernels import contact_rows  # compiled: import demsplit stays numpy-only
+
+            rows1, rows2, bad = contact_rows(self._row, id1, id2, wall)
+            if bad >= 0:  # the error message of rows(), naming the unknown ids
+                self.rows(id1)
+                self.rows(id2[wall < 0])
+        else:
+            rows1 = self.rows(id1)
+            rows2 = np.full(len(rows1), -1, dtype=np.int64)
+            pair = wall < 0
+            rows2[pair] = self.rows(id2[pair])
+        self._last = (id1, id2, wall, (rows1, rows2))
+        return rows1, rows2

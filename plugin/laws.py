@@ -15,6 +15,16 @@ Numerics (``docs/physics.md``):
   and energy are 0 (never NaN) for separated bodies;
 * energies use the delta forms (``(8/15) E* sqrt(R* delta) delta^2``), never
   the high-power force forms that overflow.
+
+One definition for numpy and for compiled loops: the formulas the per-contact
+loops need (:func:`clamped_overlap`, :func:`inverse_curvature_sum`,
+:func:`hertz_energy_formula`, :func:`hertz_kt_formula`, :func:`squared_norm`,
+:func:`spring_energy`) are written with operators and numpy ufuncs only, so the
+same function works on float64 arrays and, compiled by numba, on the scalars of
+one contact (:mod:`demsplit.kernels` compiles these very functions; it has no
+copy of them). The public functions below convert their inputs (``_f64``),
+check them and call those formulas, so array and compiled results are the same
+IEEE operations in the same order: bit for bit equal.
 """
 
 from __future__ import annotations
@@ -29,9 +39,44 @@ def _f64(x: ArrayLike) -> np.ndarray:
     return np.asarray(x, dtype=np.float64)
 
 
+def clamped_overlap(delta):
+    """delta clamped to >= 0 (m): a separated pair stores no elastic energy (NaN stays NaN).
+    Formula on float64 arrays or scalars, compiled by :mod:`demsplit.kernels`."""
+    return np.maximum(delta, 0.0)
+
+
 def _overlap(delta: ArrayLike) -> np.ndarray:
-    """delta clamped to >= 0 (m): a separated pair stores no elastic energy."""
-    return np.maximum(_f64(delta), 0.0)
+    return clamped_overlap(_f64(delta))
+
+
+def inverse_curvature_sum(R1, R2):
+    """R* = 1/(1/R1 + 1/R2) (m), unchecked: formula on float64 arrays or scalars."""
+    return 1.0 / (1.0 / R1 + 1.0 / R2)
+
+
+def hertz_energy_formula(d, R_eff, E_eff):
+    """(8/15) E* sqrt(R* d) d^2 (J) for a clamped overlap d >= 0: formula on float64 arrays or scalars."""
+    return (8.0 / 15.0) * E_eff * np.sqrt(R_eff * d) * d * d
+
+
+def hertz_kt_formula(d, R_eff, G_eff):
+    """8 G* sqrt(R* d) (N/m) for a clamped overlap d >= 0: formula on float64 arrays or scalars."""
+    return 8.0 * G_eff * np.sqrt(R_eff * d)
+
+
+def squared_norm(x, y, z):
+    """x^2 + y^2 + z^2, summed in that order: formula on float64 arrays or scalars."""
+    return x * x + y * y + z * z
+
+
+def spring_energy(k, s2):
+    """k s^2 / 2 (J) of a spring of stiffness k (N/m) stretched by s (s2 = s^2, m^2)."""
+    return 0.5 * k * s2
+
+
+def _squared_norms(v: np.ndarray) -> np.ndarray:
+    """|v|^2 of vectors (shape (n, 3)) or v^2 of magnitudes (shape (n,))."""
+    return squared_norm(v[..., 0], v[..., 1], v[..., 2]) if v.ndim == 2 else v * v
 
 
 def plane_strain_compliance(E: ArrayLike, nu: ArrayLike) -> np.ndarray:
@@ -98,9 +143,14 @@ def effective_radius(R1: ArrayLike, R2: ArrayLike) -> np.ndarray:
     """
     k = 1.0 / _f64(R1) + 1.0 / _f64(R2)
     if np.any(k <= 0):
-        raise ContactError("the sum of the two curvatures 1/R1 + 1/R2 must be > 0.",
-                           fix="check the radii: two planes cannot be in Hertz contact.")
+        raise curvature_error()
     return 1.0 / k
+
+
+def curvature_error() -> ContactError:
+    """The error of a contact whose curvatures 1/R1 + 1/R2 do not add up to > 0."""
+    return ContactError("the sum of the two curvatures 1/R1 + 1/R2 must be > 0.",
+                        fix="check the radii: two planes cannot be in Hertz contact.")
 
 
 def hertz_force_from_moduli(delta: ArrayLike, R_eff: ArrayLike, E_eff: ArrayLike) -> np.ndarray:
@@ -111,8 +161,7 @@ def hertz_force_from_moduli(delta: ArrayLike, R_eff: ArrayLike, E_eff: ArrayLike
 
 def hertz_energy_from_moduli(delta: ArrayLike, R_eff: ArrayLike, E_eff: ArrayLike) -> np.ndarray:
     """Hertz elastic energy S = (8/15) E* sqrt(R* delta) delta^2 = (2/5) P delta (J), eq. (13)."""
-    d = _overlap(delta)
-    return (8.0 / 15.0) * _f64(E_eff) * np.sqrt(_f64(R_eff) * d) * d * d
+    return hertz_energy_formula(_overlap(delta), _f64(R_eff), _f64(E_eff))
 
 
 def hertz_force(delta: ArrayLike, R1: ArrayLike, R2: ArrayLike,
@@ -162,8 +211,7 @@ def tangential_spring_energy(ft: ArrayLike, kt: ArrayLike) -> np.ndarray:
     (shape (n, 3)). Where kt = 0 (YADE sets ks = 0 on a contact that has
     separated) the energy is 0.
     """
-    ft = _f64(ft)
-    ft2 = np.einsum("...i,...i->...", ft, ft) if ft.ndim == 2 else ft * ft
+    ft2 = _squared_norms(_f64(ft))
     kt = _f64(kt)
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(kt > 0, 0.5 * ft2 / np.where(kt > 0, kt, 1.0), 0.0)
@@ -176,15 +224,13 @@ def shear_spring_energy(shear: ArrayLike, kt: ArrayLike) -> np.ndarray:
     F_t,el = -kt shear; this is the same energy as
     :func:`tangential_spring_energy` of that force.
     """
-    s = _f64(shear)
-    s2 = np.einsum("...i,...i->...", s, s) if s.ndim == 2 else s * s
-    return 0.5 * _f64(kt) * s2
+    return spring_energy(_f64(kt), _squared_norms(_f64(shear)))
 
 
 def liggghts_hertz_kt(delta: ArrayLike, R_eff: ArrayLike, G_eff: ArrayLike) -> np.ndarray:
     """LIGGGHTS ``model hertz`` tangential stiffness kt = 8 G* sqrt(R* delta) (N/m)
     (``normal_model_hertz.h``)."""
-    return 8.0 * _f64(G_eff) * np.sqrt(_f64(R_eff) * _overlap(delta))
+    return hertz_kt_formula(_overlap(delta), _f64(R_eff), _f64(G_eff))
 
 
 def liggghts_hooke_kn(R_eff: ArrayLike, E_eff: ArrayLike, m_eff: ArrayLike, v_char: float) -> np.ndarray:

@@ -13,6 +13,15 @@ This module holds the share functions, the contact point, :func:`partition`
 (per-contact energies and shares) and :func:`per_particle` (sums per particle
 and per wall). Everything works on plain arrays; see :mod:`demsplit.frame`
 for the table columns.
+
+The per-contact work runs in compiled loops (:mod:`demsplit.kernels`, imported
+when first needed, so ``import demsplit`` needs no numba): one pass gathers,
+applies the law, splits and places the contact point, one pass sums per body.
+Those loops call the formulas defined here and in :mod:`demsplit.laws`
+(:func:`body_energies`, :func:`contact_point_coordinate`, ...), compiled:
+one definition of the physics. Per-body sums add each body's contributions in
+contact order, body-1 terms then body-2 terms, as ``np.bincount`` did; results
+are those of the numpy formulation to rounding (``tests/test_kernels.py``).
 """
 
 from __future__ import annotations
@@ -134,6 +143,18 @@ def overlap_depths(delta: ArrayLike, share1: ArrayLike) -> tuple[np.ndarray, np.
     return d1, delta - d1
 
 
+def contact_point_coordinate(x1, n, r1, depth1):
+    """One coordinate of the contact point, x1 + (r1 - depth1) n (m): formula on
+    float64 arrays or scalars (compiled by :mod:`demsplit.kernels`)."""
+    return x1 + (r1 - depth1) * n
+
+
+def body_energies(s_n, s_t, u_n, u_t):
+    """Energy of body 1 and body 2 of a contact (J): u1 = s_n u_n + s_t u_t,
+    u2 = (1 - s_n) u_n + (1 - s_t) u_t. Formula on float64 arrays or scalars."""
+    return s_n * u_n + s_t * u_t, (1.0 - s_n) * u_n + (1.0 - s_t) * u_t
+
+
 def contact_point(x1: ArrayLike, n: ArrayLike, r1: ArrayLike, delta: ArrayLike,
                   share1: ArrayLike) -> np.ndarray:
     """Material-weighted contact point x_c = x1 + (r1 - share1 delta) n (m), eq. (31).
@@ -143,30 +164,30 @@ def contact_point(x1: ArrayLike, n: ArrayLike, r1: ArrayLike, delta: ArrayLike,
     Equal materials give the middle of the overlap; a rigid partner
     (share1 = 1) puts the point on its surface.
     """
-    depth1 = np.asarray(share1, dtype=np.float64) * np.asarray(delta, dtype=np.float64)
-    arm = np.asarray(r1, dtype=np.float64) - depth1
-    return np.asarray(x1, dtype=np.float64) + arm[..., None] * np.asarray(n, dtype=np.float64)
+    depth1, _ = overlap_depths(delta, share1)
+    return contact_point_coordinate(np.asarray(x1, dtype=np.float64), np.asarray(n, dtype=np.float64),
+                                    np.asarray(r1, dtype=np.float64)[..., None], depth1[..., None])
 
 
 # --- Per-contact bodies: which material, radius and mass each side has ------------------------
 
-@dataclass
 class ContactBodies:
     """Material types and elastic constants of both sides of every contact.
 
     In a single-material scene ``E1 nu1 E2 nu2`` are scalars and no per-contact
-    lookup is made.
+    lookup is made. Built from a multi-material scene, the per-contact constants
+    ``E1 nu1 E2 nu2`` are gathered from the scene's tables on first use (the
+    partition itself works from the types, once per pair of types).
     """
 
-    type1: np.ndarray | None
-    type2: np.ndarray | None
-    E1: np.ndarray | float
-    nu1: np.ndarray | float
-    E2: np.ndarray | float
-    nu2: np.ndarray | float
-    single_material: bool
-    scene: Scene | None = None
-    _pairs: tuple | None = field(default=None, repr=False, compare=False)
+    def __init__(self, type1: np.ndarray | None, type2: np.ndarray | None, E1: np.ndarray | float | None,
+                 nu1: np.ndarray | float | None, E2: np.ndarray | float | None, nu2: np.ndarray | float | None,
+                 single_material: bool, scene: Scene | None = None, *, pairs: tuple | None = None) -> None:
+        self.type1, self.type2 = type1, type2
+        self._constants = (E1, nu1, E2, nu2)
+        self.single_material = single_material
+        self.scene = scene
+        self._pairs = pairs  # (code of every contact, codes present), see _pair_codes
 
     @classmethod
     def build(cls, contacts: Table, scene: Scene, particles: Table | None = None,
@@ -174,28 +195,74 @@ class ContactBodies:
         if scene.single_material:
             m = next(iter(scene.materials.values()))
             return cls(None, None, m.E, m.nu, m.E, m.nu, True)
-        type1, type2 = contact_types(contacts, scene, particles, index)
-        E1, nu1 = scene.lookup(type1, what="particle")
-        E2, nu2 = scene.lookup(type2, what="particle or wall")
-        return cls(type1, type2, E1, nu1, E2, nu2, False, scene)
+        type1, type2, pairs = _contact_types_and_codes(contacts, scene, particles, index)
+        bodies = cls(type1, type2, None, None, None, None, False, scene, pairs=pairs)
+        code, pairs = bodies._pair_codes()
+        n_types = len(scene.material_tables()[0])
+        # every type present has a material (checked once per pair of types present)
+        scene.lookup(pairs // n_types, what="particle")
+        scene.lookup(pairs % n_types, what="particle or wall")
+        return bodies
 
-    def per_pair(self, f) -> np.ndarray | float:
-        """``f(E1, nu1, E2, nu2)`` for every contact, evaluated once per pair of
-        material types present and gathered (a few types, millions of contacts)."""
-        if self.single_material or self.scene is None:
-            return f(self.E1, self.nu1, self.E2, self.nu2)
-        E, nu = self.scene.material_tables()
-        n_types = len(E)
-        if self._pairs is None:  # code of each contact's (type1, type2), and the codes present
+    def _constant(self, k: int) -> np.ndarray | float:
+        if self._constants[k] is None:
+            E, nu = self.scene.material_tables()
+            self._constants = (E.take(self.type1), nu.take(self.type1), E.take(self.type2), nu.take(self.type2))
+        return self._constants[k]
+
+    E1 = property(lambda self: self._constant(0), doc="Young's modulus of body 1 (Pa)")
+    nu1 = property(lambda self: self._constant(1), doc="Poisson's ratio of body 1")
+    E2 = property(lambda self: self._constant(2), doc="Young's modulus of body 2 (Pa)")
+    nu2 = property(lambda self: self._constant(3), doc="Poisson's ratio of body 2")
+
+    def _pair_codes(self) -> tuple[np.ndarray, np.ndarray]:
+        """Code type1 * n_types + type2 of every contact, and the codes present."""
+        if self._pairs is None:
+            n_types = len(self.scene.material_tables()[0])
+            inside = (self.type1 >= 0) & (self.type1 < n_types) & (self.type2 >= 0) & (self.type2 < n_types)
+            if not inside.all():  # a type beyond the table: the lookup's error names it
+                self.scene.lookup(self.type1, what="particle")
+                self.scene.lookup(self.type2, what="particle or wall")
             code = self.type1 * n_types + self.type2
             present = np.zeros(n_types * n_types, dtype=bool)
             present[code] = True
             self._pairs = (code, np.flatnonzero(present))
-        code, pairs = self._pairs
+        return self._pairs
+
+    def rigid_pairs(self) -> np.ndarray:
+        """Contacts between two rigid bodies (E1 = E2 = inf): a boolean array, or a
+        boolean scalar when every contact has the same two bodies' materials."""
+        if self.single_material or self.scene is None:
+            return np.isinf(self.E1) & np.isinf(self.E2)
+        code, pairs = self._pair_codes()
+        E = self.scene.material_tables()[0]
+        n_types = len(E)
+        rigid = np.isinf(E[pairs // n_types]) & np.isinf(E[pairs % n_types])
+        if not rigid.any():
+            return np.False_
+        return np.isin(code, pairs[rigid])
+
+    def per_pair(self, f) -> np.ndarray | float:
+        """``f(E1, nu1, E2, nu2)`` for every contact, evaluated once per pair of
+        material types present and gathered (a few types, millions of contacts)."""
+        values, code = self.pair_values(f)
+        return values.take(code) if len(code) else f(self.E1, self.nu1, self.E2, self.nu2)
+
+    def pair_values(self, f) -> tuple[np.ndarray, np.ndarray]:
+        """``f(E1, nu1, E2, nu2)`` for the compiled loops, as ``(values, code)`` (see
+        :mod:`demsplit.kernels`): ``values`` per pair of types present and the pair
+        code of every contact, or (no code) the values per contact or one for all."""
+        from .kernels import NO_CODE
+
+        if self.single_material or self.scene is None:
+            return np.atleast_1d(np.asarray(f(self.E1, self.nu1, self.E2, self.nu2), dtype=np.float64)), NO_CODE
+        E, nu = self.scene.material_tables()
+        n_types = len(E)
+        code, pairs = self._pair_codes()
         t1, t2 = pairs // n_types, pairs % n_types
         table = np.zeros(n_types * n_types)
         table[pairs] = f(E[t1], nu[t1], E[t2], nu[t2])
-        return table.take(code)
+        return table, code
 
 
 def contact_types(contacts: Table, scene: Scene, particles: Table | None = None,
@@ -205,27 +272,31 @@ def contact_types(contacts: Table, scene: Scene, particles: Table | None = None,
     Taken from the ``type1``/``type2`` columns when the reader set them,
     otherwise from the particles table (by id) and the wall list.
     """
+    return _contact_types_and_codes(contacts, scene, particles, index)[:2]
+
+
+def _contact_types_and_codes(contacts: Table, scene: Scene, particles: Table | None,
+                             index: ParticleIndex | None) -> tuple[np.ndarray, np.ndarray, tuple | None]:
+    """(type1, type2, (pair code of every contact, codes present) or None when not computed)."""
     if "type1" in contacts and "type2" in contacts:
-        return contacts["type1"].astype(np.int64), contacts["type2"].astype(np.int64)
+        return contacts["type1"].astype(np.int64), contacts["type2"].astype(np.int64), None
     if particles is None:
         raise InputFormatError("contacts carry no material types and no particles table was given.",
                                fix="pass the frame's particles so types can be looked up by id.")
+    from .kernels import contact_types as gather_types  # compiled: see the module docstring
+
     index = index or ParticleIndex(particles["id"])
-    ptype = np.asarray(particles["type"], dtype=np.int64)
     wall = contacts["wall"]
-    is_wall = wall >= 0
-    type1 = ptype[index.rows(contacts["id1"])]
-    type2 = np.empty_like(type1)
-    if (~is_wall).any():
-        type2[~is_wall] = ptype[index.rows(contacts["id2"][~is_wall])]
-    if is_wall.any():
-        wall_types = scene.wall_types()
-        if wall[is_wall].max() >= len(wall_types):
-            raise ContactError(f"a wall contact names wall {int(wall[is_wall].max())} but the scene has "
-                               f"{len(wall_types)} wall(s).",
-                               fix="describe every wall of the run in the scene (input script).")
-        type2[is_wall] = wall_types[wall[is_wall]]
-    return type1, type2
+    rows1, rows2 = index.contact_rows(contacts["id1"], contacts["id2"], wall)
+    wall_types = scene.wall_types()
+    n_types = len(scene.material_tables()[0])
+    type1, type2, code, present, bad_wall, bad_type = gather_types(
+        rows1, rows2, wall, np.asarray(particles["type"]), wall_types, n_types)
+    if bad_wall >= 0:
+        raise ContactError(f"a wall contact names wall {int(wall.max())} but the scene has "
+                           f"{len(wall_types)} wall(s).",
+                           fix="describe every wall of the run in the scene (input script).")
+    return type1, type2, None if bad_type >= 0 else (code, np.flatnonzero(present))
 
 
 # --- Energies by contact model -------------------------------------------------------------
@@ -321,15 +392,41 @@ def contact_energies(contacts: Table, scene: Scene, particles: Table | None = No
             moduli[f] = bodies.per_pair(f)
         return moduli[f]
 
+    def pair_values(f, rows):  # E* or G* for the compiled loop: values per pair of types and codes
+        values, code = bodies.pair_values(f)
+        if len(code):
+            return values, code[rows]
+        return (values[rows] if len(values) > 1 else values), code
+
+    has_shear = all(c in contacts for c in ("shearx", "sheary", "shearz"))
     for model, rows in _model_groups(contacts, scene):
         d = delta[rows]
+        if model.normal == "hertz" and "kno" not in contacts:  # LIGGGHTS hertz: one compiled pass
+            from .kernels import hertz_history_energies
+
+            history = model.tangential == "history" and has_shear
+            shear = [contacts[c][rows] for c in ("shearx", "sheary", "shearz")] if history else [d, d, d]
+            E_eff, code = pair_values(laws.effective_modulus, rows)
+            G_eff = pair_values(laws.effective_shear_modulus, rows)[0] if history else E_eff
+            u_n_rows, u_t_rows, bad = hertz_history_energies(d, _f64(contacts["r1"][rows]), _f64(contacts["r2"][rows]),
+                                                             E_eff, G_eff, code, *shear, history)
+            if bad >= 0:
+                raise laws.curvature_error()
+            if isinstance(rows, slice):  # every contact: the loop's arrays are the result
+                u_n = u_n_rows
+            else:
+                u_n[rows] = u_n_rows
+            if history:
+                if isinstance(rows, slice):
+                    u_t = u_t_rows
+                else:
+                    u_t[rows] = u_t_rows
+                continue
         R_eff = laws.effective_radius(contacts["r1"][rows], contacts["r2"][rows])
         kn = None
         if model.normal == "hertz":
             if "kno" in contacts:
                 u_n[rows] = laws.hertz_energy_from_kno(d, contacts["kno"][rows])
-            else:
-                u_n[rows] = laws.hertz_energy_from_moduli(d, R_eff, pick(modulus(laws.effective_modulus), rows))
         elif model.normal == "hooke":
             v = model.params.get("characteristic_velocity")
             if v is None:
@@ -344,7 +441,7 @@ def contact_energies(contacts: Table, scene: Scene, particles: Table | None = No
             u_n[rows] = laws.power_law_energy(d, model.params["k"], model.params["n"])
 
         if model.tangential == "history":
-            if not all(c in contacts for c in ("shearx", "sheary", "shearz")):
+            if not has_shear:
                 skipped["u_t"] = ("the contact data has no tangential spring history (shear), "
                                   "so tangential elastic energy is not computed (0)")
                 continue
@@ -376,7 +473,8 @@ class ContactEnergy:
 
     ``u_n``, ``u_t`` (J): elastic energies; ``share_n1``, ``share_t1``: fraction
     to body 1; ``u1``, ``u2`` (J): energy of each body; ``depth1`` (m): approach
-    of body 1; ``cp`` (m, shape (n, 3)): contact point; ``separated``: contacts
+    of body 1; ``cp`` (m, shape (n, 3), stored by coordinate: ``cp[:, 0]`` is
+    contiguous): contact point; ``separated``: contacts
     with delta < 0 (zero energy, kept and flagged); ``skipped``: quantities not
     computed and why.
     """
@@ -410,13 +508,13 @@ def contact_shares(contacts: Table, bodies: ContactBodies, *, split: str = "mate
     n = table_length(contacts)
     if split == "material":
         if bodies.single_material:
-            half = np.full(n, 0.5)
+            half = np.broadcast_to(0.5, (n,))
             return half, half
         return (np.broadcast_to(bodies.per_pair(normal_share), (n,)),
                 np.broadcast_to(bodies.per_pair(lambda E1, nu1, E2, nu2: tangential_share(
                     E1, nu1, E2, nu2, rule=tangential_rule)), (n,)))
     if split == "equal":
-        s = np.full(n, 0.5)
+        s = np.broadcast_to(0.5, (n,))
     elif split == "radius":
         s = radius_share(contacts["r1"], contacts["r2"])
     elif split == "springs":
@@ -441,7 +539,7 @@ def partition(contacts: Table, scene: Scene, particles: Table | None = None, *,
         index = ParticleIndex(particles["id"])
     bodies = bodies or ContactBodies.build(contacts, scene, particles, index)
     n = table_length(contacts)
-    rigid_pair = np.broadcast_to(np.isinf(bodies.E1) & np.isinf(bodies.E2), (n,))
+    rigid_pair = np.broadcast_to(bodies.rigid_pairs(), (n,))
     if rigid_pair.any():
         i = int(np.flatnonzero(rigid_pair)[0])
         raise ContactError(
@@ -451,69 +549,63 @@ def partition(contacts: Table, scene: Scene, particles: Table | None = None, *,
             fix="give one of the two materials a finite Young's modulus.",
         )
     energies = energies or contact_energies(contacts, scene, particles, bodies, index)
-    s_n, s_t = contact_shares(contacts, bodies, split=split, tangential_rule=tangential_rule)
-    u1 = s_n * energies.u_n + s_t * energies.u_t
-    u2 = (1.0 - s_n) * energies.u_n + (1.0 - s_t) * energies.u_t
+    from .kernels import NO_CODE, split_contacts  # compiled: see the module docstring
+
+    if split == "material" and not bodies.single_material:  # shares per pair of types, not per contact
+        shares = (*bodies.pair_values(normal_share),
+                  *bodies.pair_values(lambda E1, nu1, E2, nu2: tangential_share(E1, nu1, E2, nu2,
+                                                                                 rule=tangential_rule)))
+    else:
+        s_n, s_t = contact_shares(contacts, bodies, split=split, tangential_rule=tangential_rule)
+        shares = (_values(s_n), NO_CODE, _values(s_t), NO_CODE)
     delta = np.asarray(contacts["delta"], dtype=np.float64)
-    depth1, _ = overlap_depths(delta, s_n)
-    x1 = np.stack([contacts["x1"], contacts["y1"], contacts["z1"]], axis=-1)
-    normal = np.stack([contacts["nx"], contacts["ny"], contacts["nz"]], axis=-1)
-    cp = contact_point(x1, normal, contacts["r1"], delta, s_n)
-    return ContactEnergy(energies.u_n, energies.u_t, np.asarray(s_n), np.asarray(s_t), u1, u2, depth1, cp,
-                         delta < 0, split, dict(energies.skipped))
+    s_n, s_t, u1, u2, depth1, cp = split_contacts(
+        *shares, energies.u_n, energies.u_t, delta,
+        *(_f64(contacts[c]) for c in ("x1", "y1", "z1", "nx", "ny", "nz", "r1")))
+    return ContactEnergy(energies.u_n, energies.u_t, s_n, s_t, u1, u2, depth1, cp.T, delta < 0, split,
+                         dict(energies.skipped))
+
+
+def _f64(x: ArrayLike) -> np.ndarray:
+    return np.asarray(x, dtype=np.float64)
+
+
+def _values(x: ArrayLike) -> np.ndarray:
+    """Per-contact values for a compiled loop: the array itself, or its one value
+    (length 1) when it is a constant broadcast to every contact."""
+    x = _f64(x)
+    if x.ndim == 1 and len(x) and x.strides[0] == 0:
+        return x[:1]
+    return np.atleast_1d(x)
 
 
 def per_particle(contacts: Table, energy: ContactEnergy, particles: Table, n_walls: int = 0,
                  index: ParticleIndex | None = None) -> tuple[Table, Table]:
-    """Sum each body's energy over its contacts (np.bincount over a dense particle index).
+    """Sum each body's energy over its contacts (one compiled pass, :func:`demsplit.kernels.body_sums`).
 
     Returns ``(particle_table, wall_table)``: per particle ``id type radius u
     u_n u_t n_contacts`` (J), in the particles' row order; per wall ``wall u
     u_n u_t n_contacts``. Conservation: Σ particle u + Σ wall u = Σ contact
     (u_n + u_t) to rounding.
     """
+    from .kernels import body_sums, max_wall  # compiled: see the module docstring
+
     index = index or ParticleIndex(particles["id"])
-    n = table_length(particles)
     wall = contacts["wall"]
-    pair = wall < 0
-    body_sum = _BodySum(contacts, index, n)
-    un1 = energy.share_n1 * energy.u_n
-    ut1 = energy.share_t1 * energy.u_t
-    un2 = energy.u_n - un1
-    ut2 = energy.u_t - ut1
-    u_n = body_sum(un1, un2)
-    u_t = body_sum(ut1, ut2)
-    n_contacts = (np.bincount(body_sum.rows1, minlength=n)
-                  + np.bincount(body_sum.rows2, minlength=n)).astype(np.int64)
+    rows1, rows2 = index.contact_rows(contacts["id1"], contacts["id2"], wall)
+    n_walls = max(n_walls, int(max_wall(wall)) + 1)
+    u_n, u_t, n_contacts, wu_n, wu_t, w_contacts = body_sums(
+        rows1, rows2, wall, _values(energy.share_n1), _values(energy.share_t1), energy.u_n, energy.u_t,
+        table_length(particles), n_walls)
     ptable = {
         "id": np.asarray(particles["id"], dtype=np.int64),
         "type": np.asarray(particles["type"], dtype=np.int32),
         "radius": np.asarray(particles["radius"], dtype=np.float64),
         "u": u_n + u_t, "u_n": u_n, "u_t": u_t, "n_contacts": n_contacts,
     }
-    w = wall[~pair]
-    n_walls = max(n_walls, int(w.max()) + 1 if len(w) else 0)
-    wu_n = np.bincount(w, weights=un2[~pair], minlength=n_walls)
-    wu_t = np.bincount(w, weights=ut2[~pair], minlength=n_walls)
     wtable = {"wall": np.arange(n_walls, dtype=np.int64), "u": wu_n + wu_t, "u_n": wu_n, "u_t": wu_t,
-              "n_contacts": np.bincount(w, minlength=n_walls).astype(np.int64)}
+              "n_contacts": w_contacts}
     return ptable, wtable
-
-
-class _BodySum:
-    """Sums per particle over its contacts: weight w1 where it is body 1, w2 where it is
-    body 2 of a particle-particle contact (np.bincount over the dense particle index)."""
-
-    def __init__(self, contacts: Table, index: ParticleIndex, n: int) -> None:
-        self.pair = contacts["wall"] < 0
-        self.all_pairs = bool(self.pair.all())
-        self.rows1 = index.rows(contacts["id1"])
-        self.rows2 = index.rows(contacts["id2"] if self.all_pairs else contacts["id2"][self.pair])
-        self.n = n
-
-    def __call__(self, w1: np.ndarray, w2: np.ndarray) -> np.ndarray:
-        return (np.bincount(self.rows1, weights=w1, minlength=self.n)
-                + np.bincount(self.rows2, weights=w2 if self.all_pairs else w2[self.pair], minlength=self.n))
 
 
 def particle_energy(contacts: Table, energies: ContactLawEnergy, bodies: ContactBodies, particles: Table, *,
@@ -521,7 +613,11 @@ def particle_energy(contacts: Table, energies: ContactLawEnergy, bodies: Contact
     """Energy of every particle (J, particles' row order) under ``split``: the
     ``u`` column of :func:`per_particle` without the per-contact table, for the
     comparison splits. u1 = s_n u_n + s_t u_t, u2 = u_n + u_t - u1."""
+    from .kernels import particle_sums  # compiled: see the module docstring
+
     index = index or ParticleIndex(particles["id"])
+    wall = contacts["wall"]
+    rows1, rows2 = index.contact_rows(contacts["id1"], contacts["id2"], wall)
     s_n, s_t = contact_shares(contacts, bodies, split=split)
-    u1 = s_n * energies.u_n + s_t * energies.u_t
-    return _BodySum(contacts, index, table_length(particles))(u1, energies.u_n + energies.u_t - u1)
+    return particle_sums(rows1, rows2, wall, _values(s_n), _values(s_t), energies.u_n, energies.u_t,
+                         table_length(particles))
