@@ -79,7 +79,9 @@ from __future__ import annotations
 import bz2
 import gzip
 import hashlib
+import itertools
 import lzma
+import os
 import struct
 from abc import ABC, abstractmethod
 from collections.abc import Iterator, Sequence
@@ -366,6 +368,9 @@ class TextDump(DumpFile):
     def __init__(self, path: Path, opener, head: bytes, columns: Sequence[str] | None) -> None:
         super().__init__(path)
         self._opener = opener
+        # blocks of rows parsed so far by the compiled fast path / by its polars fallback (observability)
+        self.fast_blocks = 0
+        self.fallback_blocks = 0
         first = _parse_header(head[:HEADER_MAX].split(b"\n")[:HEADER_LINES], self.path, 1, last=True)
         self.label = first["label"]
         self.kind = "atoms" if self.label == "ATOMS" else "local"
@@ -457,25 +462,31 @@ class TextDump(DumpFile):
             return DumpFrame(e.step, 0, e.box, {n: np.empty(0) for n in names}, self.path,
                              e.first_line, {n: None for n in names})
         ncols = len(e.names)
-        cols: dict[int, np.ndarray] = {}
+        cols: _Columns | None = None
         row, sample = 0, None
         for block in _blocks(stream, e.data_end - e.data_start):
-            if sample is None:  # first block: separators, integer columns and the digits sample
-                head = block[:DIGITS_SAMPLE]
+            if cols is None:  # first block: separators, integer columns and the digits sample
+                head = block[:DIGITS_SAMPLE].tobytes()
                 trailing = head.split(b"\n", 1)[0].endswith(b" ")
                 sample = _tokens(head[: head.rfind(b"\n") + 1] or head, ncols)
                 int_like = _integer_columns(sample, ncols)
-                cols = {i: np.empty(e.n_rows, np.int64 if int_like[i] else np.float64) for i in idx}
-            n = _rows_well_formed(np.frombuffer(block, dtype=np.uint8), ncols, trailing)
+                cols = _Columns(ncols, e.n_rows, [i for i in idx if not int_like[i]],
+                                [i for i in idx if int_like[i]])
+            n, converted = _parse_fast(block, ncols, trailing, cols, row, e.n_rows - row)
             if n is None:
-                raise self._diagnose(e, block, row, trailing)
-            table = self._parse_block(e, block, row, trailing, cols)
-            if table.height != n:
-                raise self._diagnose(e, block, row, trailing)
-            for i in idx:
-                cols[i][row: row + n] = table.get_column(f"c{i}").to_numpy()
+                raise self._diagnose(e, block.tobytes(), row, trailing)
+            if converted:
+                self.fast_blocks += 1
+            else:
+                self.fallback_blocks += 1
+                self._parse_block(e, block.tobytes(), row, n, trailing, cols)
             row += n
-        out = {n: cols[i] for n, i in zip(names, idx)}
+        if row != e.n_rows:  # the file shrank since it was indexed
+            raise TruncatedFileError(f"the frame ends after {row} of its {e.n_rows} rows: the file changed "
+                                     "after it was indexed", file=self.path, step=e.step,
+                                     line=e.first_line + row, fix="read the run once the simulation has "
+                                     "finished writing it")
+        out = {n: cols.column(i) for n, i in zip(names, idx)}
         for n, i in zip(names, idx):
             bad = ~np.isfinite(out[n]) if out[n].dtype.kind == "f" else None
             if bad is not None and bad.any():
@@ -489,20 +500,25 @@ class TextDump(DumpFile):
         return DumpFrame(e.step, e.n_rows, e.box, out, self.path, e.first_line,
                          {n: digits[i] for n, i in zip(names, idx)})
 
-    def _parse_block(self, e: _TextEntry, block: bytes, row: int, trailing: bool,
-                     cols: dict[int, np.ndarray]) -> "pl.DataFrame":
-        """polars parse of one block of whole rows; an integer-looking column that
-        holds a real here turns every integer column of the frame into float64."""
+    def _parse_block(self, e: _TextEntry, block: bytes, row: int, n: int, trailing: bool,
+                     cols: "_Columns") -> None:
+        """polars parse of one block of ``n`` whole, well-formed rows (the fallback of
+        the compiled parse) into ``cols`` from ``row`` on; an integer-looking column
+        that holds a real here turns every integer column of the frame into float64."""
         for _ in range(2):
             try:
-                return _csv(block, len(e.names) + trailing, {i: c.dtype for i, c in cols.items()})
+                table = _csv(block, len(e.names) + trailing, cols.dtypes)
+                break
             except (pl.exceptions.ComputeError, pl.exceptions.ShapeError, pl.exceptions.SchemaError) as err:
-                ints = [i for i, c in cols.items() if c.dtype.kind == "i"]
-                if not ints or "i64" not in str(err):
+                if not cols.ints.shape[0] or "i64" not in str(err):
                     raise self._diagnose(e, block, row, trailing) from err
-                for i in ints:
-                    cols[i] = cols[i].astype(np.float64)
-        raise self._diagnose(e, block, row, trailing)
+                cols.ints_to_float()
+        else:
+            raise self._diagnose(e, block, row, trailing)
+        if table.height != n:
+            raise self._diagnose(e, block, row, trailing)
+        for i in cols.dtypes:
+            cols.column(i)[row: row + n] = table.get_column(f"c{i}").to_numpy()
 
     def _diagnose(self, e: _TextEntry, text: bytes, row0: int, trailing: bool) -> DemsplitError:
         """Slow pass over one block (starting at row ``row0``) that failed the fast parse: first bad line."""
@@ -529,21 +545,6 @@ class TextDump(DumpFile):
                                 line=e.first_line + row0, fix=FIX_COUNT)
 
 
-def _blocks(stream: BinaryIO, size: int) -> Iterator[bytes]:
-    """The next ``size`` bytes of ``stream`` in pieces of about ``BLOCK`` bytes,
-    each ending with a whole row, so that a frame never sits in memory as text."""
-    while size > 0:
-        data = stream.read(min(BLOCK, size))
-        if not data:
-            return
-        size -= len(data)
-        if size > 0 and not data.endswith(b"\n"):  # complete the row cut by the block's end
-            tail = stream.readline(size)
-            size -= len(tail)
-            data += tail
-        yield data
-
-
 def _csv(block: bytes, n_fields: int, dtypes: dict[int, np.dtype]) -> "pl.DataFrame":
     """polars (multi-threaded, compiled) parse of whole rows of ``n_fields`` fields: only
     the columns ``dtypes`` names (0-based) are converted, to Int64 or Float64."""
@@ -553,84 +554,157 @@ def _csv(block: bytes, n_fields: int, dtypes: dict[int, np.dtype]) -> "pl.DataFr
                        columns=sorted(dtypes))
 
 
-def _rows_well_formed(raw: np.ndarray, ncols: int, trailing: bool) -> int | None:
-    """Number of rows in ``raw`` when every line holds exactly ``ncols``
-    non-empty fields separated by single spaces, followed by one space when
-    ``trailing``; else None. polars pads short rows and ignores extra fields,
-    so this vectorised check is what makes a ragged or padded row an error.
+def _blocks(stream: BinaryIO, size: int) -> Iterator[np.ndarray]:
+    """The next ``size`` bytes of ``stream`` in pieces of about ``BLOCK`` bytes,
+    each ending with a whole row, so that a frame never sits in memory as text.
 
-    The separators (bytes <= 32: spaces, newlines, and any tab or CR, which
-    LAMMPS never writes) must come ``ncols + trailing`` per row, spaces then a
-    newline, and no two may be adjacent (an empty field) except the trailing
-    space and its newline.
+    Each piece is a uint8 array over one reused buffer (the bytes after its
+    last newline move to the buffer's front), valid until the next is asked for.
     """
-    per = ncols + trailing
-    sep = np.flatnonzero(raw <= 32)
-    if sep.size == 0 or sep.size % per or sep[0] == 0:
-        return None
-    kind = raw[sep].reshape(-1, per)
-    if np.any(kind[:, -1] != 10) or np.any(kind[:, :-1] != 32):
-        return None
-    gap = np.diff(sep)
-    if trailing:
-        if np.any(gap[per - 2::per] != 1):
-            return None
-        gap[per - 2::per] = 2
-    return kind.shape[0] if np.all(gap > 1) else None
+    buf = bytearray(min(BLOCK, size))
+    kept = 0
+    while size > 0:
+        if kept == len(buf):  # a row longer than the buffer
+            buf = buf + bytearray(len(buf))
+        got = _read_into(stream, memoryview(buf)[kept: kept + min(len(buf) - kept, size)])
+        size -= got
+        n = kept + got
+        end = n if size == 0 or not got else buf.rfind(b"\n", 0, n) + 1
+        if end:
+            yield np.frombuffer(buf, dtype=np.uint8, count=end)
+            buf[: n - end] = buf[end:n]
+        kept = n - end
+        if not got:
+            return
+
+
+class _Columns:
+    """The requested columns of a frame as the compiled parse writes them: the
+    float64 ones are the rows of ``reals``, the int64 ones the rows of ``ints``
+    (C order, so each column is a contiguous view); per column of the dump,
+    ``kind`` is 0 (not read), 1 (real) or 2 (integer) and ``slot`` its row."""
+
+    def __init__(self, ncols: int, n_rows: int, reals: list[int], ints: list[int]) -> None:
+        self.kind = np.zeros(ncols, dtype=np.int64)
+        self.slot = np.zeros(ncols, dtype=np.int64)
+        self.kind[reals], self.kind[ints] = 1, 2
+        self.slot[reals], self.slot[ints] = np.arange(len(reals)), np.arange(len(ints))
+        self.reals = np.empty((len(reals), n_rows), dtype=np.float64)
+        self.ints = np.empty((len(ints), n_rows), dtype=np.int64)
+
+    @property
+    def dtypes(self) -> dict[int, np.dtype]:
+        """Dtype of each requested column (by its 0-based index in the row)."""
+        return {int(i): self.column(int(i)).dtype for i in np.flatnonzero(self.kind)}
+
+    def column(self, i: int) -> np.ndarray:
+        return (self.reals if self.kind[i] == 1 else self.ints)[self.slot[i]]
+
+    def ints_to_float(self) -> None:
+        """Make every integer column real (the values written so far kept)."""
+        ints = np.flatnonzero(self.kind == 2)
+        self.slot[ints] += self.reals.shape[0]
+        self.kind[ints] = 1
+        self.reals = np.concatenate([self.reals, self.ints.astype(np.float64)])
+        self.ints = self.ints[:0]
+
+
+_THREADS = os.cpu_count() or 1
+_SLICE_MIN = 1 << 20        # bytes below which a block is parsed by one thread
+_SLOW_MAX = 4096            # reals outside the compiled fast path converted by float() per slice, at most
+_pool: ThreadPoolExecutor | None = None
+
+
+def _parse_fast(a: np.ndarray, ncols: int, trailing: bool, cols: _Columns, row0: int,
+                rows_left: int) -> tuple[int | None, bool]:
+    """Compiled parse (:func:`~demsplit.readers.fastparse.parse_rows`) of the whole
+    rows in ``a`` into ``cols`` from row ``row0`` on, in line-aligned slices on
+    every core (the same result as one slice). The few reals outside the
+    compiled fast path (module docstring of :mod:`~demsplit.readers.fastparse`)
+    are converted by Python's ``float``, which is correctly rounded too.
+
+    Returns (rows, converted): ``rows`` is None when a row is malformed;
+    ``converted`` is False when some requested token could not be converted
+    here (the rows are then well formed, but not every value was written).
+    """
+    from .fastparse import FALLBACK, SHAPE, count_newlines, next_newline, parse_rows
+
+    global _pool
+    n_slices = max(1, min(_THREADS, a.size // _SLICE_MIN))
+    cuts = [0] + [next_newline(a, a.size * k // n_slices) for k in range(1, n_slices)] + [a.size]
+    rows = [count_newlines(a, lo, hi) for lo, hi in zip(cuts[:-2], cuts[1:-1])]
+    rows.append(rows_left - sum(rows))
+    first = np.cumsum([0] + rows[:-1]).tolist()
+    jobs = [(a, lo, hi, ncols, trailing, cols.kind, cols.slot, cols.reals, cols.ints, row0 + r, m,
+             np.empty((_SLOW_MAX, 4), dtype=np.int64))
+            for lo, hi, r, m in zip(cuts[:-1], cuts[1:], first, rows)]
+    if n_slices == 1:
+        results = [parse_rows(*jobs[0])]
+    else:
+        if _pool is None:
+            _pool = ThreadPoolExecutor(max_workers=_THREADS, thread_name_prefix="demsplit-parse")
+        results = [f.result() for f in [_pool.submit(parse_rows, *job) for job in jobs]]
+    statuses = [status for status, _, _, _ in results]
+    if SHAPE in statuses:
+        return None, False
+    for job, (_, _, _, n_slow) in zip(jobs, results):
+        for s, r, lo, hi in job[-1][:n_slow].tolist():
+            cols.reals[s, r] = float(a[lo:hi].tobytes())
+    return sum(n for _, _, n, _ in results), FALLBACK not in statuses
 
 
 def _scan(f: BinaryIO, digest=None) -> tuple[list[int], list[bytes], list[int], int, int, bytes]:
     """One pass over a (decompressed) stream in CHUNK pieces.
 
     ``digest`` (a hashlib object), if given, is updated with every byte read, in
-    a second thread (hashlib releases the GIL) while this one scans.
+    a second thread (hashlib releases the GIL) while this one scans: it reads
+    the chunk in place, so two buffers alternate and a buffer is refilled only
+    once its hash is done.
 
     Returns the byte offsets of the ``ITEM: TIMESTEP`` lines, up to
     ``HEADER_MAX`` bytes of text from each (cut at the next marker), the number
     of newlines before each, the total size, the total number of newlines and
-    the last byte. Newlines are counted and marker candidates (every ``I``, a
-    letter no number contains) found with numpy, at memory speed.
+    the last byte. Newlines are counted and markers found by one compiled pass
+    per chunk (:func:`~demsplit.readers.fastparse.scan_chunk`).
     """
+    from .fastparse import scan_chunk
+
     markers: list[int] = []
     headers: list[bytes] = []
     lines_before: list[int] = []
-    buf = bytearray(HEADER_MAX + CHUNK)   # the last HEADER_MAX bytes of a chunk move to the front
-    view = memoryview(buf)
-    kept, buf_start, newlines, last_byte = 0, 0, 0, b""
+    # the last HEADER_MAX bytes of a chunk move to the front of the next buffer, so a header is never cut
+    bufs = [bytearray(HEADER_MAX + CHUNK) for _ in range(1 if digest is None else 2)]
+    hashing = [None] * len(bufs)        # the hash (a future) still reading each buffer
+    pos_out = np.empty(len(bufs[0]) // len(MARKER) + 1, dtype=np.int64)
+    nl_out = np.empty_like(pos_out)
     hasher = ThreadPoolExecutor(max_workers=1) if digest is not None else None
-    hashing = None
-    while True:
-        got = _read_into(f, view[kept:])
+    prev, kept, limit, buf_start, newlines, last_byte = bufs[0], 0, 0, 0, 0, b""
+    for k in itertools.count():
+        buf = bufs[k % len(bufs)]
+        if hashing[k % len(bufs)] is not None:
+            hashing[k % len(bufs)].result()
+        buf[:kept] = prev[limit: limit + kept]
+        got = _read_into(f, memoryview(buf)[kept:])
         eof = got == 0
         size = kept + got
-        if hasher is not None:
-            if hashing is not None:
-                hashing.result()  # in order, one chunk at a time
-            hashing = hasher.submit(digest.update, bytes(view[kept:size]))
         if got:
             last_byte = bytes(buf[size - 1: size])
-        # search and count up to `limit`; keep the rest so that a header is never cut
+            if hasher is not None:  # in order: one worker
+                hashing[k % len(bufs)] = hasher.submit(digest.update, memoryview(buf)[kept:size])
+        # search and count up to `limit`; keep the rest for the next chunk
         limit = size if eof else max(size - HEADER_MAX, 0)
-        a = np.frombuffer(buf, dtype=np.uint8, count=limit)
-        is_nl = a == 10
-        found = [p for p in np.flatnonzero(a == MARKER[0]).tolist() if buf.startswith(MARKER, p)]
-        if found:
-            nl = np.flatnonzero(is_nl)
-            for pos in found:
-                nxt = buf.find(MARKER, pos + 1, min(pos + HEADER_MAX, size))
-                markers.append(buf_start + pos)
-                headers.append(bytes(buf[pos: nxt if nxt != -1 else min(pos + HEADER_MAX, size)]))
-                lines_before.append(newlines + int(np.searchsorted(nl, pos)))
-        newlines += int(np.count_nonzero(is_nl))
-        del a, is_nl
+        found, nl = scan_chunk(np.frombuffer(buf, dtype=np.uint8, count=size), limit, pos_out, nl_out)
+        for pos, before in zip(pos_out[:found].tolist(), nl_out[:found].tolist()):
+            nxt = buf.find(MARKER, pos + 1, min(pos + HEADER_MAX, size))
+            markers.append(buf_start + pos)
+            headers.append(bytes(buf[pos: nxt if nxt != -1 else min(pos + HEADER_MAX, size)]))
+            lines_before.append(newlines + before)
+        newlines += nl
         if eof:
-            view.release()
             if hasher is not None:
-                hashing.result()
-                hasher.shutdown()
+                hasher.shutdown()  # waits for the last hash
             return markers, headers, lines_before, buf_start + size, newlines, last_byte
-        buf[: size - limit] = buf[limit: size]
-        kept, buf_start = size - limit, buf_start + limit
+        prev, kept, buf_start = buf, size - limit, buf_start + limit
 
 
 def _read_into(f: BinaryIO, view: memoryview) -> int:

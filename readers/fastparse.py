@@ -1,0 +1,291 @@
+"""Compiled kernels of the text-dump reader (:mod:`demsplit.readers.lammps_dump`).
+
+Two jobs, each one pass over bytes in memory, compiled by numba
+(:func:`demsplit.jit.kernel`: cached, GIL released, so threads run them on
+disjoint slices):
+
+``scan_chunk``
+    the index scan: count the newlines of a chunk and find the
+    ``ITEM: TIMESTEP`` markers in it, with the newlines before each.
+``parse_rows``
+    the parse of whole rows: check each row's shape (``ncols`` fields, single
+    spaces, optional trailing space, newline) and convert the requested
+    columns, integers exactly to int64, reals to the float64 nearest the
+    decimal (bit for bit Python's ``float(token)``).
+
+Reals are converted by Clinger's fast path: a token
+``[+-]digits[.digits][(e|E)[+-]digits]`` has the value m * 10**e with an
+integer mantissa m (its significant digits) and a decimal exponent e. When
+m <= 2**53 and |e| <= 22, both m and 10**|e| are exact doubles, so
+``m * 10.0**e`` (e >= 0) or ``m / 10.0**-e`` (e < 0) is one IEEE operation on
+exact operands, hence correctly rounded: the nearest double to the decimal.
+LAMMPS's default ``%g`` (6 significant digits, exponents within +-22 for any
+DEM quantity in SI units) always takes it. Any other token (more digits, a
+larger exponent, ``nan``, ``inf``, a letter) is not converted: the kernel
+reports where, and the caller parses that block with its general (slower)
+parser, which also produces the located error messages. So the fast path
+never decides what is an error, and never produces a different number.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from demsplit.jit import kernel
+
+__all__ = ["scan_chunk", "count_newlines", "next_newline", "parse_rows", "OK", "SHAPE", "FALLBACK"]
+
+MARKER = b"ITEM: TIMESTEP"
+_MARKER = np.frombuffer(MARKER, dtype=np.uint8).copy()
+
+# statuses of parse_rows
+OK = 0          # every row well formed, every requested token converted
+SHAPE = 1       # a row is not ncols single-space-separated fields (+ trailing space) and a newline
+FALLBACK = 2    # rows well formed, but a requested token is outside the fast path: not all converted
+
+_FAST, _SLOW, _NOT_DECIMAL = 0, 1, 2                # what _real found
+
+_POW10 = np.array([10.0 ** k for k in range(23)])   # 1e0 .. 1e22, each an exact double
+_MAX_EXACT = 1 << 53                                # largest mantissa that is an exact double
+_SEP = 32                                           # bytes <= 32 separate fields (LAMMPS writes ' ' and '\n')
+_BLOCK = 64                                         # bytes counted per step of the scan
+
+
+@kernel
+def count_newlines(a: np.ndarray, start: int, end: int) -> int:
+    """Number of ``\\n`` bytes in ``a[start:end]``."""
+    s = a[start:end]    # indexed from 0: no negative-index wraparound, so the loop is vectorised
+    n = 0
+    for j in range(s.size):
+        n += s[j] == 10
+    return n
+
+
+@kernel
+def scan_chunk(a: np.ndarray, limit: int, pos_out: np.ndarray, nl_out: np.ndarray) -> tuple[int, int]:
+    """Newlines and ``ITEM: TIMESTEP`` markers of ``a[:limit]``.
+
+    A marker is found when it starts before ``limit`` (it may extend past it,
+    into the rest of ``a``). Its offset goes to ``pos_out[k]`` and the number
+    of newlines before it (from ``a[0]``) to ``nl_out[k]``; both must hold one
+    slot per ``len(MARKER)`` bytes of ``limit``. Returns (markers found,
+    newlines in ``a[:limit]``). Counted in 64-byte steps without branches,
+    which the compiler vectorises; a step holding an ``I`` (a letter no number
+    contains) is then searched byte by byte.
+    """
+    m = _MARKER.size
+    newlines = 0
+    found = 0
+    stop = limit - limit % _BLOCK
+    for b in range(0, stop, _BLOCK):
+        nl = 0
+        has_i = 0
+        for j in range(b, b + _BLOCK):
+            nl += a[j] == 10
+            has_i |= a[j] == 73
+        if has_i:
+            before = newlines
+            for j in range(b, b + _BLOCK):
+                if a[j] == 73 and _marker_at(a, j, m):
+                    pos_out[found] = j
+                    nl_out[found] = before
+                    found += 1
+                before += a[j] == 10
+        newlines += nl
+    for j in range(stop, limit):
+        if a[j] == 73 and _marker_at(a, j, m):
+            pos_out[found] = j
+            nl_out[found] = newlines
+            found += 1
+        newlines += a[j] == 10
+    return found, newlines
+
+
+@kernel
+def _marker_at(a: np.ndarray, j: int, m: int) -> bool:
+    if j + m > a.size:
+        return False
+    for k in range(m):
+        if a[j + k] != _MARKER[k]:
+            return False
+    return True
+
+
+@kernel
+def _real(a: np.ndarray, p: int, end: int) -> tuple[int, float, int]:
+    """The decimal literal ``[+-]digits[.digits][(e|E)[+-]digits]`` at ``a[p]``.
+
+    Returns (status, value, q), ``q`` the offset after the literal's grammar:
+    status ``_FAST`` with its value by Clinger's fast path (module docstring),
+    ``_SLOW`` for a literal outside it (more than 18 significant digits,
+    m > 2**53 or |e| > 22; value 0), ``_NOT_DECIMAL`` when the bytes at ``p``
+    do not start such a literal (``q`` then says nothing).
+    """
+    neg = False
+    if p < end and (a[p] == 45 or a[p] == 43):
+        neg = a[p] == 45
+        p += 1
+    m = 0
+    digits = 0          # significant digits (from the first nonzero one); m holds the first 18
+    seen = False        # any mantissa digit at all
+    e10 = 0
+    while p < end and 48 <= a[p] <= 57:
+        d = a[p] - 48
+        seen = True
+        if digits > 0 or d != 0:
+            digits += 1
+            if digits <= 18:
+                m = m * 10 + d
+        p += 1
+    if p < end and a[p] == 46:
+        p += 1
+        while p < end and 48 <= a[p] <= 57:
+            d = a[p] - 48
+            seen = True
+            if digits > 0 or d != 0:
+                digits += 1
+                if digits <= 18:
+                    m = m * 10 + d
+            e10 -= 1
+            p += 1
+    if not seen:
+        return _NOT_DECIMAL, 0.0, p
+    if p < end and (a[p] == 101 or a[p] == 69):
+        p += 1
+        eneg = False
+        if p < end and (a[p] == 45 or a[p] == 43):
+            eneg = a[p] == 45
+            p += 1
+        ex = 0
+        edigits = 0
+        while p < end and 48 <= a[p] <= 57:
+            if ex < 100000:     # saturate: beyond +-22 only m == 0 is fast, whatever the exponent
+                ex = ex * 10 + (a[p] - 48)
+            edigits += 1
+            p += 1
+        if edigits == 0:
+            return _NOT_DECIMAL, 0.0, p
+        e10 += -ex if eneg else ex
+    if m == 0:
+        return _FAST, (-0.0 if neg else 0.0), p
+    if digits > 18 or m > _MAX_EXACT or e10 > 22 or e10 < -22:
+        return _SLOW, 0.0, p
+    v = float(m) * _POW10[e10] if e10 >= 0 else float(m) / _POW10[-e10]
+    return _FAST, (-v if neg else v), p
+
+
+@kernel
+def _integer(a: np.ndarray, p: int, end: int) -> tuple[bool, int, int]:
+    """Value of the integer literal ``[-]digits`` (at most 18 digits) at
+    ``a[p]``: (converted, value, offset after its grammar)."""
+    neg = False
+    if p < end and a[p] == 45:
+        neg = True
+        p += 1
+    v = 0
+    n = 0
+    while p < end and 48 <= a[p] <= 57:
+        v = v * 10 + (a[p] - 48)
+        n += 1
+        p += 1
+    if n == 0 or n > 18:
+        return False, 0, p
+    return True, (-v if neg else v), p
+
+
+@kernel
+def _field_end(a: np.ndarray, q: int, end: int) -> int:
+    """Offset of the first separator (byte <= 32) at or after ``a[q]``, or ``end``.
+    Unsigned offsets spare the negative-index check on every byte (a third
+    faster: this loop runs over every byte of the columns not read)."""
+    i = np.uint64(q)
+    stop = np.uint64(end)
+    while i < stop and a[i] > _SEP:
+        i += np.uint64(1)
+    return np.int64(i)
+
+
+@kernel
+def parse_rows(a: np.ndarray, start: int, end: int, ncols: int, trailing: bool, kind: np.ndarray,
+               slot: np.ndarray, reals: np.ndarray, ints: np.ndarray, row0: int, max_rows: int,
+               slow: np.ndarray) -> tuple[int, int, int, int]:
+    """Check and convert the whole rows in ``a[start:end]`` (ending with ``\\n``).
+
+    Column ``c`` of a row is written, when ``kind[c]`` is 1, as float64 to
+    ``reals[slot[c], row0 + r]``, when 2, as int64 to ``ints[slot[c], row0 + r]``;
+    0 = not requested (only its shape is checked). At most ``max_rows`` rows
+    are expected. A real that is a decimal literal outside the fast path is
+    not written but listed in ``slow`` (one row per token: slot, row, start
+    and end offset in ``a``), for the caller to convert; when ``slow`` is full,
+    that token counts as outside the fast path.
+
+    Returns (status, row, rows, n_slow): ``OK`` with the number of rows;
+    ``SHAPE`` with the row (0-based in this slice) that is not ``ncols``
+    non-empty fields separated by single spaces, then one space when
+    ``trailing``, then a newline (any other byte <= 32 is a bad separator),
+    or that exceeds ``max_rows``; ``FALLBACK`` with the first row holding a
+    requested token that is neither converted nor listed (conversion stops
+    there; the shape check goes on to the end, so the rows are well formed).
+    """
+    p = start
+    r = 0
+    n_slow = 0
+    convert = True
+    first_fallback = -1
+    while p < end:
+        if r >= max_rows:
+            return SHAPE, r, r, n_slow
+        for c in range(ncols):
+            k = kind[c] if convert else 0
+            q = p
+            if k == 1:
+                found, v, q = _real(a, p, end)
+                if q < end and a[q] > _SEP:
+                    found = _NOT_DECIMAL
+                if found == _FAST:
+                    reals[slot[c], row0 + r] = v
+                elif found == _SLOW and n_slow < slow.shape[0]:
+                    slow[n_slow, 0] = slot[c]
+                    slow[n_slow, 1] = row0 + r
+                    slow[n_slow, 2] = p
+                    slow[n_slow, 3] = q
+                    n_slow += 1
+                else:
+                    convert = False
+                    first_fallback = r
+            elif k == 2:
+                ok, iv, q = _integer(a, p, end)
+                if ok and (q == end or a[q] <= _SEP):
+                    ints[slot[c], row0 + r] = iv
+                else:
+                    convert = False
+                    first_fallback = r
+            q = _field_end(a, q, end)
+            if q == p or q == end:          # empty field, or no newline at the end
+                return SHAPE, r, r, n_slow
+            if c < ncols - 1:
+                if a[q] != 32:
+                    return SHAPE, r, r, n_slow
+                p = q + 1
+            elif trailing:
+                if a[q] != 32 or q + 1 == end or a[q + 1] != 10:
+                    return SHAPE, r, r, n_slow
+                p = q + 2
+            else:
+                if a[q] != 10:
+                    return SHAPE, r, r, n_slow
+                p = q + 1
+        r += 1
+    if first_fallback >= 0:
+        return FALLBACK, first_fallback, r, n_slow
+    return OK, r, r, n_slow
+
+
+@kernel
+def next_newline(a: np.ndarray, p: int) -> int:
+    """Offset after the first ``\\n`` at or after ``a[p]`` (``a.size`` if none)."""
+    while p < a.size:
+        if a[p] == 10:
+            return p + 1
+        p += 1
+    return a.size

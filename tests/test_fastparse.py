@@ -1,0 +1,374 @@
+"""Tests of the compiled parse of text dumps (demsplit.readers.fastparse) and of
+its use by the reader (demsplit.readers.lammps_dump): bit-exact reals, the
+fallback to the polars path, the same errors, threads."""
+
+from __future__ import annotations
+
+import gzip
+import os
+import struct
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import demsplit.readers.lammps_dump as ld
+from demsplit.errors import InputFormatError, TruncatedFileError
+from demsplit.readers import fastparse as fp
+from demsplit.readers.lammps_dump import open_dump
+
+REPO = Path(__file__).resolve().parent.parent
+SAMPLES = REPO / "sample_dumps" / "liggghts"
+FORMATS = ["%g", "%.6g", "%.10g", "%.15g", "%.16g", "%.17g", "%e", "repr"]
+
+
+def bits(x: float) -> int:
+    return struct.unpack("<q", struct.pack("<d", x))[0]
+
+
+def fmt(x: float, f: str) -> str:
+    return repr(x) if f == "repr" else f % x
+
+
+def kernel_real(token: str) -> tuple[int, float | None, bool]:
+    """parse_rows on the one-row, one-column text ``token\\n`` read as a real:
+    (status, value written or None, listed as a slow token)."""
+    a = np.frombuffer((token + "\n").encode(), dtype=np.uint8)
+    reals = np.full((1, 1), 12345.0)
+    slow = np.empty((4, 4), dtype=np.int64)
+    status, _, rows, n_slow = fp.parse_rows(a, 0, a.size, 1, False, np.array([1]), np.array([0]), reals,
+                                            np.empty((0, 1), np.int64), 0, 1, slow)
+    assert rows == 1
+    if n_slow:
+        assert slow[0].tolist() == [0, 0, 0, len(token)]  # slot, row, the token's byte range
+    written = status == fp.OK and not n_slow
+    return status, (float(reals[0, 0]) if written else None), bool(n_slow)
+
+
+# --------------------------------------------------------------------------- the kernel alone
+
+doubles = st.floats(allow_nan=False, allow_infinity=False) | st.floats(min_value=-1e-300, max_value=1e-300) \
+    | st.sampled_from([0.0, -0.0, 5e-324, 2.2250738585072014e-308, 1.7976931348623157e308, 2.0 ** 53,
+                       2.0 ** 53 + 2, 9007199254740993.0, 1e22, 1e23, 1e-22, 1e-23])
+
+
+@settings(max_examples=400, deadline=None)
+@given(x=doubles, f=st.sampled_from(FORMATS))
+def test_kernel_real_is_pythons_float_or_not_converted(x, f):
+    token = fmt(x, f)
+    status, value, slow = kernel_real(token)
+    assert status in (fp.OK, fp.FALLBACK)
+    if value is not None:
+        assert bits(value) == bits(float(token)), token
+    else:  # outside the fast path: only for a literal with > 16 digits or |exponent| > 22
+        assert slow and status == fp.OK
+        mantissa, _, exp = token.lower().partition("e")
+        digits = mantissa.lstrip("-+").replace(".", "").lstrip("0")
+        frac = len(mantissa.partition(".")[2])
+        assert len(digits) > 15 or abs(int(exp or 0) - frac) > 22 or int(digits) > 2 ** 53, token
+
+
+@settings(max_examples=300, deadline=None)
+@given(m=st.integers(0, 2 ** 53 + 64) | st.integers(0, 10 ** 19), e=st.integers(-26, 26),
+       point=st.integers(0, 20), neg=st.booleans(), e_char=st.sampled_from("eE"))
+def test_kernel_real_near_the_fast_path_bounds(m, e, point, neg, e_char):
+    """Mantissas around 2**53 and exponents around +-22, with the decimal point
+    anywhere: converted exactly as float() does, or listed as slow."""
+    s = str(m)
+    point = min(point, len(s))
+    mantissa = s[: len(s) - point] + ("." + s[len(s) - point:] if point else "")
+    token = ("-" if neg else "") + (mantissa if mantissa[0] != "." else "0" + mantissa) + f"{e_char}{e:+d}"
+    status, value, slow = kernel_real(token)
+    if value is None:
+        assert slow
+        assert m > 2 ** 53 or abs(e - point) > 22
+    else:
+        assert bits(value) == bits(float(token)), token
+
+
+def test_kernel_fast_path_covers_g_format():
+    """Every %g token of moderate exponent takes the fast path (not merely 'is not wrong')."""
+    rng = np.random.default_rng(1)
+    x = rng.standard_normal(2000) * 10.0 ** rng.integers(-15, 15, 2000)
+    for v in x.tolist() + [0.0, -0.0, 1.0, -1e-16]:
+        token = "%g" % v
+        _, value, _ = kernel_real(token)
+        assert value is not None and bits(value) == bits(float(token)), token
+
+
+@pytest.mark.parametrize("token", ["nan", "-nan", "inf", "-inf", "abc", "1.5x", "1e", "-", ".", "1e+", "0x10",
+                                   "1_0"])
+def test_kernel_leaves_non_decimals_to_the_fallback(token):
+    status, value, slow = kernel_real(token)
+    assert status == fp.FALLBACK and value is None and not slow
+
+
+@settings(max_examples=200, deadline=None)
+@given(v=st.integers(-2 ** 63, 2 ** 63 - 1))
+def test_kernel_integers_exact_or_fallback(v):
+    a = np.frombuffer(f"{v}\n".encode(), dtype=np.uint8)
+    ints = np.zeros((1, 1), np.int64)
+    status, *_ = fp.parse_rows(a, 0, a.size, 1, False, np.array([2]), np.array([0]), np.empty((0, 1)), ints,
+                               0, 1, np.empty((1, 4), np.int64))
+    if len(str(abs(v))) <= 18:
+        assert status == fp.OK and int(ints[0, 0]) == v
+    else:
+        assert status == fp.FALLBACK
+
+
+@pytest.mark.parametrize("text, trailing, row", [
+    ("1 2 3\n4 5 6\n", False, None),
+    ("1 2 3 \n4 5 6 \n", True, None),
+    ("1 2 3\n4 5\n", False, 1),          # short row
+    ("1 2 3\n4 5 6 7\n", False, 1),      # long row
+    ("1 2 3\n4  5 6\n", False, 1),       # empty field (double space)
+    ("1 2 3\n 4 5 6\n", False, 1),       # leading space
+    ("1 2 3\n4\t5 6\n", False, 1),       # tab
+    ("1 2 3\r\n4 5 6\n", False, 0),      # CR
+    ("1 2 3 \n4 5 6\n", True, 1),        # trailing space missing
+    ("1 2 3\n4 5 6 \n", False, 1),       # unexpected trailing space
+    ("1 2 3\n\n", False, 1),             # empty line
+    ("1 2 3\n4 5 6", False, 1),          # no final newline
+])
+def test_kernel_shape_check(text, trailing, row):
+    a = np.frombuffer(text.encode(), dtype=np.uint8)
+    reals = np.zeros((3, 2))
+    status, where, _, _ = fp.parse_rows(a, 0, a.size, 3, trailing, np.array([1, 0, 1]), np.array([0, 0, 1]),
+                                        reals, np.empty((0, 2), np.int64), 0, 2, np.empty((1, 4), np.int64))
+    if row is None:
+        assert status == fp.OK and reals[:2].tolist() == [[1, 4], [3, 6]]
+    else:
+        assert (status, where) == (fp.SHAPE, row)
+
+
+def test_scan_chunk_finds_markers_and_newlines():
+    text = b"x\nITEM: TIMESTEP\n1\n" + b"1 2\n" * 50 + b"ITEM: TIMESTEP\n2\nITEM: TIMESTE" + b"I\n" * 30
+    a = np.frombuffer(text, dtype=np.uint8)
+    pos, nl = np.empty(a.size, np.int64), np.empty(a.size, np.int64)
+    for limit in (a.size, a.size - 40, 5, 100):
+        found, newlines = fp.scan_chunk(a, limit, pos, nl)
+        expect = [p for p in (2, text.index(b"ITEM: TIMESTEP\n2")) if p < limit]
+        assert pos[:found].tolist() == expect
+        assert nl[:found].tolist() == [text[:p].count(b"\n") for p in expect]
+        assert newlines == text[:limit].count(b"\n")
+
+
+# --------------------------------------------------------------------------- the reader
+
+def local_dump(rows: list[str], ncols: int, step: int = 1) -> str:
+    names = " ".join(f"c{k}" for k in range(1, ncols + 1))
+    return (f"ITEM: TIMESTEP\n{step}\nITEM: NUMBER OF ENTRIES\n{len(rows)}\nITEM: BOX BOUNDS ff ff ff\n"
+            f"0 1\n0 1\n0 1\nITEM: ENTRIES {names} \n" + "".join(r + " \n" for r in rows))
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(xs=st.lists(doubles, min_size=1, max_size=60), f=st.sampled_from(FORMATS),
+       first=st.integers(0, 10 ** 6))
+def test_reader_equals_pythons_float_per_token(xs, f, first):
+    """Fast path + float() for slow tokens + polars fallback: always float(token)."""
+    tokens = [fmt(x, f) for x in xs]
+    rows = [f"{first + k} {t} {t}" for k, t in enumerate(tokens)]
+    with tempfile.TemporaryDirectory() as d:
+        p = Path(d) / "d.txt"
+        p.write_text(local_dump(rows, 3))
+        if not all(np.isfinite([float(t) for t in tokens])):  # printed rounded up to inf: refused
+            with pytest.raises(InputFormatError, match="finite"):
+                open_dump(p).frame(0)
+            return
+        frame = open_dump(p).frame(0)
+    for name in ("c2", "c3"):
+        got = frame.columns[name]
+        if got.dtype == np.int64:  # every token an integer literal ('0', '%g' of 12345)
+            assert got.tolist() == [int(t) for t in tokens]
+        else:
+            assert [bits(v) for v in got.tolist()] == [bits(float(t)) for t in tokens]
+    assert frame.columns["c1"].tolist() == [first + k for k in range(len(xs))]
+
+
+def force_polars(monkeypatch):
+    """Make every block go through the polars path (after the kernel's shape check)."""
+    fast = ld._parse_fast
+
+    def slow_path(*args):
+        n, _ = fast(*args)
+        return n, False
+    monkeypatch.setattr(ld, "_parse_fast", slow_path)
+
+
+def read_all(path: Path, columns=None) -> tuple[list, object]:
+    d = open_dump(path)
+    return [(f.step, {k: v.copy() for k, v in f.columns.items()}, f.digits) for f in d.frames(columns)], d
+
+
+def assert_same_frames(a: list, b: list) -> None:
+    assert len(a) == len(b)
+    for (sa, ca, da), (sb, cb, db) in zip(a, b):
+        assert sa == sb and da == db and list(ca) == list(cb)
+        for k in ca:
+            assert ca[k].dtype == cb[k].dtype, k
+            assert np.array_equal(ca[k].view(np.int64), cb[k].view(np.int64)), k  # bit for bit
+
+
+@pytest.fixture(scope="module")
+def generated(tmp_path_factory) -> Path:
+    d = tmp_path_factory.mktemp("gen")
+    subprocess.run([sys.executable, str(REPO / "benchmarks" / "generate.py"), str(d), "--particles", "2000",
+                    "--contacts", "4000", "--frames", "2"], check=True, capture_output=True)
+    return d
+
+
+def sample_files() -> list[Path]:
+    return sorted(p for p in SAMPLES.glob("*/*.txt*"))
+
+
+@pytest.mark.parametrize("path", sample_files(), ids=lambda p: f"{p.parent.name}/{p.name}")
+def test_fast_path_equals_polars_path_on_samples(path, monkeypatch):
+    fast, d = read_all(path)
+    if ".gz" not in path.suffixes:  # %g dumps (the .gz are full precision): every block compiled
+        assert d.fast_blocks > 0 and d.fallback_blocks == 0
+    force_polars(monkeypatch)
+    slow, d2 = read_all(path)
+    assert d2.fallback_blocks == d2.fast_blocks + d2.fallback_blocks > 0
+    assert_same_frames(fast, slow)
+
+
+@pytest.mark.parametrize("name", ["atoms.txt", "pairs.txt"])
+def test_fast_path_equals_polars_path_on_generated_run(generated, name, monkeypatch):
+    fast, d = read_all(generated / name)
+    assert d.fast_blocks == 2 and d.fallback_blocks == 0
+    force_polars(monkeypatch)
+    slow, _ = read_all(generated / name)
+    assert_same_frames(fast, slow)
+
+
+def g17_dump(n: int) -> str:
+    rng = np.random.default_rng(3)
+    x = rng.standard_normal((n, 3))
+    return local_dump([f"{k + 1} " + " ".join("%.17g" % v for v in row) for k, row in enumerate(x)], 4)
+
+
+def test_full_precision_dump_falls_back_and_reads_exactly(tmp_path):
+    n = 3000  # 9000 tokens of 17 digits: more than a slice lists, so the block falls back to polars
+    p = tmp_path / "g17.txt"
+    text = g17_dump(n)
+    p.write_text(text)
+    d = open_dump(p)
+    f = d.frame(0)
+    assert d.fallback_blocks == 1 and d.fast_blocks == 0
+    rows = [ln.split() for ln in text.splitlines()[9:]]
+    for c in (1, 2, 3):
+        assert [bits(v) for v in f.columns[f"c{c + 1}"].tolist()] == [bits(float(r[c])) for r in rows]
+
+
+def test_a_few_slow_tokens_are_converted_by_float(tmp_path):
+    rows = [f"{k} {0.001 * k:g} 1e-30" if k % 100 == 7 else f"{k} {0.001 * k:g} 2.5" for k in range(1000)]
+    p = tmp_path / "d.txt"
+    p.write_text(local_dump(rows, 3))
+    d = open_dump(p)
+    f = d.frame(0)
+    assert d.fast_blocks == 1 and d.fallback_blocks == 0
+    assert f.columns["c3"].tolist() == [1e-30 if k % 100 == 7 else 2.5 for k in range(1000)]
+
+
+def test_nan_falls_back_and_is_reported(tmp_path):
+    rows = [f"{k} 0.5 0.25" for k in range(50)]
+    rows[31] = "31 0.5 nan"
+    text = local_dump(rows, 3)
+    d = open_dump(ld_write(tmp_path, text))
+    with pytest.raises(InputFormatError, match="expected a finite number") as err:
+        d.frame(0)
+    assert d.fallback_blocks == 1
+    assert err.value.line == 10 + 31
+
+
+def ld_write(tmp_path: Path, text: str, name: str = "d.txt") -> Path:
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+# --------------------------------------------------------------------------- errors, blocks, threads
+
+@pytest.mark.parametrize("bad, expect", [
+    ("7 0.5", "row 8 has 2 values, expected 3"),
+    ("7 0.5 0.25 1", "row 8 has 4 values, expected 3"),
+    ("7 0.5  0.25", "row 8 has 3 values, expected 3"),     # double space: an empty field
+    ("7 0.5 abc", "column 3 ('c3') of row 8 is 'abc'; expected a number"),
+])
+@pytest.mark.parametrize("block", [None, 64])
+def test_errors_name_the_line(tmp_path, monkeypatch, bad, expect, block):
+    if block:  # the bad row in a later block than the first
+        monkeypatch.setattr(ld, "BLOCK", block)
+    rows = [f"{k} 0.5 0.25" for k in range(20)]
+    rows[7] = bad
+    text = local_dump(rows, 3)
+    with pytest.raises(InputFormatError) as err:
+        open_dump(ld_write(tmp_path, text)).frame(0)
+    assert not isinstance(err.value, TruncatedFileError)
+    assert expect in str(err.value) and err.value.line == 10 + 7 and err.value.step == 1
+
+
+def test_missing_final_newline(tmp_path):
+    text = local_dump([f"{k} 0.5 0.25" for k in range(5)], 3)[:-1]
+    with pytest.raises(TruncatedFileError, match="middle of a row") as err:
+        open_dump(ld_write(tmp_path, text)).frame(0)
+    assert err.value.line == 10 + 4
+
+
+def test_integer_column_turning_real_in_a_later_block(tmp_path, monkeypatch):
+    monkeypatch.setattr(ld, "DIGITS_SAMPLE", 64)
+    monkeypatch.setattr(ld, "BLOCK", 100)
+    rows = [f"{k} {k * 0.5:g}" for k in range(40)]
+    rows[20] = "2.5e+06 10"
+    f = open_dump(ld_write(tmp_path, local_dump(rows, 2))).frame(0)
+    assert f.columns["c1"].dtype == np.float64
+    assert f.columns["c1"].tolist() == [2.5e6 if k == 20 else float(k) for k in range(40)]
+    assert f.columns["c2"].tolist() == [10.0 if k == 20 else k * 0.5 for k in range(40)]
+
+
+@pytest.mark.parametrize("block", [60, 1000, 1 << 24])   # rows longer than a block, several blocks, one
+def test_threaded_parse_equals_serial(generated, monkeypatch, block):
+    path = generated / "pairs.txt"
+    monkeypatch.setattr(ld, "BLOCK", block)
+    monkeypatch.setattr(ld, "_SLICE_MIN", 1)
+    monkeypatch.setattr(ld, "_THREADS", 1)
+    serial, _ = read_all(path)
+    monkeypatch.setattr(ld, "_THREADS", 5)
+    threaded, _ = read_all(path)
+    assert_same_frames(serial, threaded)
+
+
+def test_compressed_dump_uses_the_fast_path(tmp_path):
+    text = local_dump([f"{k} {k * 0.25:g} {k * 1e-3:g}" for k in range(300)], 3)
+    p = tmp_path / "d.txt.gz"
+    with gzip.open(p, "wt") as f:
+        f.write(text)
+    d = open_dump(p)
+    f = d.frame(0)
+    assert d.fast_blocks == 1 and d.fallback_blocks == 0
+    assert f.columns["c3"].tolist() == [float(f"{k * 1e-3:g}") for k in range(300)]
+
+
+def test_kernels_load_from_the_cache():
+    """A fresh process loads the compiled kernels instead of compiling them
+    (the first one may have had to compile them)."""
+    code = ("import numpy as np\n"
+            "from demsplit.readers import fastparse as fp\n"
+            "a = np.frombuffer(b'1 2.5\\n', dtype=np.uint8)\n"
+            "fp.parse_rows(a, 0, a.size, 2, False, np.array([2, 1]), np.array([0, 0]), np.zeros((1, 1)),\n"
+            "              np.zeros((1, 1), np.int64), 0, 1, np.empty((1, 4), np.int64))\n"
+            "fp.scan_chunk(a, a.size, np.empty(2, np.int64), np.empty(2, np.int64))\n"
+            "fp.count_newlines(a, 0, a.size); fp.next_newline(a, 0)\n"
+            "k = (fp.parse_rows, fp.scan_chunk, fp.count_newlines, fp.next_newline)\n"
+            "print(sum(sum(f.stats.cache_misses.values()) for f in k), sum(sum(f.stats.cache_hits.values()) for f in k))\n")
+    env = dict(os.environ)
+    env.pop("NUMBA_DISABLE_JIT", None)
+    for _ in range(2):
+        out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True, env=env)
+    misses, hits = map(int, out.stdout.split())
+    assert misses == 0 and hits == 4
