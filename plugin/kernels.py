@@ -60,19 +60,20 @@ def _stride(values):
 @kernel
 def contact_rows(row_of_id, id1, id2, wall):
     """Particle rows of both bodies of every contact from a dense id -> row table
-    (-1: no particle). rows2 is -1 for wall contacts. Returns (rows1, rows2,
-    first contact naming an unknown id or -1)."""
+    (-1: no particle), in the table's integer type. For a wall contact rows2 is
+    -1 - wall (< 0). Returns (rows1, rows2, first contact naming an unknown id or -1)."""
     n = id1.shape[0]
-    rows1 = np.empty(n, np.int64)
-    rows2 = np.empty(n, np.int64)
+    rows1 = np.empty(n, row_of_id.dtype)
+    rows2 = np.empty(n, row_of_id.dtype)
     bad = -1
     m = row_of_id.shape[0]
     for i in range(n):
         a = id1[i]
         r = row_of_id[a] if 0 <= a < m else -1
         rows1[i] = r
-        if wall[i] >= 0:
-            rows2[i] = -1
+        w = wall[i]
+        if w >= 0:
+            rows2[i] = -1 - w
         else:
             b = id2[i]
             r2 = row_of_id[b] if 0 <= b < m else -1
@@ -85,41 +86,35 @@ def contact_rows(row_of_id, id1, id2, wall):
 
 
 @kernel
-def contact_types(rows1, rows2, wall, ptype, wall_types, n_types):
-    """Material type of body 1 (particle) and body 2 (particle, or the wall's type)
-    of every contact, the code type1 * n_types + type2 of the pair (-1 where a type
-    is outside 0..n_types-1) and which codes are present. Returns (type1, type2,
-    code, present, first contact naming a wall beyond ``wall_types`` or -1,
-    first contact with a type outside the table or -1)."""
+def contact_types(rows1, rows2, ptype, wall_types, n_types, code):
+    """Pair code type1 * n_types + type2 of every contact into ``code`` (body 1: a
+    particle; body 2: a particle, or for rows2 = -1 - wall that wall's type), and
+    which codes are present. Returns (present, first contact naming a wall beyond
+    ``wall_types`` or -1, first contact with a type outside 0..n_types-1 or -1)."""
     n = rows1.shape[0]
-    type1 = np.empty(n, np.int64)
-    type2 = np.empty(n, np.int64)
-    code = np.empty(n, np.int64)
     present = np.zeros(n_types * n_types, np.bool_)
     bad_wall = -1
     bad_type = -1
     for i in range(n):
         t1 = np.int64(ptype[rows1[i]])
-        w = wall[i]
-        if w < 0:
-            t2 = np.int64(ptype[rows2[i]])
-        elif w < wall_types.shape[0]:
-            t2 = wall_types[w]
+        r2 = rows2[i]
+        if r2 >= 0:
+            t2 = np.int64(ptype[r2])
+        elif -1 - r2 < wall_types.shape[0]:
+            t2 = wall_types[-1 - r2]
         else:
             t2 = np.int64(-1)
             if bad_wall < 0:
                 bad_wall = i
-        type1[i] = t1
-        type2[i] = t2
         if 0 <= t1 < n_types and 0 <= t2 < n_types:
             c = t1 * n_types + t2
             code[i] = c
             present[c] = True
         else:
-            code[i] = -1
+            code[i] = 0
             if bad_type < 0:
                 bad_type = i
-    return type1, type2, code, present, bad_wall, bad_type
+    return present, bad_wall, bad_type
 
 
 @kernel
@@ -175,40 +170,40 @@ def split_contacts(sn_values, sn_code, st_values, st_code, u_n, u_t, delta, x1, 
 
 
 @kernel
-def body_sums(rows1, rows2, wall, s_n, s_t, u_n, u_t, n_particles, n_walls):
-    """Sums per particle and per wall of the normal and tangential energy each body
-    stores (body 1: s u; body 2: u - s u) and of its contacts.
+def body_sums(rows1, rows2, s_n, s_t, u_n, u_t, n_particles, n_walls):
+    """Sums per particle and per wall (rows2 = -1 - wall) of the normal and tangential
+    energy each body stores (body 1: s u; body 2: u - s u) and of its contacts.
 
-    Sums run in contact order, body-1 terms first, then body-2 terms, added at the
-    end: the order of ``np.bincount(rows1, w1) + np.bincount(rows2, w2)``.
+    Body-1 and body-2 terms are summed separately, each in contact order, and added
+    at the end: the order of ``np.bincount(rows1, w1) + np.bincount(rows2, w2)``,
+    so the sums are those of the numpy formulation bit for bit.
     Returns (particle u_n, u_t, n_contacts, wall u_n, u_t, n_contacts)."""
     n = rows1.shape[0]
     sn, st = _stride(s_n), _stride(s_t)
     p_un = np.zeros(n_particles)
     p_ut = np.zeros(n_particles)
+    q_un = np.zeros(n_particles)
+    q_ut = np.zeros(n_particles)
     p_count = np.zeros(n_particles, np.int64)
     w_un = np.zeros(n_walls)
     w_ut = np.zeros(n_walls)
     w_count = np.zeros(n_walls, np.int64)
-    for i in range(n):  # body 1
+    for i in range(n):
+        un1 = s_n[i * sn] * u_n[i]
+        ut1 = s_t[i * st] * u_t[i]
         r = rows1[i]
-        p_un[r] += s_n[i * sn] * u_n[i]
-        p_ut[r] += s_t[i * st] * u_t[i]
+        p_un[r] += un1
+        p_ut[r] += ut1
         p_count[r] += 1
-    q_un = np.zeros(n_particles)
-    q_ut = np.zeros(n_particles)
-    for i in range(n):  # body 2
-        un2 = u_n[i] - s_n[i * sn] * u_n[i]
-        ut2 = u_t[i] - s_t[i * st] * u_t[i]
-        w = wall[i]
-        if w < 0:
-            r = rows2[i]
-            q_un[r] += un2
-            q_ut[r] += ut2
-            p_count[r] += 1
+        r2 = rows2[i]
+        if r2 >= 0:
+            q_un[r2] += u_n[i] - un1
+            q_ut[r2] += u_t[i] - ut1
+            p_count[r2] += 1
         else:
-            w_un[w] += un2
-            w_ut[w] += ut2
+            w = -1 - r2
+            w_un[w] += u_n[i] - un1
+            w_ut[w] += u_t[i] - ut1
             w_count[w] += 1
     for r in range(n_particles):
         p_un[r] += q_un[r]
@@ -217,10 +212,10 @@ def body_sums(rows1, rows2, wall, s_n, s_t, u_n, u_t, n_particles, n_walls):
 
 
 @kernel
-def particle_sums(rows1, rows2, wall, s_n, s_t, u_n, u_t, n_particles):
-    """Energy of every particle under shares s_n, s_t (per contact or one value): u1 = s_n u_n + s_t u_t
-    on body 1, u_n + u_t - u1 on body 2 of particle pairs; same order of sums as
-    :func:`body_sums`."""
+def particle_sums(rows1, rows2, s_n, s_t, u_n, u_t, n_particles):
+    """Energy of every particle under shares s_n, s_t (per contact or one value):
+    u1 = s_n u_n + s_t u_t on body 1, u_n + u_t - u1 on body 2 of particle pairs
+    (rows2 >= 0); sums in the order of :func:`body_sums`."""
     n = rows1.shape[0]
     sn, st = _stride(s_n), _stride(s_t)
     p1 = np.zeros(n_particles)
@@ -228,18 +223,19 @@ def particle_sums(rows1, rows2, wall, s_n, s_t, u_n, u_t, n_particles):
     for i in range(n):
         u1 = _body_energies(s_n[i * sn], s_t[i * st], u_n[i], u_t[i])[0]
         p1[rows1[i]] += u1
-        if wall[i] < 0:
-            p2[rows2[i]] += u_n[i] + u_t[i] - u1
+        r2 = rows2[i]
+        if r2 >= 0:
+            p2[r2] += u_n[i] + u_t[i] - u1
     for r in range(n_particles):
         p1[r] += p2[r]
     return p1
 
 
 @kernel
-def max_wall(wall):
-    """Largest wall index of the contacts (-1: no wall contact)."""
+def max_wall(rows2):
+    """Largest wall index of the contacts, from rows2 = -1 - wall (-1: no wall contact)."""
     m = -1
-    for i in range(wall.shape[0]):
-        if wall[i] > m:
-            m = wall[i]
+    for i in range(rows2.shape[0]):
+        if -1 - rows2[i] > m:
+            m = -1 - rows2[i]
     return m

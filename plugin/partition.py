@@ -183,7 +183,7 @@ class ContactBodies:
     def __init__(self, type1: np.ndarray | None, type2: np.ndarray | None, E1: np.ndarray | float | None,
                  nu1: np.ndarray | float | None, E2: np.ndarray | float | None, nu2: np.ndarray | float | None,
                  single_material: bool, scene: Scene | None = None, *, pairs: tuple | None = None) -> None:
-        self.type1, self.type2 = type1, type2
+        self._types = (type1, type2)
         self._constants = (E1, nu1, E2, nu2)
         self.single_material = single_material
         self.scene = scene
@@ -195,7 +195,7 @@ class ContactBodies:
         if scene.single_material:
             m = next(iter(scene.materials.values()))
             return cls(None, None, m.E, m.nu, m.E, m.nu, True)
-        type1, type2, pairs = _contact_types_and_codes(contacts, scene, particles, index)
+        type1, type2, pairs = _contact_pairs(contacts, scene, particles, index)
         bodies = cls(type1, type2, None, None, None, None, False, scene, pairs=pairs)
         code, pairs = bodies._pair_codes()
         n_types = len(scene.material_tables()[0])
@@ -210,6 +210,15 @@ class ContactBodies:
             self._constants = (E.take(self.type1), nu.take(self.type1), E.take(self.type2), nu.take(self.type2))
         return self._constants[k]
 
+    def _type(self, k: int) -> np.ndarray | None:
+        if self._types[k] is None and self._pairs is not None:  # from the pair codes
+            n_types = len(self.scene.material_tables()[0])
+            code = self._pairs[0].astype(np.int64)
+            self._types = (code // n_types, code % n_types)
+        return self._types[k]
+
+    type1 = property(lambda self: self._type(0), doc="material type of body 1 (None: single material)")
+    type2 = property(lambda self: self._type(1), doc="material type of body 2 (None: single material)")
     E1 = property(lambda self: self._constant(0), doc="Young's modulus of body 1 (Pa)")
     nu1 = property(lambda self: self._constant(1), doc="Poisson's ratio of body 1")
     E2 = property(lambda self: self._constant(2), doc="Young's modulus of body 2 (Pa)")
@@ -272,12 +281,23 @@ def contact_types(contacts: Table, scene: Scene, particles: Table | None = None,
     Taken from the ``type1``/``type2`` columns when the reader set them,
     otherwise from the particles table (by id) and the wall list.
     """
-    return _contact_types_and_codes(contacts, scene, particles, index)[:2]
+    type1, type2, pairs = _contact_pairs(contacts, scene, particles, index)
+    if type1 is None:
+        n_types = len(scene.material_tables()[0])
+        code = pairs[0].astype(np.int64)
+        return code // n_types, code % n_types
+    return type1, type2
 
 
-def _contact_types_and_codes(contacts: Table, scene: Scene, particles: Table | None,
-                             index: ParticleIndex | None) -> tuple[np.ndarray, np.ndarray, tuple | None]:
-    """(type1, type2, (pair code of every contact, codes present) or None when not computed)."""
+def _code_dtype(n_types: int) -> type:
+    """Smallest integer type for the codes 0..n_types^2 - 1 (less to read per contact)."""
+    return np.int8 if n_types**2 <= 127 else np.int16 if n_types**2 <= 32767 else np.int64
+
+
+def _contact_pairs(contacts: Table, scene: Scene, particles: Table | None,
+                   index: ParticleIndex | None) -> tuple[np.ndarray | None, np.ndarray | None, tuple | None]:
+    """The bodies' material types as ``(type1, type2, None)`` when the contacts carry
+    them, else ``(None, None, (pair code of every contact, codes present))``."""
     if "type1" in contacts and "type2" in contacts:
         return contacts["type1"].astype(np.int64), contacts["type2"].astype(np.int64), None
     if particles is None:
@@ -290,13 +310,19 @@ def _contact_types_and_codes(contacts: Table, scene: Scene, particles: Table | N
     rows1, rows2 = index.contact_rows(contacts["id1"], contacts["id2"], wall)
     wall_types = scene.wall_types()
     n_types = len(scene.material_tables()[0])
-    type1, type2, code, present, bad_wall, bad_type = gather_types(
-        rows1, rows2, wall, np.asarray(particles["type"]), wall_types, n_types)
+    ptype = np.asarray(particles["type"])
+    code = np.empty(len(rows1), dtype=_code_dtype(n_types))
+    present, bad_wall, bad_type = gather_types(rows1, rows2, ptype, wall_types, n_types, code)
     if bad_wall >= 0:
         raise ContactError(f"a wall contact names wall {int(wall.max())} but the scene has "
                            f"{len(wall_types)} wall(s).",
                            fix="describe every wall of the run in the scene (input script).")
-    return type1, type2, None if bad_type >= 0 else (code, np.flatnonzero(present))
+    if bad_type >= 0:  # a type outside the material table: the lookup's error lists them
+        scene.lookup(ptype[rows1], what="particle")
+        pair = rows2 >= 0
+        scene.lookup(ptype[rows2[pair]], what="particle")
+        scene.lookup(wall_types[-1 - rows2[~pair]], what="wall")
+    return None, None, (code, np.flatnonzero(present))
 
 
 # --- Energies by contact model -------------------------------------------------------------
@@ -405,7 +431,7 @@ def contact_energies(contacts: Table, scene: Scene, particles: Table | None = No
             from .kernels import hertz_history_energies
 
             history = model.tangential == "history" and has_shear
-            shear = [contacts[c][rows] for c in ("shearx", "sheary", "shearz")] if history else [d, d, d]
+            shear = [_f64(contacts[c])[rows] for c in ("shearx", "sheary", "shearz")] if history else [d, d, d]
             E_eff, code = pair_values(laws.effective_modulus, rows)
             G_eff = pair_values(laws.effective_shear_modulus, rows)[0] if history else E_eff
             u_n_rows, u_t_rows, bad = hertz_history_energies(d, _f64(contacts["r1"][rows]), _f64(contacts["r2"][rows]),
@@ -593,9 +619,9 @@ def per_particle(contacts: Table, energy: ContactEnergy, particles: Table, n_wal
     index = index or ParticleIndex(particles["id"])
     wall = contacts["wall"]
     rows1, rows2 = index.contact_rows(contacts["id1"], contacts["id2"], wall)
-    n_walls = max(n_walls, int(max_wall(wall)) + 1)
+    n_walls = max(n_walls, int(max_wall(rows2)) + 1)
     u_n, u_t, n_contacts, wu_n, wu_t, w_contacts = body_sums(
-        rows1, rows2, wall, _values(energy.share_n1), _values(energy.share_t1), energy.u_n, energy.u_t,
+        rows1, rows2, _values(energy.share_n1), _values(energy.share_t1), energy.u_n, energy.u_t,
         table_length(particles), n_walls)
     ptable = {
         "id": np.asarray(particles["id"], dtype=np.int64),
@@ -619,5 +645,5 @@ def particle_energy(contacts: Table, energies: ContactLawEnergy, bodies: Contact
     wall = contacts["wall"]
     rows1, rows2 = index.contact_rows(contacts["id1"], contacts["id2"], wall)
     s_n, s_t = contact_shares(contacts, bodies, split=split)
-    return particle_sums(rows1, rows2, wall, _values(s_n), _values(s_t), energies.u_n, energies.u_t,
+    return particle_sums(rows1, rows2, _values(s_n), _values(s_t), energies.u_n, energies.u_t,
                          table_length(particles))

@@ -1,0 +1,312 @@
+"""The compiled per-contact loops (demsplit.kernels) against the plain numpy formulation.
+
+The reference below is the numpy implementation the kernels replaced, written
+with the public array API of demsplit.laws and demsplit.partition (one numpy
+pass per operation, np.bincount for the sums). The compiled paths must give the
+same numbers: bit for bit where the operations are the same, to 1e-13 relative
+where only the order of a sum or of |v|^2 differs.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import demsplit as ds
+from demsplit import laws
+from demsplit.frame import ParticleIndex
+from demsplit.partition import (ContactBodies, contact_energies, contact_point, normal_share, particle_energy,
+                                radius_share, tangential_share)
+from demsplit.pipeline import Options, frame_tables
+from demsplit.readers import open_run
+
+kernels = pytest.importorskip("demsplit.kernels")
+
+SAMPLES = Path(__file__).resolve().parent.parent / "sample_dumps" / "liggghts"
+GPa = 1e9
+
+
+# --- the numpy reference ---------------------------------------------------------------------
+
+def reference_rows(particles, ids):
+    order = np.argsort(particles["id"], kind="stable")
+    pos = np.searchsorted(particles["id"][order], ids)
+    return order[pos]
+
+
+def reference_constants(contacts, scene, particles):
+    """E, nu of both bodies of every contact, by plain numpy gathers."""
+    ptype = np.asarray(particles["type"], dtype=np.int64)
+    pair = contacts["wall"] < 0
+    type1 = ptype[reference_rows(particles, contacts["id1"])]
+    type2 = np.empty_like(type1)
+    type2[pair] = ptype[reference_rows(particles, contacts["id2"][pair])]
+    type2[~pair] = scene.wall_types()[contacts["wall"][~pair]]
+    E1, nu1 = scene.lookup(type1)
+    E2, nu2 = scene.lookup(type2)
+    return E1, nu1, E2, nu2
+
+
+def reference_hertz(contacts, constants):
+    """LIGGGHTS hertz + tangential history energies, numpy."""
+    R = laws.effective_radius(contacts["r1"], contacts["r2"])
+    delta = contacts["delta"]
+    u_n = laws.hertz_energy_from_moduli(delta, R, laws.effective_modulus(*constants))
+    kt = laws.liggghts_hertz_kt(delta, R, laws.effective_shear_modulus(*constants))
+    shear = np.stack([contacts[c] for c in ("shearx", "sheary", "shearz")], axis=-1)
+    return u_n, np.where(delta > 0, laws.shear_spring_energy(shear, kt), 0.0)
+
+
+def reference_split(contacts, s_n, s_t, u_n, u_t):
+    delta = np.asarray(contacts["delta"], dtype=np.float64)
+    x1 = np.stack([contacts[c] for c in ("x1", "y1", "z1")], axis=-1)
+    normal = np.stack([contacts[c] for c in ("nx", "ny", "nz")], axis=-1)
+    return {"u1": s_n * u_n + s_t * u_t, "u2": (1.0 - s_n) * u_n + (1.0 - s_t) * u_t, "depth1": s_n * delta,
+            "cp": contact_point(x1, normal, contacts["r1"], delta, s_n)}
+
+
+def reference_sums(contacts, particles, s_n, s_t, u_n, u_t, n_walls):
+    n = len(particles["id"])
+    pair = contacts["wall"] < 0
+    rows1 = reference_rows(particles, contacts["id1"])
+    rows2 = reference_rows(particles, contacts["id2"][pair])
+    un1, ut1 = s_n * u_n, s_t * u_t
+    un2, ut2 = u_n - un1, u_t - ut1
+
+    def body_sum(w1, w2):
+        return np.bincount(rows1, weights=w1, minlength=n) + np.bincount(rows2, weights=w2[pair], minlength=n)
+
+    w = contacts["wall"][~pair]
+    return ({"u_n": body_sum(un1, un2), "u_t": body_sum(ut1, ut2),
+             "n_contacts": np.bincount(rows1, minlength=n) + np.bincount(rows2, minlength=n)},
+            {"u_n": np.bincount(w, weights=un2[~pair], minlength=n_walls),
+             "u_t": np.bincount(w, weights=ut2[~pair], minlength=n_walls),
+             "n_contacts": np.bincount(w, minlength=n_walls)})
+
+
+def same(a, b, rtol=0.0):
+    a, b = np.asarray(a), np.asarray(b)
+    assert a.shape == b.shape
+    if rtol == 0.0:
+        np.testing.assert_array_equal(a, b)
+    else:
+        np.testing.assert_allclose(a, b, rtol=rtol, atol=0.0)
+
+
+def check_against_reference(contacts, scene, particles, n_walls=0):
+    """partition + per_particle + the comparison splits vs the numpy reference."""
+    index = ParticleIndex(particles["id"])
+    bodies = ContactBodies.build(contacts, scene, particles, index)
+    energies = contact_energies(contacts, scene, particles, bodies, index)
+    constants = reference_constants(contacts, scene, particles)
+    if scene.model.normal == "hertz" and scene.model.tangential == "history" and "shearx" in contacts:
+        u_n, u_t = reference_hertz(contacts, constants)
+        same(energies.u_n, u_n)
+        same(energies.u_t, u_t, rtol=1e-13)  # |shear|^2 summed in order, einsum's order may differ
+    u_n, u_t = energies.u_n, energies.u_t
+    e = ds.partition(contacts, scene, particles, energies=energies, bodies=bodies, index=index)
+    s_n = np.broadcast_to(normal_share(*constants), u_n.shape)
+    s_t = np.broadcast_to(tangential_share(*constants), u_n.shape)
+    same(e.share_n1, s_n)
+    same(e.share_t1, s_t)
+    for k, v in reference_split(contacts, s_n, s_t, u_n, u_t).items():
+        same(getattr(e, k), v)
+    same(e.separated, np.asarray(contacts["delta"]) < 0)
+    pt, wt = ds.per_particle(contacts, e, particles, n_walls=n_walls, index=index)
+    ref_p, ref_w = reference_sums(contacts, particles, s_n, s_t, u_n, u_t, len(wt["wall"]))
+    for k in ("u_n", "u_t", "n_contacts"):
+        same(pt[k], ref_p[k])
+        same(wt[k], ref_w[k])
+    same(pt["u"], ref_p["u_n"] + ref_p["u_t"])
+    total = np.sum(u_n + u_t)
+    assert abs(pt["u"].sum() + wt["u"].sum() - total) <= 1e-12 * total
+    for split, share in (("equal", 0.5), ("radius", radius_share(contacts["r1"], contacts["r2"]))):
+        share = np.broadcast_to(share, u_n.shape)
+        u1 = share * u_n + share * u_t
+        pair = contacts["wall"] < 0
+        rows1 = reference_rows(particles, contacts["id1"])
+        rows2 = reference_rows(particles, contacts["id2"][pair])
+        n = len(particles["id"])
+        expected = (np.bincount(rows1, weights=u1, minlength=n)
+                    + np.bincount(rows2, weights=(u_n + u_t - u1)[pair], minlength=n))
+        same(particle_energy(contacts, energies, bodies, particles, split=split, index=index), expected)
+    return e
+
+
+# --- random frames ---------------------------------------------------------------------------
+
+def random_frame(rng, n_particles, n_contacts, n_walls, n_types, dense_ids=True, hard=False):
+    ids = rng.permutation(np.arange(1, n_particles + 1)) if dense_ids else \
+        rng.choice(10**12, size=n_particles, replace=False)
+    particles = {"id": ids.astype(np.int64), "type": rng.integers(1, n_types + 1, n_particles).astype(np.int32),
+                 "x": rng.uniform(0, 1, n_particles), "y": rng.uniform(0, 1, n_particles),
+                 "z": rng.uniform(0, 1, n_particles), "radius": rng.uniform(1e-3, 3e-3, n_particles),
+                 "mass": rng.uniform(1e-6, 1e-5, n_particles)}
+    if n_particles < 2:
+        n_contacts = 0
+    i = rng.integers(0, max(n_particles, 1), n_contacts)
+    j = (i + rng.integers(1, max(n_particles, 2), n_contacts)) % max(n_particles, 1)
+    wall = np.where(rng.random(n_contacts) < 0.3, rng.integers(0, max(n_walls, 1), n_contacts), -1) \
+        if n_walls else np.full(n_contacts, -1)
+    normal = rng.normal(size=(n_contacts, 3))
+    normal /= np.linalg.norm(normal, axis=1)[:, None]
+    delta = rng.uniform(-1e-6, 1e-5, n_contacts)
+    if hard and n_contacts:  # separated, touching, denormal and huge overlaps
+        k = rng.integers(0, n_contacts, min(n_contacts, 8))
+        delta[k] = rng.choice([-1e-3, 0.0, -0.0, 1e-300, 5e-324, 1e-12, 2e-3], len(k))
+    r1 = particles["radius"][i] if n_particles else np.zeros(0)
+    r2 = np.where(wall >= 0, np.inf, particles["radius"][j] if n_particles else np.zeros(0))
+    contacts = {"id1": ids[i] if n_particles else np.zeros(0, np.int64),
+                "id2": np.where(wall >= 0, -1, ids[j] if n_particles else 0).astype(np.int64),
+                "wall": wall.astype(np.int64), "delta": delta,
+                "nx": normal[:, 0], "ny": normal[:, 1], "nz": normal[:, 2],
+                "x1": particles["x"][i] if n_particles else np.zeros(0),
+                "y1": particles["y"][i] if n_particles else np.zeros(0),
+                "z1": particles["z"][i] if n_particles else np.zeros(0), "r1": r1, "r2": r2}
+    for c in ("shearx", "sheary", "shearz"):
+        contacts[c] = rng.normal(scale=1e-6, size=n_contacts)
+    return contacts, particles
+
+
+def random_scene(rng, n_types, n_walls, normal, rigid_walls):
+    materials = {t: ds.Material(float(rng.choice([1e6, 7e7, 2e11])), float(rng.choice([-0.5, 0.0, 0.25, 0.49])))
+                 for t in range(1, n_types + 1)}
+    wall_type = n_types + 1
+    materials[wall_type] = ds.Material(np.inf if rigid_walls else 2e11, 0.3)
+    params = {"characteristic_velocity": 1.0} if normal == "hooke" else {}
+    model = ds.ContactModel(normal, "history", params=params)
+    walls = [ds.Wall(f"w{k}", "plane", type=wall_type) for k in range(n_walls)]
+    return ds.Scene(materials, model=model, walls=walls)
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n_particles=st.integers(0, 40), n_contacts=st.integers(0, 120),
+       n_walls=st.integers(0, 3), n_types=st.integers(1, 3), normal=st.sampled_from(["hertz", "hooke"]),
+       dense_ids=st.booleans(), rigid_walls=st.booleans())
+def test_random_frames_match_numpy(seed, n_particles, n_contacts, n_walls, n_types, normal, dense_ids, rigid_walls):
+    rng = np.random.default_rng(seed)
+    contacts, particles = random_frame(rng, n_particles, n_contacts, n_walls, n_types, dense_ids, hard=True)
+    scene = random_scene(rng, n_types, n_walls, normal, rigid_walls)
+    check_against_reference(contacts, scene, particles, n_walls=n_walls)
+
+
+def test_single_material_and_float32_columns():
+    rng = np.random.default_rng(11)
+    contacts, particles = random_frame(rng, 30, 100, 2, 1)
+    m = ds.Material(7e7, 0.25)
+    scene = ds.Scene({1: m, 2: m}, walls=[ds.Wall("a", "plane", 2), ds.Wall("b", "plane", 2)])
+    e = check_against_reference(contacts, scene, particles, n_walls=2)
+    assert np.all(e.share_n1 == 0.5) and np.all(e.share_t1 == 0.5)
+    as32 = {k: (v.astype(np.float32) if v.dtype == np.float64 else v) for k, v in contacts.items()}
+    e32 = ds.partition(as32, scene, particles)
+    ref = ds.partition({k: v.astype(np.float64) if v.dtype == np.float32 else v for k, v in as32.items()},
+                       scene, particles)
+    for k in ("u_n", "u_t", "u1", "u2", "depth1", "cp"):
+        same(getattr(e32, k), getattr(ref, k))
+
+
+def test_empty_frame():
+    rng = np.random.default_rng(5)
+    contacts, particles = random_frame(rng, 10, 0, 2, 2)
+    scene = random_scene(rng, 2, 2, "hertz", False)
+    e = check_against_reference(contacts, scene, particles, n_walls=2)
+    assert e.cp.shape == (0, 3)
+
+
+def test_unknown_ids_and_walls_are_errors():
+    rng = np.random.default_rng(2)
+    contacts, particles = random_frame(rng, 20, 50, 2, 2)
+    scene = random_scene(rng, 2, 2, "hertz", False)
+    bad = dict(contacts, id2=np.where(contacts["wall"] < 0, contacts["id2"], -1))
+    bad["id2"][np.flatnonzero(contacts["wall"] < 0)[0]] = 999
+    with pytest.raises(ds.ContactError, match="999"):
+        ds.partition(bad, scene, particles)
+    one_wall = random_scene(rng, 2, 1, "hertz", False)
+    wall = contacts["wall"].copy()
+    wall[wall >= 0] = 1
+    with pytest.raises(ds.ContactError, match="wall"):
+        ds.partition(dict(contacts, wall=wall), one_wall, particles)
+
+
+@pytest.mark.parametrize("dense", [True, False])
+def test_contact_rows(dense):
+    rng = np.random.default_rng(4)
+    contacts, particles = random_frame(rng, 50, 200, 3, 2, dense_ids=dense)
+    rows1, rows2 = ParticleIndex(particles["id"]).contact_rows(contacts["id1"], contacts["id2"], contacts["wall"])
+    pair = contacts["wall"] < 0
+    same(rows1, reference_rows(particles, contacts["id1"]))
+    same(rows2[pair], reference_rows(particles, contacts["id2"][pair]))
+    same(rows2[~pair], -1 - contacts["wall"][~pair])
+
+
+# --- the compiled formulas are the numpy ones ------------------------------------------------
+
+HARD = np.array([-1.0, -0.0, 0.0, 5e-324, 1e-300, 1e-12, 1e-3, 0.5, 1e300, np.inf, np.nan])
+POSITIVE = np.array([5e-324, 1e-300, 1e-6, 1.0, 7e7, 1e300, np.inf])
+
+
+def grid(*axes):
+    return [a.ravel() for a in np.meshgrid(*axes, indexing="ij")]
+
+
+def test_compiled_formulas_equal_numpy_bit_for_bit():
+    """The scalars the loops compute are the arrays' values: same IEEE operations."""
+    d, r1, E = grid(HARD, POSITIVE, POSITIVE)
+    with np.errstate(all="ignore"):
+        loop_u_n, loop_u_t, _ = kernels.hertz_history_energies(d, r1, np.full(len(r1), np.inf), E, E,
+                                                               kernels.NO_CODE, d, r1, E, True)
+        R = laws.inverse_curvature_sum(r1, np.inf)  # a particle on a plane: R* = 1/(1/r1)
+        same(loop_u_n, laws.hertz_energy_from_moduli(d, R, E))
+        kt = laws.liggghts_hertz_kt(d, R, E)
+        same(loop_u_t, np.where(d > 0, laws.shear_spring_energy(np.stack([d, r1, E], -1), kt), 0.0))
+        r1, r2 = grid(POSITIVE, POSITIVE)
+        same(np.array([kernels._inverse_curvature_sum(a, b) for a, b in zip(r1, r2)]),
+             laws.inverse_curvature_sum(r1, r2))
+        same(np.array([kernels._clamped_overlap(x) for x in HARD]), laws.clamped_overlap(HARD))
+        s_n, u_n, x1, n = grid(np.array([0.0, 0.3, 0.5, 1.0]), HARD, HARD[::2], HARD[1::2])
+        loop = kernels.split_contacts(s_n, kernels.NO_CODE, s_n[::-1].copy(), kernels.NO_CODE, u_n, u_n[::-1].copy(),
+                                      u_n, x1, x1, x1, n, n, n, np.abs(x1))
+        ref = reference_split({"delta": u_n, "x1": x1, "y1": x1, "z1": x1, "nx": n, "ny": n, "nz": n,
+                               "r1": np.abs(x1)}, s_n, s_n[::-1], u_n, u_n[::-1])
+        for got, k in zip(loop[2:5], ("u1", "u2", "depth1")):
+            same(got, ref[k])
+        same(loop[5].T, ref["cp"])
+
+
+def test_hertz_from_codes_equals_per_contact_values():
+    rng = np.random.default_rng(9)
+    n = 500
+    code = rng.integers(0, 4, n).astype(np.int8)
+    table = np.array([1e6, 2e9, np.inf, 3e11])
+    d, r1, r2, sx, sy, sz = (rng.uniform(-1e-5, 1e-4, n), rng.uniform(1e-3, 1e-2, n), np.full(n, np.inf),
+                             *rng.normal(size=(3, n)))
+    with np.errstate(all="ignore"):
+        coded = kernels.hertz_history_energies(d, r1, r2, table, table, code, sx, sy, sz, True)
+        flat = kernels.hertz_history_energies(d, r1, r2, table[code], table[code], kernels.NO_CODE, sx, sy, sz, True)
+    same(coded[0], flat[0])
+    same(coded[1], flat[1])
+    bad = kernels.hertz_history_energies(d, -r1, r2, table, table, code, sx, sy, sz, True)[2]
+    assert bad == 0
+
+
+# --- sample runs -----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("name", ["packing", "periodic", "analytic"])
+def test_sample_runs_match_numpy(name):
+    run = open_run(next((SAMPLES / name).glob("in.*")))
+    for k in sorted({0, len(run) - 1}):
+        frame = run.frame(k)
+        c = frame.contacts
+        assert len(c["delta"]) > 0
+        check_against_reference(c, run.scene, frame.particles, n_walls=len(run.scene.walls))
+        tables = frame_tables(frame, run.scene, Options())
+        e = ds.partition(c, run.scene, frame.particles)
+        pt, wt = ds.per_particle(c, e, frame.particles, n_walls=len(run.scene.walls))
+        for col in ("u", "u_n", "u_t", "n_contacts"):
+            same(tables["particles"][col], pt[col])
+        cp = frame.box.wrap(e.cp) if frame.box is not None and frame.box.any_periodic else e.cp
+        same(np.stack([tables["contacts"][f"cp{a}"] for a in "xyz"], -1), cp)
