@@ -1,34 +1,111 @@
-"""Store size, assembly (close) and read time per HDF5 compression filter.
+"""Store size, part-write (append), assembly (close) and read time per compression.
 
-Synthetic frames from tests/result_frames.py: 20 frames x (20 000 particles,
-52 000 contacts, 2 walls); energies, overlaps and points are random floats, so
-the floating-point columns barely compress (a worst case for the filters).
+The frames are real results: ``demsplit.pipeline.frame_tables`` of each frame
+of a run (default: the medium benchmark run /tmp/bench_mid/in.bench, 2 frames
+of 2e5 particles and 4e5 contacts, written by benchmarks/generate.py),
+computed once and then stored with each compression. Times are the best of
+``--repeat`` stores (the machine is shared: quote ``uptime``).
 
-Run: python benchmarks/store_compression.py
+Run: python benchmarks/store_compression.py [RUN] [--repeat 3] [--auto-max-ratio 0.5 0.75 0.9]
+
+``--auto-max-ratio`` adds ``auto`` rows with other thresholds (the default
+row uses demsplit.store.AUTO_MAX_RATIO); ``--columns`` first prints, for
+each column of the first frame with at least a chunk of rows, the size of its
+chunks after shuffle + deflate at zlib levels 1 and 4 (fraction of the raw
+size), the deflate speed (one thread, MB/s of raw data) and ``auto``'s choice.
 """
+from __future__ import annotations
+
+import argparse
 import os
 import shutil
-import sys
 import tempfile
 import time
+import zlib
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests"))
-from result_frames import PROVENANCE, WALLS_META, synthetic_frame  # noqa: E402
+import numpy as np
 
-import demsplit.store as S  # noqa: E402
+import demsplit.store as S
+from demsplit.pipeline import Options, frame_tables
+from demsplit.readers import open_run
 
-frames = [synthetic_frame(s, n_particles=20000, n_pairs=50000, n_wall_contacts=2000) for s in range(0, 20000, 1000)]
-for comp, level in [("gzip", 1), ("gzip", 4), ("gzip", 6), ("lzf", None), (None, None)]:
-    S.COMPRESSION_OPTS["gzip"] = level
-    d = tempfile.mkdtemp()
-    p = os.path.join(d, "out.h5")
-    w = S.ResultWriter(p, PROVENANCE, walls_meta=WALLS_META, compression=comp)
-    for f in frames:
-        w.append(f)
+
+def real_frames(path: str) -> list[dict]:
+    run = open_run(path)
+    try:
+        return [frame_tables(frame, run.scene, Options()) for frame in run]
+    finally:
+        run.close()
+
+
+def column_table(tables: dict) -> None:
+    print("| column | first chunk, level 1 | all chunks, level 1 | level 4 | MB/s level 1 | MB/s level 4 | auto |")
+    print("|---|---|---|---|---|---|---|")
+    for name, table in tables.items():
+        for col, values in table.items():
+            whole = len(values) // S.CHUNK_ROWS * S.CHUNK_ROWS
+            if not whole:
+                continue
+            chunks = [S._shuffled(values[k: k + S.CHUNK_ROWS]) for k in range(0, whole, S.CHUNK_ROWS)]
+            ratio, speed = {}, {}
+            for level in (1, 4):
+                t0 = time.perf_counter()
+                size = sum(len(zlib.compress(c, level)) for c in chunks)
+                speed[level] = whole * values.itemsize / (time.perf_counter() - t0) / 1e6
+                ratio[level] = size / (whole * values.itemsize)
+            first = len(zlib.compress(chunks[0], S.GZIP_LEVEL)) / len(chunks[0])
+            print(f"| {name}/{col} | {first:.3f} | {ratio[1]:.3f} | {ratio[4]:.3f} | {speed[1]:.0f} | {speed[4]:.0f} "
+                  f"| {S._choose_filter(np.asarray(values[:S.CHUNK_ROWS]))} |")
+
+
+def store_once(frames: list[dict], compression: str, directory: str) -> dict:
+    out = os.path.join(directory, "out.h5")
+    t0 = time.perf_counter()
+    w = S.ResultWriter(out, {"inputs": []}, compression=compression)
+    for tables in frames:
+        w.append(tables)
     t1 = time.perf_counter()
     w.close()
     t2 = time.perf_counter()
-    S.read_store(p)
+    S.read_store(out)
     t3 = time.perf_counter()
-    print(f"{comp}{level or ''}: {os.path.getsize(p) / 2**20:6.1f} MiB, close {t2 - t1:5.2f} s, read {t3 - t2:5.2f} s")
-    shutil.rmtree(d)
+    result = {"size": os.path.getsize(out), "append": t1 - t0, "close": t2 - t1, "read": t3 - t2}
+    os.remove(out)
+    return result
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("run", nargs="?", default="/tmp/bench_mid/in.bench")
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--auto-max-ratio", type=float, nargs="*", default=[])
+    ap.add_argument("--columns", action="store_true")
+    args = ap.parse_args()
+
+    frames = real_frames(args.run)
+    raw = sum(v.nbytes for f in frames for t in f.values() for v in t.values())
+    rows = {t: sum(len(next(iter(f[t].values()), ())) for f in frames if t in f) for t in S.TABLES}
+    print(f"{args.run}: {len(frames)} frames, {rows}, {raw / 2**20:.1f} MiB of arrays; load: {os.getloadavg()}")
+    if args.columns:
+        column_table(frames[0])
+    cases = [(c, S.AUTO_MAX_RATIO) for c in S.COMPRESSIONS] + [("auto", r) for r in args.auto_max_ratio]
+    print(f"| compression | size (MiB) | append (s) | close (s) | append + close (s) | read_store (s) |")
+    print("|---|---|---|---|---|---|")
+    default = S.AUTO_MAX_RATIO
+    for compression, ratio in cases:
+        S.AUTO_MAX_RATIO = ratio
+        d = tempfile.mkdtemp()
+        try:
+            runs = [store_once(frames, compression, d) for _ in range(args.repeat)]
+        finally:
+            shutil.rmtree(d)
+            S.AUTO_MAX_RATIO = default
+        best = {k: min(r[k] for r in runs) for k in ("size", "append", "close", "read")}
+        label = compression + (f" (<= {ratio:g})" if compression == "auto" else "")
+        total = min(r["append"] + r["close"] for r in runs)
+        print(f"| {label} | {best['size'] / 2**20:.1f} | {best['append']:.2f} | {best['close']:.2f} | {total:.2f} "
+              f"| {best['read']:.2f} |")
+
+
+if __name__ == "__main__":
+    main()

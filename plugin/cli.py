@@ -214,9 +214,11 @@ def build_parser() -> argparse.ArgumentParser:
                    help="tangential split factor: Mindlin (2-nu)/G (default) or the paper's eq. 22 (1-2nu)/G")
     p.add_argument("--no-compare", action="store_true", help="skip the 50/50 and radius-weighted splits")
     p.add_argument("--no-contacts", action="store_true", help="do not store the per-contact table")
-    p.add_argument("--compression", choices=("gzip", "lzf", "none"), default="gzip",
-                   help="HDF5 compression of the output: gzip (default; smallest, any HDF5 tool reads it), "
-                   "lzf (faster, h5py only), none (fastest, largest)")
+    p.add_argument("--compression", choices=("auto", "gzip", "lzf", "none"), default="auto",
+                   help="HDF5 compression of the output: auto (default; gzip for the columns whose first chunk "
+                   "compresses well, such as integers, shares and points, no filter for the others: docs/store.md), "
+                   "gzip (every column; smallest, slowest), lzf (h5py only), none (fastest, largest); "
+                   "any HDF5 tool reads auto, gzip and none")
     p.set_defaults(func=cmd_run)
 
     p = add("info", "describe a dump or snapshot file: kind, frames, columns, precision")

@@ -12,14 +12,20 @@ Layout (see docs/store.md)::
     /index/<table>    (n_frames + 1,) row offset of frame k in <table>:
                       frame k is rows offsets[k]:offsets[k+1]
 
-Writing (:class:`ResultWriter`): each appended frame goes to its own file
-``.OUT.h5.parts/frame_<seq>_<step>.npz`` next to the target, itself written
-to a temporary name and renamed, so a run killed at any moment leaves only
-complete parts. :meth:`ResultWriter.close` streams the parts, in step order,
-into ``OUT.h5.tmp`` and renames it to ``OUT.h5``; only then are the parts
+Writing (:class:`ResultWriter`): each appended frame goes to its own part,
+a directory ``.OUT.h5.parts/frame_<seq>_<step>/`` next to the target holding
+one raw ``.npy`` file per column, written under a temporary name and renamed,
+so a run killed at any moment leaves only complete parts. :meth:`ResultWriter.close`
+maps the parts (``np.load(mmap_mode="r")``), in step order, into ``OUT.h5.tmp``
+a whole chunk at a time and renames it to ``OUT.h5``; only then are the parts
 removed. Nothing exists at ``OUT.h5`` until it is complete. With
 ``resume=True`` the parts of an interrupted run are kept when its provenance
 (input checksums, options, scene, demsplit version) is the same.
+
+Compression (``compression="auto"``, the default): each dataset is gzip
+(level :data:`GZIP_LEVEL`, with shuffle) when its first chunk compresses to at
+most :data:`AUTO_MAX_RATIO` of its size, else stored without filter; the
+choice is the dataset's HDF5 filter pipeline, which every HDF5 reader decodes.
 """
 
 from __future__ import annotations
@@ -43,21 +49,30 @@ from .results import TABLES, UNITS, Results, Table, canonical_table, to_datafram
 
 FORMAT = "demsplit-results"
 FORMAT_VERSION = 1
-COMPRESSION = "gzip"
-"""Dataset filter (with the shuffle filter). Chosen by measurement, see docs/store.md."""
-COMPRESSION_OPTS = {"gzip": 4, "lzf": None, None: None}
+COMPRESSIONS = ("auto", "gzip", "lzf", "none")
+"""``auto``: gzip for the columns that compress, none for the others (below);
+``gzip``: every column gzip + shuffle; ``lzf``: every column lzf + shuffle
+(h5py's filter, not in every HDF5 reader); ``none``: no filter."""
+COMPRESSION = "auto"
+GZIP_LEVEL = 1
+"""zlib level of the gzip filter: on real results level 4 shrinks the columns
+gzip is kept for only a little more, at half the speed (docs/store.md)."""
+AUTO_MAX_RATIO = 0.5
+"""``auto`` gzips a column when its first chunk, shuffled and deflated, is at
+most this fraction of its raw size (measured, docs/store.md: integer columns
+and shares 0.004-0.2, contact points 0.3-0.6, energies and overlaps 0.83-0.89)."""
 CHUNK_ROWS = 65536
 """Rows per HDF5 chunk (512 KiB of float64 before compression)."""
-BUFFER_ROWS = CHUNK_ROWS
-"""close() writes a table's buffered whole chunks once this many rows are
-buffered; it holds at most about BUFFER_ROWS + CHUNK_ROWS rows per table plus
-one frame, so its memory does not grow with the number of frames."""
+PARTS_VERSION = 2
+"""Layout of the parts directory (2: a directory of .npy files per frame;
+1 was one .npz per frame). Parts of another layout are not resumed."""
 
 RESUME_KEYS = ("inputs", "options", "scene", "model", "demsplit_version")
 """Provenance entries that must be equal for parts to be resumed; ``inputs``
 is compared by the sha256 of each input file."""
 
-_PART = re.compile(r"^frame_(\d+)_(-?\d+)\.npz$")
+_PART = re.compile(r"^frame_(\d+)_(-?\d+)$")
+_COLUMNS = "columns.json"
 _MANIFEST = "run.json"
 _LOCK = "lock"
 
@@ -120,7 +135,8 @@ class ResultWriter:
     "frames": {...}}`` for one frame (``frames`` with exactly one row; an absent
     table counts as empty). Leaving the ``with`` block by an exception keeps the
     parts and writes no store. Entries added to ``writer.provenance`` before
-    ``close()`` (skipped frames, notes) are stored.
+    ``close()`` (skipped frames, notes) are stored. ``compression`` is one of
+    :data:`COMPRESSIONS` (``None`` means ``"none"``).
     """
 
     def __init__(self, path: str | Path, provenance: Mapping, *, resume: bool = False,
@@ -128,7 +144,10 @@ class ResultWriter:
         self.path = Path(path)
         self.provenance = dict(provenance)
         self.walls_meta = list(walls_meta or [])
-        self.compression = compression
+        self.compression = "none" if compression is None else compression
+        if self.compression not in COMPRESSIONS:
+            raise StoreError(f"unknown compression {compression!r}; expected one of {list(COMPRESSIONS)}.",
+                             file=self.path, fix="pick one of " + ", ".join(COMPRESSIONS) + ".")
         self.parts_dir = self.path.parent / f".{self.path.name}.parts"
         self._schema: dict[str, dict[str, str]] | None = None
         self._parts: dict[int, tuple[int, Path]] = {}  # step -> (seq, part file)
@@ -136,7 +155,7 @@ class ResultWriter:
         if not self.path.parent.is_dir():
             raise StoreError("the output directory does not exist.", file=self.path.parent,
                              fix="create it, or choose another output path.")
-        manifest = {"format": FORMAT, "format_version": FORMAT_VERSION,
+        manifest = {"format": FORMAT, "format_version": FORMAT_VERSION, "parts_version": PARTS_VERSION,
                     "identity": resume_identity(self.provenance), "provenance": self.provenance,
                     "walls_meta": self.walls_meta}
         if self.parts_dir.exists():
@@ -179,7 +198,8 @@ class ResultWriter:
             old = json.loads((self.parts_dir / _MANIFEST).read_text())
         except (OSError, ValueError):
             old = None
-        if old is None or old.get("format") != FORMAT or old.get("format_version") != FORMAT_VERSION:
+        if old is None or [old.get(k) for k in ("format", "format_version", "parts_version")] != \
+                [FORMAT, FORMAT_VERSION, PARTS_VERSION]:
             raise StoreError(f"{self.parts_dir} holds no readable run manifest of this demsplit version.",
                              file=self.path, fix=f"delete {self.parts_dir} and run again without resume.")
         if old["identity"] != manifest["identity"]:
@@ -194,8 +214,11 @@ class ResultWriter:
             m = _PART.match(p.name)
             if m:
                 self._parts[int(m.group(2))] = (int(m.group(1)), p)
-            elif p.name.endswith(".tmp"):
-                p.unlink()  # a part being written when the run died
+            elif p.name.endswith(".tmp"):  # a part (directory) or manifest being written when the run died
+                if p.is_dir():
+                    shutil.rmtree(p)
+                else:
+                    p.unlink()
         if self._parts:
             self._schema = _schema_of(_load_part(min(self._parts.values())[1]))
 
@@ -253,9 +276,8 @@ class ResultWriter:
                     )
                 self._schema.setdefault(name, cols)
         seq = 1 + max((s for s, _ in self._parts.values()), default=-1)
-        part = self.parts_dir / f"frame_{seq:08d}_{step}.npz"
-        arrays = {f"{name}.{col}": vals for name, table in canon.items() for col, vals in table.items()}
-        _write_atomic(part, lambda f: np.savez(f, **arrays))
+        part = self.parts_dir / f"frame_{seq:08d}_{step}"
+        _write_part(part, canon)
         self._parts[step] = (seq, part)
 
     def close(self) -> None:
@@ -270,95 +292,166 @@ class ResultWriter:
                 ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
             h5.attrs.update(format=FORMAT, format_version=FORMAT_VERSION, demsplit_version=demsplit_version(),
                             provenance=_to_json(self.provenance, "provenance"),
-                            walls_meta=_to_json(self.walls_meta, "walls_meta"))
+                            walls_meta=_to_json(self.walls_meta, "walls_meta"), compression=self.compression)
             sinks = {name: _TableSink(h5, name, schema.get(name, {}), self.compression, pool) for name in TABLES}
             offsets = {name: np.zeros(len(order) + 1, np.int64) for name in TABLES}
             for k, (_, (_, part)) in enumerate(order):
-                frame = _load_part(part)
+                frame = _load_part(part)  # memory-mapped: one frame's pages at a time
                 for name, sink in sinks.items():
                     offsets[name][k + 1] = offsets[name][k] + sink.append(frame.get(name), part)
+                del frame
             index = h5.create_group("index")
             index.create_dataset("step", data=np.array([s for s, _ in order], dtype=np.int64))
             for name, sink in sinks.items():
-                sink.flush(final=True)
+                sink.finish()
                 index.create_dataset(name, data=offsets[name])
         self._closed = True
         shutil.rmtree(self.parts_dir)
 
 
 class _TableSink:
-    """Streams one table's rows into resizable datasets, whole chunks at a time.
+    """Streams one table's rows into resizable chunked datasets, whole chunks at a time.
 
-    With gzip the chunks are filtered here rather than by HDF5: the shuffle
-    filter is a byte transpose and deflate is ``zlib.compress``, which releases
-    the GIL, so a thread pool compresses the chunks of a buffer on every core;
-    ``write_direct_chunk`` stores the result. The datasets carry the same
-    shuffle + gzip filters as an ordinary h5py dataset, so every HDF5 reader
-    decodes them as usual. Rows that do not fill a chunk wait in the buffer
-    until the next flush, or the last one (``final``), which pads the chunk.
+    Each column's chunks are written with ``write_direct_chunk``: as they are
+    (no filter), or shuffled and deflated here rather than by HDF5 (gzip;
+    lzf, h5py's own filter, is left to HDF5):
+    the shuffle filter is a byte transpose and deflate is ``zlib.compress``,
+    which releases the GIL, so the thread pool compresses the chunks of a frame
+    on every core. The datasets carry the same filters as an ordinary h5py
+    dataset, so every HDF5 reader decodes them as usual. The datasets are
+    created at the table's first chunk, when ``auto`` can measure it (see
+    :func:`_choose_filter`). Rows that do not fill a chunk are carried (a copy,
+    less than one chunk per column) to the next frame; :meth:`finish` writes
+    the last, partial chunk (zero-padded, outside the dataset's shape).
     """
 
-    def __init__(self, h5, name: str, schema: dict[str, str], compression: str | None,
-                 pool: ThreadPoolExecutor | None = None) -> None:
+    def __init__(self, h5, name: str, schema: dict[str, str], compression: str, pool: ThreadPoolExecutor) -> None:
         self.name, self.schema = name, schema
         self.compression, self.pool = compression, pool
         self.group = h5.create_group(name)
         self.group.attrs["columns"] = json.dumps(list(schema))
         self.group.attrs["units"] = json.dumps({c: UNITS.get(c, "") for c in schema})
-        self.buffer: dict[str, list[np.ndarray]] = {c: [] for c in schema}
-        self.buffered = 0
-        for col, dtype in schema.items():
-            self.group.create_dataset(
-                col, shape=(0,), maxshape=(None,), dtype=np.dtype(dtype), chunks=(CHUNK_ROWS,),
-                compression=compression, compression_opts=COMPRESSION_OPTS[compression],
-                shuffle=compression is not None,
-            ).attrs["unit"] = UNITS.get(col, "")
+        self.filters: dict[str, str] | None = None  # column -> "gzip" | "lzf" | "none", once created
+        self.carry = {col: np.empty(0, np.dtype(dtype)) for col, dtype in schema.items()}
+        self.rows = 0  # rows written to the datasets
 
     def append(self, table: Table | None, part: Path) -> int:
+        """Write the whole chunks that ``table`` (one frame) completes; return its row count."""
         if not table:
             return 0
         if _schema_of({self.name: table})[self.name] != self.schema:
             raise StoreError(f"table {self.name!r} in this part has columns {list(table)}, expected {list(self.schema)}.",
-                             file=part, fix=f"delete {part.parent} and run again.")
-        n = len(next(iter(table.values())))
+                             file=part, fix=f"delete {part} (the frame is recomputed on resume).")
+        chunks = {}
         for col in self.schema:
-            self.buffer[col].append(table[col])
-        self.buffered += n
-        if self.buffered >= BUFFER_ROWS:
-            self.flush()
-        return n
+            chunks[col], self.carry[col] = _whole_chunks(self.carry[col], table[col])
+        self._write(chunks)
+        return len(next(iter(table.values())))
 
-    def flush(self, final: bool = False) -> None:
-        """Write the buffered whole chunks (and, if ``final``, the rest)."""
-        n = self.buffered if final else self.buffered // CHUNK_ROWS * CHUNK_ROWS
-        if not n:
+    def finish(self) -> None:
+        """Write the carried rows (the last, partial chunk); create the datasets of a table without rows."""
+        if any(len(rows) for rows in self.carry.values()):
+            self._write({col: [rows] for col, rows in self.carry.items()})
+        if self.filters is None:
+            self._create({col: None for col in self.schema})
+
+    def _create(self, first: dict[str, np.ndarray | None]) -> None:
+        """Create the datasets; ``first``: each column's first chunk (None: no rows)."""
+        if self.compression == "auto":
+            samples = [first[col] for col in self.schema]
+            self.filters = dict(zip(self.schema, self.pool.map(_choose_filter, samples)))
+        else:
+            self.filters = dict.fromkeys(self.schema, self.compression)
+        for col, dtype in self.schema.items():
+            kind = self.filters[col]
+            self.group.create_dataset(
+                col, shape=(0,), maxshape=(None,), dtype=np.dtype(dtype), chunks=(CHUNK_ROWS,),
+                compression=None if kind == "none" else kind,
+                compression_opts=GZIP_LEVEL if kind == "gzip" else None, shuffle=kind != "none",
+            ).attrs["unit"] = UNITS.get(col, "")
+
+    def _write(self, chunks: dict[str, list[np.ndarray]]) -> None:
+        """Append each column's chunks (all whole but possibly the last one of the table)."""
+        if not any(chunks.values()):
             return
-        for col, chunks in self.buffer.items():
-            data = np.concatenate(chunks) if len(chunks) > 1 else chunks[0]
-            self._write(self.group[col], data[:n])
-            chunks[:] = [data[n:].copy()] if n < len(data) else []  # a copy: a view would keep all of data
-        self.buffered -= n
-
-    def _write(self, ds, data: np.ndarray) -> None:
-        start = ds.shape[0]  # a multiple of CHUNK_ROWS: only the final flush writes a partial chunk
-        ds.resize((start + len(data),))
-        if self.compression != "gzip" or self.pool is None:
-            ds[start:] = data
-            return
-        level = COMPRESSION_OPTS["gzip"]
-        offsets = range(0, len(data), CHUNK_ROWS)
-        blobs = self.pool.map(lambda k: _shuffle_deflate(data[k: k + CHUNK_ROWS], level), offsets)
-        for k, blob in zip(offsets, blobs):
-            ds.id.write_direct_chunk((start + k,), blob)
+        if self.filters is None:
+            self._create({col: c[0] for col, c in chunks.items()})
+        start = self.rows
+        self.rows += sum(len(c) for c in next(iter(chunks.values())))
+        for col, col_chunks in chunks.items():
+            ds = self.group[col]
+            ds.resize((self.rows,))  # the rows, not the padding: the dataset never shrinks
+            kind = self.filters[col]
+            if kind == "lzf":  # h5py's own filter: HDF5 applies it to the chunk-aligned slices
+                for k, c in enumerate(col_chunks):
+                    ds[start + k * CHUNK_ROWS: start + k * CHUNK_ROWS + len(c)] = c
+                continue
+            blobs = self.pool.map(_shuffle_deflate, col_chunks) if kind == "gzip" else map(_padded, col_chunks)
+            for k, blob in enumerate(blobs):
+                ds.id.write_direct_chunk((start + k * CHUNK_ROWS,), blob)
 
 
-def _shuffle_deflate(values: np.ndarray, level: int) -> bytes:
-    """One chunk as HDF5's shuffle + deflate filters store it: the bytes of the
-    CHUNK_ROWS values (zero-padded) grouped by byte position, then zlib."""
-    if len(values) < CHUNK_ROWS:
-        values = np.concatenate([values, np.zeros(CHUNK_ROWS - len(values), values.dtype)])
-    shuffled = np.ascontiguousarray(values).view(np.uint8).reshape(CHUNK_ROWS, values.itemsize).T.tobytes()
-    return zlib.compress(shuffled, level)
+def _whole_chunks(carry: np.ndarray, values: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
+    """Split ``carry`` + ``values`` into whole CHUNK_ROWS chunks (the first one
+    joins the carried rows, the others are views of ``values``) and the rows
+    left over (a copy, so that ``values`` can be released)."""
+    chunks = []
+    if len(carry):
+        fill = CHUNK_ROWS - len(carry)
+        carry = np.concatenate([carry, values[:fill]])
+        if len(carry) < CHUNK_ROWS:
+            return [], carry
+        chunks.append(carry)
+        values = values[fill:]
+    whole = len(values) // CHUNK_ROWS * CHUNK_ROWS
+    chunks.extend(values[k: k + CHUNK_ROWS] for k in range(0, whole, CHUNK_ROWS))
+    return chunks, np.array(values[whole:])
+
+
+def _choose_filter(first: np.ndarray | None) -> str:
+    """``auto``'s choice for a column from its first chunk: ``"gzip"`` when
+    shuffle + deflate (level GZIP_LEVEL) shrinks it to at most AUTO_MAX_RATIO
+    of its size, else ``"none"`` (also for a column without rows)."""
+    if first is None or not len(first):
+        return "none"
+    return "gzip" if len(zlib.compress(_shuffled(first), GZIP_LEVEL)) <= AUTO_MAX_RATIO * first.nbytes else "none"
+
+
+def _padded(values: np.ndarray) -> np.ndarray:
+    """A chunk's values, zero-padded to CHUNK_ROWS (the bytes HDF5 stores for a chunk)."""
+    if len(values) == CHUNK_ROWS:
+        return np.ascontiguousarray(values)
+    return np.concatenate([values, np.zeros(CHUNK_ROWS - len(values), values.dtype)])
+
+
+def _shuffled(values: np.ndarray) -> bytes:
+    """HDF5's shuffle filter: the values' bytes grouped by byte position."""
+    return np.ascontiguousarray(values).view(np.uint8).reshape(len(values), values.itemsize).T.tobytes()
+
+
+def _shuffle_deflate(values: np.ndarray) -> bytes:
+    """One chunk as HDF5's shuffle + deflate filters store it (zero-padded to CHUNK_ROWS)."""
+    return zlib.compress(_shuffled(_padded(values)), GZIP_LEVEL)
+
+
+def _write_part(path: Path, tables: Mapping[str, Table]) -> None:
+    """One frame's tables as a part: directory ``path`` with one raw ``.npy``
+    per column (``<table>.<column>.npy``) and ``columns.json`` (the column
+    order), written as ``path.tmp``, each file fsynced, renamed when complete."""
+    tmp = path.with_name(path.name + ".tmp")
+    shutil.rmtree(tmp, ignore_errors=True)
+    tmp.mkdir()
+    try:
+        for name, table in tables.items():
+            for col, values in table.items():
+                with open(tmp / f"{name}.{col}.npy", "wb") as f:
+                    np.save(f, values, allow_pickle=False)
+                    f.flush()
+                    os.fsync(f.fileno())
+        _write_atomic(tmp / _COLUMNS, lambda f: f.write(json.dumps({n: list(t) for n, t in tables.items()}).encode()))
+        os.replace(tmp, path)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
 
 
 def _alive(pid: int) -> bool:
@@ -384,16 +477,14 @@ def _schema_of(tables: Mapping[str, Table]) -> dict[str, dict[str, str]]:
 
 
 def _load_part(path: Path) -> dict[str, Table]:
+    """A part's tables, each column memory-mapped read-only."""
     try:
-        with np.load(path, allow_pickle=False) as npz:
-            out: dict[str, Table] = {}
-            for key in npz.files:
-                name, _, col = key.partition(".")
-                out.setdefault(name, {})[col] = npz[key]
+        columns = json.loads((path / _COLUMNS).read_text())
+        return {name: {col: np.load(path / f"{name}.{col}.npy", mmap_mode="r", allow_pickle=False) for col in cols}
+                for name, cols in columns.items()}
     except (OSError, ValueError) as exc:
         raise StoreError(f"cannot read a stored frame: {exc}.", file=path,
                          fix=f"delete {path} (the frame is recomputed on resume).") from exc
-    return out
 
 
 def read_store(path: str | Path, *, steps: Iterable[int] | None = None) -> Results:

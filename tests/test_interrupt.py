@@ -69,10 +69,15 @@ def parts_of(out: Path) -> Path:
     return out.parent / f".{out.name}.parts"
 
 
+def done_parts(out: Path) -> list[Path]:
+    """The complete frame parts (directories frame_<seq>_<step>; .tmp ones are being written)."""
+    return sorted(p for p in parts_of(out).glob("frame_*") if p.suffix != ".tmp")
+
+
 def wait_for_parts(proc: subprocess.Popen, out: Path, n: int) -> None:
     """Wait until the run has written at least ``n`` frame parts (and is still running)."""
     deadline = time.monotonic() + 120
-    while len(list(parts_of(out).glob("frame_*.npz"))) < n:
+    while len(done_parts(out)) < n:
         assert proc.poll() is None, f"the run ended before it could be interrupted: {proc.communicate()}"
         assert time.monotonic() < deadline
         time.sleep(0.01)
@@ -112,14 +117,14 @@ def test_interrupted_run_resumes_to_the_same_results(long_run, reference, tmp_pa
         assert words in err and "Traceback" not in err and err.count("\n") == 1
     assert_complete_or_absent(out)
     assert not out.exists()
-    done = sorted(parts_of(out).glob("frame_*.npz"))
+    done = done_parts(out)
     assert 3 <= len(done) < N_FRAMES
     assert not list(parts_of(out).glob("*.tmp")) or sig == signal.SIGKILL
 
     again = demsplit_run(long_run, out)  # without --resume: refused, parts untouched
     _, err = again.communicate(timeout=120)
     assert again.returncode == 2 and "--resume" in err
-    assert sorted(parts_of(out).glob("frame_*.npz")) == done
+    assert done_parts(out) == done
 
     resumed = subprocess.run([sys.executable, "-m", "demsplit.cli", "run", str(long_run), "-o", str(out),
                               "--resume"], capture_output=True, text=True, timeout=300)

@@ -57,7 +57,8 @@ def test_layout_and_frame_index(tmp_path):
         assert h5.attrs["format"] == "demsplit-results"
         assert json.loads(h5.attrs["provenance"]) == PROVENANCE
         ds = h5["particles/u"]
-        assert ds.maxshape == (None,) and ds.compression == store.COMPRESSION and ds.chunks is not None
+        assert ds.maxshape == (None,) and ds.chunks is not None
+        assert h5.attrs["compression"] == store.COMPRESSION == "auto" and ds.compression in (None, "gzip")
         assert ds.attrs["unit"] == "J"
         np.testing.assert_array_equal(h5["index/step"][()], sorted(STEPS))
         off = h5["index/contacts"][()]
@@ -189,7 +190,6 @@ def test_assembly_memory_does_not_grow_with_frames(tmp_path, monkeypatch):
     """close() streams part by part: its peak allocation is the same for 3 and 12 frames."""
     import tracemalloc
 
-    monkeypatch.setattr(store, "BUFFER_ROWS", 512)
     monkeypatch.setattr(store, "CHUNK_ROWS", 512)  # whole chunks are written as soon as they are full
     peaks = []
     for n in (3, 12):
@@ -220,3 +220,121 @@ def test_gzip_chunks_compressed_in_threads_decode_as_ordinary_hdf5(tmp_path, mon
                 assert ds.compression == "gzip" and ds.shuffle and ds.chunks == (512,)
                 expected = np.concatenate([np.asarray(f[table][col]) for f in frames]).astype(ds.dtype)
                 np.testing.assert_array_equal(ds[()], expected, err_msg=f"{table}/{col}")
+
+
+def low_variety_frame(step: int, **sizes) -> dict:
+    """A synthetic frame whose share_n1 takes three values (as with three material pairs)."""
+    f = synthetic_frame(step, **sizes)
+    rng = np.random.default_rng(step)
+    f["contacts"]["share_n1"] = rng.choice([0.5, 0.25, 0.75], len(f["contacts"]["share_n1"]))
+    return f
+
+
+def stored_columns(path) -> dict[str, h5py.Dataset]:
+    """Every column dataset of a store, read by h5py: {"table/column": (values, filter)}."""
+    with h5py.File(path) as h5:
+        return {f"{t}/{c}": (h5[t][c][()], h5[t][c].compression) for t in TABLES for c in h5[t]}
+
+
+def test_auto_compression_gzips_only_what_compresses(tmp_path, monkeypatch):
+    """auto: gzip (+ shuffle) for constant, integer and low-variety columns, no
+    filter for random floats; decided from the first chunk, values exact."""
+    monkeypatch.setattr(store, "CHUNK_ROWS", 512)
+    frames = [low_variety_frame(s, n_particles=700, n_pairs=1300) for s in (0, 1000, 2000)]
+    with ResultWriter(tmp_path / "o.h5", PROVENANCE, walls_meta=WALLS_META) as w:  # the default: auto
+        for f in frames:
+            w.append(f)
+    columns = stored_columns(tmp_path / "o.h5")
+    filters = {name: comp for name, (_, comp) in columns.items()}
+    for name in ("particles/step", "particles/id", "particles/type", "particles/n_contacts",
+                 "contacts/step", "contacts/wall", "contacts/share_n1"):
+        assert filters[name] == "gzip", name
+    for name in ("particles/u", "contacts/delta", "contacts/u_n", "contacts/u_t", "contacts/u1"):
+        assert filters[name] is None, name
+    with h5py.File(tmp_path / "o.h5") as h5:
+        assert h5["contacts/step"].shuffle and h5["contacts/step"].compression_opts == store.GZIP_LEVEL
+        assert not h5["contacts/u_n"].shuffle
+    for name, (values, _) in columns.items():
+        table, col = name.split("/")
+        expected = np.concatenate([np.asarray(f[table][col]) for f in frames]).astype(values.dtype)
+        np.testing.assert_array_equal(values, expected, err_msg=name)
+
+
+def test_auto_store_equals_uncompressed_store(tmp_path, monkeypatch):
+    """auto and none hold the same values; only the filters differ."""
+    monkeypatch.setattr(store, "CHUNK_ROWS", 512)
+    frames = [low_variety_frame(s, n_particles=900, n_pairs=2000) for s in (0, 1000, 2000, 3000)]
+    for comp in ("auto", "none"):
+        with ResultWriter(tmp_path / f"{comp}.h5", PROVENANCE, walls_meta=WALLS_META, compression=comp) as w:
+            for f in frames:
+                w.append(f)
+    assert_same(read_store(tmp_path / "auto.h5"), read_store(tmp_path / "none.h5"))
+    auto, none = stored_columns(tmp_path / "auto.h5"), stored_columns(tmp_path / "none.h5")
+    assert auto.keys() == none.keys()
+    for name in auto:
+        assert auto[name][0].dtype == none[name][0].dtype
+        np.testing.assert_array_equal(auto[name][0], none[name][0], err_msg=name)
+    assert {c for _, c in none.values()} == {None} and {c for _, c in auto.values()} == {None, "gzip"}
+    assert os.path.getsize(tmp_path / "auto.h5") < os.path.getsize(tmp_path / "none.h5")
+
+
+@pytest.mark.parametrize("compression", ["auto", "gzip", "lzf", "none"])
+def test_every_compression_round_trips_across_chunk_boundaries(tmp_path, monkeypatch, compression):
+    """Frames of 1 to 3 chunks' worth of rows, not aligned to chunks, and an empty
+    walls table: every column reads back exactly, by read_store and by h5py."""
+    monkeypatch.setattr(store, "CHUNK_ROWS", 512)
+    frames = [synthetic_frame(s, n_particles=n, n_pairs=n + 9) for s, n in ((0, 300), (1, 1100), (2, 77), (3, 1500))]
+    for f in frames:
+        f["walls"] = {k: v[:0] for k, v in f["walls"].items()}
+    with ResultWriter(tmp_path / "o.h5", PROVENANCE, walls_meta=WALLS_META, compression=compression) as w:
+        for f in frames:
+            w.append(f)
+    assert_same(read_store(tmp_path / "o.h5"), Results.from_frames(frames, PROVENANCE, WALLS_META))
+    for name, (values, _) in stored_columns(tmp_path / "o.h5").items():
+        table, col = name.split("/")
+        expected = np.concatenate([np.asarray(f[table][col]) for f in frames]).astype(values.dtype)
+        np.testing.assert_array_equal(values, expected, err_msg=name)
+
+
+def test_h5dump_reads_an_auto_store(tmp_path, monkeypatch):
+    """The HDF5 library's own tool decodes the gzip and unfiltered datasets alike."""
+    import shutil as sh
+
+    if sh.which("h5dump") is None:
+        pytest.skip("h5dump not installed (apt-get install hdf5-tools)")
+    monkeypatch.setattr(store, "CHUNK_ROWS", 512)
+    f = low_variety_frame(0, n_particles=700, n_pairs=1300)
+    with ResultWriter(tmp_path / "o.h5", PROVENANCE) as w:
+        w.append(f)
+    for col, comp in (("step", "gzip"), ("share_n1", "gzip"), ("u_n", None)):
+        assert stored_columns(tmp_path / "o.h5")[f"contacts/{col}"][1] == comp
+        header = subprocess.run(["h5dump", "-p", "-H", "-d", f"/contacts/{col}", str(tmp_path / "o.h5")],
+                                capture_output=True, text=True, check=True).stdout
+        assert (f"COMPRESSION DEFLATE {{ LEVEL {store.GZIP_LEVEL} }}" in header) == (comp == "gzip"), header
+        raw = tmp_path / f"{col}.bin"  # the values as h5dump decodes them, little-endian binary
+        subprocess.run(["h5dump", "-d", f"/contacts/{col}", "-b", "LE", "-o", str(raw), str(tmp_path / "o.h5")],
+                       capture_output=True, check=True)
+        expected = np.asarray(f["contacts"][col])
+        np.testing.assert_array_equal(np.fromfile(raw, expected.dtype.newbyteorder("<")), expected, err_msg=col)
+
+
+def test_parts_are_npy_directories_and_other_layouts_are_not_resumed(tmp_path):
+    out = tmp_path / "out.h5"
+    w = ResultWriter(out, PROVENANCE)
+    w.append(synthetic_frame(7))
+    w.abandon()
+    parts = tmp_path / ".out.h5.parts"
+    (part,) = [p for p in parts.iterdir() if p.name.startswith("frame_")]
+    assert part.is_dir() and part.name.endswith("_7")
+    u = np.load(part / "particles.u.npy")
+    np.testing.assert_array_equal(u, synthetic_frame(7)["particles"]["u"])
+    manifest = json.loads((parts / "run.json").read_text())
+    (parts / "run.json").write_text(json.dumps({**manifest, "parts_version": 1}))
+    with pytest.raises(StoreError, match="no readable run manifest"):
+        ResultWriter(out, PROVENANCE, resume=True)
+
+
+def test_unknown_compression_is_an_error(tmp_path):
+    with pytest.raises(StoreError, match="unknown compression 'zstd'"):
+        ResultWriter(tmp_path / "o.h5", PROVENANCE, compression="zstd")
+    assert not (tmp_path / ".o.h5.parts").exists()
