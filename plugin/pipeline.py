@@ -307,15 +307,16 @@ def _report_provenance(run, report: RunReport) -> dict:
 
 def run_to_store(path: str | Path, out: str | Path, *, options: Options = Options(), jobs: int = 1,
                  dask: str | None = None, resume: bool = False, on_bad_frame: str = "stop",
-                 progress: bool | None = None, compression: str | None = "gzip",
+                 progress: bool | None = None, compression: str | None = "auto",
                  **reader_options) -> tuple[RunReport, Scene]:
     """Analyse a run and stream the results into the HDF5 store ``out``
     (written to a temporary name and renamed when complete; ``resume``
     continues an interrupted run from its last complete frame).
 
-    compression : ``"gzip"`` (smallest, readable by every HDF5 tool),
-        ``"lzf"`` (faster, h5py only) or ``None`` (fastest, largest); see
-        ``docs/performance.md`` for the measured cost of each.
+    compression : ``"auto"`` (gzip only for the columns that compress well,
+        readable by every HDF5 tool), ``"gzip"`` (every column; smallest,
+        slowest), ``"lzf"`` (h5py only) or ``"none"``/``None`` (fastest,
+        largest); see ``docs/store.md`` for the measured cost of each.
     """
     from .readers import open_run
     from .results import walls_meta_from_scene
