@@ -70,6 +70,26 @@ def take_rows(table: Table, rows: np.ndarray) -> Table:
     return {name: col[rows] for name, col in table.items()}
 
 
+def minimum_image_components(dx, dy, dz, lengths, tilt, periodic):
+    """Minimum image of difference vectors (dx, dy, dz) (m) in a box of edge
+    ``lengths``, tilt ``xy xz yz`` and ``periodic`` axes, applying the tilt in the
+    LAMMPS order (z, then y, then x). Formula on float64 arrays or scalars (the
+    LIGGGHTS join compiles it, :mod:`demsplit.kernels`)."""
+    if periodic[2]:
+        k = np.rint(dz / lengths[2])
+        dz = dz - k * lengths[2]
+        dy = dy - k * tilt[2]
+        dx = dx - k * tilt[1]
+    if periodic[1]:
+        k = np.rint(dy / lengths[1])
+        dy = dy - k * lengths[1]
+        dx = dx - k * tilt[0]
+    if periodic[0]:
+        k = np.rint(dx / lengths[0])
+        dx = dx - k * lengths[0]
+    return dx, dy, dz
+
+
 @dataclass
 class Box:
     """Simulation box: bounds (m), periodicity per axis and triclinic tilt.
@@ -102,20 +122,8 @@ class Box:
     def minimum_image(self, d: np.ndarray) -> np.ndarray:
         """Minimum-image version of difference vectors ``d`` (shape (n, 3), m)."""
         d = np.array(d, dtype=np.float64, copy=True)
-        L = self.lengths
-        xy, xz, yz = self.tilt
-        if self.periodic[2]:
-            k = np.rint(d[:, 2] / L[2])
-            d[:, 2] -= k * L[2]
-            d[:, 1] -= k * yz
-            d[:, 0] -= k * xz
-        if self.periodic[1]:
-            k = np.rint(d[:, 1] / L[1])
-            d[:, 1] -= k * L[1]
-            d[:, 0] -= k * xy
-        if self.periodic[0]:
-            k = np.rint(d[:, 0] / L[0])
-            d[:, 0] -= k * L[0]
+        d[:, 0], d[:, 1], d[:, 2] = minimum_image_components(d[:, 0], d[:, 1], d[:, 2], self.lengths, self.tilt,
+                                                             self.periodic)
         return d
 
     def wrap(self, x: np.ndarray) -> np.ndarray:

@@ -30,6 +30,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import laws
+from .frame import minimum_image_components
 from .partition import body_energies, contact_point_coordinate
 from .jit import kernel
 
@@ -41,6 +42,7 @@ _squared_norm = kernel(laws.squared_norm)
 _spring_energy = kernel(laws.spring_energy)
 _body_energies = kernel(body_energies)
 _contact_point_coordinate = kernel(contact_point_coordinate)
+_minimum_image = kernel(minimum_image_components)
 
 
 NO_CODE = np.empty(0, np.int64)
@@ -239,3 +241,91 @@ def max_wall(rows2):
         if -1 - rows2[i] > m:
             m = -1 - rows2[i]
     return m
+
+
+@kernel
+def repeated_pair(rows1, rows2, n_particles):
+    """Contacts ``(first, repeat)`` of the earliest-repeated particle pair (rows, in
+    either order), or ``(i, i)`` for a particle paired with itself, whichever
+    repeat comes first; (-1, -1) when every contact is a distinct pair. O(n):
+    contacts are bucketed by their lower row (a counting sort keeping contact
+    order) and each bucket, a particle's few neighbours, is searched directly."""
+    n = rows1.shape[0]
+    start = np.zeros(n_particles + 1, np.int64)
+    for i in range(n):
+        start[min(rows1[i], rows2[i]) + 1] += 1
+    for r in range(n_particles):
+        start[r + 1] += start[r]
+    fill = start[:-1].copy()
+    members = np.empty(n, np.int64)
+    for i in range(n):
+        a = min(rows1[i], rows2[i])
+        members[fill[a]] = i
+        fill[a] += 1
+    first, repeat = -1, -1
+    for i in range(n):
+        if rows1[i] == rows2[i]:
+            first, repeat = i, i
+            break
+    for r in range(n_particles):
+        for k in range(start[r] + 1, start[r + 1]):
+            j = members[k]
+            if repeat >= 0 and j >= repeat:
+                continue
+            b = max(rows1[j], rows2[j])
+            for m in range(start[r], k):
+                e = members[m]
+                if max(rows1[e], rows2[e]) == b:
+                    first, repeat = e, j
+                    break
+    return first, repeat
+
+
+@kernel
+def pair_geometry(rows1, rows2, x, y, z, radius, h, lengths, tilt, periodic, with_cp):
+    """The join of a particle-pair contact list with the particles (rows), one pass:
+    d = x2 - x1 (minimum image along ``periodic`` axes), dist = |d|, the unit
+    normal n = d/dist (d where dist = 0), body 1's centre and both radii, the
+    overlap from positions r1 + r2 - dist, the larger printed step of the two
+    centres (when ``h`` is given, else an empty array) and, ``with_cp``,
+    LIGGGHTS' radius-weighted contact point x1 + r1/(r1 + r2) d, shape (3, n)
+    (``contactPoint`` of ``compute pair/gran/local``).
+    Returns (nx, ny, nz, x1, y1, z1, r1, r2, gap, hmax, cp)."""
+    n = rows1.shape[0]
+    nx = np.empty(n)
+    ny = np.empty(n)
+    nz = np.empty(n)
+    x1 = np.empty(n)
+    y1 = np.empty(n)
+    z1 = np.empty(n)
+    r1 = np.empty(n)
+    r2 = np.empty(n)
+    gap = np.empty(n)
+    with_h = h.shape[0] > 0
+    hmax = np.empty(n if with_h else 0)
+    cp = np.empty((3, n if with_cp else 0))
+    for i in range(n):
+        a = rows1[i]
+        b = rows2[i]
+        dx, dy, dz = _minimum_image(x[b] - x[a], y[b] - y[a], z[b] - z[a], lengths, tilt, periodic)
+        dist = np.sqrt(_squared_norm(dx, dy, dz))
+        s = dist if dist > 0 else 1.0
+        nx[i] = dx / s
+        ny[i] = dy / s
+        nz[i] = dz / s
+        x1[i] = x[a]
+        y1[i] = y[a]
+        z1[i] = z[a]
+        ra = radius[a]
+        rb = radius[b]
+        r1[i] = ra
+        r2[i] = rb
+        gap[i] = ra + rb - dist
+        if with_h:
+            hmax[i] = max(h[a], h[b])
+        if with_cp:
+            w = ra / (ra + rb)
+            cp[0, i] = x[a] + w * dx
+            cp[1, i] = y[a] + w * dy
+            cp[2, i] = z[a] + w * dz
+    return nx, ny, nz, x1, y1, z1, r1, r2, gap, hmax, cp

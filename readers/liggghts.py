@@ -62,21 +62,6 @@ def existing_file(path: str | Path) -> Path | None:
     return None
 
 
-def repeated_pair(id1: np.ndarray, id2: np.ndarray) -> tuple[int, int] | None:
-    """Rows ``(first, repeat)`` of the earliest-repeated particle pair listed twice
-    (in either order) or of a particle paired with itself (``(row, row)``); None
-    when every row is a distinct pair. Vectorised (one lexsort)."""
-    same = np.flatnonzero(id1 == id2)
-    a, b = np.minimum(id1, id2), np.maximum(id1, id2)
-    order = np.lexsort((b, a))  # stable: equal pairs stay in row order
-    dup = np.flatnonzero((a[order][1:] == a[order][:-1]) & (b[order][1:] == b[order][:-1]))
-    candidates = [(int(same[0]), int(same[0]))] if same.size else []
-    if dup.size:
-        k = int(np.argmin(order[dup + 1]))
-        candidates.append((int(order[dup[k]]), int(order[dup[k] + 1])))
-    return min(candidates, key=lambda rows: rows[1]) if candidates else None
-
-
 def scene_script(*, materials: dict[int, Material], contacts: Path, walls: Path | None = None,
                  columns: str | None = None, wall_columns: str | None = None, wall_type: int | None = None,
                  model: str = "hertz", tangential: str = "history", characteristic_velocity: float | None = None,
@@ -397,12 +382,15 @@ class LiggghtsRun:
 
     def _pairs(self, pf: DumpFrame, particles: Table, index: ParticleIndex, xyz: np.ndarray, h: np.ndarray,
                box: Box) -> Table:
+        from demsplit.kernels import pair_geometry, repeated_pair as repeated_rows  # compiled, lazily
+
         names = self._pair_names
         col = {c: pf.columns[t] for c, t in names.items() if t in pf.columns}
         id1, id2 = pf.int_column(names["id1"]), pf.int_column(names["id2"])
-        twice = repeated_pair(id1, id2)
-        if twice is not None:
-            first, repeat = twice
+        wall = np.full(len(id1), -1, np.int64)
+        rows1, rows2 = self._pair_rows(index, pf, id1, id2, wall)
+        first, repeat = repeated_rows(rows1, rows2, len(index.ids))
+        if repeat >= 0:
             raise ContactError(
                 f"particle {int(id1[first])} is paired with itself." if first == repeat else
                 f"the contact of particles {int(id1[repeat])} and {int(id2[repeat])} is listed twice in this frame "
@@ -410,24 +398,20 @@ class LiggghtsRun:
                 file=pf.file, step=pf.step, line=pf.line_of(repeat),
                 fix="each contact must appear once per frame: check that the dump is not the concatenation of "
                     "two runs or of two MPI ranks' output for the same step.")
-        rows1, rows2 = self._rows(index, pf, id1, id2)
-        d = xyz[rows2] - xyz[rows1]
-        if box.any_periodic:
-            d = box.minimum_image(d)
-        dist = np.sqrt(np.einsum("ij,ij->i", d, d))
-        n = d / np.where(dist > 0, dist, 1.0)[:, None]
-        r1, r2 = particles["radius"][rows1], particles["radius"][rows2]
-        out: Table = {"id1": id1, "id2": id2, "wall": np.full(len(id1), -1, np.int64),
-                      "delta": col["delta"] if "delta" in col else r1 + r2 - dist,
-                      "nx": n[:, 0], "ny": n[:, 1], "nz": n[:, 2],
-                      "x1": xyz[rows1, 0], "y1": xyz[rows1, 1], "z1": xyz[rows1, 2], "r1": r1, "r2": r2}
-        out["bound"] = self._delta_error(pf, names, np.maximum(h[rows1], h[rows2]), r1 + r2 - dist)
+        dumped_cp = all(c in col for c in ("cpx", "cpy", "cpz"))
+        # h is needed only for overlaps recomputed from positions
+        nx, ny, nz, x1, y1, z1, r1, r2, gap, hmax, cp = pair_geometry(
+            rows1, rows2, particles["x"], particles["y"], particles["z"], particles["radius"],
+            h if "delta" not in names else h[:0], box.lengths, box.tilt, box.periodic, not dumped_cp)
+        out: Table = {"id1": id1, "id2": id2, "wall": wall, "delta": col["delta"] if "delta" in col else gap,
+                      "nx": nx, "ny": ny, "nz": nz, "x1": x1, "y1": y1, "z1": z1, "r1": r1, "r2": r2}
+        out["bound"] = self._delta_error(pf, names, hmax, gap)
         if all(c in col for c in ("shearx", "sheary", "shearz")):
             out.update(shearx=col["shearx"], sheary=col["sheary"], shearz=col["shearz"])
-        if all(c in col for c in ("cpx", "cpy", "cpz")):
+        if dumped_cp:
             cp = np.stack([col["cpx"], col["cpy"], col["cpz"]], axis=-1)
-        else:  # LIGGGHTS' own radius-weighted point, (x1 r2 + x2 r1)/(r1 + r2)
-            cp = xyz[rows1] + (r1 / (r1 + r2))[:, None] * d
+        else:  # LIGGGHTS' own radius-weighted point, (x1 r2 + x2 r1)/(r1 + r2), from the join
+            cp = cp.T
         if box.any_periodic:
             cp = box.wrap(cp)
         out.update(cpx=cp[:, 0], cpy=cp[:, 1], cpz=cp[:, 2])
@@ -471,6 +455,17 @@ class LiggghtsRun:
         return out
 
     @staticmethod
+    def _pair_rows(index: ParticleIndex, f: DumpFrame, id1: np.ndarray, id2: np.ndarray,
+                   wall: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`ParticleIndex.contact_rows` of the particle pairs of contact dump frame
+        ``f``; an unknown id is a ContactError naming the dump and the line of its first row."""
+        try:
+            return index.contact_rows(id1, id2, wall)
+        except ContactError:
+            LiggghtsRun._rows(index, f, id1, id2)  # raises, with the line
+            raise
+
+    @staticmethod
     def _rows(index: ParticleIndex, f: DumpFrame, *ids: np.ndarray) -> list[np.ndarray]:
         """Particle rows of each id column of contact dump frame ``f``; an unknown id is a
         ContactError naming the contact dump and the line of its first row."""
@@ -487,7 +482,7 @@ class LiggghtsRun:
         dumped ``delta`` column, or the position bound when there is none."""
         token = names.get("delta")
         if token is not None:
-            return np.full(len(h), relative_rounding(f.digits.get(token)))
+            return np.full(len(delta_from_positions), relative_rounding(f.digits.get(token)))
         return position_error(h, delta_from_positions)
 
     def _overlap_policy(self, contacts: Table, error: np.ndarray, af: DumpFrame, pf: DumpFrame,

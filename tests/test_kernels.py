@@ -310,3 +310,66 @@ def test_sample_runs_match_numpy(name):
             same(tables["particles"][col], pt[col])
         cp = frame.box.wrap(e.cp) if frame.box is not None and frame.box.any_periodic else e.cp
         same(np.stack([tables["contacts"][f"cp{a}"] for a in "xyz"], -1), cp)
+
+
+# --- the LIGGGHTS join -----------------------------------------------------------------------
+
+def reference_repeated_pair(id1, id2):
+    """The numpy check the compiled one replaced: one lexsort of the (min, max) pairs."""
+    same_ = np.flatnonzero(id1 == id2)
+    a, b = np.minimum(id1, id2), np.maximum(id1, id2)
+    order = np.lexsort((b, a))
+    dup = np.flatnonzero((a[order][1:] == a[order][:-1]) & (b[order][1:] == b[order][:-1]))
+    candidates = [(int(same_[0]), int(same_[0]))] if same_.size else []
+    if dup.size:
+        k = int(np.argmin(order[dup + 1]))
+        candidates.append((int(order[dup[k]]), int(order[dup[k] + 1])))
+    return min(candidates, key=lambda rows: rows[1]) if candidates else (-1, -1)
+
+
+@settings(max_examples=300, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 30), m=st.integers(0, 60), no_self=st.booleans())
+def test_repeated_pair_matches_lexsort(seed, n, m, no_self):
+    rng = np.random.default_rng(seed)
+    a, b = rng.integers(0, n, m), rng.integers(0, n, m)
+    if no_self and n > 1:
+        b = np.where(a == b, (b + 1) % n, b)
+    assert tuple(kernels.repeated_pair(a, b, n)) == reference_repeated_pair(a, b)
+
+
+@pytest.mark.parametrize("periodic", [(False, False, False), (True, True, True), (True, False, True)])
+def test_pair_geometry_matches_numpy(periodic):
+    rng = np.random.default_rng(8)
+    n_particles, n = 40, 300
+    box = ds.Box(np.zeros(3), np.array([1.0, 2.0, 0.5]), periodic, np.array([0.1, -0.05, 0.2]))
+    x, y, z = (rng.uniform(lo, hi, n_particles) for lo, hi in zip(box.lo, box.hi))
+    radius = rng.uniform(0.01, 0.1, n_particles)
+    h = rng.choice([0.0, 1e-6, 1e-4], n_particles)
+    rows1, rows2 = rng.integers(0, n_particles, n), rng.integers(0, n_particles, n)
+    rows2[:5] = rows1[:5]  # dist = 0: the normal is d itself
+    got = dict(zip(("nx", "ny", "nz", "x1", "y1", "z1", "r1", "r2", "gap", "hmax", "cp"),
+                   kernels.pair_geometry(rows1, rows2, x, y, z, radius, h, box.lengths, box.tilt, box.periodic,
+                                         True)))
+    xyz = np.stack([x, y, z], -1)
+    d = xyz[rows2] - xyz[rows1]
+    if box.any_periodic:
+        d = box.minimum_image(d)
+    dist = np.sqrt(np.einsum("ij,ij->i", d, d))
+    normal = d / np.where(dist > 0, dist, 1.0)[:, None]
+    r1, r2 = radius[rows1], radius[rows2]
+    for k, v in (("nx", normal[:, 0]), ("ny", normal[:, 1]), ("nz", normal[:, 2]), ("gap", r1 + r2 - dist)):
+        same(got[k], v, rtol=1e-12)  # |d|^2 summed in order; einsum's order may differ by one ulp
+    for k, v in (("x1", x[rows1]), ("y1", y[rows1]), ("z1", z[rows1]), ("r1", r1), ("r2", r2),
+                 ("hmax", np.maximum(h[rows1], h[rows2]))):
+        same(got[k], v)
+    same(got["cp"].T, xyz[rows1] + (r1 / (r1 + r2))[:, None] * d)
+    assert kernels.pair_geometry(rows1, rows2, x, y, z, radius, h[:0], box.lengths, box.tilt, box.periodic,
+                                 False)[-2].size == 0
+
+
+def test_minimum_image_compiled_is_the_box_formula():
+    rng = np.random.default_rng(1)
+    box = ds.Box(np.zeros(3), np.array([1.0, 2.0, 0.5]), (True, True, True), np.array([0.1, -0.05, 0.2]))
+    d = rng.uniform(-3, 3, (200, 3))
+    loop = np.array([kernels._minimum_image(*v, box.lengths, box.tilt, box.periodic) for v in d])
+    same(loop, box.minimum_image(d))
