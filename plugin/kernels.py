@@ -21,6 +21,13 @@ contact i has ``values[code[i]]`` (a small table per pair of material types,
 ``code = type1 * n_types + type2``); with an empty ``code``, ``values`` holds
 one value per contact, or a single value for all of them (length 1).
 
+Outputs are allocated by numpy and filled by the loops (the public functions
+here are thin wrappers around the compiled ``_...`` loops): numpy asks the
+kernel for transparent huge pages on large arrays, numba's allocator does not,
+and the 4 KiB page faults of fresh numba arrays cost about 3 ns per 8-byte
+value written (9 output columns of 2e6 rows: 63 ms from numba, 3 ms from
+numpy; ``/tmp/kern_geo.py`` of this change).
+
 This module imports numba: import it lazily, inside the functions that use it
 (``import demsplit`` must work in YADE's Python, without numba).
 """
@@ -56,17 +63,22 @@ def _stride(values):
 
 # Loops select values inline, ``values[code[i]] if coded else values[i * stride]``:
 # a helper function taking the arrays would not be inlined and would pay numba's
-# reference counting of both arrays on every call (10x slower).
+# reference counting of both arrays on every call (10x slower). For the same
+# reason the formulas called per contact get scalars and tuples, never arrays.
 
 
-@kernel
 def contact_rows(row_of_id, id1, id2, wall):
     """Particle rows of both bodies of every contact from a dense id -> row table
     (-1: no particle), in the table's integer type. For a wall contact rows2 is
     -1 - wall (< 0). Returns (rows1, rows2, first contact naming an unknown id or -1)."""
+    rows1 = np.empty(len(id1), row_of_id.dtype)
+    rows2 = np.empty(len(id1), row_of_id.dtype)
+    return rows1, rows2, _contact_rows(row_of_id, id1, id2, wall, rows1, rows2)
+
+
+@kernel
+def _contact_rows(row_of_id, id1, id2, wall, rows1, rows2):
     n = id1.shape[0]
-    rows1 = np.empty(n, row_of_id.dtype)
-    rows2 = np.empty(n, row_of_id.dtype)
     bad = -1
     m = row_of_id.shape[0]
     for i in range(n):
@@ -84,7 +96,7 @@ def contact_rows(row_of_id, id1, id2, wall):
                 r = -1
         if r < 0 and bad < 0:
             bad = i
-    return rows1, rows2, bad
+    return bad
 
 
 @kernel
@@ -119,16 +131,21 @@ def contact_types(rows1, rows2, ptype, wall_types, n_types, code):
     return present, bad_wall, bad_type
 
 
-@kernel
 def hertz_history_energies(delta, r1, r2, E_eff, G_eff, code, shearx, sheary, shearz, with_shear):
     """LIGGGHTS ``model hertz`` (+ ``tangential history``) energies of every contact (J):
     u_n = (8/15) E* sqrt(R* d) d^2 and, with shear, u_t = kt |shear|^2 / 2 with
     kt = 8 G* sqrt(R* d) where delta > 0 (0 elsewhere); R* = 1/(1/r1 + 1/r2),
     d = max(delta, 0). E_eff, G_eff: values for ``code`` (module docstring).
     Returns (u_n, u_t, first contact with 1/r1 + 1/r2 <= 0 or -1)."""
+    u_n = np.empty(len(delta))
+    u_t = np.empty(len(delta))
+    return u_n, u_t, _hertz_history_energies(delta, r1, r2, E_eff, G_eff, code, shearx, sheary, shearz,
+                                             with_shear, u_n, u_t)
+
+
+@kernel
+def _hertz_history_energies(delta, r1, r2, E_eff, G_eff, code, shearx, sheary, shearz, with_shear, u_n, u_t):
     n = delta.shape[0]
-    u_n = np.empty(n)
-    u_t = np.zeros(n)
     coded, se, sg = code.shape[0] > 0, _stride(E_eff), _stride(G_eff)
     bad = -1
     for i in range(n):
@@ -140,21 +157,26 @@ def hertz_history_energies(delta, r1, r2, E_eff, G_eff, code, shearx, sheary, sh
         if with_shear and delta[i] > 0.0:
             u_t[i] = _spring_energy(_hertz_kt(d, R, G_eff[code[i]] if coded else G_eff[i * sg]),
                                     _squared_norm(shearx[i], sheary[i], shearz[i]))
-    return u_n, u_t, bad
+        else:
+            u_t[i] = 0.0
+    return bad
 
 
-@kernel
 def split_contacts(sn_values, sn_code, st_values, st_code, u_n, u_t, delta, x1, y1, z1, nx, ny, nz, r1):
     """Per contact: the shares s_n, s_t (from values and codes, module docstring),
     u1, u2 (:func:`~demsplit.partition.body_energies`), depth1 = s_n delta and
-    the contact point x1 + (r1 - depth1) n, as an array of shape (3, n)."""
+    the contact point x1 + (r1 - depth1) n, as an array of shape (3, n).
+    Returns (s_n, s_t, u1, u2, depth1, cp)."""
+    out = [np.empty(len(delta)) for _ in range(5)]
+    cp = np.empty((3, len(delta)))
+    _split_contacts(sn_values, sn_code, st_values, st_code, u_n, u_t, delta, x1, y1, z1, nx, ny, nz, r1, *out, cp)
+    return (*out, cp)
+
+
+@kernel
+def _split_contacts(sn_values, sn_code, st_values, st_code, u_n, u_t, delta, x1, y1, z1, nx, ny, nz, r1,
+                    s_n, s_t, u1, u2, depth1, cp):
     n = delta.shape[0]
-    s_n = np.empty(n)
-    s_t = np.empty(n)
-    u1 = np.empty(n)
-    u2 = np.empty(n)
-    depth1 = np.empty(n)
-    cp = np.empty((3, n))
     n_coded, t_coded = sn_code.shape[0] > 0, st_code.shape[0] > 0
     sn, st = _stride(sn_values), _stride(st_values)
     for i in range(n):
@@ -168,10 +190,8 @@ def split_contacts(sn_values, sn_code, st_values, st_code, u_n, u_t, delta, x1, 
         cp[0, i] = _contact_point_coordinate(x1[i], nx[i], r1[i], d1)
         cp[1, i] = _contact_point_coordinate(y1[i], ny[i], r1[i], d1)
         cp[2, i] = _contact_point_coordinate(z1[i], nz[i], r1[i], d1)
-    return s_n, s_t, u1, u2, depth1, cp
 
 
-@kernel
 def body_sums(rows1, rows2, s_n, s_t, u_n, u_t, n_particles, n_walls):
     """Sums per particle and per wall (rows2 = -1 - wall) of the normal and tangential
     energy each body stores (body 1: s u; body 2: u - s u) and of its contacts.
@@ -180,16 +200,17 @@ def body_sums(rows1, rows2, s_n, s_t, u_n, u_t, n_particles, n_walls):
     at the end: the order of ``np.bincount(rows1, w1) + np.bincount(rows2, w2)``,
     so the sums are those of the numpy formulation bit for bit.
     Returns (particle u_n, u_t, n_contacts, wall u_n, u_t, n_contacts)."""
+    p_un, p_ut, q_un, q_ut = (np.zeros(n_particles) for _ in range(4))
+    w_un, w_ut = np.zeros(n_walls), np.zeros(n_walls)
+    p_count, w_count = np.zeros(n_particles, np.int64), np.zeros(n_walls, np.int64)
+    _body_sums(rows1, rows2, s_n, s_t, u_n, u_t, p_un, p_ut, q_un, q_ut, p_count, w_un, w_ut, w_count)
+    return p_un, p_ut, p_count, w_un, w_ut, w_count
+
+
+@kernel
+def _body_sums(rows1, rows2, s_n, s_t, u_n, u_t, p_un, p_ut, q_un, q_ut, p_count, w_un, w_ut, w_count):
     n = rows1.shape[0]
     sn, st = _stride(s_n), _stride(s_t)
-    p_un = np.zeros(n_particles)
-    p_ut = np.zeros(n_particles)
-    q_un = np.zeros(n_particles)
-    q_ut = np.zeros(n_particles)
-    p_count = np.zeros(n_particles, np.int64)
-    w_un = np.zeros(n_walls)
-    w_ut = np.zeros(n_walls)
-    w_count = np.zeros(n_walls, np.int64)
     for i in range(n):
         un1 = s_n[i * sn] * u_n[i]
         ut1 = s_t[i * st] * u_t[i]
@@ -207,30 +228,32 @@ def body_sums(rows1, rows2, s_n, s_t, u_n, u_t, n_particles, n_walls):
             w_un[w] += u_n[i] - un1
             w_ut[w] += u_t[i] - ut1
             w_count[w] += 1
-    for r in range(n_particles):
+    for r in range(p_un.shape[0]):
         p_un[r] += q_un[r]
         p_ut[r] += q_ut[r]
-    return p_un, p_ut, p_count, w_un, w_ut, w_count
 
 
-@kernel
 def particle_sums(rows1, rows2, s_n, s_t, u_n, u_t, n_particles):
     """Energy of every particle under shares s_n, s_t (per contact or one value):
     u1 = s_n u_n + s_t u_t on body 1, u_n + u_t - u1 on body 2 of particle pairs
     (rows2 >= 0); sums in the order of :func:`body_sums`."""
+    p1, p2 = np.zeros(n_particles), np.zeros(n_particles)
+    _particle_sums(rows1, rows2, s_n, s_t, u_n, u_t, p1, p2)
+    return p1
+
+
+@kernel
+def _particle_sums(rows1, rows2, s_n, s_t, u_n, u_t, p1, p2):
     n = rows1.shape[0]
     sn, st = _stride(s_n), _stride(s_t)
-    p1 = np.zeros(n_particles)
-    p2 = np.zeros(n_particles)
     for i in range(n):
         u1 = _body_energies(s_n[i * sn], s_t[i * st], u_n[i], u_t[i])[0]
         p1[rows1[i]] += u1
         r2 = rows2[i]
         if r2 >= 0:
             p2[r2] += u_n[i] + u_t[i] - u1
-    for r in range(n_particles):
+    for r in range(p1.shape[0]):
         p1[r] += p2[r]
-    return p1
 
 
 @kernel
@@ -243,21 +266,24 @@ def max_wall(rows2):
     return m
 
 
-@kernel
 def repeated_pair(rows1, rows2, n_particles):
     """Contacts ``(first, repeat)`` of the earliest-repeated particle pair (rows, in
     either order), or ``(i, i)`` for a particle paired with itself, whichever
     repeat comes first; (-1, -1) when every contact is a distinct pair. O(n):
     contacts are bucketed by their lower row (a counting sort keeping contact
     order) and each bucket, a particle's few neighbours, is searched directly."""
+    return _repeated_pair(rows1, rows2, np.zeros(n_particles + 1, np.int64), np.empty(len(rows1), np.int64))
+
+
+@kernel
+def _repeated_pair(rows1, rows2, start, members):
     n = rows1.shape[0]
-    start = np.zeros(n_particles + 1, np.int64)
+    n_particles = start.shape[0] - 1
     for i in range(n):
         start[min(rows1[i], rows2[i]) + 1] += 1
     for r in range(n_particles):
         start[r + 1] += start[r]
     fill = start[:-1].copy()
-    members = np.empty(n, np.int64)
     for i in range(n):
         a = min(rows1[i], rows2[i])
         members[fill[a]] = i
@@ -281,9 +307,9 @@ def repeated_pair(rows1, rows2, n_particles):
     return first, repeat
 
 
-@kernel
-def pair_geometry(rows1, rows2, x, y, z, radius, h, lengths, tilt, periodic, with_cp):
-    """The join of a particle-pair contact list with the particles (rows), one pass:
+def pair_geometry(rows1, rows2, xyzr, h, lengths, tilt, periodic, with_cp):
+    """The join of a particle-pair contact list with the particles (rows), one pass
+    (``xyzr``: each particle's centre and radius in one row, one cache line to fetch):
     d = x2 - x1 (minimum image along ``periodic`` axes), dist = |d|, the unit
     normal n = d/dist (d where dist = 0), body 1's centre and both radii, the
     overlap from positions r1 + r2 - dist, the larger printed step of the two
@@ -291,33 +317,35 @@ def pair_geometry(rows1, rows2, x, y, z, radius, h, lengths, tilt, periodic, wit
     LIGGGHTS' radius-weighted contact point x1 + r1/(r1 + r2) d, shape (3, n)
     (``contactPoint`` of ``compute pair/gran/local``).
     Returns (nx, ny, nz, x1, y1, z1, r1, r2, gap, hmax, cp)."""
-    n = rows1.shape[0]
-    nx = np.empty(n)
-    ny = np.empty(n)
-    nz = np.empty(n)
-    x1 = np.empty(n)
-    y1 = np.empty(n)
-    z1 = np.empty(n)
-    r1 = np.empty(n)
-    r2 = np.empty(n)
-    gap = np.empty(n)
-    with_h = h.shape[0] > 0
-    hmax = np.empty(n if with_h else 0)
+    n = len(rows1)
+    out = [np.empty(n) for _ in range(9)]
+    hmax = np.empty(n if len(h) else 0)
     cp = np.empty((3, n if with_cp else 0))
+    _pair_geometry(rows1, rows2, xyzr, h, lengths, tilt, periodic, *out, hmax, cp)
+    return (*out, hmax, cp)
+
+
+@kernel
+def _pair_geometry(rows1, rows2, xyzr, h, lengths, tilt, periodic, nx, ny, nz, x1, y1, z1, r1, r2, gap, hmax, cp):
+    n = rows1.shape[0]
+    with_h = hmax.shape[0] > 0
+    with_cp = cp.shape[1] > 0
+    box = (lengths[0], lengths[1], lengths[2])  # tuples, not arrays, into the per-contact call
+    skew = (tilt[0], tilt[1], tilt[2])
     for i in range(n):
         a = rows1[i]
         b = rows2[i]
-        dx, dy, dz = _minimum_image(x[b] - x[a], y[b] - y[a], z[b] - z[a], lengths, tilt, periodic)
+        xa, ya, za, ra = xyzr[a, 0], xyzr[a, 1], xyzr[a, 2], xyzr[a, 3]
+        rb = xyzr[b, 3]
+        dx, dy, dz = _minimum_image(xyzr[b, 0] - xa, xyzr[b, 1] - ya, xyzr[b, 2] - za, box, skew, periodic)
         dist = np.sqrt(_squared_norm(dx, dy, dz))
         s = dist if dist > 0 else 1.0
         nx[i] = dx / s
         ny[i] = dy / s
         nz[i] = dz / s
-        x1[i] = x[a]
-        y1[i] = y[a]
-        z1[i] = z[a]
-        ra = radius[a]
-        rb = radius[b]
+        x1[i] = xa
+        y1[i] = ya
+        z1[i] = za
         r1[i] = ra
         r2[i] = rb
         gap[i] = ra + rb - dist
@@ -325,7 +353,6 @@ def pair_geometry(rows1, rows2, x, y, z, radius, h, lengths, tilt, periodic, wit
             hmax[i] = max(h[a], h[b])
         if with_cp:
             w = ra / (ra + rb)
-            cp[0, i] = x[a] + w * dx
-            cp[1, i] = y[a] + w * dy
-            cp[2, i] = z[a] + w * dz
-    return nx, ny, nz, x1, y1, z1, r1, r2, gap, hmax, cp
+            cp[0, i] = xa + w * dx
+            cp[1, i] = ya + w * dy
+            cp[2, i] = za + w * dz

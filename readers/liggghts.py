@@ -350,14 +350,19 @@ class LiggghtsRun:
             first = np.zeros(len(particles["id"]), bool)
             first[np.unique(particles["id"], return_index=True)[1]] = True
             raise exc.located(line=af.line_of(int(np.flatnonzero(~first)[0]))) from None
-        xyz = np.stack([particles["x"], particles["y"], particles["z"]], axis=-1)
-        # printed step of every particle's coordinates (0 at full precision)
-        h = np.max([printed_step(particles[c], af.digits.get(c)) for c in ("x", "y", "z")], axis=0)
-        parts = [self._pairs(pf, particles, index, xyz, h, box)]
+        # centre and radius of each particle in one row: the join fetches one cache line per body
+        xyzr = np.stack([particles["x"], particles["y"], particles["z"], particles["radius"]], axis=-1)
+        xyz = xyzr[:, :3]
+        has_primitive = any(w.kind in ("plane", "cylinder") for w in self.scene.walls)
+        # printed step of every particle's coordinates (0 at full precision), where positions make overlaps
+        h = np.max([printed_step(particles[c], af.digits.get(c)) for c in ("x", "y", "z")], axis=0) \
+            if "delta" not in self._pair_names or wf is not None or has_primitive else None
+        parts = [self._pairs(pf, index, xyzr, h, box)]
         if wf is not None:
             parts.append(self._mesh_walls(wf, particles, index, xyz, h))
         # printed positions can hide a contact: keep those within their uncertainty (bound inf)
-        primitive = primitive_wall_contacts(particles, self.scene.walls, margin=np.sqrt(3.0) * h)
+        primitive = primitive_wall_contacts(particles, self.scene.walls, margin=np.sqrt(3.0) * h) \
+            if has_primitive else {}
         notes = []
         if primitive:
             rows = index.rows(primitive["id1"])
@@ -380,7 +385,7 @@ class LiggghtsRun:
                      source=(str(af.file), str(pf.file)) + ((str(wf.file),) if wf is not None else ()),
                      overlap_source=source, overlap_error=error, notes=notes)
 
-    def _pairs(self, pf: DumpFrame, particles: Table, index: ParticleIndex, xyz: np.ndarray, h: np.ndarray,
+    def _pairs(self, pf: DumpFrame, index: ParticleIndex, xyzr: np.ndarray, h: np.ndarray | None,
                box: Box) -> Table:
         from demsplit.kernels import pair_geometry, repeated_pair as repeated_rows  # compiled, lazily
 
@@ -399,10 +404,10 @@ class LiggghtsRun:
                 fix="each contact must appear once per frame: check that the dump is not the concatenation of "
                     "two runs or of two MPI ranks' output for the same step.")
         dumped_cp = all(c in col for c in ("cpx", "cpy", "cpz"))
-        # h is needed only for overlaps recomputed from positions
+        # h (printed steps) only for overlaps recomputed from positions
         nx, ny, nz, x1, y1, z1, r1, r2, gap, hmax, cp = pair_geometry(
-            rows1, rows2, particles["x"], particles["y"], particles["z"], particles["radius"],
-            h if "delta" not in names else h[:0], box.lengths, box.tilt, box.periodic, not dumped_cp)
+            rows1, rows2, xyzr, h if "delta" not in names else np.zeros(0), box.lengths, box.tilt, box.periodic,
+            not dumped_cp)
         out: Table = {"id1": id1, "id2": id2, "wall": wall, "delta": col["delta"] if "delta" in col else gap,
                       "nx": nx, "ny": ny, "nz": nz, "x1": x1, "y1": y1, "z1": z1, "r1": r1, "r2": r2}
         out["bound"] = self._delta_error(pf, names, hmax, gap)

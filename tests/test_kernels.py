@@ -347,9 +347,9 @@ def test_pair_geometry_matches_numpy(periodic):
     h = rng.choice([0.0, 1e-6, 1e-4], n_particles)
     rows1, rows2 = rng.integers(0, n_particles, n), rng.integers(0, n_particles, n)
     rows2[:5] = rows1[:5]  # dist = 0: the normal is d itself
+    xyzr = np.stack([x, y, z, radius], -1)
     got = dict(zip(("nx", "ny", "nz", "x1", "y1", "z1", "r1", "r2", "gap", "hmax", "cp"),
-                   kernels.pair_geometry(rows1, rows2, x, y, z, radius, h, box.lengths, box.tilt, box.periodic,
-                                         True)))
+                   kernels.pair_geometry(rows1, rows2, xyzr, h, box.lengths, box.tilt, box.periodic, True)))
     xyz = np.stack([x, y, z], -1)
     d = xyz[rows2] - xyz[rows1]
     if box.any_periodic:
@@ -363,8 +363,10 @@ def test_pair_geometry_matches_numpy(periodic):
                  ("hmax", np.maximum(h[rows1], h[rows2]))):
         same(got[k], v)
     same(got["cp"].T, xyz[rows1] + (r1 / (r1 + r2))[:, None] * d)
-    assert kernels.pair_geometry(rows1, rows2, x, y, z, radius, h[:0], box.lengths, box.tilt, box.periodic,
-                                 False)[-2].size == 0
+    no_h_no_cp = kernels.pair_geometry(rows1, rows2, xyzr, h[:0], box.lengths, box.tilt, box.periodic, False)
+    assert no_h_no_cp[-2].size == 0 and no_h_no_cp[-1].size == 0
+    for a, b in zip(no_h_no_cp[:-2], got.values()):
+        same(a, b)
 
 
 def test_minimum_image_compiled_is_the_box_formula():
