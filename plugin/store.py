@@ -296,10 +296,9 @@ class ResultWriter:
             sinks = {name: _TableSink(h5, name, schema.get(name, {}), self.compression, pool) for name in TABLES}
             offsets = {name: np.zeros(len(order) + 1, np.int64) for name in TABLES}
             for k, (_, (_, part)) in enumerate(order):
-                frame = _load_part(part)  # memory-mapped: one frame's pages at a time
+                frame = _load_part(part)  # memory-mapped; each sink releases a column once written
                 for name, sink in sinks.items():
-                    offsets[name][k + 1] = offsets[name][k] + sink.append(frame.get(name), part)
-                del frame
+                    offsets[name][k + 1] = offsets[name][k] + sink.append(frame.pop(name, None), part)
             index = h5.create_group("index")
             index.create_dataset("step", data=np.array([s for s, _ in order], dtype=np.int64))
             for name, sink in sinks.items():
@@ -314,15 +313,15 @@ class _TableSink:
 
     Each column's chunks are written with ``write_direct_chunk``: as they are
     (no filter), or shuffled and deflated here rather than by HDF5 (gzip;
-    lzf, h5py's own filter, is left to HDF5):
-    the shuffle filter is a byte transpose and deflate is ``zlib.compress``,
-    which releases the GIL, so the thread pool compresses the chunks of a frame
-    on every core. The datasets carry the same filters as an ordinary h5py
-    dataset, so every HDF5 reader decodes them as usual. The datasets are
-    created at the table's first chunk, when ``auto`` can measure it (see
-    :func:`_choose_filter`). Rows that do not fill a chunk are carried (a copy,
-    less than one chunk per column) to the next frame; :meth:`finish` writes
-    the last, partial chunk (zero-padded, outside the dataset's shape).
+    lzf, h5py's own filter, is left to HDF5): the shuffle filter is a byte
+    transpose and deflate is ``zlib.compress``, which releases the GIL, so the
+    thread pool compresses a column's chunks on every core. The datasets carry
+    the same filters as an ordinary h5py dataset, so every HDF5 reader decodes
+    them as usual. A column's dataset is created at its first chunk, when
+    ``auto`` can measure it (:func:`_choose_filter`). Rows that do not fill a
+    chunk are carried (a copy, less than one chunk per column) to the next
+    frame; :meth:`finish` writes the last, partial chunk (zero-padded, outside
+    the dataset's shape).
     """
 
     def __init__(self, h5, name: str, schema: dict[str, str], compression: str, pool: ThreadPoolExecutor) -> None:
@@ -331,64 +330,57 @@ class _TableSink:
         self.group = h5.create_group(name)
         self.group.attrs["columns"] = json.dumps(list(schema))
         self.group.attrs["units"] = json.dumps({c: UNITS.get(c, "") for c in schema})
-        self.filters: dict[str, str] | None = None  # column -> "gzip" | "lzf" | "none", once created
         self.carry = {col: np.empty(0, np.dtype(dtype)) for col, dtype in schema.items()}
-        self.rows = 0  # rows written to the datasets
 
-    def append(self, table: Table | None, part: Path) -> int:
-        """Write the whole chunks that ``table`` (one frame) completes; return its row count."""
+    def append(self, table: dict[str, np.ndarray] | None, part: Path) -> int:
+        """Write the whole chunks that ``table`` (one frame) completes, one
+        column at a time, and return its row count. Consumes ``table``: each
+        column is dropped once written, so that only one column of a
+        memory-mapped part is resident at a time."""
         if not table:
             return 0
         if _schema_of({self.name: table})[self.name] != self.schema:
             raise StoreError(f"table {self.name!r} in this part has columns {list(table)}, expected {list(self.schema)}.",
                              file=part, fix=f"delete {part} (the frame is recomputed on resume).")
-        chunks = {}
+        n = len(next(iter(table.values())))
         for col in self.schema:
-            chunks[col], self.carry[col] = _whole_chunks(self.carry[col], table[col])
-        self._write(chunks)
-        return len(next(iter(table.values())))
+            chunks, self.carry[col] = _whole_chunks(self.carry[col], table.pop(col))
+            self._write(col, chunks)
+        return n
 
     def finish(self) -> None:
-        """Write the carried rows (the last, partial chunk); create the datasets of a table without rows."""
-        if any(len(rows) for rows in self.carry.values()):
-            self._write({col: [rows] for col, rows in self.carry.items()})
-        if self.filters is None:
-            self._create({col: None for col in self.schema})
+        """Write the carried rows (each column's last, partial chunk); create
+        the datasets of columns without rows."""
+        for col, rows in self.carry.items():
+            self._write(col, [rows] if len(rows) else [])
+            if col not in self.group:
+                self._create(col, None)
 
-    def _create(self, first: dict[str, np.ndarray | None]) -> None:
-        """Create the datasets; ``first``: each column's first chunk (None: no rows)."""
-        if self.compression == "auto":
-            samples = [first[col] for col in self.schema]
-            self.filters = dict(zip(self.schema, self.pool.map(_choose_filter, samples)))
-        else:
-            self.filters = dict.fromkeys(self.schema, self.compression)
-        for col, dtype in self.schema.items():
-            kind = self.filters[col]
-            self.group.create_dataset(
-                col, shape=(0,), maxshape=(None,), dtype=np.dtype(dtype), chunks=(CHUNK_ROWS,),
-                compression=None if kind == "none" else kind,
-                compression_opts=GZIP_LEVEL if kind == "gzip" else None, shuffle=kind != "none",
-            ).attrs["unit"] = UNITS.get(col, "")
+    def _create(self, col: str, first: np.ndarray | None):
+        """The dataset of ``col``, its filter chosen from ``first``, its first chunk (None: no rows)."""
+        kind = _choose_filter(first) if self.compression == "auto" else self.compression
+        ds = self.group.create_dataset(
+            col, shape=(0,), maxshape=(None,), dtype=np.dtype(self.schema[col]), chunks=(CHUNK_ROWS,),
+            compression=None if kind == "none" else kind,
+            compression_opts=GZIP_LEVEL if kind == "gzip" else None, shuffle=kind != "none",
+        )
+        ds.attrs["unit"] = UNITS.get(col, "")
+        return ds
 
-    def _write(self, chunks: dict[str, list[np.ndarray]]) -> None:
-        """Append each column's chunks (all whole but possibly the last one of the table)."""
-        if not any(chunks.values()):
+    def _write(self, col: str, chunks: list[np.ndarray]) -> None:
+        """Append the chunks of one column (all whole but possibly the table's last one)."""
+        if not chunks:
             return
-        if self.filters is None:
-            self._create({col: c[0] for col, c in chunks.items()})
-        start = self.rows
-        self.rows += sum(len(c) for c in next(iter(chunks.values())))
-        for col, col_chunks in chunks.items():
-            ds = self.group[col]
-            ds.resize((self.rows,))  # the rows, not the padding: the dataset never shrinks
-            kind = self.filters[col]
-            if kind == "lzf":  # h5py's own filter: HDF5 applies it to the chunk-aligned slices
-                for k, c in enumerate(col_chunks):
-                    ds[start + k * CHUNK_ROWS: start + k * CHUNK_ROWS + len(c)] = c
-                continue
-            blobs = self.pool.map(_shuffle_deflate, col_chunks) if kind == "gzip" else map(_padded, col_chunks)
-            for k, blob in enumerate(blobs):
-                ds.id.write_direct_chunk((start + k * CHUNK_ROWS,), blob)
+        ds = self.group[col] if col in self.group else self._create(col, chunks[0])
+        start = ds.shape[0]
+        ds.resize((start + sum(len(c) for c in chunks),))  # the rows, not the padding: it never shrinks
+        if ds.compression == "lzf":  # h5py's own filter: HDF5 applies it to the chunk-aligned slices
+            for k, c in enumerate(chunks):
+                ds[start + k * CHUNK_ROWS: start + k * CHUNK_ROWS + len(c)] = c
+            return
+        blobs = self.pool.map(_shuffle_deflate, chunks) if ds.compression == "gzip" else map(_padded, chunks)
+        for k, blob in enumerate(blobs):
+            ds.id.write_direct_chunk((start + k * CHUNK_ROWS,), blob)
 
 
 def _whole_chunks(carry: np.ndarray, values: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
