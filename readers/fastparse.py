@@ -19,12 +19,16 @@ integer mantissa m (its significant digits) and a decimal exponent e. When
 m <= 2**53 and |e| <= 22, both m and 10**|e| are exact doubles, so
 ``m * 10.0**e`` (e >= 0) or ``m / 10.0**-e`` (e < 0) is one IEEE operation on
 exact operands, hence correctly rounded: the nearest double to the decimal.
-LAMMPS's default ``%g`` (6 significant digits, exponents within +-22 for any
-DEM quantity in SI units) always takes it. Any other token (more digits, a
-larger exponent, ``nan``, ``inf``, a letter) is not converted: the kernel
-reports where, and the caller parses that block with its general (slower)
-parser, which also produces the located error messages. So the fast path
-never decides what is an error, and never produces a different number.
+LAMMPS's default ``%g`` (6 significant digits) takes it for magnitudes from
+about 1e-17 to 1e22 (e is the printed exponent minus the digits after the
+point: ``8.4781e-19`` is 84781e-23, outside). A decimal literal
+outside the path (more digits, a larger exponent) is listed with its byte
+range, for the caller to convert with Python's ``float`` (also correctly
+rounded); any other token (``nan``, ``inf``, a letter, a real in an integer
+column) is not converted: the kernel reports the row, and the caller parses
+that block with its general (slower) parser, which also produces the located
+error messages. So the fast path never decides what is an error, and never
+produces a different number.
 """
 
 from __future__ import annotations

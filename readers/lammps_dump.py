@@ -17,34 +17,47 @@ a time and reports bad input precisely.
 
 Index
     The first access to ``n_frames``/``steps``/``frame(k)`` scans the
-    (decompressed) file once in 16 MiB chunks read into one reused buffer:
-    numpy counts the newlines and finds the ``ITEM: TIMESTEP`` candidates (the
-    letter ``I``, which no number contains) at memory speed; no per-line
-    Python. Each frame's entry holds its step, header row count, box, column
-    names, the byte range of its rows and their line numbers. The index is
-    cached on the object. Binary files are indexed by hopping from header to
-    header.
+    (decompressed) file once in 16 MiB chunks: one compiled pass per chunk
+    (:func:`~demsplit.readers.fastparse.scan_chunk`, numba) counts the
+    newlines and finds the ``ITEM: TIMESTEP`` markers; no per-line Python. A
+    plain file is hashed (sha256, for provenance) by a second thread on the
+    same chunks, in place: two buffers alternate, so the scan is as fast as
+    the hash. Each frame's entry holds its step, header row count, box,
+    column names, the byte range of its rows and their line numbers. The
+    index is cached on the object. Binary files are indexed by hopping from
+    header to header.
 
 Reading a frame
     ``frame(k)`` seeks to the frame's rows (a compressed file re-decompresses
     from the start up to frame k; iteration, ``for f in dump``, reads the
     stream once, forwards) and reads them in blocks of about 16 MiB of whole
-    rows, each parsed and copied into arrays preallocated from the header's
-    row count: the text of a frame is never in memory at once, so memory is
-    the requested columns plus one block.
+    rows into one reused buffer, each parsed straight into arrays
+    preallocated from the header's row count (the requested columns of each
+    dtype are the rows of one 2-D array): the text of a frame is never in
+    memory at once, so memory is the requested columns plus one block.
 
 Parser (measured)
-    Each block is parsed by ``polars.read_csv`` (compiled, multi-threaded;
-    full schema given, only the requested columns converted). polars pads
-    short rows with nulls and ignores extra fields, so every block first
-    passes a vectorised shape check (:func:`_rows_well_formed`: the separators
-    come ``ncols`` (+1 trailing space) per row, newline last, never two
-    adjacent). ``python benchmarks/bench.py`` measures the reader against the
-    bare parsers (``docs/performance.md``). Profiled on the 2e6-contact,
-    41-column benchmark frame (860 MB, 8 columns read, shared 2-core
-    machine): polars 1.4 s plus the shape check 2.3 s (cProfile, before the
-    check's last simplification), against 4.1-6.9 s for
-    ``pyarrow.csv.read_csv`` on the same frame (which checks shapes itself).
+    Each block is cut into line-aligned slices, one per core, parsed by the
+    compiled kernel :func:`~demsplit.readers.fastparse.parse_rows` in a
+    thread pool (it releases the GIL): in one pass it checks every row's
+    shape (``ncols`` fields, single spaces, the optional trailing space, a
+    newline) and converts the requested columns, integers exactly, reals by
+    Clinger's fast path (correctly rounded: bit for bit Python's ``float``).
+    The rare real outside that path (more than 15-16 digits, or a decimal
+    exponent beyond +-22 such as ``8.4781e-19``: one token in 77 000 rows of
+    the benchmark's contacts) is converted by ``float`` (at most 4096 per
+    slice). A block holding anything else (``%.17g`` text beyond that count,
+    ``nan``, a non-number, a real in an integer column) is parsed again by
+    the general path, ``polars.read_csv`` (full schema, only the requested
+    columns converted), which also makes an integer column real and, for
+    bad input, leads to the located error. ``fast_blocks`` and
+    ``fallback_blocks`` on a :class:`TextDump` count the two. Measured on
+    the benchmark run (``benchmarks/bench.py``, ``docs/performance.md``,
+    shared 2-core machine): the 2.57 GB, 41-column contact dump indexed in
+    1.5 s (sha256 alone: 1.3-1.7 GB/s here) and its 10 columns parsed in
+    3.3 s; the kernel alone converts 0.6-0.8 GB/s of those rows per core.
+    Before (numpy scan, polars plus a numpy shape check): 13.4 s index and
+    7.6 s parse for both dumps (cProfile of ``demsplit run``).
 
 Validation (every frame that is read)
     * the header's ``NUMBER OF ATOMS/ENTRIES`` equals the number of lines
@@ -52,9 +65,9 @@ Validation (every frame that is read)
       end of the file a shortfall or a last line without newline is a
       :class:`~demsplit.errors.TruncatedFileError`;
     * every row has as many values as the header has names, single spaces
-      between (the shape check);
-    * every value of the columns read is a number (polars), and finite
-      (``numpy.isfinite``).
+      between (the shape check of the compiled parse);
+    * every value of the columns read is a number (the compiled parse, else
+      polars), and finite (``numpy.isfinite``).
     When one of these fails, a diagnostic pass over that block alone finds the
     first offending line (1-based, in the decompressed file) and column.
     Non-numbers and NaN/inf in columns that were not requested are not seen.
