@@ -338,3 +338,18 @@ def test_unknown_compression_is_an_error(tmp_path):
     with pytest.raises(StoreError, match="unknown compression 'zstd'"):
         ResultWriter(tmp_path / "o.h5", PROVENANCE, compression="zstd")
     assert not (tmp_path / ".o.h5.parts").exists()
+
+
+def test_demsplit_run_defaults_to_auto_and_equals_none(tmp_path):
+    """The CLI's default store is auto; --compression none holds the same values."""
+    from demsplit import cli
+
+    script = os.path.join(os.path.dirname(__file__), "..", "sample_dumps", "liggghts", "packing", "in.packing")
+    assert cli.main(["run", script, "-o", str(tmp_path / "auto.h5"), "-q"]) == 0
+    assert cli.main(["run", script, "-o", str(tmp_path / "none.h5"), "-q", "--compression", "none"]) == 0
+    with h5py.File(tmp_path / "auto.h5") as h5:
+        assert h5.attrs["compression"] == "auto"
+        assert h5["contacts/step"].compression == "gzip" and h5["contacts/u_n"].compression is None
+    auto, none = read_store(tmp_path / "auto.h5"), read_store(tmp_path / "none.h5")
+    for name in TABLES:
+        pdt.assert_frame_equal(getattr(auto, name), getattr(none, name), check_exact=True)
