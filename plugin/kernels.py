@@ -200,60 +200,56 @@ def body_sums(rows1, rows2, s_n, s_t, u_n, u_t, n_particles, n_walls):
     at the end: the order of ``np.bincount(rows1, w1) + np.bincount(rows2, w2)``,
     so the sums are those of the numpy formulation bit for bit.
     Returns (particle u_n, u_t, n_contacts, wall u_n, u_t, n_contacts)."""
-    p_un, p_ut, q_un, q_ut = (np.zeros(n_particles) for _ in range(4))
+    # one row per particle: body-1 u_n, u_t, body-2 u_n, u_t and the count, one cache line per visit
+    acc = np.zeros((n_particles, 5))
     w_un, w_ut = np.zeros(n_walls), np.zeros(n_walls)
-    p_count, w_count = np.zeros(n_particles, np.int64), np.zeros(n_walls, np.int64)
-    _body_sums(rows1, rows2, s_n, s_t, u_n, u_t, p_un, p_ut, q_un, q_ut, p_count, w_un, w_ut, w_count)
-    return p_un, p_ut, p_count, w_un, w_ut, w_count
+    w_count = np.zeros(n_walls, np.int64)
+    _body_sums(rows1, rows2, s_n, s_t, u_n, u_t, acc, w_un, w_ut, w_count)
+    return acc[:, 0] + acc[:, 2], acc[:, 1] + acc[:, 3], acc[:, 4].astype(np.int64), w_un, w_ut, w_count
 
 
 @kernel
-def _body_sums(rows1, rows2, s_n, s_t, u_n, u_t, p_un, p_ut, q_un, q_ut, p_count, w_un, w_ut, w_count):
+def _body_sums(rows1, rows2, s_n, s_t, u_n, u_t, acc, w_un, w_ut, w_count):
     n = rows1.shape[0]
     sn, st = _stride(s_n), _stride(s_t)
     for i in range(n):
         un1 = s_n[i * sn] * u_n[i]
         ut1 = s_t[i * st] * u_t[i]
         r = rows1[i]
-        p_un[r] += un1
-        p_ut[r] += ut1
-        p_count[r] += 1
+        acc[r, 0] += un1
+        acc[r, 1] += ut1
+        acc[r, 4] += 1.0  # counts below 2^53 are exact in a double
         r2 = rows2[i]
         if r2 >= 0:
-            q_un[r2] += u_n[i] - un1
-            q_ut[r2] += u_t[i] - ut1
-            p_count[r2] += 1
+            acc[r2, 2] += u_n[i] - un1
+            acc[r2, 3] += u_t[i] - ut1
+            acc[r2, 4] += 1.0
         else:
             w = -1 - r2
             w_un[w] += u_n[i] - un1
             w_ut[w] += u_t[i] - ut1
             w_count[w] += 1
-    for r in range(p_un.shape[0]):
-        p_un[r] += q_un[r]
-        p_ut[r] += q_ut[r]
 
 
 def particle_sums(rows1, rows2, s_n, s_t, u_n, u_t, n_particles):
     """Energy of every particle under shares s_n, s_t (per contact or one value):
     u1 = s_n u_n + s_t u_t on body 1, u_n + u_t - u1 on body 2 of particle pairs
     (rows2 >= 0); sums in the order of :func:`body_sums`."""
-    p1, p2 = np.zeros(n_particles), np.zeros(n_particles)
-    _particle_sums(rows1, rows2, s_n, s_t, u_n, u_t, p1, p2)
-    return p1
+    acc = np.zeros((n_particles, 2))  # body-1 and body-2 sums of a particle side by side
+    _particle_sums(rows1, rows2, s_n, s_t, u_n, u_t, acc)
+    return acc[:, 0] + acc[:, 1]
 
 
 @kernel
-def _particle_sums(rows1, rows2, s_n, s_t, u_n, u_t, p1, p2):
+def _particle_sums(rows1, rows2, s_n, s_t, u_n, u_t, acc):
     n = rows1.shape[0]
     sn, st = _stride(s_n), _stride(s_t)
     for i in range(n):
         u1 = _body_energies(s_n[i * sn], s_t[i * st], u_n[i], u_t[i])[0]
-        p1[rows1[i]] += u1
+        acc[rows1[i], 0] += u1
         r2 = rows2[i]
         if r2 >= 0:
-            p2[r2] += u_n[i] + u_t[i] - u1
-    for r in range(p1.shape[0]):
-        p1[r] += p2[r]
+            acc[r2, 1] += u_n[i] + u_t[i] - u1
 
 
 @kernel

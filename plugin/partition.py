@@ -124,8 +124,10 @@ def radius_share(r1: ArrayLike, r2: ArrayLike) -> np.ndarray:
     """
     r1 = np.asarray(r1, dtype=np.float64)
     r2 = np.asarray(r2, dtype=np.float64)
+    plane = np.isinf(r2)
     with np.errstate(invalid="ignore"):
-        share = np.where(np.isinf(r2), 1.0, r1 / (r1 + np.where(np.isinf(r2), 0.0, r2)))
+        share = np.asarray(r1 / (r1 + r2), dtype=np.float64)
+    share[plane] = 1.0
     return _scalar_or_array(share)
 
 
