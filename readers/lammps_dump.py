@@ -43,10 +43,10 @@ Parser (measured)
     shape (``ncols`` fields, single spaces, the optional trailing space, a
     newline) and converts the requested columns, integers exactly, reals by
     Clinger's fast path (correctly rounded: bit for bit Python's ``float``).
-    The rare real outside that path (more than 15-16 digits, or a decimal
-    exponent beyond +-22 such as ``8.4781e-19``: one token in 77 000 rows of
-    the benchmark's contacts) is converted by ``float`` (at most 4096 per
-    slice). A block holding anything else (``%.17g`` text beyond that count,
+    The rare real outside that path (a mantissa above 2**53: 17 digits, some
+    of 16; or a decimal exponent beyond +-22 such as ``8.4781e-19``: one
+    token in 77 000 rows of the benchmark's contacts) is converted by
+    ``float`` (at most 4096 per slice). A block holding anything else (``%.17g`` text beyond that count,
     ``nan``, a non-number, a real in an integer column) is parsed again by
     the general path, ``polars.read_csv`` (full schema, only the requested
     columns converted), which also makes an integer column real and, for
@@ -625,7 +625,7 @@ class _Columns:
 _THREADS = os.cpu_count() or 1
 _SLICE_MIN = 1 << 20        # bytes below which a block is parsed by one thread
 _SLOW_MAX = 4096            # reals outside the compiled fast path converted by float() per slice, at most
-_pool: ThreadPoolExecutor | None = None
+_pool: tuple[int, ThreadPoolExecutor] | None = None    # (process id, the parse threads of that process)
 
 
 def _parse_fast(a: np.ndarray, ncols: int, trailing: bool, cols: _Columns, row0: int,
@@ -654,16 +654,19 @@ def _parse_fast(a: np.ndarray, ncols: int, trailing: bool, cols: _Columns, row0:
     if n_slices == 1:
         results = [parse_rows(*jobs[0])]
     else:
-        if _pool is None:
-            _pool = ThreadPoolExecutor(max_workers=_THREADS, thread_name_prefix="demsplit-parse")
-        results = [f.result() for f in [_pool.submit(parse_rows, *job) for job in jobs]]
+        if _pool is None or _pool[0] != os.getpid():  # a forked worker process needs its own threads
+            _pool = (os.getpid(), ThreadPoolExecutor(max_workers=_THREADS, thread_name_prefix="demsplit-parse"))
+        results = [f.result() for f in [_pool[1].submit(parse_rows, *job) for job in jobs]]
     statuses = [status for status, _, _, _ in results]
     if SHAPE in statuses:
         return None, False
+    rows_parsed = sum(n for _, _, n, _ in results)
+    if FALLBACK in statuses:
+        return rows_parsed, False
     for job, (_, _, _, n_slow) in zip(jobs, results):
         for s, r, lo, hi in job[-1][:n_slow].tolist():
             cols.reals[s, r] = float(a[lo:hi].tobytes())
-    return sum(n for _, _, n, _ in results), FALLBACK not in statuses
+    return rows_parsed, True
 
 
 def _scan(f: BinaryIO, digest=None) -> tuple[list[int], list[bytes], list[int], int, int, bytes]:

@@ -372,3 +372,18 @@ def test_kernels_load_from_the_cache():
         out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True, env=env)
     misses, hits = map(int, out.stdout.split())
     assert misses == 0 and hits == 4
+
+
+@pytest.mark.skipif(not hasattr(os, "fork"), reason="needs os.fork")
+def test_forked_process_parses_with_its_own_threads(monkeypatch):
+    """The parse threads of a process that forks are not in the child: it starts its own."""
+    monkeypatch.setattr(ld, "_SLICE_MIN", 1)
+    path = SAMPLES / "packing" / "pairs.txt"
+    parent = open_dump(path).frame(0).columns["c_cpgl[38]"].copy()   # the parent's pool now exists
+    pid = os.fork()
+    if pid == 0:  # child: exit 0 when it reads the same, within 20 s
+        import signal
+        signal.alarm(20)
+        os._exit(0 if np.array_equal(open_dump(path).frame(0).columns["c_cpgl[38]"], parent) else 1)
+    _, status = os.waitpid(pid, 0)
+    assert os.waitstatus_to_exitcode(status) == 0
