@@ -213,10 +213,8 @@ class ContactBodies:
         return self._constants[k]
 
     def _type(self, k: int) -> np.ndarray | None:
-        if self._types[k] is None and self._pairs is not None:  # from the pair codes
-            n_types = len(self.scene.material_tables()[0])
-            code = self._pairs[0].astype(np.int64)
-            self._types = (code // n_types, code % n_types)
+        if self._types[k] is None and self._pairs is not None:
+            self._types = _types_of_codes(self._pairs[0], self.scene)
         return self._types[k]
 
     type1 = property(lambda self: self._type(0), doc="material type of body 1 (None: single material)")
@@ -284,11 +282,14 @@ def contact_types(contacts: Table, scene: Scene, particles: Table | None = None,
     otherwise from the particles table (by id) and the wall list.
     """
     type1, type2, pairs = _contact_pairs(contacts, scene, particles, index)
-    if type1 is None:
-        n_types = len(scene.material_tables()[0])
-        code = pairs[0].astype(np.int64)
-        return code // n_types, code % n_types
-    return type1, type2
+    return (type1, type2) if type1 is not None else _types_of_codes(pairs[0], scene)
+
+
+def _types_of_codes(code: np.ndarray, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+    """(type1, type2) of pair codes type1 * n_types + type2."""
+    n_types = len(scene.material_tables()[0])
+    code = code.astype(np.int64)
+    return code // n_types, code % n_types
 
 
 def _code_dtype(n_types: int) -> type:
