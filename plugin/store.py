@@ -317,11 +317,11 @@ class _TableSink:
     transpose and deflate is ``zlib.compress``, which releases the GIL, so the
     thread pool compresses a column's chunks on every core. The datasets carry
     the same filters as an ordinary h5py dataset, so every HDF5 reader decodes
-    them as usual. A column's dataset is created at its first chunk, when
-    ``auto`` can measure it (:func:`_choose_filter`). Rows that do not fill a
-    chunk are carried (a copy, less than one chunk per column) to the next
-    frame; :meth:`finish` writes the last, partial chunk (zero-padded, outside
-    the dataset's shape).
+    them as usual. The filters are chosen when the table's first chunk is
+    complete, when ``auto`` can measure it (:func:`_choose_filter`, the
+    columns in the thread pool). Rows that do not fill a chunk are carried (a copy, less
+    than one chunk per column) to the next frame; :meth:`finish` writes the
+    last, partial chunk (zero-padded, outside the dataset's shape).
     """
 
     def __init__(self, h5, name: str, schema: dict[str, str], compression: str, pool: ThreadPoolExecutor) -> None:
@@ -331,6 +331,7 @@ class _TableSink:
         self.group.attrs["columns"] = json.dumps(list(schema))
         self.group.attrs["units"] = json.dumps({c: UNITS.get(c, "") for c in schema})
         self.carry = {col: np.empty(0, np.dtype(dtype)) for col, dtype in schema.items()}
+        self.filters: dict[str, str] = {}  # column -> "gzip" | "lzf" | "none", once chosen
 
     def append(self, table: dict[str, np.ndarray] | None, part: Path) -> int:
         """Write the whole chunks that ``table`` (one frame) completes, one
@@ -343,22 +344,34 @@ class _TableSink:
             raise StoreError(f"table {self.name!r} in this part has columns {list(table)}, expected {list(self.schema)}.",
                              file=part, fix=f"delete {part} (the frame is recomputed on resume).")
         n = len(next(iter(table.values())))
+        carried = len(next(iter(self.carry.values())))  # the same for every column
+        if not self.filters and carried + n >= CHUNK_ROWS:  # the table's first chunk is complete
+            self._decide({col: np.concatenate([self.carry[col], table[col][:CHUNK_ROWS - carried]])
+                          for col in self.schema})
         for col in self.schema:
             chunks, self.carry[col] = _whole_chunks(self.carry[col], table.pop(col))
             self._write(col, chunks)
         return n
 
     def finish(self) -> None:
-        """Write the carried rows (each column's last, partial chunk); create
-        the datasets of columns without rows."""
+        """Write the carried rows (each column's last, partial chunk); a
+        column without rows gets an empty dataset."""
+        if not self.filters:  # the table has less than a chunk of rows
+            self._decide(self.carry)
         for col, rows in self.carry.items():
             self._write(col, [rows] if len(rows) else [])
             if col not in self.group:
-                self._create(col, None)
+                self._create(col)
 
-    def _create(self, col: str, first: np.ndarray | None):
-        """The dataset of ``col``, its filter chosen from ``first``, its first chunk (None: no rows)."""
-        kind = _choose_filter(first) if self.compression == "auto" else self.compression
+    def _decide(self, first: dict[str, np.ndarray]) -> None:
+        """Choose each column's filter from ``first``, its first chunk (or all its rows, if fewer)."""
+        if self.compression == "auto":
+            self.filters = dict(zip(first, self.pool.map(_choose_filter, first.values())))
+        else:
+            self.filters = dict.fromkeys(first, self.compression)
+
+    def _create(self, col: str):
+        kind = self.filters[col]
         ds = self.group.create_dataset(
             col, shape=(0,), maxshape=(None,), dtype=np.dtype(self.schema[col]), chunks=(CHUNK_ROWS,),
             compression=None if kind == "none" else kind,
@@ -371,14 +384,14 @@ class _TableSink:
         """Append the chunks of one column (all whole but possibly the table's last one)."""
         if not chunks:
             return
-        ds = self.group[col] if col in self.group else self._create(col, chunks[0])
+        ds = self.group[col] if col in self.group else self._create(col)
         start = ds.shape[0]
         ds.resize((start + sum(len(c) for c in chunks),))  # the rows, not the padding: it never shrinks
-        if ds.compression == "lzf":  # h5py's own filter: HDF5 applies it to the chunk-aligned slices
+        if self.filters[col] == "lzf":  # h5py's own filter: HDF5 applies it to the chunk-aligned slices
             for k, c in enumerate(chunks):
                 ds[start + k * CHUNK_ROWS: start + k * CHUNK_ROWS + len(c)] = c
             return
-        blobs = self.pool.map(_shuffle_deflate, chunks) if ds.compression == "gzip" else map(_padded, chunks)
+        blobs = self.pool.map(_shuffle_deflate, chunks) if self.filters[col] == "gzip" else map(_padded, chunks)
         for k, blob in enumerate(blobs):
             ds.id.write_direct_chunk((start + k * CHUNK_ROWS,), blob)
 

@@ -353,3 +353,20 @@ def test_demsplit_run_defaults_to_auto_and_equals_none(tmp_path):
     auto, none = read_store(tmp_path / "auto.h5"), read_store(tmp_path / "none.h5")
     for name in TABLES:
         pdt.assert_frame_equal(getattr(auto, name), getattr(none, name), check_exact=True)
+
+
+def test_auto_decides_once_from_the_first_chunk(tmp_path, monkeypatch):
+    """A column constant over its first chunk stays gzip when later rows are random;
+    a random first chunk leaves the column unfiltered when later rows are constant."""
+    monkeypatch.setattr(store, "CHUNK_ROWS", 512)
+    frames = [synthetic_frame(s, n_particles=300, n_pairs=700) for s in (0, 1)]
+    frames[0]["contacts"]["u_n"] = np.full(710, 1e-6)  # first chunk constant, second frame random
+    frames[1]["contacts"]["u_t"] = np.full(710, 1e-6)  # first chunk random (frame 0), then constant
+    with ResultWriter(tmp_path / "o.h5", PROVENANCE) as w:
+        for f in frames:
+            w.append(f)
+    columns = stored_columns(tmp_path / "o.h5")
+    assert columns["contacts/u_n"][1] == "gzip" and columns["contacts/u_t"][1] is None
+    for col in ("u_n", "u_t"):
+        np.testing.assert_array_equal(columns[f"contacts/{col}"][0],
+                                      np.concatenate([f["contacts"][col] for f in frames]))
