@@ -46,18 +46,18 @@ Parser (measured)
     The rare real outside that path (a mantissa above 2**53: 17 digits, some
     of 16; or a decimal exponent beyond +-22 such as ``8.4781e-19``: one
     token in 77 000 rows of the benchmark's contacts) is converted by
-    ``float`` (at most 4096 per slice). A block holding anything else (``%.17g`` text beyond that count,
-    ``nan``, a non-number, a real in an integer column) is parsed again by
-    the general path, ``polars.read_csv`` (full schema, only the requested
+    ``float`` (at most 4096 per slice). A block holding anything else
+    (``%.17g`` text beyond that count, ``nan``, a non-number, a real in an
+    integer column) is parsed again by the general path, ``polars.read_csv`` (full schema, only the requested
     columns converted), which also makes an integer column real and, for
     bad input, leads to the located error. ``fast_blocks`` and
-    ``fallback_blocks`` on a :class:`TextDump` count the two. Measured on
-    the benchmark run (``benchmarks/bench.py``, ``docs/performance.md``,
-    shared 2-core machine): the 2.57 GB, 41-column contact dump indexed in
-    1.5 s (sha256 alone: 1.3-1.7 GB/s here) and its 10 columns parsed in
-    3.3 s; the kernel alone converts 0.6-0.8 GB/s of those rows per core.
-    Before (numpy scan, polars plus a numpy shape check): 13.4 s index and
-    7.6 s parse for both dumps (cProfile of ``demsplit run``).
+    ``fallback_blocks`` on a :class:`TextDump` count the two. Measured
+    (``docs/performance.md``, "Parser and index": fresh processes, shared
+    2-core machine at load 3): the benchmark's 2.57 GB, 41-column contact
+    dump is indexed (and hashed) in 1.45-1.95 s and its 10 columns parsed in
+    2.35-3.7 s, against 4.25-4.96 s and 6.1-6.5 s for the numpy scan and the
+    polars parse plus numpy shape check this replaced; one thread converts
+    15 columns of those rows at 0.75-0.84 GB/s.
 
 Validation (every frame that is read)
     * the header's ``NUMBER OF ATOMS/ENTRIES`` equals the number of lines
