@@ -134,7 +134,7 @@ def _real(a: np.ndarray, p: int, end: int) -> tuple[int, float, int]:
     seen = False        # any mantissa digit at all
     e10 = 0
     while p < end and 48 <= a[p] <= 57:
-        d = a[p] - 48
+        d = int(a[p]) - 48
         seen = True
         if digits > 0 or d != 0:
             digits += 1
@@ -144,7 +144,7 @@ def _real(a: np.ndarray, p: int, end: int) -> tuple[int, float, int]:
     if p < end and a[p] == 46:
         p += 1
         while p < end and 48 <= a[p] <= 57:
-            d = a[p] - 48
+            d = int(a[p]) - 48
             seen = True
             if digits > 0 or d != 0:
                 digits += 1
@@ -164,7 +164,7 @@ def _real(a: np.ndarray, p: int, end: int) -> tuple[int, float, int]:
         edigits = 0
         while p < end and 48 <= a[p] <= 57:
             if ex < 100000:     # saturate: beyond +-22 only m == 0 is fast, whatever the exponent
-                ex = ex * 10 + (a[p] - 48)
+                ex = ex * 10 + (int(a[p]) - 48)
             edigits += 1
             p += 1
         if edigits == 0:
@@ -189,7 +189,7 @@ def _integer(a: np.ndarray, p: int, end: int) -> tuple[bool, int, int]:
     v = 0
     n = 0
     while p < end and 48 <= a[p] <= 57:
-        v = v * 10 + (a[p] - 48)
+        v = v * 10 + (int(a[p]) - 48)
         n += 1
         p += 1
     if n == 0 or n > 18:
