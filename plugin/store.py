@@ -13,10 +13,10 @@ Layout (see docs/store.md)::
                       frame k is rows offsets[k]:offsets[k+1]
 
 Writing (:class:`ResultWriter`): each appended frame goes to its own part,
-a directory ``.OUT.h5.parts/frame_<seq>_<step>/`` next to the target holding
-one raw ``.npy`` file per column, written under a temporary name and renamed,
+``.OUT.h5.parts/frame_<seq>_<step>.npys`` next to the target: the columns as
+consecutive raw ``.npy`` records, written under a temporary name and renamed,
 so a run killed at any moment leaves only complete parts. :meth:`ResultWriter.close`
-maps the parts (``np.load(mmap_mode="r")``), in step order, into ``OUT.h5.tmp``
+memory-maps the parts' columns, in step order, copies them into ``OUT.h5.tmp``
 a whole chunk at a time and renames it to ``OUT.h5``; only then are the parts
 removed. Nothing exists at ``OUT.h5`` until it is complete. With
 ``resume=True`` the parts of an interrupted run are kept when its provenance
@@ -64,15 +64,14 @@ and shares 0.004-0.2, contact points 0.3-0.6, energies and overlaps 0.83-0.89)."
 CHUNK_ROWS = 65536
 """Rows per HDF5 chunk (512 KiB of float64 before compression)."""
 PARTS_VERSION = 2
-"""Layout of the parts directory (2: a directory of .npy files per frame;
-1 was one .npz per frame). Parts of another layout are not resumed."""
+"""Layout of the parts (2: one file of .npy records per frame; 1 was one
+.npz per frame). Parts of another layout are not resumed."""
 
 RESUME_KEYS = ("inputs", "options", "scene", "model", "demsplit_version")
 """Provenance entries that must be equal for parts to be resumed; ``inputs``
 is compared by the sha256 of each input file."""
 
-_PART = re.compile(r"^frame_(\d+)_(-?\d+)$")
-_COLUMNS = "columns.json"
+_PART = re.compile(r"^frame_(\d+)_(-?\d+)\.npys$")
 _MANIFEST = "run.json"
 _LOCK = "lock"
 
@@ -214,11 +213,8 @@ class ResultWriter:
             m = _PART.match(p.name)
             if m:
                 self._parts[int(m.group(2))] = (int(m.group(1)), p)
-            elif p.name.endswith(".tmp"):  # a part (directory) or manifest being written when the run died
-                if p.is_dir():
-                    shutil.rmtree(p)
-                else:
-                    p.unlink()
+            elif p.name.endswith(".tmp"):  # a part or manifest being written when the run died
+                p.unlink()
         if self._parts:
             self._schema = _schema_of(_load_part(min(self._parts.values())[1]))
 
@@ -276,7 +272,7 @@ class ResultWriter:
                     )
                 self._schema.setdefault(name, cols)
         seq = 1 + max((s for s, _ in self._parts.values()), default=-1)
-        part = self.parts_dir / f"frame_{seq:08d}_{step}"
+        part = self.parts_dir / f"frame_{seq:08d}_{step}.npys"
         _write_part(part, canon)
         self._parts[step] = (seq, part)
 
@@ -440,23 +436,19 @@ def _shuffle_deflate(values: np.ndarray) -> bytes:
 
 
 def _write_part(path: Path, tables: Mapping[str, Table]) -> None:
-    """One frame's tables as a part: directory ``path`` with one raw ``.npy``
-    per column (``<table>.<column>.npy``) and ``columns.json`` (the column
-    order), written as ``path.tmp``, each file fsynced, renamed when complete."""
-    tmp = path.with_name(path.name + ".tmp")
-    shutil.rmtree(tmp, ignore_errors=True)
-    tmp.mkdir()
-    try:
-        for name, table in tables.items():
-            for col, values in table.items():
-                with open(tmp / f"{name}.{col}.npy", "wb") as f:
-                    np.save(f, values, allow_pickle=False)
-                    f.flush()
-                    os.fsync(f.fileno())
-        _write_atomic(tmp / _COLUMNS, lambda f: f.write(json.dumps({n: list(t) for n, t in tables.items()}).encode()))
-        os.replace(tmp, path)
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
+    """One frame's tables as a part: a file of consecutive ``.npy`` records
+    (``np.save``: a header, then the array's raw bytes), first the column
+    names (``{table: [column, ...]}`` as JSON bytes), then every column in that
+    order; written under ``path.tmp``, fsynced once, renamed when complete."""
+    names = json.dumps({name: list(table) for name, table in tables.items()}).encode()
+
+    def write(f) -> None:
+        np.save(f, np.frombuffer(names, np.uint8))
+        for table in tables.values():
+            for values in table.values():
+                np.save(f, values, allow_pickle=False)
+
+    _write_atomic(path, write)
 
 
 def _alive(pid: int) -> bool:
@@ -482,14 +474,30 @@ def _schema_of(tables: Mapping[str, Table]) -> dict[str, dict[str, str]]:
 
 
 def _load_part(path: Path) -> dict[str, Table]:
-    """A part's tables, each column memory-mapped read-only."""
+    """A part's tables (see :func:`_write_part`), each column memory-mapped read-only."""
     try:
-        columns = json.loads((path / _COLUMNS).read_text())
-        return {name: {col: np.load(path / f"{name}.{col}.npy", mmap_mode="r", allow_pickle=False) for col in cols}
-                for name, cols in columns.items()}
-    except (OSError, ValueError) as exc:
+        size = path.stat().st_size
+        with open(path, "rb") as f:
+            names = json.loads(np.load(f, allow_pickle=False).tobytes())
+            return {name: {col: _map_record(f, path, size) for col in cols} for name, cols in names.items()}
+    except (OSError, ValueError, EOFError) as exc:
         raise StoreError(f"cannot read a stored frame: {exc}.", file=path,
                          fix=f"delete {path} (the frame is recomputed on resume).") from exc
+
+
+def _map_record(f, path: Path, size: int) -> np.ndarray:
+    """Memory-map the 1-D ``.npy`` record at ``f``'s position and move ``f`` past it."""
+    version = np.lib.format.read_magic(f)
+    read_header = {(1, 0): np.lib.format.read_array_header_1_0, (2, 0): np.lib.format.read_array_header_2_0}
+    if version not in read_header:
+        raise ValueError(f"unexpected .npy version {version}")
+    shape, _, dtype = read_header[version](f)
+    offset = f.tell()
+    end = offset + int(np.prod(shape)) * dtype.itemsize
+    if end > size:
+        raise ValueError(f"the file ends at byte {size}, inside a column that ends at byte {end}")
+    f.seek(end)
+    return np.memmap(path, dtype, "r", offset, shape) if end > offset else np.empty(shape, dtype)
 
 
 def read_store(path: str | Path, *, steps: Iterable[int] | None = None) -> Results:

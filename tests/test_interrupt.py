@@ -70,8 +70,8 @@ def parts_of(out: Path) -> Path:
 
 
 def done_parts(out: Path) -> list[Path]:
-    """The complete frame parts (directories frame_<seq>_<step>; .tmp ones are being written)."""
-    return sorted(p for p in parts_of(out).glob("frame_*") if p.suffix != ".tmp")
+    """The complete frame parts (frame_<seq>_<step>.npys; .tmp ones are being written)."""
+    return sorted(parts_of(out).glob("frame_*.npys"))
 
 
 def wait_for_parts(proc: subprocess.Popen, out: Path, n: int) -> None:

@@ -318,16 +318,25 @@ def test_h5dump_reads_an_auto_store(tmp_path, monkeypatch):
         np.testing.assert_array_equal(np.fromfile(raw, expected.dtype.newbyteorder("<")), expected, err_msg=col)
 
 
-def test_parts_are_npy_directories_and_other_layouts_are_not_resumed(tmp_path):
+def test_parts_are_raw_npy_records_and_other_layouts_are_not_resumed(tmp_path):
     out = tmp_path / "out.h5"
     w = ResultWriter(out, PROVENANCE)
     w.append(synthetic_frame(7))
     w.abandon()
     parts = tmp_path / ".out.h5.parts"
-    (part,) = [p for p in parts.iterdir() if p.name.startswith("frame_")]
-    assert part.is_dir() and part.name.endswith("_7")
-    u = np.load(part / "particles.u.npy")
-    np.testing.assert_array_equal(u, synthetic_frame(7)["particles"]["u"])
+    (part,) = parts.glob("frame_*")
+    assert part.name.endswith("_7.npys")
+    with open(part, "rb") as f:  # np.load reads the records one after another
+        names = json.loads(np.load(f).tobytes())
+        records = {(name, col): np.load(f) for name, cols in names.items() for col in cols}
+        assert f.read() == b""
+    for (name, col), values in records.items():
+        np.testing.assert_array_equal(values, synthetic_frame(7)[name][col])
+    assert list(names["contacts"]) == list(synthetic_frame(7)["contacts"])
+
+    part.write_bytes(part.read_bytes()[:-8])  # a part cut short (a disk failure): named, not read
+    with pytest.raises(StoreError, match="cannot read a stored frame: the file ends at byte"):
+        ResultWriter(out, PROVENANCE, resume=True)
     manifest = json.loads((parts / "run.json").read_text())
     (parts / "run.json").write_text(json.dumps({**manifest, "parts_version": 1}))
     with pytest.raises(StoreError, match="no readable run manifest"):
