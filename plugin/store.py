@@ -342,8 +342,8 @@ class _TableSink:
         n = len(next(iter(table.values())))
         carried = len(next(iter(self.carry.values())))  # the same for every column
         if not self.filters and carried + n >= CHUNK_ROWS:  # the table's first chunk is complete
-            self._decide({col: np.concatenate([self.carry[col], table[col][:CHUNK_ROWS - carried]])
-                          for col in self.schema})
+            self._decide({col: np.concatenate([self.carry[col], table[col][:CHUNK_ROWS - carried]]) if carried
+                          else table[col][:CHUNK_ROWS] for col in self.schema})  # (views: keep none after this)
         for col in self.schema:
             chunks, self.carry[col] = _whole_chunks(self.carry[col], table.pop(col))
             self._write(col, chunks)
