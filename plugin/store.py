@@ -367,6 +367,7 @@ class _TableSink:
             self.filters = dict.fromkeys(first, self.compression)
 
     def _create(self, col: str):
+        """The empty, resizable dataset of ``col`` with its chosen filter."""
         kind = self.filters[col]
         ds = self.group.create_dataset(
             col, shape=(0,), maxshape=(None,), dtype=np.dtype(self.schema[col]), chunks=(CHUNK_ROWS,),
@@ -409,11 +410,11 @@ def _whole_chunks(carry: np.ndarray, values: np.ndarray) -> tuple[list[np.ndarra
     return chunks, np.array(values[whole:])
 
 
-def _choose_filter(first: np.ndarray | None) -> str:
+def _choose_filter(first: np.ndarray) -> str:
     """``auto``'s choice for a column from its first chunk: ``"gzip"`` when
     shuffle + deflate (level GZIP_LEVEL) shrinks it to at most AUTO_MAX_RATIO
     of its size, else ``"none"`` (also for a column without rows)."""
-    if first is None or not len(first):
+    if not len(first):
         return "none"
     return "gzip" if len(zlib.compress(_shuffled(first), GZIP_LEVEL)) <= AUTO_MAX_RATIO * first.nbytes else "none"
 
