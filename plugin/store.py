@@ -116,9 +116,10 @@ def _to_json(obj, what: str) -> str:
                          fix=f"put only str, numbers, lists and dicts in the {what}.") from exc
 
 
-def _write_atomic(path: Path, write) -> None:
-    """Call ``write(file)`` on a temporary file renamed to ``path`` when complete."""
-    with atomic_path(path) as tmp, open(tmp, "wb") as f:
+def _write_atomic(path: Path, write, *, durable: bool = True) -> None:
+    """Call ``write(file)`` on a temporary file renamed to ``path`` when complete
+    (fsynced first unless ``durable=False``, see :func:`~demsplit.atomic.atomic_path`)."""
+    with atomic_path(path, durable=durable) as tmp, open(tmp, "wb") as f:
         write(f)
 
 
@@ -440,7 +441,11 @@ def _write_part(path: Path, tables: Mapping[str, Table]) -> None:
     """One frame's tables as a part: a file of consecutive ``.npy`` records
     (``np.save``: a header, then the array's raw bytes), first the column
     names (``{table: [column, ...]}`` as JSON bytes), then every column in that
-    order; written under ``path.tmp``, fsynced once, renamed when complete."""
+    order; written under ``path.tmp`` and renamed when complete. Not fsynced: a
+    part exists for a resume after the process was killed, which the page
+    cache survives; after a power cut a short part is named by
+    :func:`_load_part` (delete it and resume), and the final store is fsynced
+    before it is renamed into place."""
     names = json.dumps({name: list(table) for name, table in tables.items()}).encode()
 
     def write(f) -> None:
@@ -449,7 +454,7 @@ def _write_part(path: Path, tables: Mapping[str, Table]) -> None:
             for values in table.values():
                 np.save(f, values, allow_pickle=False)
 
-    _write_atomic(path, write)
+    _write_atomic(path, write, durable=False)
 
 
 def _alive(pid: int) -> bool:
