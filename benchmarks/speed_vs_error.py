@@ -92,7 +92,9 @@ def compute(variant: str, contacts: dict, particles: dict, scene, split: str, fn
 
 
 def timed(f, min_time: float) -> float:
-    """Best time of one call of ``f``, repeating for at least ``min_time`` seconds."""
+    """Best time of one call of ``f``, repeating for at least ``min_time`` seconds,
+    after one untimed call (the first call loads numba's cached kernels)."""
+    f()
     best, spent = np.inf, 0.0
     while spent < min_time or best == np.inf:
         t = time.perf_counter()
