@@ -133,25 +133,22 @@ def _real(a: np.ndarray, p: int, end: int) -> tuple[int, float, int]:
     digits = 0          # significant digits (from the first nonzero one); m holds the first 18
     seen = False        # any mantissa digit at all
     e10 = 0
-    while p < end and 48 <= a[p] <= 57:
-        d = int(a[p]) - 48
-        seen = True
-        if digits > 0 or d != 0:
-            digits += 1
-            if digits <= 18:
-                m = m * 10 + d
-        p += 1
-    if p < end and a[p] == 46:
-        p += 1
-        while p < end and 48 <= a[p] <= 57:
+    point = False       # past the decimal point: each digit lowers the exponent
+    while p < end:
+        if 48 <= a[p] <= 57:
             d = int(a[p]) - 48
             seen = True
             if digits > 0 or d != 0:
                 digits += 1
                 if digits <= 18:
                     m = m * 10 + d
-            e10 -= 1
-            p += 1
+            if point:
+                e10 -= 1
+        elif a[p] == 46 and not point:
+            point = True
+        else:
+            break
+        p += 1
     if not seen:
         return _NOT_DECIMAL, 0.0, p
     if p < end and (a[p] == 101 or a[p] == 69):
