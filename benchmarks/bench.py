@@ -9,9 +9,11 @@ Every measurement runs in its own Python process, started fresh; its wall
 time (interpreter start and imports included: what a user waits for) is taken
 by this parent, and its peak RSS is the child's own ``VmHWM`` (high-water
 mark of its resident memory, from ``/proc/self/status``; ``ru_maxrss`` would
-carry the parent's high-water mark across fork and exec). With ``--repeat N`` the rounds are interleaved and the best
-time kept (the machine is shared; ratios from the same round are the figures
-to quote). Measurements:
+carry the parent's high-water mark across fork and exec). Before each child
+the parent writes back every dirty page (``os.sync``, untimed), so that no
+child pays for an earlier child's output. With ``--repeat N`` the rounds are
+interleaved and the best time kept (the machine is shared; ratios from the
+same round are the figures to quote). Measurements:
 
 ``warm-up``
     runs first: ``demsplit run`` on the packing sample in a fresh process, so
@@ -243,8 +245,13 @@ def _kernel(script: Path, work: Path) -> dict:
 # --------------------------------------------------------------------------- parent
 
 def measure(name: str, d: Path, work: Path, index_file: str) -> dict:
-    """Run child ``name`` in a fresh process: wall time, peak RSS, its report."""
+    """Run child ``name`` in a fresh process: wall time, peak RSS, its report.
+
+    The dirty pages earlier children left (their stores) are written back
+    first, untimed (``os.sync``): otherwise the kernel's write-back of one
+    child's output would be charged to whichever child runs next."""
     cmd = [sys.executable, __file__, "--child", name, str(d), "--work", str(work), "--index", index_file]
+    os.sync()
     t = time.perf_counter()
     proc = subprocess.run(cmd, capture_output=True)
     seconds = time.perf_counter() - t

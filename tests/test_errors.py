@@ -298,4 +298,4 @@ def test_cli_prints_one_message_for_bad_input(run_dir, tmp_path):
     assert "Traceback" not in proc.stderr
     assert proc.stderr.count("\n") == 1 and proc.stderr.startswith("demsplit: error: ")
     assert "pairs.txt:18, timestep 200000" in proc.stderr and "9999" in proc.stderr
-    assert not out.exists() and not (tmp_path / ".out.h5.parts").exists()  # nothing written, nothing left
+    assert not out.exists() and not (tmp_path / ".out.h5.partial").exists()  # nothing written, nothing left

@@ -24,6 +24,7 @@ import pandas as pd
 import pytest
 
 import demsplit
+import demsplit.store
 
 PACKING = Path(__file__).resolve().parent.parent / "sample_dumps" / "liggghts" / "packing"
 N_FRAMES = 60
@@ -65,19 +66,19 @@ def reference(long_run, tmp_path_factory) -> demsplit.Results:
     return demsplit.load_results(out)
 
 
-def parts_of(out: Path) -> Path:
-    return out.parent / f".{out.name}.parts"
+def work_of(out: Path) -> Path:
+    return demsplit.store.work_dir_of(out)
 
 
-def done_parts(out: Path) -> list[Path]:
-    """The complete frame parts (frame_<seq>_<step>.npys; .tmp ones are being written)."""
-    return sorted(parts_of(out).glob("frame_*.npys"))
+def done_steps(out: Path) -> list[int]:
+    """The frames the interrupted store holds (its commit record; a record being written is a .tmp)."""
+    return demsplit.store.committed_steps(out)
 
 
-def wait_for_parts(proc: subprocess.Popen, out: Path, n: int) -> None:
-    """Wait until the run has written at least ``n`` frame parts (and is still running)."""
+def wait_for_frames(proc: subprocess.Popen, out: Path, n: int) -> None:
+    """Wait until the run has committed at least ``n`` frames (and is still running)."""
     deadline = time.monotonic() + 120
-    while len(done_parts(out)) < n:
+    while len(done_steps(out)) < n:
         assert proc.poll() is None, f"the run ended before it could be interrupted: {proc.communicate()}"
         assert time.monotonic() < deadline
         time.sleep(0.01)
@@ -109,7 +110,7 @@ def assert_same_results(a: demsplit.Results, b: demsplit.Results) -> None:
 def test_interrupted_run_resumes_to_the_same_results(long_run, reference, tmp_path, sig, code, words):
     out = tmp_path / "out.h5"
     proc = demsplit_run(long_run, out)
-    wait_for_parts(proc, out, 3)
+    wait_for_frames(proc, out, 3)
     proc.send_signal(sig)
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == code, err
@@ -117,20 +118,20 @@ def test_interrupted_run_resumes_to_the_same_results(long_run, reference, tmp_pa
         assert words in err and "Traceback" not in err and err.count("\n") == 1
     assert_complete_or_absent(out)
     assert not out.exists()
-    done = done_parts(out)
+    done = done_steps(out)
     assert 3 <= len(done) < N_FRAMES
-    assert not list(parts_of(out).glob("*.tmp")) or sig == signal.SIGKILL
+    assert not list(work_of(out).glob("*.tmp")) or sig == signal.SIGKILL
 
-    again = demsplit_run(long_run, out)  # without --resume: refused, parts untouched
+    again = demsplit_run(long_run, out)  # without --resume: refused, the interrupted frames untouched
     _, err = again.communicate(timeout=120)
     assert again.returncode == 2 and "--resume" in err
-    assert done_parts(out) == done
+    assert done_steps(out) == done
 
     resumed = subprocess.run([sys.executable, "-m", "demsplit.cli", "run", str(long_run), "-o", str(out),
                               "--resume"], capture_output=True, text=True, timeout=300)
     assert resumed.returncode == 0, resumed.stderr
     assert f"{len(done)} resumed" in resumed.stdout
-    assert not parts_of(out).exists()
+    assert not work_of(out).exists()
     assert_complete_or_absent(out)
     assert_same_results(demsplit.load_results(out), reference)
     assert len(reference.frames) == N_FRAMES

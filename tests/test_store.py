@@ -45,7 +45,7 @@ def test_round_trip_identical_dataframes(tmp_path):
     assert stored.frames["step"].tolist() == sorted(STEPS)
     assert stored.particles["id"].dtype == np.int64 and stored.particles["type"].dtype == np.int32
     assert stored.particles.attrs["units"]["u"] == "J" and stored.contacts.attrs["units"]["delta"] == "m"
-    assert sorted(os.listdir(tmp_path)) == ["out.h5"]  # parts and temporaries removed
+    assert sorted(os.listdir(tmp_path)) == ["out.h5"]  # work directory and temporaries removed
 
 
 def test_layout_and_frame_index(tmp_path):
@@ -93,7 +93,7 @@ def test_exception_mid_run_leaves_no_store_and_parts_resume(tmp_path):
 
 
 def test_sigkill_mid_run_then_resume(tmp_path):
-    """A writer killed with SIGKILL after two frames: no store, two parts."""
+    """A writer killed with SIGKILL after two frames: no store, two frames to resume."""
     out = tmp_path / "out.h5"
     script = textwrap.dedent(f"""
         import os, signal, sys
@@ -186,19 +186,22 @@ def test_file_fingerprint(tmp_path):
         file_fingerprint(tmp_path / "missing")
 
 
-def test_assembly_memory_does_not_grow_with_frames(tmp_path, monkeypatch):
-    """close() streams part by part: its peak allocation is the same for 3 and 12 frames."""
+def test_writing_memory_does_not_grow_with_frames(tmp_path, monkeypatch):
+    """Frames are written as they come: the writer's peak allocation while
+    appending and closing is the same for 3 and 12 frames."""
     import tracemalloc
 
-    monkeypatch.setattr(store, "CHUNK_ROWS", 512)  # whole chunks are written as soon as they are full
+    monkeypatch.setattr(store, "CHUNK_ROWS", 512)
     peaks = []
     for n in (3, 12):
-        w = ResultWriter(tmp_path / f"out{n}.h5", PROVENANCE)
-        for s in range(n):
-            w.append(synthetic_frame(s, n_particles=300, n_pairs=1000))
+        frames_n = [synthetic_frame(s, n_particles=300, n_pairs=1000) for s in range(n)]
         tracemalloc.start()
+        base = tracemalloc.get_traced_memory()[0]
+        w = ResultWriter(tmp_path / f"out{n}.h5", PROVENANCE)
+        for f in frames_n:
+            w.append(f)
         w.close()
-        peaks.append(tracemalloc.get_traced_memory()[1])
+        peaks.append(tracemalloc.get_traced_memory()[1] - base)
         tracemalloc.stop()
         assert len(read_store(tmp_path / f"out{n}.h5").frames) == n
     assert peaks[1] < 1.5 * peaks[0], peaks
@@ -318,35 +321,98 @@ def test_h5dump_reads_an_auto_store(tmp_path, monkeypatch):
         np.testing.assert_array_equal(np.fromfile(raw, expected.dtype.newbyteorder("<")), expected, err_msg=col)
 
 
-def test_parts_are_raw_npy_records_and_other_layouts_are_not_resumed(tmp_path):
+def test_work_directory_holds_a_readable_store_and_its_commit_record(tmp_path, monkeypatch):
+    """Mid-run, .out.h5.partial/ holds the store written so far (a valid HDF5
+    file, in SWMR mode) and the commit record: the frames' steps and offsets
+    and the rows not yet in a whole chunk. Other layouts are not resumed."""
+    monkeypatch.setattr(store, "CHUNK_ROWS", 128)
     out = tmp_path / "out.h5"
     w = ResultWriter(out, PROVENANCE)
-    w.append(synthetic_frame(7))
+    for s in (7, 8):
+        w.append(synthetic_frame(s, n_particles=300, n_pairs=500))
+    work = tmp_path / ".out.h5.partial"
+    assert store.committed_steps(out) == [7, 8]
+    header, carry = store._read_records(work / "commit.npys")
+    expected = np.concatenate([synthetic_frame(s, n_particles=300, n_pairs=500)["contacts"]["u_n"] for s in (7, 8)])
+    n = len(expected) // 2
+    assert header["rows"]["contacts"] == [0, n, 2 * n] and header["written"]["contacts"] == 2 * n // 128 * 128
+    with h5py.File(work / "store.h5", "r", swmr=True) as h5:  # readable while the writer has it open
+        np.testing.assert_array_equal(h5["contacts/u_n"][()], expected[:header["written"]["contacts"]])
+    np.testing.assert_array_equal(carry["contacts"]["u_n"], expected[header["written"]["contacts"]:])
     w.abandon()
-    parts = tmp_path / ".out.h5.parts"
-    (part,) = parts.glob("frame_*")
-    assert part.name.endswith("_7.npys")
-    with open(part, "rb") as f:  # np.load reads the records one after another
-        names = json.loads(np.load(f).tobytes())
-        records = {(name, col): np.load(f) for name, cols in names.items() for col in cols}
-        assert f.read() == b""
-    for (name, col), values in records.items():
-        np.testing.assert_array_equal(values, synthetic_frame(7)[name][col])
-    assert list(names["contacts"]) == list(synthetic_frame(7)["contacts"])
 
-    part.write_bytes(part.read_bytes()[:-8])  # a part cut short (a disk failure): named, not read
-    with pytest.raises(StoreError, match="cannot read a stored frame: the file ends at byte"):
+    commit = work / "commit.npys"
+    intact = commit.read_bytes()
+    commit.write_bytes(intact[:-8])  # a record cut short (a power cut): named, not read
+    with pytest.raises(StoreError, match="cannot read the commit record: the file ends at byte"):
         ResultWriter(out, PROVENANCE, resume=True)
-    manifest = json.loads((parts / "run.json").read_text())
-    (parts / "run.json").write_text(json.dumps({**manifest, "parts_version": 1}))
+    commit.write_bytes(intact)
+    manifest = json.loads((work / "run.json").read_text())
+    (work / "run.json").write_text(json.dumps({**manifest, "work_version": 2}))
     with pytest.raises(StoreError, match="no readable run manifest"):
         ResultWriter(out, PROVENANCE, resume=True)
+
+
+KILL_SCRIPT = """
+import os, signal, sys
+sys.path.insert(0, {tests!r})
+from result_frames import synthetic_frame, PROVENANCE, WALLS_META
+import demsplit.store as store
+store.CHUNK_ROWS = 128
+calls = {{"n": 0}}
+real = getattr(store, {target!r}) if {target!r} != "_TableSink._write" else store._TableSink._write
+
+def dying(*args, **kwargs):
+    calls["n"] += 1
+    if calls["n"] == {at}:
+        if {target!r} == "_write_records":  # die with the record half written under its temporary name
+            path = args[0]
+            path.with_name(path.name + ".tmp").write_bytes(b"\\x93NUMPY half")
+        os.kill(os.getpid(), signal.SIGKILL)
+    return real(*args, **kwargs)
+
+if {target!r} == "_TableSink._write":
+    store._TableSink._write = dying
+else:
+    setattr(store, {target!r}, dying)
+w = store.ResultWriter({out!r}, PROVENANCE, walls_meta=WALLS_META)
+for s in range(6):
+    w.append(synthetic_frame(s, n_particles=300, n_pairs=500))
+w.close()
+"""
+
+
+# _TableSink._write is called once per column per frame: 42 calls a frame (particles 1-10,
+# contacts 11-28, walls 29-34, frames 35-42), so call 54 is frame 1's contacts, 99 frame 2's
+# contacts and 131 frame 3's particles, each with chunks written past the last commit.
+@pytest.mark.parametrize("target, at", [("_TableSink._write", 5), ("_TableSink._write", 54), ("_TableSink._write", 99),
+                                        ("_TableSink._write", 131), ("_write_records", 1), ("_write_records", 4)])
+def test_killed_at_any_point_of_a_frame_resumes_to_the_same_store(tmp_path, target, at):
+    """SIGKILL inside a frame (between chunk writes, or with the commit record
+    half written): the resumed run equals an uninterrupted one."""
+    frames6 = [synthetic_frame(s, n_particles=300, n_pairs=500) for s in range(6)]
+    out = tmp_path / "out.h5"
+    script = KILL_SCRIPT.format(tests=os.path.dirname(__file__), target=target, at=at, out=str(out))
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True)
+    assert proc.returncode == -9, proc.stderr.decode()
+    assert not out.exists()
+    done = store.committed_steps(out)
+    assert done == list(range(len(done))) and len(done) < 6
+    import unittest.mock
+
+    with unittest.mock.patch.object(store, "CHUNK_ROWS", 128), \
+            ResultWriter(out, PROVENANCE, walls_meta=WALLS_META, resume=True) as w:
+        assert w.done_steps == set(done)
+        for f in frames6[len(done):]:
+            w.append(f)
+    assert not (tmp_path / ".out.h5.partial").exists()
+    assert_same(load_results(out), Results.from_frames(frames6, PROVENANCE, WALLS_META))
 
 
 def test_unknown_compression_is_an_error(tmp_path):
     with pytest.raises(StoreError, match="unknown compression 'zstd'"):
         ResultWriter(tmp_path / "o.h5", PROVENANCE, compression="zstd")
-    assert not (tmp_path / ".o.h5.parts").exists()
+    assert not (tmp_path / ".o.h5.partial").exists()
 
 
 def test_demsplit_run_defaults_to_auto_and_equals_none(tmp_path):
