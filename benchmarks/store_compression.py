@@ -1,4 +1,4 @@
-"""Store size, part-write (append), assembly (close) and read time per compression.
+"""Store size, write (append: every frame, as it arrives), close and read time per compression.
 
 The frames are real results: ``demsplit.pipeline.frame_tables`` of each frame
 of a run (default: the medium benchmark run /tmp/bench_mid/in.bench, 2 frames
@@ -11,8 +11,10 @@ Run: python benchmarks/store_compression.py [RUN] [--repeat 3] [--auto-max-ratio
 ``--auto-max-ratio`` adds ``auto`` rows with other thresholds (the default
 row uses demsplit.store.AUTO_MAX_RATIO); ``--columns`` first prints, for
 each column of the first frame with at least a chunk of rows, the size of its
-chunks after shuffle + deflate at zlib levels 1 and 4 (fraction of the raw
-size), the deflate speed (one thread, MB/s of raw data) and ``auto``'s choice.
+chunks after shuffle + deflate (fraction of the raw size) and the deflate
+speed (one thread, MB/s of raw data) with the store's deflate (ISA-L level 1,
+``isal``) and with zlib levels 1 and 4 (the store's before), and ``auto``'s
+choice.
 """
 from __future__ import annotations
 
@@ -24,6 +26,7 @@ import time
 import zlib
 
 import numpy as np
+from isal import isal_zlib
 
 import demsplit.store as S
 from demsplit.pipeline import Options, frame_tables
@@ -39,8 +42,11 @@ def real_frames(path: str) -> list[dict]:
 
 
 def column_table(tables: dict) -> None:
-    print("| column | first chunk, level 1 | all chunks, level 1 | level 4 | MB/s level 1 | MB/s level 4 | auto |")
-    print("|---|---|---|---|---|---|---|")
+    deflates = {"isal 1": lambda c: isal_zlib.compress(c, S.GZIP_LEVEL), "zlib 1": lambda c: zlib.compress(c, 1),
+                "zlib 4": lambda c: zlib.compress(c, 4)}
+    print("| column | first chunk, isal 1 | " + " | ".join(f"all, {k}" for k in deflates) + " | "
+          + " | ".join(f"MB/s {k}" for k in deflates) + " | auto |")
+    print("|---" * (3 + 2 * len(deflates)) + "|")
     for name, table in tables.items():
         for col, values in table.items():
             whole = len(values) // S.CHUNK_ROWS * S.CHUNK_ROWS
@@ -48,14 +54,15 @@ def column_table(tables: dict) -> None:
                 continue
             chunks = [S._shuffled(values[k: k + S.CHUNK_ROWS]) for k in range(0, whole, S.CHUNK_ROWS)]
             ratio, speed = {}, {}
-            for level in (1, 4):
+            for key, deflate in deflates.items():
                 t0 = time.perf_counter()
-                size = sum(len(zlib.compress(c, level)) for c in chunks)
-                speed[level] = whole * values.itemsize / (time.perf_counter() - t0) / 1e6
-                ratio[level] = size / (whole * values.itemsize)
-            first = len(zlib.compress(chunks[0], S.GZIP_LEVEL)) / len(chunks[0])
-            print(f"| {name}/{col} | {first:.3f} | {ratio[1]:.3f} | {ratio[4]:.3f} | {speed[1]:.0f} | {speed[4]:.0f} "
-                  f"| {S._choose_filter(np.asarray(values[:S.CHUNK_ROWS]))} |")
+                size = sum(len(deflate(c)) for c in chunks)
+                speed[key] = whole * values.itemsize / (time.perf_counter() - t0) / 1e6
+                ratio[key] = size / (whole * values.itemsize)
+            first = len(deflates["isal 1"](chunks[0])) / len(chunks[0])
+            print(f"| {name}/{col} | {first:.3f} | " + " | ".join(f"{ratio[k]:.3f}" for k in deflates) + " | "
+                  + " | ".join(f"{speed[k]:.0f}" for k in deflates)
+                  + f" | {S._choose_filter(np.asarray(values[:S.CHUNK_ROWS]))} |")
 
 
 def store_once(frames: list[dict], compression: str, directory: str) -> dict:

@@ -110,14 +110,15 @@ def _options(args: argparse.Namespace):
 
 def cmd_run(args: argparse.Namespace) -> int:
     from .pipeline import run_to_store
-    from .report import text_summary
-    from .results import load_results
 
     report, _ = run_to_store(args.input, args.output, options=_options(args), jobs=args.jobs, dask=args.dask,
                              resume=args.resume, on_bad_frame=args.on_bad_frame,
                              compression=None if args.compression == "none" else args.compression,
                              progress=False if args.quiet else None, **_reader_options(args))
     if not args.quiet:
+        from .report import text_summary
+        from .results import load_results
+
         print(text_summary(load_results(args.output)))
         for note in report.notes:
             print(f"note: {note}")

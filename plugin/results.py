@@ -31,12 +31,15 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from .errors import StoreError
 from .frame import describe_steps
+
+if TYPE_CHECKING:  # pandas is imported where a DataFrame is made: writing a store needs none
+    import pandas as pd
 
 Table = dict[str, np.ndarray]
 
@@ -104,6 +107,8 @@ def canonical_table(name: str, table: Mapping[str, np.ndarray], *, step: int | N
 
 def to_dataframe(table: Mapping[str, np.ndarray]) -> pd.DataFrame:
     """A DataFrame of ``table`` (column order kept) with ``attrs['units']`` set."""
+    import pandas as pd
+
     df = pd.DataFrame({col: np.asarray(vals) for col, vals in table.items()})
     df.attrs["units"] = {col: UNITS.get(col, "") for col in df.columns}
     return df

@@ -104,7 +104,6 @@ from pathlib import Path
 from typing import BinaryIO
 
 import numpy as np
-import polars as pl
 
 from demsplit import fingerprint
 from demsplit.errors import DemsplitError, InputFormatError, PrecisionError, TruncatedFileError
@@ -518,6 +517,8 @@ class TextDump(DumpFile):
         """polars parse of one block of ``n`` whole, well-formed rows (the fallback of
         the compiled parse) into ``cols`` from ``row`` on; an integer-looking column
         that holds a real here turns every integer column of the frame into float64."""
+        import polars as pl  # only here: most blocks take the compiled parse
+
         for _ in range(2):
             try:
                 table = _csv(block, len(e.names) + trailing, cols.dtypes)
@@ -561,6 +562,8 @@ class TextDump(DumpFile):
 def _csv(block: bytes, n_fields: int, dtypes: dict[int, np.dtype]) -> "pl.DataFrame":
     """polars (multi-threaded, compiled) parse of whole rows of ``n_fields`` fields: only
     the columns ``dtypes`` names (0-based) are converted, to Int64 or Float64."""
+    import polars as pl
+
     schema = {f"c{k}": pl.String for k in range(n_fields)}
     schema.update({f"c{i}": pl.Int64 if d.kind == "i" else pl.Float64 for i, d in dtypes.items()})
     return pl.read_csv(block, separator=" ", has_header=False, quote_char=None, schema=schema,
