@@ -207,16 +207,19 @@ def per_size(particles: pd.DataFrame, bins=None, value: str = "u", *, by_frame: 
 def per_frame(particles: pd.DataFrame, walls: pd.DataFrame, frames: pd.DataFrame) -> pd.DataFrame:
     """One row per frame: the frame table, plus
     ``u_contacts`` = u_n + u_t (J, sum over contacts),
-    ``u_particles`` = sum of particle ``u``, ``u_walls`` = sum of wall ``u`` (J),
+    ``u_particles`` = sum of particle ``u``, ``u_walls`` = sum of wall ``u`` (J;
+    as the frames table has them when the pipeline recorded them, so that the
+    balance of every frame needs only the frames table; else summed here),
     ``balance_rel_error`` = |u_particles + u_walls - u_contacts| / u_contacts
     (energy conservation of the split; ~1e-15 when correct),
-    and the distribution statistics of particle ``u`` (``mean`` ... ``gini``)."""
+    and the distribution statistics of particle ``u`` (``mean`` ... ``gini``;
+    NaN for frames whose particles are not in ``particles``)."""
     out = frames.copy()
     out["u_contacts"] = out["u_n"] + out["u_t"]
-    u_p = particles.groupby("step")["u"].sum() if len(particles) else pd.Series(dtype=float)
-    u_w = walls.groupby("step")["u"].sum() if len(walls) else pd.Series(dtype=float)
-    out["u_particles"] = out["step"].map(u_p).fillna(0.0).to_numpy(dtype=np.float64)
-    out["u_walls"] = out["step"].map(u_w).fillna(0.0).to_numpy(dtype=np.float64)
+    for col, table in (("u_particles", particles), ("u_walls", walls)):
+        if col not in out:
+            sums = table.groupby("step")["u"].sum() if len(table) else pd.Series(dtype=float)
+            out[col] = out["step"].map(sums).fillna(0.0).to_numpy(dtype=np.float64)
     with np.errstate(invalid="ignore", divide="ignore"):
         out["balance_rel_error"] = (out["u_particles"] + out["u_walls"] - out["u_contacts"]).abs() / out["u_contacts"]
     stats = grouped_stats(particles, ["step"], "u").drop(columns=["count", "total"])

@@ -117,9 +117,9 @@ def cmd_run(args: argparse.Namespace) -> int:
                              progress=False if args.quiet else None, **_reader_options(args))
     if not args.quiet:
         from .report import text_summary
-        from .results import load_results
+        from .store import read_last_frame
 
-        print(text_summary(load_results(args.output)))
+        print(text_summary(read_last_frame(args.output)))
         for note in report.notes:
             print(f"note: {note}")
         if report.bad_frames:

@@ -55,7 +55,9 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = Options()) -> Ta
     u_n u_t``) and, with ``options.compare``, under the comparison splits;
     ``contacts``: per-contact energies, shares, depth and contact points
     (``cp*_sim``: the simulator's own point, when the input has it);
-    ``walls``: energy stored in each wall; ``frames``: one row of totals.
+    ``walls``: energy stored in each wall; ``frames``: one row of totals (contact
+    energies, and the sums over particles and walls that the energy balance
+    compares them with).
     """
     source = frame.source[0] if frame.source else None
     particles, contacts = frame.particles, frame.contacts
@@ -101,6 +103,8 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = Options()) -> Ta
         "n_wall_contacts": np.array([int(np.count_nonzero(contacts["wall"] >= 0))], dtype=np.int64),
         "u_n": np.array([main.u_n.sum()]),
         "u_t": np.array([main.u_t.sum()]),
+        "u_particles": np.array([ptable["u"].sum()]),
+        "u_walls": np.array([wtable["u"].sum()]),
         "overlap_max_rel_error": np.array([np.nan if err is None or len(err) == 0 else float(np.max(err))]),
     }
     return tables

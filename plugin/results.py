@@ -17,7 +17,9 @@
     ``n_contacts``.
 ``frames``
     one row per frame: ``step``, ``time`` (s), ``n_particles``, ``n_contacts``
-    (all contacts, wall contacts included), ``n_wall_contacts``, ``u_n``, ``u_t`` (J), ``overlap_max_rel_error``.
+    (all contacts, wall contacts included), ``n_wall_contacts``, ``u_n``, ``u_t`` (J, sums
+    over contacts), ``u_particles``, ``u_walls`` (J, sums of the particles' and the
+    walls' ``u``), ``overlap_max_rel_error``.
 
 Every DataFrame carries ``df.attrs['units']``, a mapping column -> unit
 (``"1"`` for dimensionless numbers and counts). Rows are ordered by ``step``
@@ -46,7 +48,8 @@ Table = dict[str, np.ndarray]
 TABLES = ("particles", "contacts", "walls", "frames")
 """The tables of a result set, in the order they are stored."""
 
-_ENERGY = {c: "J" for c in ("u", "u_n", "u_t", "u_equal", "u_radius", "u_springs", "u1", "u2")}
+_ENERGY = {c: "J" for c in ("u", "u_n", "u_t", "u_equal", "u_radius", "u_springs", "u1", "u2", "u_particles",
+                            "u_walls")}
 _LENGTH = {c: "m" for c in ("radius", "delta", "depth1", "cpx", "cpy", "cpz", "cpx_sim", "cpy_sim", "cpz_sim")}
 _COUNT = {c: "1" for c in ("step", "id", "clump", "n_members", "id1", "id2", "wall", "type", "n_contacts", "n_particles",
                            "n_wall_contacts", "share_n1", "share_t1", "overlap_max_rel_error")}

@@ -631,9 +631,11 @@ def _map_record(f, path: Path, size: int) -> np.ndarray:
     return np.memmap(path, dtype, "r", offset, shape) if end > offset else np.empty(shape, dtype)
 
 
-def read_store(path: str | Path, *, steps: Iterable[int] | None = None) -> Results:
+def read_store(path: str | Path, *, steps: Iterable[int] | None = None, every_frame_row: bool = False) -> Results:
     """Read a store into :class:`~demsplit.results.Results` (every frame, or only
-    timesteps ``steps``, each read through the frame index without the rest)."""
+    timesteps ``steps``, each read through the frame index without the rest;
+    ``every_frame_row``: the ``frames`` table of every frame all the same, e.g.
+    for the energy balance of a whole run beside one frame's tables)."""
     import h5py
 
     path = Path(path)
@@ -669,7 +671,7 @@ def read_store(path: str | Path, *, steps: Iterable[int] | None = None) -> Resul
                 group = h5[name]
                 columns = json.loads(group.attrs["columns"])
                 off = h5[f"index/{name}"][()]
-                if steps is None:
+                if steps is None or (every_frame_row and name == "frames"):
                     table = {col: group[col][()] for col in columns}
                 else:
                     table = {col: np.concatenate([group[col][off[k]:off[k + 1]] for k in frames_k]
@@ -680,6 +682,20 @@ def read_store(path: str | Path, *, steps: Iterable[int] | None = None) -> Resul
     except (KeyError, ValueError, OSError) as exc:  # a group, dataset or attribute missing or unreadable
         raise StoreError(f"the store is damaged or incomplete ({type(exc).__name__}: {exc}).", file=path,
                          fix="rerun demsplit run to rewrite it.") from exc
+
+
+def read_last_frame(path: str | Path) -> Results:
+    """The last frame's tables and every frame's row of the ``frames`` table:
+    what ``demsplit run`` summarises, in memory independent of the number of
+    frames."""
+    import h5py
+
+    try:
+        with h5py.File(path, "r") as h5:
+            stored = h5["index/step"][()]
+    except (OSError, KeyError):
+        return read_store(path)  # read_store names what is wrong with the file
+    return read_store(path, steps=stored[-1:], every_frame_row=True)
 
 
 def export_tables(results: Results, directory: str | Path, fmt: str = "parquet") -> list[Path]:

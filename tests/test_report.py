@@ -43,3 +43,26 @@ def test_html_has_every_figure_and_is_self_contained(tmp_path, simulator_point, 
     for heading in ("Energy per particle type", "Frames", "Split comparison", "Walls", "Provenance"):
         assert f"<h2>{heading}</h2>" in page
     assert [p.name for p in tmp_path.iterdir()] == ["report.html"]
+
+
+def test_run_summary_reads_one_frame_and_equals_the_full_summary(tmp_path):
+    """demsplit run prints its summary from the last frame's tables and the
+    frames table (memory independent of the number of frames): the same text
+    as from the whole store, and only the last frame's particles are read."""
+    from pathlib import Path
+
+    from demsplit import cli
+    from demsplit.results import load_results
+    from demsplit.store import read_last_frame
+
+    script = Path(__file__).resolve().parent.parent / "sample_dumps" / "liggghts" / "packing" / "in.packing"
+    out = tmp_path / "o.h5"
+    assert cli.main(["run", str(script), "-o", str(out), "-q"]) == 0
+    full, last = load_results(out), read_last_frame(out)
+    step = int(full.steps[-1])
+    assert len(full.steps) == 3 and last.steps.tolist() == full.steps.tolist()
+    assert set(last.particles["step"]) == {step} and len(last.particles) == (full.particles["step"] == step).sum()
+    assert set(last.contacts["step"]) == {step}
+    assert text_summary(last) == text_summary(full)
+    pf = full.per_frame()  # the recorded sums are the particles' and walls' own
+    assert (pf["u_particles"] - full.particles.groupby("step")["u"].sum().to_numpy()).abs().max() <= 1e-15 * pf["u_contacts"].max()
