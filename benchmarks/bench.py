@@ -82,9 +82,12 @@ def _frames(index_file: str, name: str) -> list[tuple[int, int]]:
 def child(name: str, d: Path, work: Path, index_file: str) -> dict:
     """Run one measurement in this (fresh) process; return what it wants reported."""
     script, atoms, pairs = d / "in.bench", d / "atoms.txt", d / "pairs.txt"
-    if name == "imports":
+    if name == "imports":  # what demsplit run -q imports (its kernel modules import numba)
+        import h5py  # noqa: F401
         import demsplit.cli  # noqa: F401
+        import demsplit.kernels  # noqa: F401
         import demsplit.pipeline  # noqa: F401
+        import demsplit.readers.fastparse  # noqa: F401
         import demsplit.readers.liggghts  # noqa: F401
         import demsplit.store  # noqa: F401
         return {}
