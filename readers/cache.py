@@ -65,7 +65,8 @@ def convert_run(input: str | Path, output: str | Path, **reader_options) -> Path
                                fix="give another output path with -o.")
     run = open_run(input, **reader_options)
     try:
-        with atomic_path(output) as tmp, h5py.File(tmp, "w") as h5:
+        # no chunk cache: each dataset is written once, whole (a cache only holds memory)
+        with atomic_path(output) as tmp, h5py.File(tmp, "w", rdcc_nbytes=0) as h5:
             h5.attrs["format"] = FORMAT
             h5.attrs["version"] = VERSION
             h5.attrs["scene"] = json.dumps(scene_to_dict(run.scene))
@@ -85,6 +86,7 @@ def convert_run(input: str | Path, output: str | Path, **reader_options) -> Path
                     continue
                 _write_frame(g, frame)
                 steps.append(frame.step)
+                del frame  # not alive while the next frame is read (peak memory: one frame)
             h5.attrs["n_frames"] = len(steps)
             h5.attrs["steps"] = np.array([-1 if s is None else s for s in steps], dtype=np.int64)
     finally:
