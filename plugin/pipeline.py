@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import DemsplitError
+from .fingerprint import hash_in_background
 from .frame import CONTACT_REQUIRED, PARTICLE_REQUIRED, Frame, ParticleIndex, require_columns
 from .partition import ContactBodies, contact_energies, partition, particle_energy, per_particle
 from .scene import Scene
@@ -295,6 +296,7 @@ def analyze(path: str | Path, *, options: Options = Options(), jobs: int = 1, da
     run = open_run(path, **reader_options)
     try:
         report = RunReport()
+        hash_in_background(getattr(run, "sources", [path]))  # the provenance's sha256, while frames are computed
         frames = list(process_run(run, options, jobs=jobs, dask=dask, on_bad_frame=on_bad_frame,
                                   progress=progress, report=report))
         provenance = build_provenance(getattr(run, "sources", [path]), scene=run.scene,
@@ -324,17 +326,32 @@ def run_to_store(path: str | Path, out: str | Path, *, options: Options = Option
     """
     from .readers import open_run
     from .results import walls_meta_from_scene
-    from .store import ResultWriter, build_provenance
+    from .store import ResultWriter, build_provenance, check_output
 
+    check_output(out, resume=resume)  # before any work: no output directory, or an unresumed interrupted run
     run = open_run(path, **reader_options)
     try:
         report = RunReport()
-        provenance = build_provenance(getattr(run, "sources", [path]), scene=run.scene, options=asdict(options),
+        sources = getattr(run, "sources", [path])
+        hash_in_background(sources)
+        # A new run computes its first frame while the inputs are hashed, then opens the store (its
+        # provenance holds their sha256); a resumed run opens the store first, to skip its frames.
+        frames, first = None, None
+        if not resume:
+            frames = process_run(run, options, jobs=jobs, dask=dask, on_bad_frame=on_bad_frame,
+                                 progress=progress, report=report)
+            first = next(frames, None)
+        provenance = build_provenance(sources, scene=run.scene, options=asdict(options),
                                       run=run.describe() if hasattr(run, "describe") else {})
         with ResultWriter(out, provenance, resume=resume, walls_meta=walls_meta_from_scene(run.scene),
                           compression=compression) as writer:
-            for tables in process_run(run, options, jobs=jobs, dask=dask, on_bad_frame=on_bad_frame,
-                                      skip_steps=writer.done_steps, progress=progress, report=report):
+            if frames is None:
+                frames = process_run(run, options, jobs=jobs, dask=dask, on_bad_frame=on_bad_frame,
+                                     skip_steps=writer.done_steps, progress=progress, report=report)
+            if first is not None:
+                writer.append(first)
+                first = None  # stored: free it before the next frame is computed
+            for tables in frames:
                 writer.append(tables)
                 del tables  # stored: free it before the next frame is computed
             writer.provenance.update(bad_frames=report.bad_frames, notes=report.notes)

@@ -127,6 +127,20 @@ def work_dir_of(path: str | Path) -> Path:
     return path.parent / f".{path.name}.partial"
 
 
+def check_output(path: str | Path, *, resume: bool = False) -> None:
+    """Raise :class:`StoreError` when a store cannot be started at ``path``:
+    its directory is missing, or an interrupted run's work directory is there
+    and ``resume`` is false (it is never silently discarded)."""
+    path = Path(path)
+    if not path.parent.is_dir():
+        raise StoreError("the output directory does not exist.", file=path.parent,
+                         fix="create it, or choose another output path.")
+    work = work_dir_of(path)
+    if work.exists() and not resume:
+        raise StoreError(f"an interrupted run left its finished frames in {work}.", file=path,
+                         fix=f"resume it (resume=True, demsplit run --resume), or delete {work} to start over.")
+
+
 def committed_steps(path: str | Path) -> list[int]:
     """Timesteps of the frames an unfinished (or interrupted) store ``path``
     holds so far, in the order they were appended ([] when none)."""
@@ -177,6 +191,7 @@ class ResultWriter:
         if self.compression not in COMPRESSIONS:
             raise StoreError(f"unknown compression {compression!r}; expected one of {list(COMPRESSIONS)}.",
                              file=self.path, fix="pick one of " + ", ".join(COMPRESSIONS) + ".")
+        check_output(self.path, resume=resume)
         self.work_dir = work_dir_of(self.path)
         self._store = self.work_dir / _STORE
         self._h5 = None  # the store being written, in SWMR mode, from the first frame on
@@ -185,18 +200,10 @@ class ResultWriter:
         self._rows: dict[str, list[int]] = {name: [0] for name in TABLES}  # row offsets, in append order
         self._pool: ThreadPoolExecutor | None = None
         self._closed = False
-        if not self.path.parent.is_dir():
-            raise StoreError("the output directory does not exist.", file=self.path.parent,
-                             fix="create it, or choose another output path.")
         manifest = {"format": FORMAT, "format_version": FORMAT_VERSION, "work_version": WORK_VERSION,
                     "identity": resume_identity(self.provenance), "provenance": self.provenance,
                     "walls_meta": self.walls_meta, "compression": self.compression}
         if self.work_dir.exists():
-            if not resume:
-                raise StoreError(
-                    f"an interrupted run left its finished frames in {self.work_dir}.", file=self.path,
-                    fix=f"resume it (resume=True, demsplit run --resume), or delete {self.work_dir} to start over.",
-                )
             self._lock()
             try:
                 self._resume(manifest)

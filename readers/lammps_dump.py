@@ -19,10 +19,11 @@ Index
     The first access to ``n_frames``/``steps``/``frame(k)`` scans the
     (decompressed) file once in 16 MiB chunks: one compiled pass per chunk
     (:func:`~demsplit.readers.fastparse.scan_chunk`, numba) counts the
-    newlines and finds the ``ITEM: TIMESTEP`` markers; no per-line Python. A
-    plain file is hashed (sha256, for provenance) by a second thread on the
-    same chunks, in place: two buffers alternate, so the scan is as fast as
-    the hash. Each frame's entry holds its step, header row count, box,
+    newlines and finds the ``ITEM: TIMESTEP`` markers; no per-line Python.
+    (The sha256 for the provenance is not taken here but by
+    :mod:`demsplit.fingerprint`, in the background while the first frame is
+    computed: the scan of the benchmark's contact dump takes 0.64 s alone,
+    1.5 s with the hash.) Each frame's entry holds its step, header row count, box,
     column names, the byte range of its rows and their line numbers. The
     index is cached on the object. Binary files are indexed by hopping from
     header to header.
@@ -54,7 +55,7 @@ Parser (measured)
     ``fallback_blocks`` on a :class:`TextDump` count the two. Measured
     (``docs/performance.md``, "Parser and index": fresh processes, shared
     2-core machine at load 3): the benchmark's 2.57 GB, 41-column contact
-    dump is indexed (and hashed) in 1.45-1.95 s and its 10 columns parsed in
+    dump was indexed (and hashed, as it then was) in 1.45-1.95 s and its 10 columns parsed in
     2.35-3.7 s, against 4.25-4.96 s and 6.1-6.5 s for the numpy scan and the
     polars parse plus numpy shape check this replaced; one thread converts
     15 columns of those rows at 0.75-0.84 GB/s.
@@ -91,8 +92,6 @@ from __future__ import annotations
 
 import bz2
 import gzip
-import hashlib
-import itertools
 import lzma
 import os
 import struct
@@ -105,7 +104,6 @@ from typing import BinaryIO
 
 import numpy as np
 
-from demsplit import fingerprint
 from demsplit.errors import DemsplitError, InputFormatError, PrecisionError, TruncatedFileError
 from demsplit.frame import Box, describe_steps
 
@@ -401,12 +399,8 @@ class TextDump(DumpFile):
 
     # -- index
     def _build_index(self) -> tuple[list[_TextEntry], list[DemsplitError]]:
-        # a plain file is hashed during the scan (provenance then needs no second read)
-        digest = hashlib.sha256() if self._opener is None else None
         with self._stream() as f:
-            markers, headers, lines_before, total, total_newlines, last_byte = _scan(f, digest)
-        if digest is not None:
-            fingerprint.record(self.path, digest.hexdigest())
+            markers, headers, lines_before, total, total_newlines, last_byte = _scan(f)
         entries: list[_TextEntry] = []
         damaged: list[DemsplitError] = []
         for i, (pos, head, nl_before) in enumerate(zip(markers, headers, lines_before)):
@@ -672,44 +666,34 @@ def _parse_fast(a: np.ndarray, ncols: int, trailing: bool, cols: _Columns, row0:
     return rows_parsed, True
 
 
-def _scan(f: BinaryIO, digest=None) -> tuple[list[int], list[bytes], list[int], int, int, bytes]:
+def _scan(f: BinaryIO) -> tuple[list[int], list[bytes], list[int], int, int, bytes]:
     """One pass over a (decompressed) stream in CHUNK pieces.
-
-    ``digest`` (a hashlib object), if given, is updated with every byte read, in
-    a second thread (hashlib releases the GIL) while this one scans: it reads
-    the chunk in place, so two buffers alternate and a buffer is refilled only
-    once its hash is done.
 
     Returns the byte offsets of the ``ITEM: TIMESTEP`` lines, up to
     ``HEADER_MAX`` bytes of text from each (cut at the next marker), the number
     of newlines before each, the total size, the total number of newlines and
     the last byte. Newlines are counted and markers found by one compiled pass
-    per chunk (:func:`~demsplit.readers.fastparse.scan_chunk`).
+    per chunk (:func:`~demsplit.readers.fastparse.scan_chunk`). (The provenance's
+    sha256 of the file is not taken here: :mod:`demsplit.fingerprint` hashes
+    the inputs in the background while the first frame is computed.)
     """
     from .fastparse import scan_chunk
 
     markers: list[int] = []
     headers: list[bytes] = []
     lines_before: list[int] = []
-    # the last HEADER_MAX bytes of a chunk move to the front of the next buffer, so a header is never cut
-    bufs = [bytearray(HEADER_MAX + CHUNK) for _ in range(1 if digest is None else 2)]
-    hashing = [None] * len(bufs)        # the hash (a future) still reading each buffer
-    pos_out = np.empty(len(bufs[0]) // len(MARKER) + 1, dtype=np.int64)
+    # the last HEADER_MAX bytes of a chunk move to the front of the buffer, so a header is never cut
+    buf = bytearray(HEADER_MAX + CHUNK)
+    pos_out = np.empty(len(buf) // len(MARKER) + 1, dtype=np.int64)
     nl_out = np.empty_like(pos_out)
-    hasher = ThreadPoolExecutor(max_workers=1) if digest is not None else None
-    prev, kept, limit, buf_start, newlines, last_byte = bufs[0], 0, 0, 0, 0, b""
-    for k in itertools.count():
-        buf = bufs[k % len(bufs)]
-        if hashing[k % len(bufs)] is not None:
-            hashing[k % len(bufs)].result()
-        buf[:kept] = prev[limit: limit + kept]
+    kept, limit, buf_start, newlines, last_byte = 0, 0, 0, 0, b""
+    while True:
+        buf[:kept] = buf[limit: limit + kept]
         got = _read_into(f, memoryview(buf)[kept:])
         eof = got == 0
         size = kept + got
         if got:
             last_byte = bytes(buf[size - 1: size])
-            if hasher is not None:  # in order: one worker
-                hashing[k % len(bufs)] = hasher.submit(digest.update, memoryview(buf)[kept:size])
         # search and count up to `limit`; keep the rest for the next chunk
         limit = size if eof else max(size - HEADER_MAX, 0)
         found, nl = scan_chunk(np.frombuffer(buf, dtype=np.uint8, count=size), limit, pos_out, nl_out)
@@ -720,10 +704,8 @@ def _scan(f: BinaryIO, digest=None) -> tuple[list[int], list[bytes], list[int], 
             lines_before.append(newlines + before)
         newlines += nl
         if eof:
-            if hasher is not None:
-                hasher.shutdown()  # waits for the last hash
             return markers, headers, lines_before, buf_start + size, newlines, last_byte
-        prev, kept, buf_start = buf, size - limit, buf_start + limit
+        kept, buf_start = size - limit, buf_start + limit
 
 
 def _read_into(f: BinaryIO, view: memoryview) -> int:

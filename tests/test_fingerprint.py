@@ -1,4 +1,5 @@
-"""Input fingerprints: the digest the dump scan records is the file's sha256, and a changed file is hashed again."""
+"""Input fingerprints: the digest hashed in the background is the file's sha256,
+a changed file is hashed again, and a missing file is named."""
 
 from __future__ import annotations
 
@@ -6,19 +7,59 @@ import hashlib
 import os
 import shutil
 
+import pytest
+
 from demsplit import fingerprint
-from demsplit.readers.lammps_dump import open_dump
+from demsplit.errors import StoreError
 
 from conftest import SAMPLES
 
 
-def test_scan_records_the_sha256_and_a_change_invalidates_it(tmp_path):
+def test_background_digest_is_the_sha256_and_a_change_invalidates_it(tmp_path):
     path = tmp_path / "pairs.txt"
     shutil.copy(SAMPLES / "liggghts" / "packing" / "pairs.txt", path)
-    open_dump(path).steps  # builds the index: one read of every byte, hashed on the way
-    assert any(key[0] == str(path.resolve()) for key in fingerprint._KNOWN)
+    fingerprint.hash_in_background([path])
+    key = fingerprint._key(path)
+    assert key in fingerprint._PENDING
     assert fingerprint.file_fingerprint(path)["sha256"] == hashlib.sha256(path.read_bytes()).hexdigest()
-    with open(path, "ab") as f:  # the file changes: the recorded digest no longer applies
+    assert key in fingerprint._KNOWN and key not in fingerprint._PENDING  # waited for, then remembered
+    with open(path, "ab") as f:  # the file changes: the digest no longer applies
         f.write(b"\n")
     os.utime(path, ns=(1, 1))
     assert fingerprint.file_fingerprint(path)["sha256"] == hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def test_an_error_of_the_background_hash_is_named_with_the_file(tmp_path):
+    """The hashing thread hands its error to whoever waits for the digest."""
+    from concurrent.futures import Future
+
+    path = tmp_path / "unreadable.txt"
+    path.write_bytes(b"x" * 100)
+    failed: Future = Future()
+    failed.set_exception(PermissionError(13, "Permission denied"))
+    fingerprint._PENDING[fingerprint._key(path)] = (os.getpid(), failed)  # as _hash_all leaves it
+    with pytest.raises(StoreError, match="cannot read input file to fingerprint it: Permission denied") as err:
+        fingerprint.file_fingerprint(path)
+    assert str(path) in str(err.value)
+    fingerprint.hash_in_background([tmp_path / "never-existed.txt"])  # left for file_fingerprint to report
+    with pytest.raises(StoreError, match="cannot read input file"):
+        fingerprint.file_fingerprint(tmp_path / "never-existed.txt")
+
+
+def test_a_run_stores_the_sha256_of_every_input(tmp_path):
+    """demsplit run hashes its inputs in the background while it computes the
+    first frame; the store's provenance holds the files' own sha256."""
+    import json
+
+    import h5py
+
+    from demsplit.cli import main
+
+    out = tmp_path / "o.h5"
+    assert main(["run", str(SAMPLES / "liggghts" / "packing" / "in.packing"), "-o", str(out), "-q"]) == 0
+    with h5py.File(out) as h5:
+        inputs = json.loads(h5.attrs["provenance"])["inputs"]
+    assert {os.path.basename(i["path"]) for i in inputs} >= {"in.packing", "atoms_full.txt.gz", "pairs_full.txt.gz"}
+    for i in inputs:
+        data = open(i["path"], "rb").read()
+        assert i["sha256"] == hashlib.sha256(data).hexdigest() and i["size"] == len(data), i["path"]
