@@ -12,8 +12,8 @@ mark of its resident memory, from ``/proc/self/status``; ``ru_maxrss`` would
 carry the parent's high-water mark across fork and exec). Before each child
 the parent writes back every dirty page (``os.sync``, untimed), so that no
 child pays for an earlier child's output. With ``--repeat N`` the rounds are
-interleaved and the best time kept (the machine is shared; ratios from the
-same round are the figures to quote). Measurements:
+interleaved, each in a rotated order (:func:`rotated`), and the best time
+of each measurement kept (the machine is shared). Measurements:
 
 ``warm-up``
     runs first: ``demsplit run`` on the packing sample in a fresh process, so
@@ -283,6 +283,18 @@ def frame_ranges(d: Path) -> dict:
     return out
 
 
+def rotated(names: list[str], r: int, repeat: int) -> list[str]:
+    """The order of round ``r``: warm-up and imports first, the others rotated
+    by ``r`` times 1/``repeat`` of their number, so that no measurement always
+    runs in the same place (the first heavy child after a round's warm-up was
+    the slowest of its kind in every round of one run: machine state left by
+    the previous children, e.g. memory to compact for huge pages)."""
+    fixed = [n for n in names if n in ("warm-up", "imports")]
+    rest = [n for n in names if n not in fixed]
+    k = (r * len(rest)) // max(repeat, 1) if rest else 0
+    return fixed + rest[k:] + rest[:k]
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("dir", type=Path, help="directory written by benchmarks/generate.py")
@@ -304,8 +316,8 @@ def main(argv: list[str] | None = None) -> None:
         Path(index_file).write_text(json.dumps(frame_ranges(a.dir)))
         load0 = os.getloadavg()
         rounds = []
-        for _ in range(a.repeat):
-            rounds.append({n: measure(n, a.dir, Path(work), index_file) for n in names})
+        for r in range(a.repeat):
+            rounds.append({n: measure(n, a.dir, Path(work), index_file) for n in rotated(names, r, a.repeat)})
             print(f"round {len(rounds)}: " + ", ".join(f"{n} {r.get('seconds', float('nan')):.1f} s"
                                                        for n, r in rounds[-1].items()), file=sys.stderr)
         load1 = os.getloadavg()

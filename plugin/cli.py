@@ -30,7 +30,7 @@ EXIT_TERMINATED = 143   # 128 + SIGTERM
 
 
 class Terminated(BaseException):
-    """SIGTERM arrived: unwinds like Ctrl-C (an open result store keeps its parts for --resume)."""
+    """SIGTERM arrived: unwinds like Ctrl-C (an open result store keeps its committed frames for --resume)."""
 
 
 def _raise_terminated(signum, frame) -> None:
