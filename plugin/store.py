@@ -70,7 +70,10 @@ and shares 0.004-0.2, contact points 0.3-0.6, energies and overlaps 0.83-0.89).
 A table without rows in its first frame is decided by dtype: integers gzip,
 reals none."""
 CHUNK_ROWS = 65536
-"""Rows per HDF5 chunk (512 KiB of float64 before compression)."""
+"""Rows per HDF5 chunk (512 KiB of float64 before compression), at most: a
+table whose first frame is smaller gets smaller chunks (:func:`chunk_rows`)."""
+MIN_CHUNK_ROWS = 1024
+"""Rows per chunk, at least (8 KiB of float64)."""
 LIBVER = ("v110", "v110")
 """HDF5 file-format bounds: the 1.10 format (which SWMR needs), readable by
 every HDF5 library since 1.10.0 (2016)."""
@@ -265,7 +268,7 @@ class ResultWriter:
                              file=self.path, fix=f"resume with --compression {header.get('compression')}, or delete "
                                                  f"{self.work_dir} to start over.")
         fresh = self._store.with_name(_STORE + ".new")
-        self._open(fresh, _schema_of(carry), header["filters"])  # the records keep the column order
+        self._open(fresh, _schema_of(carry), header["filters"], header["chunks"])  # the records keep the column order
         import h5py
 
         try:
@@ -325,15 +328,17 @@ class ResultWriter:
             self._pool = ThreadPoolExecutor(max_workers=os.cpu_count() or 1)
         return self._pool
 
-    def _open(self, path: Path, schema: Mapping[str, Mapping[str, str]], filters: Mapping[str, Mapping[str, str]]):
-        """Create the store at ``path`` with every table's datasets, and start SWMR writing."""
+    def _open(self, path: Path, schema: Mapping[str, Mapping[str, str]], filters: Mapping[str, Mapping[str, str]],
+              chunks: Mapping[str, int]):
+        """Create the store at ``path`` with every table's datasets (``chunks``:
+        rows per chunk of each table), and start SWMR writing."""
         import h5py
 
         # no chunk cache: every chunk is written whole, once, and not read back (with lzf, whose chunks
         # HDF5 filters itself, the cache held ~100 MB more at the peak on the medium benchmark run)
         self._h5 = h5py.File(path, "w", libver=LIBVER, rdcc_nbytes=0)
         self._sinks = {name: _TableSink(self._h5, name, dict(schema.get(name, {})), dict(filters.get(name, {})),
-                                        self._threads()) for name in TABLES}
+                                        chunks.get(name, CHUNK_ROWS), self._threads()) for name in TABLES}
         self._h5.swmr_mode = True
 
     def append(self, tables: Mapping[str, Mapping[str, np.ndarray]]) -> None:
@@ -355,7 +360,8 @@ class ResultWriter:
                                  fix="append one frame at a time.")
         schema = _schema_of(canon)
         if self._h5 is None:
-            self._open(self._store, schema, _choose_filters(canon, self.compression, self._threads()))
+            self._open(self._store, schema, _choose_filters(canon, self.compression, self._threads()),
+                       {name: chunk_rows(len(next(iter(table.values()), ()))) for name, table in canon.items()})
         for name, cols in schema.items():
             if cols != self._sinks[name].schema:
                 raise StoreError(
@@ -374,6 +380,7 @@ class ResultWriter:
         self._h5.flush()
         header = {"steps": self._steps, "rows": self._rows, "compression": self.compression,
                   "filters": {name: sink.filters for name, sink in self._sinks.items()},
+                  "chunks": {name: sink.chunk_rows for name, sink in self._sinks.items()},
                   "written": {name: sink.written for name, sink in self._sinks.items()}}
         _write_records(self.work_dir / _COMMIT, header, {name: sink.carry for name, sink in self._sinks.items()})
 
@@ -384,7 +391,7 @@ class ResultWriter:
         import h5py
 
         if self._h5 is None:  # no frame: a store with empty tables
-            self._open(self._store, {}, {})
+            self._open(self._store, {}, {}, {})
         for sink in self._sinks.values():
             sink.finish()
         self._release()
@@ -410,9 +417,10 @@ class ResultWriter:
 
         schema = {name: sink.schema for name, sink in self._sinks.items()}
         filters = {name: sink.filters for name, sink in self._sinks.items()}
+        chunks = {name: sink.chunk_rows for name, sink in self._sinks.items()}
         sorted_path = self._store.with_name("sorted.h5")
         with h5py.File(self._store, "r", libver=LIBVER) as src:
-            self._open(sorted_path, schema, filters)
+            self._open(sorted_path, schema, filters, chunks)
             for k in order:
                 for name, sink in self._sinks.items():
                     lo, hi = self._rows[name][k], self._rows[name][k + 1]
@@ -442,9 +450,10 @@ class _TableSink:
     (zero-padded, outside the dataset's shape). ``written``: rows in the file.
     """
 
-    def __init__(self, h5, name: str, schema: dict[str, str], filters: dict[str, str],
+    def __init__(self, h5, name: str, schema: dict[str, str], filters: dict[str, str], chunk_rows: int,
                  pool: ThreadPoolExecutor) -> None:
         self.name, self.schema, self.filters, self.pool = name, schema, filters, pool
+        self.chunk_rows = chunk_rows
         self.group = h5.create_group(name)
         self.group.attrs["columns"] = json.dumps(list(schema))
         self.group.attrs["units"] = json.dumps({c: UNITS.get(c, "") for c in schema})
@@ -456,7 +465,7 @@ class _TableSink:
         """The empty, resizable dataset of ``col`` with its chosen filter."""
         kind = self.filters[col]
         ds = self.group.create_dataset(
-            col, shape=(0,), maxshape=(None,), dtype=np.dtype(self.schema[col]), chunks=(CHUNK_ROWS,),
+            col, shape=(0,), maxshape=(None,), dtype=np.dtype(self.schema[col]), chunks=(self.chunk_rows,),
             compression=None if kind == "none" else kind,
             compression_opts=GZIP_LEVEL if kind == "gzip" else None, shuffle=kind != "none",
         )
@@ -470,7 +479,7 @@ class _TableSink:
             return 0
         n = len(next(iter(table.values())))
         for col in self.schema:
-            chunks, self.carry[col] = _whole_chunks(self.carry[col], table[col])
+            chunks, self.carry[col] = _whole_chunks(self.carry[col], table[col], self.chunk_rows)
             self._write(col, chunks)
         self.written = self.datasets[next(iter(self.schema))].shape[0]
         return n
@@ -480,10 +489,10 @@ class _TableSink:
         (whole chunks of ``group``, copied as stored) and its carried rows."""
         for col, ds in self.datasets.items():
             src = group[col]
-            if src.shape[0] < written or written % CHUNK_ROWS:
+            if src.shape[0] < written or written % self.chunk_rows:
                 raise ValueError(f"{self.name}/{col} holds {src.shape[0]} rows, the commit record {written}")
             ds.resize((written,))
-            for start in range(0, written, CHUNK_ROWS):
+            for start in range(0, written, self.chunk_rows):
                 mask, blob = src.id.read_direct_chunk((start,))
                 ds.id.write_direct_chunk((start,), blob, mask)
         self.carry.update(carry)
@@ -504,11 +513,12 @@ class _TableSink:
         ds.resize((start + sum(len(c) for c in chunks),))  # the rows, not the padding: it never shrinks
         if self.filters[col] == "lzf":  # h5py's own filter: HDF5 applies it to the chunk-aligned slices
             for k, c in enumerate(chunks):
-                ds[start + k * CHUNK_ROWS: start + k * CHUNK_ROWS + len(c)] = c
+                ds[start + k * self.chunk_rows: start + k * self.chunk_rows + len(c)] = c
             return
-        blobs = self.pool.map(_shuffle_deflate, chunks) if self.filters[col] == "gzip" else map(_padded, chunks)
+        padded = (_padded(c, self.chunk_rows) for c in chunks)
+        blobs = self.pool.map(_shuffle_deflate, padded) if self.filters[col] == "gzip" else padded
         for k, blob in enumerate(blobs):
-            ds.id.write_direct_chunk((start + k * CHUNK_ROWS,), blob)
+            ds.id.write_direct_chunk((start + k * self.chunk_rows,), blob)
 
 
 def _choose_filters(tables: Mapping[str, Table], compression: str,
@@ -525,20 +535,28 @@ def _choose_filters(tables: Mapping[str, Table], compression: str,
     return chosen
 
 
-def _whole_chunks(carry: np.ndarray, values: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
-    """Split ``carry`` + ``values`` into whole CHUNK_ROWS chunks (the first one
-    joins the carried rows, the others are views of ``values``) and the rows
-    left over (a copy, so that ``values`` can be released)."""
+def chunk_rows(first_rows: int) -> int:
+    """Rows per chunk of a table whose first frame has ``first_rows`` rows: the
+    power of two that holds them, within [MIN_CHUNK_ROWS, CHUNK_ROWS], so that
+    a small run is not stored as mostly padding (its last chunk is padded to
+    a whole chunk) and a large one in chunks of CHUNK_ROWS."""
+    return min(CHUNK_ROWS, max(MIN_CHUNK_ROWS, 1 << max(first_rows - 1, 0).bit_length()))
+
+
+def _whole_chunks(carry: np.ndarray, values: np.ndarray, size: int) -> tuple[list[np.ndarray], np.ndarray]:
+    """Split ``carry`` + ``values`` into whole chunks of ``size`` rows (the first
+    one joins the carried rows, the others are views of ``values``) and the
+    rows left over (a copy, so that ``values`` can be released)."""
     chunks = []
     if len(carry):
-        fill = CHUNK_ROWS - len(carry)
+        fill = size - len(carry)
         carry = np.concatenate([carry, values[:fill]])
-        if len(carry) < CHUNK_ROWS:
+        if len(carry) < size:
             return [], carry
         chunks.append(carry)
         values = values[fill:]
-    whole = len(values) // CHUNK_ROWS * CHUNK_ROWS
-    chunks.extend(values[k: k + CHUNK_ROWS] for k in range(0, whole, CHUNK_ROWS))
+    whole = len(values) // size * size
+    chunks.extend(values[k: k + size] for k in range(0, whole, size))
     return chunks, np.array(values[whole:])
 
 
@@ -553,11 +571,11 @@ def _choose_filter(first: np.ndarray) -> str:
     return "gzip" if deflated <= AUTO_MAX_RATIO * first.nbytes else "none"
 
 
-def _padded(values: np.ndarray) -> np.ndarray:
-    """A chunk's values, zero-padded to CHUNK_ROWS (the bytes HDF5 stores for a chunk)."""
-    if len(values) == CHUNK_ROWS:
+def _padded(values: np.ndarray, size: int) -> np.ndarray:
+    """A chunk's values, zero-padded to ``size`` rows (the bytes HDF5 stores for a chunk)."""
+    if len(values) == size:
         return np.ascontiguousarray(values)
-    return np.concatenate([values, np.zeros(CHUNK_ROWS - len(values), values.dtype)])
+    return np.concatenate([values, np.zeros(size - len(values), values.dtype)])
 
 
 def _shuffled(values: np.ndarray) -> bytes:
@@ -565,9 +583,9 @@ def _shuffled(values: np.ndarray) -> bytes:
     return np.ascontiguousarray(values).view(np.uint8).reshape(len(values), values.itemsize).T.tobytes()
 
 
-def _shuffle_deflate(values: np.ndarray) -> bytes:
-    """One chunk as HDF5's shuffle + deflate filters store it (zero-padded to CHUNK_ROWS)."""
-    return isal_zlib.compress(_shuffled(_padded(values)), GZIP_LEVEL)
+def _shuffle_deflate(chunk: np.ndarray) -> bytes:
+    """One (padded) chunk as HDF5's shuffle + deflate filters store it."""
+    return isal_zlib.compress(_shuffled(chunk), GZIP_LEVEL)
 
 
 def _write_records(path: Path, header: Mapping, tables: Mapping[str, Table]) -> None:

@@ -445,3 +445,19 @@ def test_auto_decides_once_from_the_first_chunk(tmp_path, monkeypatch):
     for col in ("u_n", "u_t"):
         np.testing.assert_array_equal(columns[f"contacts/{col}"][0],
                                       np.concatenate([f["contacts"][col] for f in frames]))
+
+
+def test_small_tables_get_small_chunks(tmp_path):
+    """A table's chunks hold its first frame's rows rounded up to a power of two
+    (1024 to CHUNK_ROWS), so that a small run is not stored as mostly padding."""
+    assert [store.chunk_rows(n) for n in (0, 1, 300, 1024, 1025, 40_000, 10**7)] == \
+        [1024, 1024, 1024, 1024, 2048, 65536, 65536]
+    frames_small = [synthetic_frame(s, n_particles=300, n_pairs=700) for s in range(3)]
+    with ResultWriter(tmp_path / "o.h5", PROVENANCE, walls_meta=WALLS_META, compression="none") as w:
+        for f in frames_small:
+            w.append(f)
+    with h5py.File(tmp_path / "o.h5") as h5:
+        assert h5["particles/u"].chunks == (1024,) and h5["frames/step"].chunks == (1024,)
+    raw = sum(np.asarray(v).nbytes for f in frames_small for t in f.values() for v in t.values())
+    assert os.path.getsize(tmp_path / "o.h5") < 3 * raw  # a 65 536-row chunk per column would be ~60x
+    assert_same(read_store(tmp_path / "o.h5"), Results.from_frames(frames_small, PROVENANCE, WALLS_META))
