@@ -336,18 +336,18 @@ def run_to_store(path: str | Path, out: str | Path, *, options: Options = Option
         hash_in_background(sources)
         # A new run computes its first frame while the inputs are hashed, then opens the store (its
         # provenance holds their sha256); a resumed run opens the store first, to skip its frames.
-        frames, first = None, None
-        if not resume:
-            frames = process_run(run, options, jobs=jobs, dask=dask, on_bad_frame=on_bad_frame,
-                                 progress=progress, report=report)
-            first = next(frames, None)
+        def frames_after(done: set[int]):
+            return process_run(run, options, jobs=jobs, dask=dask, on_bad_frame=on_bad_frame,
+                               skip_steps=done, progress=progress, report=report)
+
+        frames = None if resume else frames_after(set())
+        first = None if frames is None else next(frames, None)
         provenance = build_provenance(sources, scene=run.scene, options=asdict(options),
                                       run=run.describe() if hasattr(run, "describe") else {})
         with ResultWriter(out, provenance, resume=resume, walls_meta=walls_meta_from_scene(run.scene),
                           compression=compression) as writer:
             if frames is None:
-                frames = process_run(run, options, jobs=jobs, dask=dask, on_bad_frame=on_bad_frame,
-                                     skip_steps=writer.done_steps, progress=progress, report=report)
+                frames = frames_after(writer.done_steps)
             if first is not None:
                 writer.append(first)
                 first = None  # stored: free it before the next frame is computed
