@@ -100,12 +100,15 @@ from collections.abc import Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
-from typing import BinaryIO
+from typing import TYPE_CHECKING, BinaryIO
 
 import numpy as np
 
 from demsplit.errors import DemsplitError, InputFormatError, PrecisionError, TruncatedFileError
 from demsplit.frame import Box, describe_steps
+
+if TYPE_CHECKING:  # polars is imported where the fallback parse needs it
+    import polars as pl
 
 __all__ = ["open_dump", "DumpFile", "DumpFrame"]
 
