@@ -41,7 +41,7 @@ import json
 import os
 import shutil
 from collections.abc import Iterable, Mapping
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Executor
 from pathlib import Path
 
 import numpy as np
@@ -51,6 +51,7 @@ from .atomic import atomic_path, publish
 from .fingerprint import file_fingerprint  # noqa: F401  (part of this module's API)
 from .errors import StoreError
 from .scene import scene_to_dict
+from . import threads
 from .results import TABLES, UNITS, Results, Table, canonical_table, to_dataframe
 
 FORMAT = "demsplit-results"
@@ -201,7 +202,6 @@ class ResultWriter:
         self._sinks: dict[str, _TableSink] = {}
         self._steps: list[int] = []  # in append order
         self._rows: dict[str, list[int]] = {name: [0] for name in TABLES}  # row offsets, in append order
-        self._pool: ThreadPoolExecutor | None = None
         self._closed = False
         manifest = {"format": FORMAT, "format_version": FORMAT_VERSION, "work_version": WORK_VERSION,
                     "identity": resume_identity(self.provenance), "provenance": self.provenance,
@@ -313,21 +313,12 @@ class ResultWriter:
                 shutil.rmtree(self.work_dir, ignore_errors=True)
 
     def _release(self) -> None:
-        """Close the store file and stop the compression threads."""
+        """Close the store file."""
         if self._h5 is not None:
             self._h5.close()
             self._h5 = None
-        if self._pool is not None:
-            self._pool.shutdown()
-            self._pool = None
 
     # -- writing ---------------------------------------------------------
-    def _threads(self) -> ThreadPoolExecutor:
-        """The thread pool that compresses chunks (one thread per core)."""
-        if self._pool is None:
-            self._pool = ThreadPoolExecutor(max_workers=os.cpu_count() or 1)
-        return self._pool
-
     def _open(self, path: Path, schema: Mapping[str, Mapping[str, str]], filters: Mapping[str, Mapping[str, str]],
               chunks: Mapping[str, int]):
         """Create the store at ``path`` with every table's datasets (``chunks``:
@@ -338,7 +329,7 @@ class ResultWriter:
         # HDF5 filters itself, the cache held ~100 MB more at the peak on the medium benchmark run)
         self._h5 = h5py.File(path, "w", libver=LIBVER, rdcc_nbytes=0)
         self._sinks = {name: _TableSink(self._h5, name, dict(schema.get(name, {})), dict(filters.get(name, {})),
-                                        chunks.get(name, CHUNK_ROWS), self._threads()) for name in TABLES}
+                                        chunks.get(name, CHUNK_ROWS), threads.pool()) for name in TABLES}
         self._h5.swmr_mode = True
 
     def append(self, tables: Mapping[str, Mapping[str, np.ndarray]]) -> None:
@@ -360,7 +351,7 @@ class ResultWriter:
                                  fix="append one frame at a time.")
         schema = _schema_of(canon)
         if self._h5 is None:
-            self._open(self._store, schema, _choose_filters(canon, self.compression, self._threads()),
+            self._open(self._store, schema, _choose_filters(canon, self.compression, threads.pool()),
                        {name: chunk_rows(len(next(iter(table.values()), ()))) for name, table in canon.items()})
         for name, cols in schema.items():
             if cols != self._sinks[name].schema:
@@ -451,7 +442,7 @@ class _TableSink:
     """
 
     def __init__(self, h5, name: str, schema: dict[str, str], filters: dict[str, str], chunk_rows: int,
-                 pool: ThreadPoolExecutor) -> None:
+                 pool: Executor) -> None:
         self.name, self.schema, self.filters, self.pool = name, schema, filters, pool
         self.chunk_rows = chunk_rows
         self.group = h5.create_group(name)
@@ -522,7 +513,7 @@ class _TableSink:
 
 
 def _choose_filters(tables: Mapping[str, Table], compression: str,
-                    pool: ThreadPoolExecutor) -> dict[str, dict[str, str]]:
+                    pool: Executor) -> dict[str, dict[str, str]]:
     """Each column's filter: ``compression`` itself, or for ``auto`` the choice
     of :func:`_choose_filter` on the column's first chunk of rows (measured in
     the thread pool), by dtype when the table has no rows."""

@@ -93,11 +93,9 @@ from __future__ import annotations
 import bz2
 import gzip
 import lzma
-import os
 import struct
 from abc import ABC, abstractmethod
 from collections.abc import Iterator, Sequence
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, BinaryIO
@@ -106,6 +104,7 @@ import numpy as np
 
 from demsplit.errors import DemsplitError, InputFormatError, PrecisionError, TruncatedFileError
 from demsplit.frame import Box, describe_steps
+from demsplit.threads import THREADS, pool
 
 if TYPE_CHECKING:  # polars is imported where the fallback parse needs it
     import polars as pl
@@ -622,10 +621,8 @@ class _Columns:
         self.ints = self.ints[:0]
 
 
-_THREADS = os.cpu_count() or 1
 _SLICE_MIN = 1 << 20        # bytes below which a block is parsed by one thread
 _SLOW_MAX = 4096            # reals outside the compiled fast path converted by float() per slice, at most
-_pool: tuple[int, ThreadPoolExecutor] | None = None    # (process id, the parse threads of that process)
 
 
 def _parse_fast(a: np.ndarray, ncols: int, trailing: bool, cols: _Columns, row0: int,
@@ -642,8 +639,7 @@ def _parse_fast(a: np.ndarray, ncols: int, trailing: bool, cols: _Columns, row0:
     """
     from .fastparse import FALLBACK, SHAPE, count_newlines, next_newline, parse_rows
 
-    global _pool
-    n_slices = max(1, min(_THREADS, a.size // _SLICE_MIN))
+    n_slices = max(1, min(THREADS, a.size // _SLICE_MIN))
     cuts = [0] + [next_newline(a, a.size * k // n_slices) for k in range(1, n_slices)] + [a.size]
     rows = [count_newlines(a, lo, hi) for lo, hi in zip(cuts[:-2], cuts[1:-1])]
     rows.append(rows_left - sum(rows))
@@ -654,9 +650,7 @@ def _parse_fast(a: np.ndarray, ncols: int, trailing: bool, cols: _Columns, row0:
     if n_slices == 1:
         results = [parse_rows(*jobs[0])]
     else:
-        if _pool is None or _pool[0] != os.getpid():  # a forked worker process needs its own threads
-            _pool = (os.getpid(), ThreadPoolExecutor(max_workers=_THREADS, thread_name_prefix="demsplit-parse"))
-        results = [f.result() for f in [_pool[1].submit(parse_rows, *job) for job in jobs]]
+        results = list(pool().map(lambda job: parse_rows(*job), jobs))
     statuses = [status for status, _, _, _ in results]
     if SHAPE in statuses:
         return None, False
