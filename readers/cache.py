@@ -22,6 +22,16 @@ Layout (root attribute ``format`` = ``"demsplit-ingest-cache"``, ``version``)::
         contacts/<column>
         overlap_error        (absent when the frame has none)
 
+Reading: h5py serialises every HDF5 call on one lock, so reading a frame's
+columns through it copies them one at a time. A contiguous dataset's bytes
+lie at one offset in the file (``DatasetID.get_offset``), so :class:`CacheRun`
+reads each column with ``os.preadv`` straight into its array, the columns
+spread over :func:`demsplit.threads.pool` (``preadv`` releases the GIL). A
+dataset that is not contiguous, native-endian and unfiltered (a cache someone
+repacked with ``h5repack``, say) is read through h5py, into native byte order. On the benchmark's
+cache (3 frames, 1 GB of arrays) this takes the frames from 0.21-0.26 s to
+0.11 s on 2 cores.
+
 The file is written to a temporary name in the same directory and renamed
 when complete, so a cache is either whole or absent. A frame the reader
 refused (damaged dump frame) is stored as its error and raised again, with
@@ -31,6 +41,7 @@ the same class and message, by :meth:`CacheRun.frame`.
 from __future__ import annotations
 
 import json
+import os
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -42,6 +53,7 @@ from ..atomic import atomic_path
 from ..errors import DemsplitError, InputFormatError
 from ..frame import Box, Frame
 from ..scene import scene_from_dict, scene_to_dict
+from ..threads import pool
 
 FORMAT = "demsplit-ingest-cache"
 VERSION = 1
@@ -149,6 +161,7 @@ class CacheRun:
         self.sources = [self.path] + json.loads(attrs["sources"])
         self._describe = json.loads(attrs["describe"])
         self._frames = self._h5["frames"]
+        self._fd = os.open(path, os.O_RDONLY)
 
     def __len__(self) -> int:
         return len(self.steps)
@@ -168,11 +181,17 @@ class CacheRun:
             box = Box(np.array(a["box_lo"]), np.array(a["box_hi"]),
                       tuple(bool(p) for p in a["box_periodic"]), np.array(a["box_tilt"]))
         time = float(a["time"])
-        return Frame(step=int(a["step"]), particles=_table(g["particles"]), contacts=_table(g["contacts"]),
+        datasets = {(name, col): g[name][col] for name in ("particles", "contacts")
+                    for col in json.loads(g[name].attrs["order"])}  # in the order the reader built them
+        if "overlap_error" in g:
+            datasets["overlap_error", None] = g["overlap_error"]
+        arrays = self._read(datasets)
+        particles, contacts = ({col: v for (name, col), v in arrays.items() if name == table}
+                               for table in ("particles", "contacts"))
+        return Frame(step=int(a["step"]), particles=particles, contacts=contacts,
                      box=box, time=None if np.isnan(time) else time, source=tuple(json.loads(a["source"])),
                      overlap_source=str(a["overlap_source"]),
-                     overlap_error=g["overlap_error"][()] if "overlap_error" in g else None,
-                     notes=json.loads(a["notes"]))
+                     overlap_error=arrays.get(("overlap_error", None)), notes=json.loads(a["notes"]))
 
     def __iter__(self) -> Iterator[Frame]:
         for k in range(len(self)):
@@ -184,10 +203,34 @@ class CacheRun:
 
     def close(self) -> None:
         self._h5.close()
+        os.close(self._fd)
 
+    def _read(self, datasets: dict) -> dict:
+        """The arrays of ``datasets`` (same keys), read in parallel where the
+        layout allows (module docstring: Reading)."""
+        out, direct = {}, []
+        for key, d in datasets.items():
+            offset = d.id.get_offset()
+            out[key] = np.empty(d.shape, d.dtype.newbyteorder("="))
+            if offset is None or d.chunks is not None or d.external or not d.dtype.isnative:
+                if d.size:
+                    d.read_direct(out[key])  # HDF5 decodes (and converts to native byte order)
+            else:
+                direct.append((offset, out[key]))
+        for _ in pool().map(lambda job: self._pread(*job), direct):
+            pass
+        return out
 
-def _table(g: h5py.Group) -> dict[str, np.ndarray]:
-    return {col: g[col][()] for col in json.loads(g.attrs["order"])}
+    def _pread(self, offset: int, into: np.ndarray) -> None:
+        """Fill ``into`` with the file's bytes from ``offset`` on."""
+        view = memoryview(into).cast("B")
+        done = 0
+        while done < len(view):
+            got = os.preadv(self._fd, [view[done:]], offset + done)
+            if not got:
+                raise InputFormatError(f"the cache ends inside a dataset (byte {offset + done}).", file=self.path,
+                                       fix="the file was cut short: convert the run again.")
+            done += got
 
 
 def open_cache(path: str | Path, **options) -> CacheRun:

@@ -53,6 +53,48 @@ def test_cache_frames_equal_the_original_reader(run, samples, tmp_path):
     assert [f.step for f in cached] == [f.step for f in original] == list(cached.steps)
 
 
+def _repack(src, dst, **dataset_options) -> None:
+    """Copy the cache ``src`` to ``dst``, every non-empty dataset rewritten with
+    ``dataset_options`` (``byteorder``: stored with that byte order)."""
+    order = dataset_options.pop("byteorder", "=")
+    with h5py.File(src, "r") as a, h5py.File(dst, "w") as b:
+        b.attrs.update(a.attrs)
+
+        def copy(name, obj):
+            if isinstance(obj, h5py.Group):
+                b.require_group(name).attrs.update(obj.attrs)
+            elif obj.size:
+                b.create_dataset(name, data=obj[()].astype(obj.dtype.newbyteorder(order)), **dataset_options)
+            else:
+                b.create_dataset(name, data=obj[()])
+        a.visititems(copy)
+
+
+@pytest.mark.parametrize("layout", [{"chunks": True, "compression": "gzip"}, {"byteorder": ">"}])
+def test_a_repacked_cache_is_read_through_hdf5(layout, samples, tmp_path):
+    """Columns that are not contiguous, native-endian datasets (chunked and
+    compressed, or big-endian, as h5repack may leave them) are read by h5py."""
+    cache = convert_run(samples / "liggghts" / "packing" / "in.packing", tmp_path / "cache.h5")
+    repacked = tmp_path / "repacked.h5"
+    _repack(cache, repacked, **layout)
+    with h5py.File(cache, "r") as original, h5py.File(repacked, "r") as h5:
+        assert original["frames/000001/contacts/delta"].id.get_offset() is not None  # read by preadv
+        d = h5["frames/000001/contacts/delta"]
+        assert d.chunks is not None or not d.dtype.isnative
+    assert_same_frames(open_run(cache), open_run(repacked))
+
+
+def test_a_column_past_the_end_of_the_cache_is_refused_with_its_name(samples, tmp_path):
+    """A dataset whose bytes the file does not hold (a cache cut short) is an
+    error naming the file, not an array of garbage."""
+    cache = convert_run(samples / "liggghts" / "packing" / "in.packing", tmp_path / "cache.h5")
+    run = open_run(cache)
+    with pytest.raises(InputFormatError, match="ends inside a dataset") as err:
+        run._pread(cache.stat().st_size - 4, np.empty(1))
+    assert err.value.file == str(cache)
+    run.close()
+
+
 def test_cache_results_equal_text_results_and_work_in_workers(samples, tmp_path):
     script = samples / "liggghts" / "packing" / "in.packing"
     cache = tmp_path / "cache.h5"
