@@ -96,7 +96,7 @@ def main() -> None:
     if args.columns:
         column_table(frames[0])
     cases = [(c, S.AUTO_MAX_RATIO) for c in S.COMPRESSIONS] + [("auto", r) for r in args.auto_max_ratio]
-    print(f"| compression | size (MiB) | append (s) | close (s) | append + close (s) | read_store (s) |")
+    print("| compression | size (MiB) | append (s) | close (s) | append + close (s) | read_store (s) |")
     print("|---|---|---|---|---|---|")
     default = S.AUTO_MAX_RATIO
     for compression, ratio in cases:
