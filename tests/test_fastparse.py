@@ -158,6 +158,31 @@ def test_scan_chunk_finds_markers_and_newlines():
         assert newlines == text[:limit].count(b"\n")
 
 
+def index_of(path: Path) -> tuple:
+    return ld._scan(open_dump(path)._stream())
+
+
+@pytest.mark.parametrize("compressed", [False, True], ids=["mapped", "gzip-buffer"])
+@pytest.mark.parametrize("chunk", [1, 7, 333, 4096])
+def test_index_scan_is_the_same_for_any_window(tmp_path, monkeypatch, compressed, chunk):
+    """Windows of any size (headers cut between windows, a window smaller than a
+    header, markers right at a limit) give the index of one window holding it all,
+    for the memory-mapped plain file and for the buffered compressed stream."""
+    frames = [local_dump([f"{k} {k * 0.5:g}" for k in range(n)], 2, step=s)
+              for s, n in ((0, 3), (10, 0), (20, 11), (30, 1))]
+    text = ("".join(frames) + "ITEM: TIMESTEP\n40\nITEM: NUMB").encode()  # a cut header at the end
+    path = tmp_path / ("d.txt.gz" if compressed else "d.txt")
+    path.write_bytes(gzip.compress(text) if compressed else text)
+    markers = [k for k in range(len(text)) if text.startswith(b"ITEM: TIMESTEP", k)]
+    whole = index_of(path)
+    assert whole[0] == markers and whole[3:] == (len(text), text.count(b"\n"), text[-1:])
+    assert whole[2] == [text[:m].count(b"\n") for m in markers]
+    assert whole[1] == [text[m: n] for m, n in zip(markers, markers[1:] + [len(text)])]
+    monkeypatch.setattr(ld, "CHUNK", chunk)
+    monkeypatch.setattr(ld, "HEADER_MAX", 200)  # holds each header (at most 155 bytes here)
+    assert index_of(path) == whole
+
+
 # --------------------------------------------------------------------------- the reader
 
 def local_dump(rows: list[str], ncols: int, step: int = 1) -> str:
