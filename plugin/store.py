@@ -624,17 +624,17 @@ def _schema_of(tables: Mapping[str, Table]) -> dict[str, dict[str, str]]:
 def _read_records(path: Path) -> tuple[dict, dict[str, Table]]:
     """A record file's header and tables (see :func:`_write_records`), each column memory-mapped read-only."""
     try:
-        size = path.stat().st_size
-        with open(path, "rb") as f:
+        with open(path, "rb") as f:  # every column is mapped from this open file: a record renamed over
+            size = os.fstat(f.fileno()).st_size  # `path` meanwhile (a running writer's next commit) is not mixed in
             header = json.loads(np.load(f, allow_pickle=False).tobytes())
-            tables = {name: {col: _map_record(f, path, size) for col in cols} for name, cols in header.pop("columns")}
+            tables = {name: {col: _map_record(f, size) for col in cols} for name, cols in header.pop("columns")}
             return header, tables
     except (OSError, ValueError, EOFError, KeyError) as exc:
         raise StoreError(f"cannot read the commit record: {exc}.", file=path,
                          fix=f"delete {path.parent} and run again without resume.") from exc
 
 
-def _map_record(f, path: Path, size: int) -> np.ndarray:
+def _map_record(f, size: int) -> np.ndarray:
     """Memory-map the 1-D ``.npy`` record at ``f``'s position and move ``f`` past it."""
     version = np.lib.format.read_magic(f)
     read_header = {(1, 0): np.lib.format.read_array_header_1_0, (2, 0): np.lib.format.read_array_header_2_0}
@@ -645,8 +645,9 @@ def _map_record(f, path: Path, size: int) -> np.ndarray:
     end = offset + int(np.prod(shape)) * dtype.itemsize
     if end > size:
         raise ValueError(f"the file ends at byte {size}, inside a column that ends at byte {end}")
-    f.seek(end)
-    return np.memmap(path, dtype, "r", offset, shape) if end > offset else np.empty(shape, dtype)
+    column = np.memmap(f, dtype, "r", offset, shape) if end > offset else np.empty(shape, dtype)
+    f.seek(end)  # (np.memmap moves the file's position)
+    return column
 
 
 def read_store(path: str | Path, *, steps: Iterable[int] | None = None, every_frame_row: bool = False) -> Results:

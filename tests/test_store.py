@@ -461,3 +461,33 @@ def test_small_tables_get_small_chunks(tmp_path):
     raw = sum(np.asarray(v).nbytes for f in frames_small for t in f.values() for v in t.values())
     assert os.path.getsize(tmp_path / "o.h5") < 3 * raw  # a 65 536-row chunk per column would be ~60x
     assert_same(read_store(tmp_path / "o.h5"), Results.from_frames(frames_small, PROVENANCE, WALLS_META))
+
+
+def test_a_commit_record_replaced_while_it_is_read_is_read_whole(tmp_path):
+    """A reader (``committed_steps``, a resume) that opens the commit record
+    while the running writer renames its next one into place reads one record
+    or the other, never the header of one with the columns of the other."""
+    import threading
+
+    path = tmp_path / "commit.npys"
+    records = [({"steps": list(range(n))}, {"t": {"a": np.arange(n, dtype=np.float64), "b": np.arange(2 * n)}})
+               for n in (3, 3000)]
+    store._write_records(path, *records[0])
+    stop = threading.Event()
+
+    def writer():
+        k = 0
+        while not stop.is_set():
+            k += 1
+            store._write_records(path, *records[k % 2])
+
+    thread = threading.Thread(target=writer)
+    thread.start()
+    try:
+        for _ in range(400):
+            header, tables = store._read_records(path)
+            n = len(header["steps"])
+            assert tables["t"]["a"].tolist() == list(range(n)) and len(tables["t"]["b"]) == 2 * n
+    finally:
+        stop.set()
+        thread.join()
