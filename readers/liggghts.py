@@ -413,13 +413,11 @@ class LiggghtsRun:
         out["bound"] = self._delta_error(pf, names, hmax, gap)
         if all(c in col for c in ("shearx", "sheary", "shearz")):
             out.update(shearx=col["shearx"], sheary=col["sheary"], shearz=col["shearz"])
-        if dumped_cp:
-            cp = np.stack([col["cpx"], col["cpy"], col["cpz"]], axis=-1)
-        else:  # LIGGGHTS' own radius-weighted point, (x1 r2 + x2 r1)/(r1 + r2), from the join
-            cp = cp.T
+        # the dumped point, else LIGGGHTS' own radius-weighted point, (x1 r2 + x2 r1)/(r1 + r2), from the join
+        cpx, cpy, cpz = (col["cpx"], col["cpy"], col["cpz"]) if dumped_cp else cp
         if box.any_periodic:
-            cp = box.wrap(cp)
-        out.update(cpx=cp[:, 0], cpy=cp[:, 1], cpz=cp[:, 2])
+            cpx, cpy, cpz = box.wrap(np.stack([cpx, cpy, cpz], axis=-1)).T
+        out.update(cpx=cpx, cpy=cpy, cpz=cpz)
         return out
 
     def _mesh_walls(self, wf: DumpFrame, particles: Table, index: ParticleIndex, xyz: np.ndarray,
