@@ -710,13 +710,13 @@ def _windows(f: BinaryIO) -> Iterator[tuple[int, np.ndarray, int]]:
     A plain file's windows are memory maps of it, one per window (unmapped
     when the next is asked for, so the resident memory stays one or two
     windows): no copy (the scan of the 2.57 GB benchmark contact dump took
-    0.82-0.90 s with ``read()`` copying the file out of the page cache, 0.51-0.64 s
-    mapped, four alternating runs of each). A compressed stream is read into one
-    reused buffer of ``HEADER_MAX + CHUNK`` bytes, the last ``HEADER_MAX``
-    bytes of each window moving to the front for the next.
+    0.82-0.90 s with ``read()`` copying the file out of the page cache,
+    0.51-0.64 s mapped, four alternating runs of each). A compressed stream is
+    read into one reused buffer of ``HEADER_MAX + CHUNK`` bytes, the last
+    ``HEADER_MAX`` bytes of each window moving to the front for the next.
     """
-    if isinstance(f, (io.BufferedReader, io.FileIO)):
-        size = os.fstat(f.fileno()).st_size
+    # (an empty file cannot be mapped: it takes the buffered path, which reads nothing)
+    if isinstance(f, (io.BufferedReader, io.FileIO)) and (size := os.fstat(f.fileno()).st_size):
         for start in range(0, size, CHUNK):
             base = start - start % mmap.ALLOCATIONGRANULARITY  # a map starts on a page
             mapped = mmap.mmap(f.fileno(), min(start + CHUNK + HEADER_MAX, size) - base,
@@ -724,8 +724,7 @@ def _windows(f: BinaryIO) -> Iterator[tuple[int, np.ndarray, int]]:
             if hasattr(mapped, "madvise"):
                 mapped.madvise(mmap.MADV_SEQUENTIAL)
             yield start, np.frombuffer(mapped, dtype=np.uint8)[start - base:], min(CHUNK, size - start)
-        if size:
-            return
+        return
     buf = bytearray(HEADER_MAX + CHUNK)
     kept, limit, start = 0, 0, 0
     while True:
