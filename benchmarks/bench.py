@@ -217,7 +217,8 @@ def _kernel(script: Path, work: Path) -> dict:
     import numpy as np
 
     from demsplit.frame import ParticleIndex
-    from demsplit.partition import ContactBodies, contact_energies, partition, per_particle
+    from demsplit.physics.bodies import ContactBodies
+    from demsplit.physics.partition import contact_energies, partition, per_particle
     from demsplit.pipeline import Options, frame_tables
     from demsplit.readers import open_run
 

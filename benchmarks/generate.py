@@ -43,7 +43,8 @@ from pathlib import Path
 
 import numpy as np
 
-from demsplit.laws import effective_radius, effective_shear_modulus, hertz_force
+from demsplit.physics.elastic import hertz_force
+from demsplit.physics.moduli import effective_radius, effective_shear_modulus
 
 ATOM_COLUMNS = ("id", "type", "x", "y", "z", "vx", "vy", "vz", "fx", "fy", "fz",
                 "omegax", "omegay", "omegaz", "radius", "mass")

@@ -49,7 +49,7 @@ from pathlib import Path
 import numpy as np
 
 from demsplit.frame import ParticleIndex, take_rows
-from demsplit.partition import ContactLawEnergy, contact_energies, partition, per_particle
+from demsplit.physics.partition import ContactLawEnergy, contact_energies, partition, per_particle
 from demsplit.readers.lammps_dump import open_dump
 from demsplit.readers.liggghts import LiggghtsRun
 
@@ -84,7 +84,7 @@ def normal_force(run: LiggghtsRun) -> list[np.ndarray]:
 def compute(variant: str, contacts: dict, particles: dict, scene, split: str, fn: np.ndarray | None):
     """Per-contact split and per-particle sums of one frame under ``variant``."""
     if variant == "(2/5)|Fn| delta":
-        energies = ContactLawEnergy(0.4 * fn * np.maximum(contacts["delta"], 0.0), np.zeros(len(fn)))
+        energies = ContactLawEnergy(np.stack([0.4 * fn * np.maximum(contacts["delta"], 0.0), np.zeros(len(fn))]))
     else:
         energies = contact_energies(contacts, scene, particles)
     e = partition(contacts, scene, particles, split=split, energies=energies)

@@ -21,6 +21,7 @@ import sys
 import traceback
 
 from .errors import DemsplitError
+from .readers.liggghts_script import NORMAL, TANGENTIAL
 from .scene import Material
 
 EXIT_ERROR = 2
@@ -92,8 +93,8 @@ def _add_input(p: argparse.ArgumentParser) -> None:
                    help='keywords of the compute pair/gran/local behind --contacts, e.g. "pos id delta history"')
     n.add_argument("--wall-columns", metavar="KEYWORDS", help="keywords of the compute wall/gran/local behind --walls")
     n.add_argument("--wall-type", type=int, metavar="T", help="material type of the mesh walls")
-    n.add_argument("--model", choices=("hertz", "hooke"), help="pair_style gran model (default hertz)")
-    n.add_argument("--tangential", choices=("history", "no_history"), help="tangential model (default history)")
+    n.add_argument("--model", choices=tuple(NORMAL), help="pair_style gran model (default hertz)")
+    n.add_argument("--tangential", choices=TANGENTIAL, help="tangential model (default history)")
     n.add_argument("--characteristic-velocity", type=float, metavar="V", help="for model hooke (m/s)")
     n.add_argument("--boundary", metavar='"X Y Z"', help='boundary as in the script, e.g. "p p f" (default "f f f")')
     y = p.add_argument_group("YADE inputs")

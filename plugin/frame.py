@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import ContactError, InputFormatError
+from .physics.formulas import minimum_image_components
 
 Table = dict[str, np.ndarray]
 
@@ -68,26 +69,6 @@ def require_columns(table: Table, required: tuple[str, ...], what: str, *, file:
 def take_rows(table: Table, rows: np.ndarray) -> Table:
     """The rows ``rows`` (an index or boolean mask) of every column."""
     return {name: col[rows] for name, col in table.items()}
-
-
-def minimum_image_components(dx, dy, dz, lengths, tilt, periodic):
-    """Minimum image of difference vectors (dx, dy, dz) (m) in a box of edge
-    ``lengths``, tilt ``xy xz yz`` and ``periodic`` axes, applying the tilt in the
-    LAMMPS order (z, then y, then x). Formula on float64 arrays or scalars (the
-    LIGGGHTS join compiles it, :mod:`demsplit.kernels`)."""
-    if periodic[2]:
-        k = np.rint(dz / lengths[2])
-        dz = dz - k * lengths[2]
-        dy = dy - k * tilt[2]
-        dx = dx - k * tilt[1]
-    if periodic[1]:
-        k = np.rint(dy / lengths[1])
-        dy = dy - k * lengths[1]
-        dx = dx - k * tilt[0]
-    if periodic[0]:
-        k = np.rint(dx / lengths[0])
-        dx = dx - k * lengths[0]
-    return dx, dy, dz
 
 
 @dataclass

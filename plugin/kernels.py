@@ -1,4 +1,4 @@
-"""Compiled per-contact loops: the hot paths of :mod:`demsplit.partition` and the LIGGGHTS join.
+"""Compiled per-contact loops: the hot paths of :mod:`demsplit.physics.partition` and the LIGGGHTS join.
 
 Numpy evaluates an expression one operation at a time over whole arrays, so
 the per-contact work (gather both bodies, the law, the split, the contact
@@ -7,9 +7,10 @@ Here each stage is one loop over the contacts, compiled by numba
 (:func:`demsplit.jit.kernel`: cached, GIL released, numpy error model).
 
 No second copy of the physics: the loops call the formulas of
-:mod:`demsplit.laws` and :mod:`demsplit.partition` (``hertz_energy_formula``,
-``hertz_kt_formula``, ``spring_energy``, ``body_energies``,
-``contact_point_coordinate``, ...), compiled here from those very functions.
+:mod:`demsplit.physics.formulas` (``hertz_energy_formula``,
+``hertz_kt_formula``, ``spring_energy``, ``contact_point_coordinate``, ...),
+compiled here from those very functions. This module imports only those
+formulas and the compiled-function decorator: nothing above it.
 The public array API evaluates the same functions on arrays, so the two give
 the same IEEE operations in the same order; ``tests/test_kernels.py`` checks
 the compiled paths against the numpy formulation (bit for bit, except |v|^2,
@@ -22,6 +23,11 @@ Per-contact values come as ``(values, code)``: with a non-empty ``code``
 contact i has ``values[code[i]]`` (a small table per pair of material types,
 ``code = type1 * n_types + type2``); with an empty ``code``, ``values`` holds
 one value per contact, or a single value for all of them (length 1).
+
+Energies of the modes (:mod:`demsplit.physics.modes`) come as one array of
+shape (modes, contacts), row m the energy of mode m, and the shares as
+``(values, code)`` with one row of values per mode, or a single row that every
+mode shares. The loops add the modes of a contact in mode order.
 
 Outputs are allocated by numpy and filled by the loops (the public functions
 here are thin wrappers around the compiled ``_...`` loops): numpy asks the
@@ -40,20 +46,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import laws
-from .frame import minimum_image_components
-from .partition import body_energies, contact_point_coordinate
 from .jit import kernel
+from .physics import formulas
 
-_clamped_overlap = kernel(laws.clamped_overlap)
-_inverse_curvature_sum = kernel(laws.inverse_curvature_sum)
-_hertz_energy = kernel(laws.hertz_energy_formula)
-_hertz_kt = kernel(laws.hertz_kt_formula)
-_squared_norm = kernel(laws.squared_norm)
-_spring_energy = kernel(laws.spring_energy)
-_body_energies = kernel(body_energies)
-_contact_point_coordinate = kernel(contact_point_coordinate)
-_minimum_image = kernel(minimum_image_components)
+_clamped_overlap = kernel(formulas.clamped_overlap)
+_inverse_curvature_sum = kernel(formulas.inverse_curvature_sum)
+_hertz_energy = kernel(formulas.hertz_energy_formula)
+_hertz_kt = kernel(formulas.hertz_kt_formula)
+_squared_norm = kernel(formulas.squared_norm)
+_spring_energy = kernel(formulas.spring_energy)
+_contact_point_coordinate = kernel(formulas.contact_point_coordinate)
+_minimum_image = kernel(formulas.minimum_image_components)
 
 
 NO_CODE = np.empty(0, np.int64)
@@ -166,94 +169,115 @@ def _hertz_history_energies(delta, r1, r2, E_eff, G_eff, code, shearx, sheary, s
     return bad
 
 
-def split_contacts(sn_values, sn_code, st_values, st_code, u_n, u_t, delta, x1, y1, z1, nx, ny, nz, r1):
-    """Per contact: the shares s_n, s_t (from values and codes, module docstring),
-    u1, u2 (:func:`~demsplit.partition.body_energies`), depth1 = s_n delta and
-    the contact point x1 + (r1 - depth1) n, as an array of shape (3, n).
-    Returns (s_n, s_t, u1, u2, depth1, cp)."""
-    out = [np.empty(len(delta)) for _ in range(5)]
-    cp = np.empty((3, len(delta)))
-    _split_contacts(sn_values, sn_code, st_values, st_code, u_n, u_t, delta, x1, y1, z1, nx, ny, nz, r1, *out, cp)
-    return (*out, cp)
+def split_contacts(share_values, share_code, u, delta, x1, y1, z1, nx, ny, nz, r1):
+    """Per contact: the share of body 1 of every mode (``share_values`` of shape (modes or 1, K),
+    ``share_code``: module docstring), u1 = sum_m s_m u_m, u2 = sum_m (1 - s_m) u_m (``u``: shape
+    (modes, n), J), depth1 = s_0 delta (the normal mode's share) and the contact point
+    x1 + (r1 - depth1) n, shape (3, n). Returns (shares (modes, n), u1, u2, depth1, cp)."""
+    n = len(delta)
+    shares = np.empty((u.shape[0], n))
+    out = [np.empty(n) for _ in range(3)]
+    cp = np.empty((3, n))
+    _split_contacts(share_values, share_code, u, delta, x1, y1, z1, nx, ny, nz, r1, shares, *out, cp)
+    return (shares, *out, cp)
 
 
 @kernel
-def _split_contacts(sn_values, sn_code, st_values, st_code, u_n, u_t, delta, x1, y1, z1, nx, ny, nz, r1,
-                    s_n, s_t, u1, u2, depth1, cp):
+def _share(values, code, coded, m, i):
+    """Share of contact i in mode m (values row m, or row 0 when every mode shares one)."""
+    row = m if values.shape[0] > 1 else 0
+    return values[row, code[i]] if coded else values[row, i if values.shape[1] > 1 else 0]
+
+
+@kernel
+def _split_contacts(share_values, share_code, u, delta, x1, y1, z1, nx, ny, nz, r1, shares, u1, u2, depth1, cp):
     n = delta.shape[0]
-    n_coded, t_coded = sn_code.shape[0] > 0, st_code.shape[0] > 0
-    sn, st = _stride(sn_values), _stride(st_values)
+    modes = u.shape[0]
+    coded = share_code.shape[0] > 0
     for i in range(n):
-        a = sn_values[sn_code[i]] if n_coded else sn_values[i * sn]
-        b = st_values[st_code[i]] if t_coded else st_values[i * st]
-        s_n[i] = a
-        s_t[i] = b
-        u1[i], u2[i] = _body_energies(a, b, u_n[i], u_t[i])
+        a = _share(share_values, share_code, coded, 0, i)
+        shares[0, i] = a
+        b1 = a * u[0, i]
+        b2 = (1.0 - a) * u[0, i]
         d1 = a * delta[i]
+        for m in range(1, modes):
+            s = _share(share_values, share_code, coded, m, i)
+            shares[m, i] = s
+            b1 = b1 + s * u[m, i]
+            b2 = b2 + (1.0 - s) * u[m, i]
+        u1[i] = b1
+        u2[i] = b2
         depth1[i] = d1
         cp[0, i] = _contact_point_coordinate(x1[i], nx[i], r1[i], d1)
         cp[1, i] = _contact_point_coordinate(y1[i], ny[i], r1[i], d1)
         cp[2, i] = _contact_point_coordinate(z1[i], nz[i], r1[i], d1)
 
 
-def body_sums(rows1, rows2, s_n, s_t, u_n, u_t, n_particles, n_walls):
-    """Sums per particle and per wall (rows2 = -1 - wall) of the normal and tangential
-    energy each body stores (body 1: s u; body 2: u - s u) and of its contacts.
+def body_sums(rows1, rows2, shares, u, n_particles, n_walls):
+    """Sums per particle and per wall (rows2 = -1 - wall) of the energy of every mode each body
+    stores (body 1: s u; body 2: u - s u; ``shares`` and ``u`` of shape (modes, n)) and of its contacts.
 
     Body-1 and body-2 terms are summed separately, each in contact order, and added
     at the end: the order of ``np.bincount(rows1, w1) + np.bincount(rows2, w2)``,
     so the sums are those of the numpy formulation bit for bit.
-    Returns (particle u_n, u_t, n_contacts, wall u_n, u_t, n_contacts)."""
-    # one row per particle: body-1 u_n, u_t, body-2 u_n, u_t and the count, one cache line per visit
-    acc = np.zeros((n_particles, 5))
-    w_un, w_ut = np.zeros(n_walls), np.zeros(n_walls)
+    Returns (particle energies (modes, n_particles), n_contacts, wall energies (modes, n_walls), n_contacts)."""
+    modes = u.shape[0]
+    # one row per particle: body-1 sums of every mode, body-2 sums, the count: one cache line per visit
+    acc = np.zeros((n_particles, 2 * modes + 1))
+    walls = np.zeros((modes, n_walls))
     w_count = np.zeros(n_walls, np.int64)
-    _body_sums(rows1, rows2, s_n, s_t, u_n, u_t, acc, w_un, w_ut, w_count)
-    return acc[:, 0] + acc[:, 2], acc[:, 1] + acc[:, 3], acc[:, 4].astype(np.int64), w_un, w_ut, w_count
+    _body_sums(rows1, rows2, shares, u, acc, walls, w_count)
+    particles = np.ascontiguousarray((acc[:, :modes] + acc[:, modes:2 * modes]).T)
+    return particles, acc[:, 2 * modes].astype(np.int64), walls, w_count
 
 
 @kernel
-def _body_sums(rows1, rows2, s_n, s_t, u_n, u_t, acc, w_un, w_ut, w_count):
+def _body_sums(rows1, rows2, shares, u, acc, walls, w_count):
     n = rows1.shape[0]
-    sn, st = _stride(s_n), _stride(s_t)
+    modes = u.shape[0]
+    count = 2 * modes
     for i in range(n):
-        un1 = s_n[i * sn] * u_n[i]
-        ut1 = s_t[i * st] * u_t[i]
         r = rows1[i]
-        acc[r, 0] += un1
-        acc[r, 1] += ut1
-        acc[r, 4] += 1.0  # counts below 2^53 are exact in a double
         r2 = rows2[i]
+        for m in range(modes):
+            b1 = shares[m, i] * u[m, i]
+            acc[r, m] += b1
+            if r2 >= 0:
+                acc[r2, modes + m] += u[m, i] - b1
+            else:
+                walls[m, -1 - r2] += u[m, i] - b1
+        acc[r, count] += 1.0  # counts below 2^53 are exact in a double
         if r2 >= 0:
-            acc[r2, 2] += u_n[i] - un1
-            acc[r2, 3] += u_t[i] - ut1
-            acc[r2, 4] += 1.0
+            acc[r2, count] += 1.0
         else:
-            w = -1 - r2
-            w_un[w] += u_n[i] - un1
-            w_ut[w] += u_t[i] - ut1
-            w_count[w] += 1
+            w_count[-1 - r2] += 1
 
 
-def particle_sums(rows1, rows2, s_n, s_t, u_n, u_t, n_particles):
-    """Energy of every particle under shares s_n, s_t (per contact or one value):
-    u1 = s_n u_n + s_t u_t on body 1, u_n + u_t - u1 on body 2 of particle pairs
-    (rows2 >= 0); sums in the order of :func:`body_sums`."""
+def particle_sums(rows1, rows2, share_values, u, n_particles):
+    """Energy of every particle under one share per contact for every mode (``share_values`` of
+    shape (1, n) or (1, 1)): u1 = sum_m s u_m on body 1, sum_m u_m - u1 on body 2 of particle
+    pairs (rows2 >= 0); sums in the order of :func:`body_sums`."""
     acc = np.zeros((n_particles, 2))  # body-1 and body-2 sums of a particle side by side
-    _particle_sums(rows1, rows2, s_n, s_t, u_n, u_t, acc)
+    _particle_sums(rows1, rows2, share_values, u, acc)
     return acc[:, 0] + acc[:, 1]
 
 
 @kernel
-def _particle_sums(rows1, rows2, s_n, s_t, u_n, u_t, acc):
+def _particle_sums(rows1, rows2, share_values, u, acc):
     n = rows1.shape[0]
-    sn, st = _stride(s_n), _stride(s_t)
+    modes = u.shape[0]
+    per_contact = share_values.shape[1] > 1
     for i in range(n):
-        u1 = _body_energies(s_n[i * sn], s_t[i * st], u_n[i], u_t[i])[0]
-        acc[rows1[i], 0] += u1
+        s = share_values[0, i if per_contact else 0]
+        b1 = s * u[0, i]
+        total = u[0, i]
+        for m in range(1, modes):
+            b1 = b1 + s * u[m, i]
+            total = total + u[m, i]
+        acc[rows1[i], 0] += b1
         r2 = rows2[i]
         if r2 >= 0:
-            acc[r2, 1] += u_n[i] + u_t[i] - u1
+            acc[r2, 1] += total - b1
 
 
 @kernel

@@ -21,7 +21,9 @@ import numpy as np
 from .errors import DemsplitError
 from .fingerprint import hash_in_background
 from .frame import CONTACT_REQUIRED, PARTICLE_REQUIRED, Frame, ParticleIndex, require_columns
-from .partition import ContactBodies, contact_energies, partition, particle_energy, per_particle
+from .physics.bodies import ContactBodies
+from .physics.modes import MODE_COLUMNS
+from .physics.partition import contact_energies, partition, particle_energy, per_particle
 from .scene import Scene
 
 Tables = dict[str, dict[str, np.ndarray]]
@@ -32,7 +34,7 @@ class Options:
     """What to compute.
 
     tangential_rule : ``"mindlin"`` (default) or ``"paper"`` (see
-        :func:`demsplit.partition.tangential_share`).
+        :func:`demsplit.physics.shares.tangential_share`).
     compare : also compute the 50/50 (``u_equal``) and radius-weighted
         (``u_radius``) splits per particle, and YADE's series-spring split
         (``u_springs``) for its linear law.
@@ -45,8 +47,8 @@ class Options:
 
 
 def comparison_splits(scene: Scene) -> tuple[str, ...]:
-    """The naive splits reported beside the distribution law for this scene."""
-    return ("equal", "radius", "springs") if scene.model.normal == "linear" else ("equal", "radius")
+    """The naive splits reported beside the distribution law for this scene (the scene's law says which)."""
+    return scene.model.contact_law.comparison_splits
 
 
 def frame_tables(frame: Frame, scene: Scene, options: Options = Options()) -> Tables:
@@ -102,8 +104,7 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = Options()) -> Ta
         "n_particles": np.array([len(ptable["id"])], dtype=np.int64),
         "n_contacts": np.array([n], dtype=np.int64),
         "n_wall_contacts": np.array([int(np.count_nonzero(contacts["wall"] >= 0))], dtype=np.int64),
-        "u_n": np.array([main.u_n.sum()]),
-        "u_t": np.array([main.u_t.sum()]),
+        **{column: np.array([main.u[k].sum()]) for k, column in enumerate(MODE_COLUMNS)},
         "u_particles": np.array([ptable["u"].sum()]),
         "u_walls": np.array([wtable["u"].sum()]),
         "overlap_max_rel_error": np.array([np.nan if err is None or len(err) == 0 else float(np.max(err))]),

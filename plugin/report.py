@@ -60,7 +60,8 @@ def text_summary(results: Results, step: int | None = None) -> str:
     ]
     model = results.provenance.get("model")
     if model:
-        lines.append(f"  contact model: {model.get('normal')} / {model.get('tangential')}")
+        params = ", ".join(f"{k}={v!r}" for k, v in sorted(model.get("params", {}).items()))
+        lines.append(f"  contact law: {model.get('law')}" + (f" ({params})" if params else ""))
     if np.isfinite(fr.get("overlap_max_rel_error", np.nan)):
         lines.append(f"  overlaps recomputed from positions: max relative error {fr['overlap_max_rel_error']:.3g}")
     cols = ["type", "count", "total", "share_of_total", "mean", "p50", "p95", "top10_share", "gini"]

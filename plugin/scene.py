@@ -13,19 +13,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from .errors import MaterialError, UnsupportedModelError
-
-NORMAL_MODELS = ("hertz", "hooke", "linear", "power")
-"""Normal laws: ``hertz`` (LIGGGHTS model hertz, YADE Hertz-Mindlin),
-``hooke`` (LIGGGHTS model hooke, kn from characteristicVelocity),
-``linear`` (a spring whose stiffness the simulator stored per contact, YADE
-CundallStrack), ``power`` (F = k delta^n, params ``k``, ``n``)."""
-
-TANGENTIAL_MODELS = ("history", "incremental", "none")
-"""Tangential laws: ``history`` (LIGGGHTS tangential history: spring
-displacement ``shear`` and kt built by the normal model), ``incremental``
-(YADE: elastic shear force and its stiffness stored per contact), ``none``
-(no tangential elastic energy)."""
-
+from .physics import laws
 
 @dataclass(frozen=True)
 class Material:
@@ -53,29 +41,34 @@ class Material:
 
 @dataclass(frozen=True)
 class ContactModel:
-    """The contact law the run used.
+    """The contact law the run used: its registry key and its parameters.
 
-    ``params`` holds model constants: ``characteristic_velocity`` (m/s, hooke),
-    ``kt_to_kn`` (kt/kn for hooke; 1, or 2/7 with LIGGGHTS ``ktToKnUser on``),
-    ``k`` and ``n`` (power law).
+    ``law`` is a key of the law registry (:mod:`demsplit.physics.laws`), the
+    simulator's own name: ``liggghts:hertz``, ``liggghts:hooke``,
+    ``yade:Law2_ScGeom_MindlinPhys_Mindlin``, ... ``params`` are the law's
+    parameters (e.g. ``tangential``, ``characteristic_velocity`` (m/s)); the
+    defaults the law declares are filled in, so two models of the same law
+    compare equal whether a default was written or not. An unknown key or
+    parameter is an :class:`~demsplit.errors.UnsupportedModelError` that lists
+    what is supported.
     """
 
-    normal: str = "hertz"
-    tangential: str = "history"
+    law: str = laws.DEFAULT
     params: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        if self.normal not in NORMAL_MODELS:
-            raise UnsupportedModelError(
-                f"normal contact model {self.normal!r} is not supported (supported: {', '.join(NORMAL_MODELS)}).",
-                fix="use a run made with a supported model, or describe the model explicitly.",
-            )
-        if self.tangential not in TANGENTIAL_MODELS:
-            raise UnsupportedModelError(
-                f"tangential contact model {self.tangential!r} is not supported "
-                f"(supported: {', '.join(TANGENTIAL_MODELS)}).",
-                fix="use a run made with a supported model, or describe the model explicitly.",
-            )
+        contact_law = laws.make(self.law, self.params)
+        object.__setattr__(self, "params", dict(contact_law.params))
+        object.__setattr__(self, "_contact_law", contact_law)
+
+    @property
+    def contact_law(self) -> laws.ContactLaw:
+        """The law itself (:class:`demsplit.physics.laws.ContactLaw`), which computes the energies."""
+        return self._contact_law
+
+    def describe(self) -> str:
+        """One line: the law, its parameters and what it computes."""
+        return self.contact_law.describe()
 
 
 WALL_KINDS = ("plane", "cylinder", "mesh", "yade_wall", "facet", "box")

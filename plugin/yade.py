@@ -54,8 +54,8 @@ RECORD_TAIL = 6 + 8 + 1
 SHAPE_KINDS = {"Sphere": "sphere", "Wall": "wall", "Facet": "facet", "Box": "box", "Clump": "clump"}
 """YADE shape class -> the ``kind`` column of the bodies table (else ``other``)."""
 
-MINDLIN_LAW = "Law2_ScGeom_MindlinPhys_Mindlin"
-CUNDALL_LAW = "Law2_ScGeom_FrictPhys_CundallStrack"
+YADE_PREFIX = "yade:"
+"""A YADE law's registry key is this prefix + its Law2 functor's class name."""
 
 
 # --------------------------------------------------------------------------
@@ -106,18 +106,19 @@ def _engines(O) -> tuple[list[dict], dict]:
 
 
 def _law_energies(O) -> dict:
-    """The laws' own elastic energies (J), for validation: Mindlin's
-    ``normElastEnergy()`` and CundallStrack's ``elasticEnergy()``."""
+    """The laws' own elastic energies (J), for validation: each registered law's
+    ``simulator_energies`` (e.g. Mindlin's ``normElastEnergy()``)."""
+    from .physics import laws
+
     out = {}
     for e in O.engines:
         if type(e).__name__ != "InteractionLoop":
             continue
         for f in e.lawDispatcher.functors:
-            name = type(f).__name__
-            if name == MINDLIN_LAW:
-                out["mindlin_normElastEnergy"] = float(f.normElastEnergy())
-            elif name == CUNDALL_LAW:
-                out["cundallstrack_elasticEnergy"] = float(f.elasticEnergy())
+            key = YADE_PREFIX + type(f).__name__
+            if key in laws.supported():
+                for name, (method, _) in laws.law_class(key).simulator_energies.items():
+                    out[name] = float(getattr(f, method)())
     return out
 
 

@@ -141,7 +141,7 @@ def _describe_snapshots(path: Path) -> str:
         meta0 = run.meta(0)
         lines.append(f"  YADE {meta0.get('yade_version')}, {meta0.get('precision_name')}, "
                      f"periodic {meta0.get('periodic')}")
-        lines.append(f"  model:    {run.scene.model.normal} / {run.scene.model.tangential}")
+        lines.append(f"  model:    {run.scene.model.describe()}")
         lines.append("  materials: " + ", ".join(f"{t}: E={m.E:g} Pa nu={m.nu:g}"
                                                  for t, m in sorted(run.scene.materials.items())))
         lines.append(f"  walls:    {_walls(run.scene)}")
@@ -183,8 +183,7 @@ def _describe_script(path: Path) -> str:
     script = read_script(path)
     scene = script.scene
     lines = [f"{path}: LIGGGHTS input script",
-             f"  model:    {scene.model.normal} / {scene.model.tangential}"
-             + (f" {scene.model.params}" if scene.model.params else ""),
+             f"  model:    {scene.model.describe()}",
              f"  timestep: {script.timestep} s; periodic {list(script.periodic)}",
              "  materials: " + ", ".join(f"{t}: E={m.E:g} Pa nu={m.nu:g}" for t, m in sorted(scene.materials.items())),
              f"  walls:    {_walls(scene)}",
@@ -213,7 +212,7 @@ def check_run(input: str | Path, **reader_options) -> tuple[str, bool]:
         return _finish(out, [str(exc)])
     try:
         scene = run.scene
-        out.append(f"  model:     {scene.model.normal} / {scene.model.tangential}")
+        out.append(f"  model:     {scene.model.describe()}")
         out.append("  materials: " + ", ".join(f"{t}: E={m.E:g} Pa nu={m.nu:g}"
                                               for t, m in sorted(scene.materials.items())))
         out.append(f"  walls:     {_walls(scene)}")
@@ -339,27 +338,22 @@ def _check_materials(scene, types: set[int]) -> list[str]:
 
 
 def _what_run_computes(run, frame: Frame) -> list[str]:
-    """What ``demsplit run`` would compute from which columns (from the first readable frame)."""
-    from ..partition import contact_energies
+    """What ``demsplit run`` would compute from which columns (from the first readable frame):
+    each law's one-line description, and the modes the columns do not allow, with why."""
+    from ..physics.partition import contact_energies
 
     scene = run.scene
-    c = frame.contacts
     lines = ["run would compute:",
              f"  overlaps:    {frame.overlap_source or 'as the reader gives them'}"]
-    kno = "kno" in c or "kn" in c
-    lines.append(f"  normal:      {scene.model.normal} energy from "
-                 + ("the simulator's stored stiffness" if kno else "materials and radii"))
+    models = [scene.model]
+    models += [w.model for w in scene.walls if w.model is not None and w.model not in models]
+    lines += [f"  law:         {model.describe()}" for model in models]
     try:  # the partition's own verdict on what the columns allow (one frame)
-        skipped = contact_energies(c, scene, frame.particles).skipped
+        skipped = contact_energies(frame.contacts, scene, frame.particles).skipped
     except DemsplitError as exc:
         skipped = {"energies": str(exc)}
-    tangential = {"history": "1/2 kt |shear|^2 from the dumped shear history",
-                  "incremental": "1/2 |Ft|^2 / ks from the stored shear force and stiffness",
-                  "none": "none (the model has no tangential spring)"}[scene.model.tangential]
-    lines.append("  tangential:  " + (f"NOT available: {skipped['u_t']}" if "u_t" in skipped else tangential))
     for what, why in skipped.items():
-        if what != "u_t":
-            lines.append(f"  not computed: {what}: {why}")
+        lines.append(f"  not computed: {what}: {why}")
     for note in list(getattr(run, "notes", [])) + frame.notes:
         lines.append(f"  note: {note}")
     lines.append(f"  walls:       {len(scene.walls)} ({_walls(scene)})")

@@ -39,7 +39,7 @@ import numpy as np
 from ..errors import ContactError, InputFormatError, MaterialError, PrecisionError
 from ..frame import Box, Frame, ParticleIndex, Table
 from ..scene import Material, Scene
-from ..partition import contact_point
+from ..physics.shares import contact_point
 from ..walls import primitive_wall_contacts
 from .lammps_dump import HEADER_LINES, DumpFile, DumpFrame, open_dump
 from .liggghts_script import read_script
@@ -278,9 +278,9 @@ class LiggghtsRun:
 
     def _atom_columns(self) -> list[str]:
         cols = list(ATOM_COLUMNS)
-        if self.scene.model.normal == "hooke" or any(w.model is not None and w.model.normal == "hooke"
-                                                      for w in self.scene.walls):
-            cols.append("mass")
+        models = [self.scene.model] + [w.model for w in self.scene.walls if w.model is not None]
+        for model in models:  # what the laws need of the particles (mass for hooke)
+            cols += [c for c in model.contact_law.particle_columns if c not in cols]
         missing = [c for c in cols if c not in (self.atoms.columns or [])]
         if missing:
             raise InputFormatError(f"the atom dump lacks the columns {missing}.", file=self.atoms.path,
@@ -525,7 +525,7 @@ class LiggghtsRun:
             return None if d is None else {"path": str(d.path), "frames": len(d.steps)}
         return {"kind": "liggghts", "script": self.script_text or str(self.script.path), "atoms": info(self.atoms),
                 "pairs": info(self.pairs), "walls": info(self.walls),
-                "model": {"normal": self.scene.model.normal, "tangential": self.scene.model.tangential},
+                "model": {"law": self.scene.model.law, "params": self.scene.model.params},
                 "overlap_tolerance": self.overlap_tolerance, "force_positions": self.force_positions,
                 "notes": self.notes}
 

@@ -77,6 +77,9 @@ from typing import Iterator, Sequence
 import numpy as np
 
 from ..errors import DemsplitError, MaterialError, ScriptError, UnsupportedModelError
+from ..physics.laws import law_class
+from ..physics.laws._liggghts import SHEAR as SHEAR_COLUMNS
+from ..physics.laws._liggghts import TANGENTIAL_MODELS
 from ..scene import ContactModel, Material, Scene, Wall
 
 __all__ = ["read_script", "LiggghtsScript", "DumpSpec", "LocalLayout", "local_layout", "history_columns"]
@@ -121,8 +124,6 @@ _WALL_BLOCKS: dict[str, list[str]] = {
     "contactPoint": _xyz("unwritten_cp"),
 }
 
-SHEAR_COLUMNS = ("shearx", "sheary", "shearz")
-
 _ROLLING_HISTORY = {"off": 0, "cdt": 0, "epsd": 3, "epsd2": 3, "epsd3": 3}
 """History values each rolling-friction model adds (``r_torque{x,y,z}_old``)."""
 
@@ -135,8 +136,8 @@ def history_columns(kind: str, *, tangential: str = "history", rolling: str = "o
     """Names of the ``history`` block for a model: shear (tangential history),
     then rolling-friction torque, then the ``computeElasticPotential`` values.
 
-    ``tangential`` is demsplit's name (``history`` or ``none``); ``rolling`` the
-    LIGGGHTS ``rolling_friction`` model.
+    ``tangential`` is the LIGGGHTS ``tangential`` model (``history`` or
+    ``no_history``); ``rolling`` the LIGGGHTS ``rolling_friction`` model.
     """
     names = list(SHEAR_COLUMNS) if tangential == "history" else []
     if _ROLLING_HISTORY[rolling]:
@@ -547,8 +548,12 @@ def _substitute(text: str, variables: _Variables, where: _Where) -> str:
 # Contact models
 # --------------------------------------------------------------------------
 
-NORMAL = {"hertz": "hertz", "hooke": "hooke"}
-TANGENTIAL = {"history": "history", "no_history": "none"}
+NORMAL = {"hertz": "liggghts:hertz", "hooke": "liggghts:hooke"}
+"""LIGGGHTS ``model`` word -> contact-law registry key (:mod:`demsplit.physics.laws`)."""
+TANGENTIAL = TANGENTIAL_MODELS
+"""LIGGGHTS ``tangential`` words, passed to the law as its ``tangential`` parameter."""
+PROPERTY_PARAMETERS = {"characteristicVelocity": "characteristic_velocity"}
+"""``fix property/global`` scalar -> the law parameter it gives, where the law declares that parameter."""
 _MODEL_KEYS = ("model", "tangential", "cohesion", "rolling_friction", "surface")
 
 
@@ -557,7 +562,7 @@ class _ModelSpec:
     """A ``pair_style gran`` or ``fix wall/gran`` model, before the
     characteristic velocity is known."""
 
-    normal: str
+    law: str
     tangential: str
     rolling: str
     settings: dict[str, str]
@@ -596,11 +601,11 @@ def _parse_model(words: list[str], stop: tuple[str, ...], where: _Where,
         raise ScriptError(f"{what}: no 'model' keyword.", file=where.file, line=where.line,
                           fix="give 'model hertz' or 'model hooke'.")
     if normal not in NORMAL:
-        raise unsupported(f"normal model {normal!r} is not supported.", "model hertz, model hooke")
+        raise unsupported(f"normal model {normal!r} is not supported.", ", ".join(f"model {w}" for w in NORMAL))
     tangential = kinds.get("tangential", "no_history")  # LIGGGHTS' default (measured)
     if tangential not in TANGENTIAL:
         raise unsupported(f"tangential model {tangential!r} is not supported.",
-                          "tangential history, tangential no_history")
+                          ", ".join(f"tangential {w}" for w in TANGENTIAL))
     cohesion = kinds.get("cohesion", "off")
     if cohesion != "off":
         raise unsupported(f"cohesion model {cohesion!r} changes the elastic contact energy and "
@@ -616,7 +621,7 @@ def _parse_model(words: list[str], stop: tuple[str, ...], where: _Where,
     surface = kinds.get("surface", "default")
     if surface != "default":
         raise unsupported(f"surface model {surface!r} is not supported.", "surface default")
-    return _ModelSpec(NORMAL[normal], TANGENTIAL[tangential], rolling, settings, where), i
+    return _ModelSpec(NORMAL[normal], tangential, rolling, settings, where), i
 
 
 # --------------------------------------------------------------------------
@@ -990,16 +995,21 @@ class _Reader:
     # -- assembly ----------------------------------------------------------
 
     def model(self, spec: _ModelSpec) -> ContactModel:
-        params: dict = {}
-        if spec.normal == "hooke":
-            v = self.properties.get("characteristicVelocity")
-            if v is None:
-                raise self.error(ScriptError, "model hooke needs 'fix ID all property/global "
-                                 "characteristicVelocity scalar V', which the script does not define.",
-                                 spec.where, "add the characteristicVelocity the run used.")
-            params["characteristic_velocity"] = float(v[1])
+        """The contact model of a ``pair_style gran`` or ``fix wall/gran``: the law's key and the
+        parameters it declares, from the model's words and the script's global properties."""
+        declared = law_class(spec.law).parameters
+        params: dict = {"tangential": spec.tangential}
+        for prop, name in PROPERTY_PARAMETERS.items():
+            if name not in declared:
+                continue
+            value = self.properties.get(prop)
+            if value is None:
+                raise self.error(ScriptError, f"{spec.law} needs 'fix ID all property/global {prop} scalar V', "
+                                 "which the script does not define.", spec.where, f"add the {prop} the run used.")
+            params[name] = float(value[1])
+        if "kt_to_kn" in declared:
             params["kt_to_kn"] = 2.0 / 7.0 if spec.on("ktToKnUser") else 1.0
-        return ContactModel(normal=spec.normal, tangential=spec.tangential, params=params)
+        return ContactModel(spec.law, params)
 
     def materials(self) -> dict[int, Material]:
         found = {name: self.properties.get(name) for name in _MATERIAL_PROPERTIES}

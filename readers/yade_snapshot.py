@@ -28,14 +28,12 @@ from demsplit.errors import (ContactError, InputFormatError, MaterialError, Trun
                              UnsupportedModelError)
 from demsplit.frame import Box, Frame, Table
 from demsplit.scene import ContactModel, Material, Scene, Wall
-from demsplit.yade import (CUNDALL_LAW, FORMAT_NAME, FORMAT_VERSION, MINDLIN_LAW,
-                           RECORD_TAIL, npy_records, sniff_format)
+from demsplit.physics import laws as law_registry
+from demsplit.yade import FORMAT_NAME, FORMAT_VERSION, RECORD_TAIL, YADE_PREFIX, npy_records, sniff_format
 
-LAW_MODELS = {
-    MINDLIN_LAW: ContactModel(normal="hertz", tangential="incremental"),
-    CUNDALL_LAW: ContactModel(normal="linear", tangential="incremental"),
-}
-"""YADE Law2 functor -> the demsplit contact model."""
+LAW_MODELS = {key[len(YADE_PREFIX):]: ContactModel(key) for key in law_registry.supported()
+              if key.startswith(YADE_PREFIX)}
+"""YADE Law2 functor class -> the contact model (its law's registry key is ``yade:`` + the class)."""
 
 WALL_KINDS = {"wall": "yade_wall", "facet": "facet", "box": "box"}
 """Body kind in the snapshot -> :class:`demsplit.scene.Wall` kind."""
@@ -140,15 +138,18 @@ def _text(col: np.ndarray) -> np.ndarray:
     return col.astype(str)
 
 
-def scene_from_snapshot(meta: dict, bodies: Table, *, path: Path, step: int | None = None) -> Scene:
-    """Materials (keyed by YADE material id), contact model and walls of a snapshot."""
+def scene_from_snapshot(meta: dict, bodies: Table, *, path: Path, step: int | None = None,
+                        plane_as_plane: bool = False) -> Scene:
+    """Materials (keyed by YADE material id), contact model and walls of a snapshot. With
+    ``plane_as_plane`` a law that stores its normal stiffness rebuilds it from the materials
+    and the radii instead (its ``normal_stiffness`` parameter)."""
     laws = [f["class"] for f in meta["functors"]["law"]]
     known = [law for law in laws if law in LAW_MODELS]
     if len(known) != 1 or len(laws) != 1:
         raise UnsupportedModelError(
             f"the InteractionLoop has Law2 functor(s) {laws}; demsplit reads runs with exactly one of "
             f"{sorted(LAW_MODELS)}.", file=path, step=step,
-            fix="use Law2_ScGeom_MindlinPhys_Mindlin or Law2_ScGeom_FrictPhys_CundallStrack.")
+            fix=f"use {' or '.join(sorted(LAW_MODELS))}.")
     materials = {}
     for m in meta["materials"]:
         if "young" not in m or "poisson" not in m:
@@ -168,7 +169,10 @@ def scene_from_snapshot(meta: dict, bodies: Table, *, path: Path, step: int | No
         pos = (bodies["x"][row], bodies["y"][row], bodies["z"][row])[axis]
         walls.append(Wall(name=f"body {int(bodies['id'][row])} ({kind})", kind=kind,
                           type=int(bodies["material"][row]), axis=axis, position=float(pos)))
-    return Scene(materials=materials, model=LAW_MODELS[known[0]], walls=walls,
+    model = LAW_MODELS[known[0]]
+    if plane_as_plane and "normal_stiffness" in model.contact_law.parameters:
+        model = ContactModel(model.law, {**model.params, "normal_stiffness": "materials"})
+    return Scene(materials=materials, model=model, walls=walls,
                  source=f"{path} (YADE {meta.get('yade_version', '?')}, {meta.get('precision_name', '?')})")
 
 
@@ -347,7 +351,8 @@ class YadeSnapshotRun:
             raise InputFormatError(
                 f"snapshot format version {meta['format_version']} is newer than this reader ({FORMAT_VERSION}).",
                 file=self.path, fix="update demsplit.")
-        self.scene = scene_from_snapshot(meta, tables["bodies"], path=self.path, step=int(meta["iter"]))
+        self.scene = scene_from_snapshot(meta, tables["bodies"], path=self.path, step=int(meta["iter"]),
+                                         plane_as_plane=plane_as_plane)
         kinds = _text(tables["bodies"]["kind"])
         wall_ids = tables["bodies"]["id"][np.isin(kinds, list(WALL_KINDS))]
         self._walls = {int(b): k for k, b in enumerate(wall_ids)}

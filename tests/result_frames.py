@@ -83,6 +83,6 @@ PROVENANCE = {
     "inputs": [{"path": "/data/run.dump", "size": 123, "sha256": "ab" * 32}],
     "options": {"tangential_rule": "mindlin", "split": "material"},
     "scene": {"materials": {"1": {"E": 1e7, "nu": 0.3}, "2": {"E": 5e7, "nu": 0.25}}},
-    "model": {"normal": "hertz", "tangential": "history", "params": {}},
+    "model": {"law": "liggghts:hertz", "params": {"tangential": "history"}},
     "demsplit_version": "test",
 }

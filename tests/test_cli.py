@@ -87,10 +87,10 @@ def test_a_bug_is_an_internal_error_exit_3(monkeypatch, capsys):
                                      "c_cpgl[1]           17"]),
     (PACKING / "pairs.txt", ["kind:     local (label CONTACTS)"]),
     (PACKING / "atoms.bin", ["binary", "frames:   3", "col16"]),
-    (SAMPLES / "yade" / "mindlin_box.h5", ["snapshot file", "snapshots: 3", "hertz / incremental",
+    (SAMPLES / "yade" / "mindlin_box.h5", ["snapshot file", "snapshots: 3", "yade:Law2_ScGeom_MindlinPhys_Mindlin",
                                           "Law2_ScGeom_MindlinPhys_Mindlin", "24000"]),
-    (SAMPLES / "yade" / "cundall_periodic.npys", ["snapshot file", "linear / incremental", "periodic True"]),
-    (PACKING / "in.packing", ["LIGGGHTS input script", "hertz / history", "1: E=1e+08 Pa nu=0.25",
+    (SAMPLES / "yade" / "cundall_periodic.npys", ["snapshot file", "yade:Law2_ScGeom_FrictPhys_CundallStrack", "periodic True"]),
+    (PACKING / "in.packing", ["LIGGGHTS input script", "liggghts:hertz (tangential='history')", "1: E=1e+08 Pa nu=0.25",
                               "wpost (cylinder, type 3)", "dpair17", "full precision"]),
 ])
 def test_info_on_each_kind_of_file(path, words):
@@ -119,7 +119,8 @@ def test_check_ok(run_dir):
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert "OK: no problem found" in proc.stdout
     assert "overlaps:    pairs: dumped delta" in proc.stdout
-    assert "tangential:  1/2 kt |shear|^2" in proc.stdout
+    assert "law:         liggghts:hertz (tangential='history'): Hertz u_n" in proc.stdout
+    assert "not computed: u_t" not in proc.stdout
     assert "primitive-wall contacts is not computed" in proc.stdout
 
 

@@ -46,7 +46,7 @@ def hooke_run(tmp_path_factory, request):
 
 def test_hooke_energy_is_half_kn_delta_squared_with_liggghts_kn(hooke_run):
     run = open_run(hooke_run)
-    assert run.scene.model.normal == "hooke" and run.scene.model.params["characteristic_velocity"] == V
+    assert run.scene.model.law == "liggghts:hooke" and run.scene.model.params["characteristic_velocity"] == V
     frame = run.frame(0)
     res = demsplit.analyze(hooke_run)
     c = res.contacts
@@ -76,8 +76,10 @@ def test_hertz_kt_reproduces_liggghts_tangential_force():
     cap of sliding contacts, so most contacts agree to well under 1 %; a kt off
     by any constant factor (the paper's (1-2nu)/G instead of (2-nu)/G in G*,
     say) would be off by tens of percent everywhere."""
-    from demsplit import laws
-    from demsplit.partition import ContactBodies
+    from demsplit.physics.bodies import ContactBodies
+    from demsplit.physics.elastic import overlap
+    from demsplit.physics.formulas import hertz_kt_formula
+    from demsplit.physics.moduli import effective_radius, effective_shear_modulus
 
     run = open_run(SAMPLES / "liggghts" / "packing" / "in.packing")
     frame = run.frame(0)
@@ -87,9 +89,9 @@ def test_hertz_kt_reproduces_liggghts_tangential_force():
     names = run._pair_names
     ft = np.stack([f.columns[names[k]] for k in ("ftx", "fty", "ftz")], -1)
     bodies = ContactBodies.build(c, run.scene, frame.particles)
-    R = laws.effective_radius(c["r1"][pair], c["r2"][pair])
-    G = laws.effective_shear_modulus(bodies.E1[pair], bodies.nu1[pair], bodies.E2[pair], bodies.nu2[pair])
-    kt = laws.liggghts_hertz_kt(c["delta"][pair], R, G)
+    R = effective_radius(c["r1"][pair], c["r2"][pair])
+    G = effective_shear_modulus(bodies.E1[pair], bodies.nu1[pair], bodies.E2[pair], bodies.nu2[pair])
+    kt = hertz_kt_formula(overlap(c["delta"][pair]), R, G)
     shear = np.stack([c[k][pair] for k in ("shearx", "sheary", "shearz")], -1)
     rel = np.linalg.norm(-kt[:, None] * shear - ft, axis=1) / np.linalg.norm(ft, axis=1)
     assert len(rel) > 500

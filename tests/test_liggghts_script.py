@@ -103,8 +103,8 @@ def test_materials_model_coefficients_gravity(tmp_path):
         run 100
     """)
     assert s.scene.materials[1].E == 5e6 and s.scene.materials[2].nu == 0.3
-    assert s.scene.model.normal == "hooke" and s.scene.model.tangential == "history"
-    assert s.scene.model.params == {"characteristic_velocity": 2.5, "kt_to_kn": 2 / 7}
+    assert s.scene.model.law == "liggghts:hooke"
+    assert s.scene.model.params == {"tangential": "history", "characteristic_velocity": 2.5, "kt_to_kn": 2 / 7}
     np.testing.assert_array_equal(s.coefficients["coefficientFriction"], [[0.5, 0.6], [0.6, 0.7]])
     assert s.coefficients["characteristicVelocity"] == 2.5
     np.testing.assert_allclose(s.gravity, [0, 9.81 * 0.6, -9.81 * 0.8])
@@ -114,7 +114,7 @@ def test_materials_model_coefficients_gravity(tmp_path):
 
 def test_hertz_no_history_is_the_default_tangential(tmp_path):
     s = script(tmp_path, "pair_style gran model hertz\n")
-    assert s.scene.model.tangential == "none" and s.scene.model.params == {}
+    assert s.scene.model.law == "liggghts:hertz" and s.scene.model.params == {"tangential": "no_history"}
 
 
 def test_walls_primitive_and_mesh(tmp_path):
@@ -128,7 +128,7 @@ def test_walls_primitive_and_mesh(tmp_path):
     floor, drum, lid = s.scene.walls
     assert (floor.kind, floor.axis, floor.position, floor.type, floor.model) == ("plane", 2, -0.01, 2, None)
     assert (drum.kind, drum.axis, drum.radius, drum.center) == ("cylinder", 1, 0.05, (0.1, 0.2))
-    assert drum.model.normal == "hooke" and drum.model.tangential == "none"
+    assert drum.model.law == "liggghts:hooke" and drum.model.params["tangential"] == "no_history"
     assert lid.kind == "mesh" and lid.file == str(tmp_path / "lid.stl")
     assert lid.transforms == (("scale", (0.001,)), ("move", (0.0, 0.0, 0.1)),
                               ("rotate", (1.0, 0.0, 0.0, 90.0)), ("scale", (2.0,)))

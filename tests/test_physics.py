@@ -11,7 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import demsplit as ds
-from demsplit.partition import ContactBodies
+from demsplit.physics.bodies import ContactBodies
 
 GPa = 1e9
 mm = 1e-3

@@ -20,7 +20,7 @@ def results(simulator_point: bool = True) -> Results:
 def test_text_summary_shows_the_last_frame_per_type():
     res = results()
     text = text_summary(res)
-    assert "frame at timestep 200" in text and "hertz / history" in text
+    assert "frame at timestep 200" in text and "contact law: liggghts:hertz (tangential='history')" in text
     per_type = res.per_type().query("step == 200").set_index("type")
     for t, row in per_type.iterrows():
         line = next(l for l in text.splitlines() if re.match(rf"\s*{t}\s+{int(row['count'])}\s", l))

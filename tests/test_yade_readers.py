@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from demsplit.errors import DemsplitError, InputFormatError, PrecisionError, TruncatedFileError
-from demsplit.partition import partition
+from demsplit.physics.partition import partition
 from demsplit.readers.yade_export import overlap_error_bound, read_export_text, read_vtk, read_vtk_frame
 from demsplit.readers.yade_snapshot import _open_store, open_yade_snapshot
 from demsplit.yade import write_snapshot
@@ -58,7 +58,7 @@ def test_both_formats_give_the_same_frames():
 
 def test_scene_of_the_mindlin_sample():
     scene = open_yade_snapshot(YADE / "mindlin_box.h5").scene
-    assert (scene.model.normal, scene.model.tangential) == ("hertz", "incremental")
+    assert scene.model.law == "yade:Law2_ScGeom_MindlinPhys_Mindlin"
     assert scene.materials[0].E == 2e7 and scene.materials[0].nu == 0.3
     assert scene.materials[1].E == 1e8 and scene.materials[1].nu == 0.2
     assert [w.kind for w in scene.walls] == ["yade_wall"] * 4 + ["facet"] * 2 + ["box"]

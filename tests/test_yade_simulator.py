@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from demsplit.frame import ParticleIndex
-from demsplit.partition import partition, per_particle
+from demsplit.physics.partition import partition, per_particle
 from demsplit.readers.yade_snapshot import open_yade_snapshot
 
 from conftest import require_program

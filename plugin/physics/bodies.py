@@ -1,0 +1,222 @@
+"""The two bodies of every contact: their material types and elastic constants, per contact.
+
+:class:`ContactBodies` knows, for every contact of a frame, which material
+each side is made of, without a per-contact lookup where it can avoid one: a
+single-material scene has scalars, a multi-material scene codes every
+contact by its pair of types (``type1 * n_types + type2``) and evaluates
+moduli and shares once per pair present. :class:`LawRows` is the view of
+these contacts that a contact law gets (:class:`demsplit.physics.laws.ContactRows`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ..errors import ContactError, InputFormatError
+from ..frame import ParticleIndex, Table
+from ..scene import Scene
+from .moduli import reduced_mass
+
+class ContactBodies:
+    """Material types and elastic constants of both sides of every contact.
+
+    In a single-material scene ``E1 nu1 E2 nu2`` are scalars and no per-contact
+    lookup is made. Built from a multi-material scene, the per-contact constants
+    ``E1 nu1 E2 nu2`` are gathered from the scene's tables on first use (the
+    partition itself works from the types, once per pair of types).
+    """
+
+    def __init__(self, type1: np.ndarray | None, type2: np.ndarray | None, E1: np.ndarray | float | None,
+                 nu1: np.ndarray | float | None, E2: np.ndarray | float | None, nu2: np.ndarray | float | None,
+                 single_material: bool, scene: Scene | None = None, *, pairs: tuple | None = None) -> None:
+        self._types = (type1, type2)
+        self._constants = (E1, nu1, E2, nu2)
+        self.single_material = single_material
+        self.scene = scene
+        self._pairs = pairs  # (code of every contact, codes present), see _pair_codes
+
+    @classmethod
+    def build(cls, contacts: Table, scene: Scene, particles: Table | None = None,
+              index: ParticleIndex | None = None) -> "ContactBodies":
+        if scene.single_material:
+            m = next(iter(scene.materials.values()))
+            return cls(None, None, m.E, m.nu, m.E, m.nu, True)
+        type1, type2, pairs = _contact_pairs(contacts, scene, particles, index)
+        bodies = cls(type1, type2, None, None, None, None, False, scene, pairs=pairs)
+        code, pairs = bodies._pair_codes()
+        n_types = len(scene.material_tables()[0])
+        # every type present has a material (checked once per pair of types present)
+        scene.lookup(pairs // n_types, what="particle")
+        scene.lookup(pairs % n_types, what="particle or wall")
+        return bodies
+
+    def _constant(self, k: int) -> np.ndarray | float:
+        if self._constants[k] is None:
+            E, nu = self.scene.material_tables()
+            self._constants = (E.take(self.type1), nu.take(self.type1), E.take(self.type2), nu.take(self.type2))
+        return self._constants[k]
+
+    def _type(self, k: int) -> np.ndarray | None:
+        if self._types[k] is None and self._pairs is not None:
+            self._types = _types_of_codes(self._pairs[0], self.scene)
+        return self._types[k]
+
+    type1 = property(lambda self: self._type(0), doc="material type of body 1 (None: single material)")
+    type2 = property(lambda self: self._type(1), doc="material type of body 2 (None: single material)")
+    E1 = property(lambda self: self._constant(0), doc="Young's modulus of body 1 (Pa)")
+    nu1 = property(lambda self: self._constant(1), doc="Poisson's ratio of body 1")
+    E2 = property(lambda self: self._constant(2), doc="Young's modulus of body 2 (Pa)")
+    nu2 = property(lambda self: self._constant(3), doc="Poisson's ratio of body 2")
+
+    def _pair_codes(self) -> tuple[np.ndarray, np.ndarray]:
+        """Code type1 * n_types + type2 of every contact, and the codes present."""
+        if self._pairs is None:
+            n_types = len(self.scene.material_tables()[0])
+            inside = (self.type1 >= 0) & (self.type1 < n_types) & (self.type2 >= 0) & (self.type2 < n_types)
+            if not inside.all():  # a type beyond the table: the lookup's error names it
+                self.scene.lookup(self.type1, what="particle")
+                self.scene.lookup(self.type2, what="particle or wall")
+            code = self.type1 * n_types + self.type2
+            present = np.zeros(n_types * n_types, dtype=bool)
+            present[code] = True
+            self._pairs = (code, np.flatnonzero(present))
+        return self._pairs
+
+    def rigid_pairs(self) -> np.ndarray:
+        """Contacts between two rigid bodies (E1 = E2 = inf): a boolean array, or a
+        boolean scalar when every contact has the same two bodies' materials."""
+        if self.single_material or self.scene is None:
+            return np.isinf(self.E1) & np.isinf(self.E2)
+        code, pairs = self._pair_codes()
+        E = self.scene.material_tables()[0]
+        n_types = len(E)
+        rigid = np.isinf(E[pairs // n_types]) & np.isinf(E[pairs % n_types])
+        if not rigid.any():
+            return np.False_
+        return np.isin(code, pairs[rigid])
+
+    def per_pair(self, f) -> np.ndarray | float:
+        """``f(E1, nu1, E2, nu2)`` for every contact, evaluated once per pair of
+        material types present and gathered (a few types, millions of contacts)."""
+        values, code = self.pair_values(f)
+        return values.take(code) if len(code) else f(self.E1, self.nu1, self.E2, self.nu2)
+
+    def pair_values(self, f) -> tuple[np.ndarray, np.ndarray]:
+        """``f(E1, nu1, E2, nu2)`` for the compiled loops, as ``(values, code)`` (see
+        :mod:`demsplit.kernels`): ``values`` per pair of types present and the pair
+        code of every contact, or (no code) the values per contact or one for all."""
+        from ..kernels import NO_CODE
+
+        if self.single_material or self.scene is None:
+            return np.atleast_1d(np.asarray(f(self.E1, self.nu1, self.E2, self.nu2), dtype=np.float64)), NO_CODE
+        E, nu = self.scene.material_tables()
+        n_types = len(E)
+        code, pairs = self._pair_codes()
+        t1, t2 = pairs // n_types, pairs % n_types
+        table = np.zeros(n_types * n_types)
+        table[pairs] = f(E[t1], nu[t1], E[t2], nu[t2])
+        return table, code
+
+
+def contact_types(contacts: Table, scene: Scene, particles: Table | None = None,
+                  index: ParticleIndex | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Material type of body 1 and body 2 of each contact.
+
+    Taken from the ``type1``/``type2`` columns when the reader set them,
+    otherwise from the particles table (by id) and the wall list.
+    """
+    type1, type2, pairs = _contact_pairs(contacts, scene, particles, index)
+    return (type1, type2) if type1 is not None else _types_of_codes(pairs[0], scene)
+
+
+def _types_of_codes(code: np.ndarray, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+    """(type1, type2) of pair codes type1 * n_types + type2."""
+    n_types = len(scene.material_tables()[0])
+    code = code.astype(np.int64)
+    return code // n_types, code % n_types
+
+
+def _code_dtype(n_types: int) -> type:
+    """Smallest integer type for the codes 0..n_types^2 - 1 (less to read per contact)."""
+    return np.int8 if n_types**2 <= 127 else np.int16 if n_types**2 <= 32767 else np.int64
+
+
+def _contact_pairs(contacts: Table, scene: Scene, particles: Table | None,
+                   index: ParticleIndex | None) -> tuple[np.ndarray | None, np.ndarray | None, tuple | None]:
+    """The bodies' material types as ``(type1, type2, None)`` when the contacts carry
+    them, else ``(None, None, (pair code of every contact, codes present))``."""
+    if "type1" in contacts and "type2" in contacts:
+        return contacts["type1"].astype(np.int64), contacts["type2"].astype(np.int64), None
+    if particles is None:
+        raise InputFormatError("contacts carry no material types and no particles table was given.",
+                               fix="pass the frame's particles so types can be looked up by id.")
+    from ..kernels import contact_types as gather_types  # compiled: see the module docstring
+
+    index = index or ParticleIndex(particles["id"])
+    wall = contacts["wall"]
+    rows1, rows2 = index.contact_rows(contacts["id1"], contacts["id2"], wall)
+    wall_types = scene.wall_types()
+    n_types = len(scene.material_tables()[0])
+    ptype = np.asarray(particles["type"])
+    code = np.empty(len(rows1), dtype=_code_dtype(n_types))
+    present, bad_wall, bad_type = gather_types(rows1, rows2, ptype, wall_types, n_types, code)
+    if bad_wall >= 0:
+        raise ContactError(f"a wall contact names wall {int(wall.max())} but the scene has "
+                           f"{len(wall_types)} wall(s).",
+                           fix="describe every wall of the run in the scene (input script).")
+    if bad_type >= 0:  # a type outside the material table: the lookup's error lists them
+        scene.lookup(ptype[rows1], what="particle")
+        pair = rows2 >= 0
+        scene.lookup(ptype[rows2[pair]], what="particle")
+        scene.lookup(wall_types[-1 - rows2[~pair]], what="wall")
+    return None, None, (code, np.flatnonzero(present))
+
+
+class LawRows:
+    """The contacts ``rows`` (a slice or an index array) of a frame, as a contact law sees them
+    (:class:`demsplit.physics.laws.ContactRows`): float64 columns of those rows, moduli per pair of
+    types, reduced masses. ``law`` (its key) names the law in the errors of missing columns."""
+
+    def __init__(self, contacts: Table, rows: slice | np.ndarray, bodies: ContactBodies, law: str,
+                 particles: Table | None = None, index: ParticleIndex | None = None) -> None:
+        self.contacts, self.rows, self.bodies, self.law = contacts, rows, bodies, law
+        self.particles, self.index = particles, index
+        self.delta = self.column("delta")
+        self.r1 = self.column("r1")
+        self.r2 = self.column("r2")
+
+    def has(self, *names: str) -> bool:
+        return all(c in self.contacts for c in names)
+
+    def column(self, name: str) -> np.ndarray:
+        if name not in self.contacts:
+            raise InputFormatError(
+                f"the contact law {self.law} needs the contact column {name!r}, which the input does not have.",
+                fix="dump it (see the reader's documentation for the column) or describe the model explicitly.")
+        return np.asarray(self.contacts[name], dtype=np.float64)[self.rows]
+
+    def per_pair(self, rule) -> np.ndarray | float:
+        values = self.bodies.per_pair(rule)
+        return values if np.ndim(values) == 0 else values[self.rows]
+
+    def pair_values(self, rule) -> tuple[np.ndarray, np.ndarray]:
+        values, code = self.bodies.pair_values(rule)
+        if len(code):
+            return values, code[self.rows]
+        return (values[self.rows] if len(values) > 1 else values), code
+
+    def reduced_mass(self) -> np.ndarray:
+        c, rows = self.contacts, self.rows
+        if "m1" in c and "m2" in c:
+            return reduced_mass(c["m1"][rows], c["m2"][rows])
+        if self.particles is None or "mass" not in self.particles:
+            raise InputFormatError(f"the contact law {self.law} needs particle masses, which the atom dump "
+                                   "does not have.", fix="add 'mass' to the dump custom columns.")
+        index = self.index or ParticleIndex(self.particles["id"])
+        mass = np.asarray(self.particles["mass"], dtype=np.float64)
+        m1 = mass[index.rows(c["id1"][rows])]
+        m2 = np.full_like(m1, np.inf)
+        pair = c["wall"][rows] < 0
+        m2[pair] = mass[index.rows(c["id2"][rows][pair])]
+        return reduced_mass(m1, m2)

@@ -1,0 +1,263 @@
+"""The partition: every contact's elastic energy by its own law, split between its two bodies, summed per body.
+
+:func:`contact_energies` groups the contacts by the law that acts on them
+(the scene's law, or a wall's own law) and asks each law for the energy of
+every mode it has (:mod:`demsplit.physics.laws`); :func:`partition` gives each
+body its share of every mode by that mode's rule
+(:mod:`demsplit.physics.modes`) and places the contact point;
+:func:`per_particle` sums per particle and per wall. Energies are arrays of
+shape (modes, contacts), row m the mode ``MODES[m]``.
+
+    u1 = sum_m s_m u_m,  u2 = sum_m (1 - s_m) u_m,  depth1 = s_n delta,  x_c = x1 + (r1 - depth1) n.
+
+The per-contact work runs in compiled loops (:mod:`demsplit.kernels`, imported
+when first needed, so ``import demsplit`` needs no numba); per-body sums add
+each body's contributions in contact order, body-1 terms then body-2 terms.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ..errors import ContactError
+from ..frame import ParticleIndex, Table, table_length
+from ..scene import ContactModel, Scene
+from .bodies import ContactBodies, LawRows
+from .modes import MODE_COLUMNS, MODES
+from .shares import SPLITS, radius_share, springs_share
+
+_SHARE_COLUMNS = tuple(m.share_column for m in MODES)
+
+
+class _ByMode:
+    """Attribute access to the rows of ``u`` (and ``shares``) by mode column: ``x.u_n``, ``x.share_t1``."""
+
+    u: np.ndarray
+
+    def __getattr__(self, name: str) -> np.ndarray:
+        if name in MODE_COLUMNS:
+            return self.u[MODE_COLUMNS.index(name)]
+        if name in _SHARE_COLUMNS and "shares" in self.__dict__:
+            return self.__dict__["shares"][_SHARE_COLUMNS.index(name)]
+        raise AttributeError(f"{type(self).__name__!r} has no attribute {name!r}")
+
+
+@dataclass
+class ContactLawEnergy(_ByMode):
+    """Elastic energy of every mode of every contact under the run's own law(s) (J), shape (modes, n),
+    and the modes that could not be computed, with why (``u_n``, ``u_t``: the rows by mode)."""
+
+    u: np.ndarray
+    skipped: dict[str, str] = field(default_factory=dict)
+
+
+@dataclass
+class ContactEnergy(_ByMode):
+    """Per-contact results of :func:`partition`.
+
+    ``u`` (J) and ``shares`` (fraction to body 1): shape (modes, n), also as
+    ``u_n u_t`` and ``share_n1 share_t1``; ``u1``, ``u2`` (J): energy of each
+    body; ``depth1`` (m): approach of body 1; ``cp`` (m, shape (n, 3), stored by
+    coordinate: ``cp[:, 0]`` is contiguous): contact point; ``separated``:
+    contacts with delta < 0 (zero energy, kept and flagged); ``skipped``:
+    quantities not computed and why.
+    """
+
+    u: np.ndarray
+    shares: np.ndarray
+    u1: np.ndarray
+    u2: np.ndarray
+    depth1: np.ndarray
+    cp: np.ndarray
+    separated: np.ndarray
+    split: str = "material"
+    skipped: dict[str, str] = field(default_factory=dict)
+
+    def table(self) -> Table:
+        """The per-contact columns as a table: every mode's energy and share, ``u1 u2 depth1 cpx cpy cpz``."""
+        out = {m.column: self.u[k] for k, m in enumerate(MODES)}
+        out.update({m.share_column: self.shares[k] for k, m in enumerate(MODES)})
+        out.update(u1=self.u1, u2=self.u2, depth1=self.depth1, cpx=self.cp[:, 0], cpy=self.cp[:, 1],
+                   cpz=self.cp[:, 2])
+        return out
+
+
+def law_groups(contacts: Table, scene: Scene) -> list[tuple[ContactModel, slice | np.ndarray]]:
+    """Rows of the contacts each law acts on: the scene's law, or a wall's own law where it differs
+    (LIGGGHTS ``fix wall/gran`` with another model)."""
+    wall = contacts["wall"]
+    groups: list[tuple[ContactModel, np.ndarray]] = []
+    default = np.ones(len(wall), dtype=bool)
+    for i, w in enumerate(scene.walls):
+        if w.model is None or w.model == scene.model:
+            continue
+        mask = wall == i
+        default &= ~mask
+        for model, other in groups:
+            if model == w.model:
+                other |= mask
+                break
+        else:
+            groups.append((w.model, mask))
+    groups.append((scene.model, default))
+    if len(groups) == 1:  # one law for every contact: a slice, so that x[rows] is a view, not a copy
+        return [(scene.model, slice(None))] if len(wall) else []
+    return [(m, np.flatnonzero(mask)) for m, mask in groups if mask.any()]
+
+
+def contact_energies(contacts: Table, scene: Scene, particles: Table | None = None,
+                     bodies: ContactBodies | None = None, index: ParticleIndex | None = None, *,
+                     compiled: bool = True) -> ContactLawEnergy:
+    """Elastic energy of every mode of every contact with the run's own law(s) (J), shape (modes, n).
+
+    Each law computes the modes it has from the columns it declares
+    (:mod:`demsplit.physics.laws`); a mode a law does not have, or cannot
+    compute from the columns given, is 0 and named in ``skipped`` with the
+    reason. Damping and friction work are never counted.
+    """
+    n = table_length(contacts)
+    bodies = bodies or ContactBodies.build(contacts, scene, particles, index)
+    u = np.zeros((len(MODES), n))
+    skipped: dict[str, str] = {}
+    for model, rows in law_groups(contacts, scene):
+        law = model.contact_law
+        result = law.energies(LawRows(contacts, rows, bodies, law.key, particles, index), compiled=compiled)
+        for k, column in enumerate(MODE_COLUMNS):
+            if column in result.modes:
+                u[k, rows] = result.modes[column]
+            elif column in result.skipped:
+                skipped[column] = result.skipped[column]
+            else:
+                skipped.setdefault(column, f"the contact law {law.key} has no {MODES[k].name} energy (0)")
+    return ContactLawEnergy(u, skipped)
+
+
+def _per_contact(x: ArrayLike) -> np.ndarray:
+    """Per-contact values for a compiled loop as one row: the array itself, or its one value
+    (length 1) when it is a constant broadcast to every contact."""
+    x = np.asarray(x, dtype=np.float64)
+    if x.ndim == 1 and len(x) and x.strides[0] == 0:
+        x = x[:1]
+    return np.ascontiguousarray(np.atleast_1d(x))[None, :]
+
+
+def comparison_shares(contacts: Table, bodies: ContactBodies, split: str) -> np.ndarray:
+    """Share of body 1 under a comparison split, the same for every mode (shape (1, n) or (1, 1)):
+    ``equal`` 1/2, ``radius`` r1/(r1 + r2), ``springs`` the series springs k_i = E_i r_i (see
+    :data:`~demsplit.physics.shares.SPLITS`)."""
+    if split == "equal":
+        return np.full((1, 1), 0.5)
+    if split == "radius":
+        return _per_contact(radius_share(contacts["r1"], contacts["r2"]))
+    if split == "springs":
+        n = table_length(contacts)
+        return _per_contact(np.broadcast_to(springs_share(bodies.E1, contacts["r1"], bodies.E2, contacts["r2"]),
+                                            (n,)))
+    raise ValueError(f"unknown split {split!r}; use one of {SPLITS}")
+
+
+def _material_shares(bodies: ContactBodies, n: int, tangential_rule: str) -> tuple[np.ndarray, np.ndarray]:
+    """Shares of body 1 of every mode under the material law, as ``(values, code)`` for the loops:
+    one value per pair of types present (coded) in a multi-material scene, 1/2 in a single-material one."""
+    from ..kernels import NO_CODE
+
+    if bodies.single_material:
+        return np.full((1, 1), 0.5), NO_CODE
+    rows = [bodies.pair_values(mode.rule(tangential_rule)) for mode in MODES]
+    code = rows[0][1]
+    if len(code):
+        return np.stack([values for values, _ in rows]), code
+    return np.concatenate([_per_contact(np.broadcast_to(values, (n,)) if len(values) == 1 else values)
+                           for values, _ in rows]), NO_CODE
+
+
+def partition(contacts: Table, scene: Scene, particles: Table | None = None, *,
+              split: str = "material", tangential_rule: str = "mindlin",
+              energies: ContactLawEnergy | None = None, bodies: ContactBodies | None = None,
+              index: ParticleIndex | None = None) -> ContactEnergy:
+    """Split every contact's elastic energy between its two bodies and place the contact point.
+
+    u1 = sum_m s_m u_m,  u2 = sum_m (1 - s_m) u_m,  depth1 = s_n delta,  x_c = x1 + (r1 - depth1) n,
+
+    with s_m the share of body 1 of mode m under ``split`` (the material law:
+    each mode's own rule; the comparison splits: one share for every mode).
+    ``energies`` and ``bodies`` may be passed in to reuse them across splits.
+    """
+    if index is None and particles is not None and not scene.single_material:
+        index = ParticleIndex(particles["id"])
+    bodies = bodies or ContactBodies.build(contacts, scene, particles, index)
+    n = table_length(contacts)
+    rigid_pair = np.broadcast_to(bodies.rigid_pairs(), (n,))
+    if rigid_pair.any():
+        i = int(np.flatnonzero(rigid_pair)[0])
+        raise ContactError(
+            f"{int(np.count_nonzero(rigid_pair))} contact(s) between two rigid bodies, e.g. "
+            f"id1={int(contacts['id1'][i])}, id2={int(contacts['id2'][i])}, wall={int(contacts['wall'][i])}: "
+            "neither body can store elastic energy.",
+            fix="give one of the two materials a finite Young's modulus.",
+        )
+    energies = energies or contact_energies(contacts, scene, particles, bodies, index)
+    from ..kernels import NO_CODE, split_contacts  # compiled: see the module docstring
+
+    if split == "material":
+        values, code = _material_shares(bodies, n, tangential_rule)
+    else:
+        values, code = comparison_shares(contacts, bodies, split), NO_CODE
+    delta = np.asarray(contacts["delta"], dtype=np.float64)
+    shares, u1, u2, depth1, cp = split_contacts(
+        values, code, energies.u, delta,
+        *(np.asarray(contacts[c], dtype=np.float64) for c in ("x1", "y1", "z1", "nx", "ny", "nz", "r1")))
+    return ContactEnergy(energies.u, shares, u1, u2, depth1, cp.T, delta < 0, split, dict(energies.skipped))
+
+
+def per_particle(contacts: Table, energy: ContactEnergy, particles: Table, n_walls: int = 0,
+                 index: ParticleIndex | None = None) -> tuple[Table, Table]:
+    """Sum each body's energy over its contacts (one compiled pass, :func:`demsplit.kernels.body_sums`).
+
+    Returns ``(particle_table, wall_table)``: per particle ``id type radius u``,
+    the energy of every mode (J) and ``n_contacts``, in the particles' row
+    order; per wall ``wall u``, every mode, ``n_contacts``. ``u`` is the sum of
+    the modes. Conservation: sum of particle u + sum of wall u = sum over
+    contacts of every mode, to rounding.
+    """
+    from ..kernels import body_sums, max_wall  # compiled: see the module docstring
+
+    index = index or ParticleIndex(particles["id"])
+    wall = contacts["wall"]
+    rows1, rows2 = index.contact_rows(contacts["id1"], contacts["id2"], wall)
+    n_walls = max(n_walls, int(max_wall(rows2)) + 1)
+    pu, n_contacts, wu, w_contacts = body_sums(rows1, rows2, energy.shares, energy.u, table_length(particles),
+                                               n_walls)
+    ptable = {
+        "id": np.asarray(particles["id"], dtype=np.int64),
+        "type": np.asarray(particles["type"], dtype=np.int32),
+        "radius": np.asarray(particles["radius"], dtype=np.float64),
+        "u": _total(pu), **dict(zip(MODE_COLUMNS, pu)), "n_contacts": n_contacts,
+    }
+    wtable = {"wall": np.arange(n_walls, dtype=np.int64), "u": _total(wu), **dict(zip(MODE_COLUMNS, wu)),
+              "n_contacts": w_contacts}
+    return ptable, wtable
+
+
+def _total(u: np.ndarray) -> np.ndarray:
+    """Sum of the modes (rows of ``u``), added in mode order."""
+    total = u[0]
+    for row in u[1:]:
+        total = total + row
+    return total
+
+
+def particle_energy(contacts: Table, energies: ContactLawEnergy, bodies: ContactBodies, particles: Table, *,
+                    split: str, index: ParticleIndex | None = None) -> np.ndarray:
+    """Energy of every particle (J, particles' row order) under a comparison ``split``: the
+    ``u`` column of :func:`per_particle` without the per-contact table."""
+    from ..kernels import particle_sums  # compiled: see the module docstring
+
+    index = index or ParticleIndex(particles["id"])
+    wall = contacts["wall"]
+    rows1, rows2 = index.contact_rows(contacts["id1"], contacts["id2"], wall)
+    return particle_sums(rows1, rows2, comparison_shares(contacts, bodies, split), energies.u,
+                         table_length(particles))
