@@ -287,10 +287,17 @@ class LiggghtsRun:
                                    fix="add them to the 'dump ... custom' line.")
         return cols
 
-    @staticmethod
-    def _wanted(names: dict[str, str]) -> list[str]:
-        keep = ("id1", "id2", "mesh_index", "delta", "shearx", "sheary", "shearz", "cpx", "cpy", "cpz",
-                "wall_cpx", "wall_cpy", "wall_cpz")
+    def _law_columns(self) -> list[str]:
+        """Contact columns the scene's laws read (the tangential history, ...), in their order."""
+        columns: list[str] = []
+        for model in [self.scene.model] + [w.model for w in self.scene.walls if w.model is not None]:
+            columns += [c for c in model.contact_law.needs() if c not in columns]
+        return columns
+
+    def _wanted(self, names: dict[str, str]) -> list[str]:
+        """Dump tokens of the contact columns the join needs and the laws read."""
+        keep = ["id1", "id2", "mesh_index", "delta", "cpx", "cpy", "cpz", "wall_cpx", "wall_cpy", "wall_cpz"]
+        keep += [c for c in self._law_columns() if c not in keep]
         return [names[c] for c in keep if c in names]
 
     def _local_at(self, dump: DumpFile, step: int, names: dict[str, str]) -> DumpFrame:
@@ -372,8 +379,9 @@ class LiggghtsRun:
                 np.stack([primitive[c] for c in ("x1", "y1", "z1")], -1),
                 np.stack([primitive[c] for c in ("nx", "ny", "nz")], -1),
                 primitive["r1"], primitive["delta"], 1.0).T
-            if "shearx" in parts[0]:
-                for c in ("shearx", "sheary", "shearz"):
+            history = [c for c in self._law_columns() if c in parts[0]]
+            if history:
+                for c in history:
                     primitive[c] = np.zeros(len(primitive["delta"]))
                 notes.append("tangential energy of primitive-wall contacts is not computed (0): "
                               "LIGGGHTS does not dump their shear history")
@@ -411,8 +419,7 @@ class LiggghtsRun:
         out: Table = {"id1": id1, "id2": id2, "wall": wall, "delta": col["delta"] if "delta" in col else gap,
                       "nx": nx, "ny": ny, "nz": nz, "x1": x1, "y1": y1, "z1": z1, "r1": r1, "r2": r2}
         out["bound"] = self._delta_error(pf, names, hmax, gap)
-        if all(c in col for c in ("shearx", "sheary", "shearz")):
-            out.update(shearx=col["shearx"], sheary=col["sheary"], shearz=col["shearz"])
+        out.update({c: col[c] for c in self._law_columns() if c in col})
         # the dumped point, else LIGGGHTS' own radius-weighted point, (x1 r2 + x2 r1)/(r1 + r2), from the join
         cpx, cpy, cpz = (col["cpx"], col["cpy"], col["cpz"]) if dumped_cp else cp
         if box.any_periodic:
@@ -452,8 +459,7 @@ class LiggghtsRun:
         wall_digits = min((wf.digits.get(names[c]) or 17) for c in ("wall_cpx", "wall_cpy", "wall_cpz"))
         h_wall = np.max(printed_step(on_wall, wall_digits), axis=1)
         out["bound"] = self._delta_error(wf, names, np.maximum(h[rows], h_wall), r - dist)
-        if all(c in col for c in ("shearx", "sheary", "shearz")):
-            out.update(shearx=col["shearx"], sheary=col["sheary"], shearz=col["shearz"])
+        out.update({c: col[c] for c in self._law_columns() if c in col})
         out.update(cpx=on_wall[:, 0], cpy=on_wall[:, 1], cpz=on_wall[:, 2])
         return out
 
