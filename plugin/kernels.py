@@ -32,11 +32,8 @@ mode shares. The loops add the modes of a contact in mode order.
 Outputs are allocated by numpy and filled by the loops (the public functions
 here are thin wrappers around the compiled ``_...`` loops): numpy asks the
 kernel for transparent huge pages on large arrays, numba's allocator does not,
-and the 4 KiB page faults of fresh numba arrays dominate a loop: a numba loop
-writing 9 columns of 2e6 values into arrays it allocated took 63 ms, and the
-join (:func:`pair_geometry`, 2e6 contacts) went from 94 ms to 36 ms when numpy
-allocated its outputs (measured with ``time.perf_counter`` around the calls
-on frame 0 of the 2e6-contact benchmark run, 2-core machine).
+and the 4 KiB page faults of fresh numba arrays dominate a loop
+(``docs/performance.md``, "Compiled loops").
 
 This module imports numba: import it lazily, inside the functions that use it
 (``import demsplit`` must work in YADE's Python, without numba).
@@ -178,35 +175,35 @@ def split_contacts(share_values, share_code, u, delta, x1, y1, z1, nx, ny, nz, r
     shares = np.empty((u.shape[0], n))
     out = [np.empty(n) for _ in range(3)]
     cp = np.empty((3, n))
-    _split_contacts(share_values, share_code, u, delta, x1, y1, z1, nx, ny, nz, r1, shares, *out, cp)
+    _split_contacts(share_values, share_code, tuple(u), delta, x1, y1, z1, nx, ny, nz, r1, tuple(shares), *out, cp)
     return (shares, *out, cp)
 
-
-@kernel
-def _share(values, code, coded, m, i):
-    """Share of contact i in mode m (values row m, or row 0 when every mode shares one)."""
-    row = m if values.shape[0] > 1 else 0
-    return values[row, code[i]] if coded else values[row, i if values.shape[1] > 1 else 0]
+# The energies and shares of the modes go into the loops as tuples of 1-D arrays (rows of the (modes, n)
+# arrays, no copy): numba compiles one loop per number of modes, whose inner loop over the modes it unrolls.
+# With the (modes, n) arrays themselves the per-body sums took three times as long.
 
 
 @kernel
 def _split_contacts(share_values, share_code, u, delta, x1, y1, z1, nx, ny, nz, r1, shares, u1, u2, depth1, cp):
     n = delta.shape[0]
-    modes = u.shape[0]
     coded = share_code.shape[0] > 0
+    per_mode = share_values.shape[0] > 1
+    per_contact = share_values.shape[1] > 1
     for i in range(n):
-        a = _share(share_values, share_code, coded, 0, i)
-        shares[0, i] = a
-        b1 = a * u[0, i]
-        b2 = (1.0 - a) * u[0, i]
-        d1 = a * delta[i]
-        for m in range(1, modes):
-            s = _share(share_values, share_code, coded, m, i)
-            shares[m, i] = s
-            b1 = b1 + s * u[m, i]
-            b2 = b2 + (1.0 - s) * u[m, i]
+        # the share's column: inline, as a helper taking the arrays would pay their reference counts per call
+        col = share_code[i] if coded else (i if per_contact else 0)
+        a = share_values[0, col]
+        shares[0][i] = a
+        b1 = a * u[0][i]
+        b2 = (1.0 - a) * u[0][i]
+        for m in range(1, len(u)):
+            s = share_values[m if per_mode else 0, col]
+            shares[m][i] = s
+            b1 = b1 + s * u[m][i]
+            b2 = b2 + (1.0 - s) * u[m][i]
         u1[i] = b1
         u2[i] = b2
+        d1 = a * delta[i]
         depth1[i] = d1
         cp[0, i] = _contact_point_coordinate(x1[i], nx[i], r1[i], d1)
         cp[1, i] = _contact_point_coordinate(y1[i], ny[i], r1[i], d1)
@@ -226,31 +223,35 @@ def body_sums(rows1, rows2, shares, u, n_particles, n_walls):
     acc = np.zeros((n_particles, 2 * modes + 1))
     walls = np.zeros((modes, n_walls))
     w_count = np.zeros(n_walls, np.int64)
-    _body_sums(rows1, rows2, shares, u, acc, walls, w_count)
-    particles = np.ascontiguousarray((acc[:, :modes] + acc[:, modes:2 * modes]).T)
+    _body_sums(rows1, rows2, tuple(shares), tuple(u), acc, walls, w_count)
+    particles = np.empty((modes, n_particles))
+    for m in range(modes):
+        np.add(acc[:, m], acc[:, modes + m], out=particles[m])
     return particles, acc[:, 2 * modes].astype(np.int64), walls, w_count
 
 
 @kernel
 def _body_sums(rows1, rows2, shares, u, acc, walls, w_count):
     n = rows1.shape[0]
-    modes = u.shape[0]
+    modes = len(u)
     count = 2 * modes
     for i in range(n):
         r = rows1[i]
         r2 = rows2[i]
-        for m in range(modes):
-            b1 = shares[m, i] * u[m, i]
-            acc[r, m] += b1
-            if r2 >= 0:
-                acc[r2, modes + m] += u[m, i] - b1
-            else:
-                walls[m, -1 - r2] += u[m, i] - b1
-        acc[r, count] += 1.0  # counts below 2^53 are exact in a double
         if r2 >= 0:
+            for m in range(modes):
+                b1 = shares[m][i] * u[m][i]
+                acc[r, m] += b1
+                acc[r2, modes + m] += u[m][i] - b1
             acc[r2, count] += 1.0
         else:
-            w_count[-1 - r2] += 1
+            w = -1 - r2
+            for m in range(modes):
+                b1 = shares[m][i] * u[m][i]
+                acc[r, m] += b1
+                walls[m, w] += u[m][i] - b1
+            w_count[w] += 1
+        acc[r, count] += 1.0  # counts below 2^53 are exact in a double
 
 
 def particle_sums(rows1, rows2, share_values, u, n_particles):
@@ -258,22 +259,21 @@ def particle_sums(rows1, rows2, share_values, u, n_particles):
     shape (1, n) or (1, 1)): u1 = sum_m s u_m on body 1, sum_m u_m - u1 on body 2 of particle
     pairs (rows2 >= 0); sums in the order of :func:`body_sums`."""
     acc = np.zeros((n_particles, 2))  # body-1 and body-2 sums of a particle side by side
-    _particle_sums(rows1, rows2, share_values, u, acc)
+    _particle_sums(rows1, rows2, share_values, tuple(u), acc)
     return acc[:, 0] + acc[:, 1]
 
 
 @kernel
 def _particle_sums(rows1, rows2, share_values, u, acc):
     n = rows1.shape[0]
-    modes = u.shape[0]
     per_contact = share_values.shape[1] > 1
     for i in range(n):
         s = share_values[0, i if per_contact else 0]
-        b1 = s * u[0, i]
-        total = u[0, i]
-        for m in range(1, modes):
-            b1 = b1 + s * u[m, i]
-            total = total + u[m, i]
+        b1 = s * u[0][i]
+        total = u[0][i]
+        for m in range(1, len(u)):
+            b1 = b1 + s * u[m][i]
+            total = total + u[m][i]
         acc[rows1[i], 0] += b1
         r2 = rows2[i]
         if r2 >= 0:
