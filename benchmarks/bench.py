@@ -98,7 +98,7 @@ def child(name: str, d: Path, work: Path, index_file: str) -> dict:
         import demsplit.pipeline  # noqa: F401
         import demsplit.readers.fastparse  # noqa: F401
         import demsplit.readers.liggghts  # noqa: F401
-        import demsplit.store  # noqa: F401
+        import demsplit.results.store  # noqa: F401
         return {}
     if name == "warm-up":
         from demsplit.cli import main

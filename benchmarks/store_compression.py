@@ -9,7 +9,7 @@ computed once and then stored with each compression. Times are the best of
 Run: python benchmarks/store_compression.py [RUN] [--repeat 3] [--auto-max-ratio 0.5 0.75 0.9]
 
 ``--auto-max-ratio`` adds ``auto`` rows with other thresholds (the default
-row uses demsplit.store.AUTO_MAX_RATIO); ``--columns`` first prints, for
+row uses demsplit.results.store.AUTO_MAX_RATIO); ``--columns`` first prints, for
 each column of the first frame with at least a chunk of rows, the size of its
 chunks after shuffle + deflate (fraction of the raw size) and the deflate
 speed (one thread, MB/s of raw data) with the store's deflate (ISA-L level 1,
@@ -28,7 +28,7 @@ import zlib
 import numpy as np
 from isal import isal_zlib
 
-import demsplit.store as S
+import demsplit.results.store as S
 from demsplit.pipeline import Options, frame_tables
 from demsplit.readers import open_run
 

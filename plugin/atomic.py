@@ -24,7 +24,7 @@ def atomic_path(path: str | Path, *, durable: bool = True) -> Iterator[Path]:
     ``durable=False`` skips the fsync: the file then survives a killed process
     (the kernel's page cache outlives it) but not a power cut, which may
     leave it empty or short under its final name; for the store's commit
-    record, whose reader names a short one (see :mod:`demsplit.store`)."""
+    record, whose reader names a short one (see :mod:`demsplit.results.store`)."""
     path = Path(path)
     tmp = path.with_name(path.name + ".tmp")
     try:

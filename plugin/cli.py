@@ -117,8 +117,8 @@ def cmd_run(args: argparse.Namespace) -> int:
                              compression=None if args.compression == "none" else args.compression,
                              progress=False if args.quiet else None, **_reader_options(args))
     if not args.quiet:
-        from .report import text_summary
-        from .store import read_last_frame
+        from .results.report import text_summary
+        from .results.store import read_last_frame
 
         print(text_summary(read_last_frame(args.output)))
         for note in report.notes:
@@ -148,7 +148,7 @@ def cmd_check(args: argparse.Namespace) -> int:
 
 
 def cmd_report(args: argparse.Namespace) -> int:
-    from .report import text_summary, write_html
+    from .results.report import text_summary, write_html
     from .results import load_results
 
     results = load_results(args.results)
@@ -163,7 +163,7 @@ def cmd_report(args: argparse.Namespace) -> int:
 
 def cmd_export(args: argparse.Namespace) -> int:
     from .results import load_results
-    from .store import export_tables
+    from .results.store import export_tables
 
     if not (args.parquet or args.csv):
         raise DemsplitError("nothing to export to.", fix="give --parquet DIR or --csv DIR.")

@@ -292,7 +292,7 @@ def analyze(path: str | Path, *, options: Options = Options(), jobs: int = 1, da
     """
     from .readers import open_run
     from .results import Results, walls_meta_from_scene
-    from .store import build_provenance
+    from .results.store import build_provenance
 
     run = open_run(path, **reader_options)
     try:
@@ -327,7 +327,7 @@ def run_to_store(path: str | Path, out: str | Path, *, options: Options = Option
     """
     from .readers import open_run
     from .results import walls_meta_from_scene
-    from .store import ResultWriter, build_provenance, check_output
+    from .results.store import ResultWriter, build_provenance, check_output
 
     check_output(out, resume=resume)  # before any work: no output directory, or an unresumed interrupted run
     run = open_run(path, **reader_options)

@@ -89,7 +89,7 @@ def _range(a: np.ndarray) -> str:
 def _describe_hdf5(path: Path) -> str:
     import h5py
 
-    from ..store import FORMAT as STORE_FORMAT
+    from ..results.store import FORMAT as STORE_FORMAT
     from ..yade import FORMAT_NAME
 
     try:

@@ -23,7 +23,7 @@ import math
 import numpy as np
 import pytest
 
-from demsplit.aggregate import gini, size_bins, top_share
+from demsplit.results.aggregate import gini, size_bins, top_share
 from demsplit.errors import DemsplitError
 from demsplit.results import Results
 

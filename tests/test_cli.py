@@ -55,7 +55,7 @@ def test_damaged_store_is_one_message(tmp_path):
     """A store file with the format mark but no tables: report and info say so, exit 2."""
     import h5py
 
-    from demsplit.store import FORMAT
+    from demsplit.results.store import FORMAT
 
     bad = tmp_path / "weird.h5"
     with h5py.File(bad, "w") as h5:

@@ -24,7 +24,7 @@ import pandas as pd
 import pytest
 
 import demsplit
-import demsplit.store
+import demsplit.results.store
 
 PACKING = Path(__file__).resolve().parent.parent / "sample_dumps" / "liggghts" / "packing"
 N_FRAMES = 60
@@ -67,12 +67,12 @@ def reference(long_run, tmp_path_factory) -> demsplit.Results:
 
 
 def work_of(out: Path) -> Path:
-    return demsplit.store.work_dir_of(out)
+    return demsplit.results.store.work_dir_of(out)
 
 
 def done_steps(out: Path) -> list[int]:
     """The frames the interrupted store holds (its commit record; a record being written is a .tmp)."""
-    return demsplit.store.committed_steps(out)
+    return demsplit.results.store.committed_steps(out)
 
 
 def wait_for_frames(proc: subprocess.Popen, out: Path, n: int) -> None:

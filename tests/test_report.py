@@ -8,7 +8,7 @@ import pytest
 from result_frames import PROVENANCE, WALLS_META, synthetic_frame
 
 from demsplit.errors import StoreError
-from demsplit.report import text_summary, write_html
+from demsplit.results.report import text_summary, write_html
 from demsplit.results import Results
 
 
@@ -53,7 +53,7 @@ def test_run_summary_reads_one_frame_and_equals_the_full_summary(tmp_path):
 
     from demsplit import cli
     from demsplit.results import load_results
-    from demsplit.store import read_last_frame
+    from demsplit.results.store import read_last_frame
 
     script = Path(__file__).resolve().parent.parent / "sample_dumps" / "liggghts" / "packing" / "in.packing"
     out = tmp_path / "o.h5"

@@ -15,10 +15,10 @@ import pandas.testing as pdt
 import pytest
 from result_frames import PROVENANCE, WALLS_META, synthetic_frame
 
-import demsplit.store as store
+import demsplit.results.store as store
 from demsplit.errors import StoreError
 from demsplit.results import TABLES, Results, load_results
-from demsplit.store import ResultWriter, export_tables, file_fingerprint, read_store
+from demsplit.results.store import ResultWriter, export_tables, file_fingerprint, read_store
 
 STEPS = (2000, 0, 1000)  # appended out of order: the store is in step order
 
@@ -99,7 +99,7 @@ def test_sigkill_mid_run_then_resume(tmp_path):
         import os, signal, sys
         sys.path.insert(0, {os.path.dirname(__file__)!r})
         from result_frames import synthetic_frame, PROVENANCE, WALLS_META
-        from demsplit.store import ResultWriter
+        from demsplit.results.store import ResultWriter
         w = ResultWriter({str(out)!r}, PROVENANCE, walls_meta=WALLS_META)
         for s in {STEPS[:2]!r}:
             w.append(synthetic_frame(s))
@@ -357,7 +357,7 @@ KILL_SCRIPT = """
 import os, signal, sys
 sys.path.insert(0, {tests!r})
 from result_frames import synthetic_frame, PROVENANCE, WALLS_META
-import demsplit.store as store
+import demsplit.results.store as store
 store.CHUNK_ROWS = 128
 calls = {{"n": 0}}
 real = getattr(store, {target!r}) if {target!r} != "_TableSink._write" else store._TableSink._write

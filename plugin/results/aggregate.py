@@ -30,7 +30,7 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
-from .errors import DemsplitError
+from ..errors import DemsplitError
 
 QUANTILES = {"p05": 0.05, "p25": 0.25, "p50": 0.50, "p75": 0.75, "p95": 0.95}
 TOP_FRACTIONS = {"top1_share": 0.01, "top10_share": 0.10}

@@ -20,8 +20,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .atomic import atomic_path
-from .results import Results
+from ..atomic import atomic_path
+from .tables import Results
 
 SCATTER_MAX_POINTS = 100_000
 """Energy-radius scatter plots draw at most this many particles (a seeded

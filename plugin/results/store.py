@@ -47,12 +47,13 @@ from pathlib import Path
 import numpy as np
 from isal import isal_zlib
 
-from .atomic import atomic_path, publish
-from .fingerprint import file_fingerprint  # noqa: F401  (part of this module's API)
-from .errors import StoreError
-from .scene import scene_to_dict
-from . import threads
-from .results import TABLES, UNITS, Results, Table, canonical_table, to_dataframe
+from .. import threads
+from ..atomic import atomic_path, publish
+from ..errors import StoreError
+from ..fingerprint import file_fingerprint  # noqa: F401  (part of this module's API)
+from ..scene import scene_to_dict
+from .schema import TABLES, UNITS, Table, canonical_table, to_dataframe
+from .tables import Results
 
 FORMAT = "demsplit-results"
 FORMAT_VERSION = 1
@@ -747,3 +748,8 @@ def export_tables(results: Results, directory: str | Path, fmt: str = "parquet")
     meta = directory / "provenance.json"
     _write_atomic(meta, lambda f: f.write(prov.encode()))
     return [*written, meta]
+
+
+def load_results(path: str | Path, *, steps: Iterable[int] | None = None) -> Results:
+    """Read a result store written by :class:`ResultWriter` (all frames, or only timesteps ``steps``)."""
+    return read_store(path, steps=steps)

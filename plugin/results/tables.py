@@ -32,89 +32,16 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .errors import StoreError
-from .frame import describe_steps
+from ..errors import StoreError
+from ..frame import describe_steps
+from .schema import TABLES, Table, canonical_table, to_dataframe
 
 if TYPE_CHECKING:  # pandas is imported where a DataFrame is made: writing a store needs none
     import pandas as pd
-
-Table = dict[str, np.ndarray]
-
-TABLES = ("particles", "contacts", "walls", "frames")
-"""The tables of a result set, in the order they are stored."""
-
-_ENERGY = {c: "J" for c in ("u", "u_n", "u_t", "u_equal", "u_radius", "u_springs", "u1", "u2", "u_particles",
-                            "u_walls")}
-_LENGTH = {c: "m" for c in ("radius", "delta", "depth1", "cpx", "cpy", "cpz", "cpx_sim", "cpy_sim", "cpz_sim")}
-_COUNT = {c: "1" for c in ("step", "id", "clump", "n_members", "id1", "id2", "wall", "type", "n_contacts", "n_particles",
-                           "n_wall_contacts", "share_n1", "share_t1", "overlap_max_rel_error")}
-UNITS: dict[str, str] = {**_ENERGY, **_LENGTH, **_COUNT, "time": "s"}
-"""Unit of every known column; a column not listed here gets the unit ``""`` (unknown)."""
-
-_INT64 = ("step", "id", "clump", "n_members", "id1", "id2", "wall", "n_contacts", "n_particles", "n_wall_contacts")
-_INT32 = ("type",)
-
-
-def canonical_column(name: str, values: np.ndarray, *, table: str = "", step: int | None = None) -> np.ndarray:
-    """``values`` as the canonical dtype of column ``name``: int64 for steps,
-    ids, wall indices and counts, int32 for types, float64 for everything else.
-
-    Integer columns given as floats must hold integral values (a NaN id or a
-    ``1.23457e+06`` count is an error, never a silent cast).
-    """
-    values = np.asarray(values)
-    if name in _INT64 or name in _INT32:
-        dtype = np.int64 if name in _INT64 else np.int32
-        if values.dtype.kind == "f":
-            bad = ~np.isfinite(values) | (values != np.round(values))
-            if bad.any():
-                row = int(np.flatnonzero(bad)[0])
-                raise StoreError(
-                    f"column {table}.{name} must hold integers, found {values[row]!r} in row {row}.",
-                    step=step,
-                    fix="pass integer arrays for ids, types, steps and counts.",
-                )
-        elif values.dtype.kind not in "iub":
-            raise StoreError(
-                f"column {table}.{name} must hold integers, found dtype {values.dtype}.",
-                step=step,
-                fix="pass integer arrays for ids, types, steps and counts.",
-            )
-        return values.astype(dtype, copy=False)
-    if values.dtype.kind not in "fiub":
-        raise StoreError(
-            f"column {table}.{name} must be numeric, found dtype {values.dtype}.",
-            step=step,
-            fix="pass numeric numpy arrays for every result column.",
-        )
-    return values.astype(np.float64, copy=False)
-
-
-def canonical_table(name: str, table: Mapping[str, np.ndarray], *, step: int | None = None) -> Table:
-    """Every column of ``table`` in its canonical dtype, all of one length."""
-    out = {col: canonical_column(col, vals, table=name, step=step) for col, vals in table.items()}
-    lengths = {col: len(v) for col, v in out.items()}
-    if len(set(lengths.values())) > 1:
-        raise StoreError(
-            f"table {name!r} has columns of different lengths: {lengths}.",
-            step=step,
-            fix="give every column of a table one value per row.",
-        )
-    return out
-
-
-def to_dataframe(table: Mapping[str, np.ndarray]) -> pd.DataFrame:
-    """A DataFrame of ``table`` (column order kept) with ``attrs['units']`` set."""
-    import pandas as pd
-
-    df = pd.DataFrame({col: np.asarray(vals) for col, vals in table.items()})
-    df.attrs["units"] = {col: UNITS.get(col, "") for col in df.columns}
-    return df
 
 
 def _sorted_by_step(table: Table) -> Table:
@@ -124,19 +51,13 @@ def _sorted_by_step(table: Table) -> Table:
     return {col: vals[order] for col, vals in table.items()}
 
 
-def walls_meta_from_scene(scene) -> list[dict]:
-    """``walls_meta`` (one JSON-able dict per wall index: ``wall``, ``name``,
-    ``kind``, ``type``) from a :class:`demsplit.scene.Scene`."""
-    return [{"wall": k, "name": w.name, "kind": w.kind, "type": int(w.type)} for k, w in enumerate(scene.walls)]
-
-
 @dataclass
 class Results:
     """Per-particle, per-contact, per-wall and per-frame results of a run.
 
     Build it with :meth:`from_frames` (per-frame tables from the pipeline),
     :meth:`from_tables` (tables already holding every frame) or
-    :func:`load_results` (a store written by :class:`demsplit.store.ResultWriter`).
+    :func:`load_results` (a store written by :class:`demsplit.results.store.ResultWriter`).
     """
 
     particles: pd.DataFrame
@@ -172,7 +93,7 @@ class Results:
         walls_meta: list[dict] | None = None,
     ) -> "Results":
         """Results from per-frame tables (the dicts the pipeline hands to
-        :meth:`demsplit.store.ResultWriter.append`), concatenated in step order.
+        :meth:`demsplit.results.store.ResultWriter.append`), concatenated in step order.
 
         Every frame must give a table the same columns (an absent table counts
         as an empty one).
@@ -217,46 +138,46 @@ class Results:
             walls_meta=self.walls_meta,
         )
 
-    # Statistics (formulas in demsplit.aggregate)
+    # Statistics (formulas in demsplit.results.aggregate)
     def per_type(self, value: str = "u", *, by_frame: bool = True) -> pd.DataFrame:
-        """Distribution statistics of ``value`` per particle type (see :func:`demsplit.aggregate.per_type`)."""
+        """Distribution statistics of ``value`` per particle type (see :func:`demsplit.results.aggregate.per_type`)."""
         from .aggregate import per_type
 
         return per_type(self.particles, value, by_frame=by_frame)
 
     def per_size(self, bins=None, value: str = "u", *, by_frame: bool = True) -> pd.DataFrame:
-        """Statistics of ``value`` per radius class (see :func:`demsplit.aggregate.per_size`)."""
+        """Statistics of ``value`` per radius class (see :func:`demsplit.results.aggregate.per_size`)."""
         from .aggregate import per_size
 
         return per_size(self.particles, bins, value, by_frame=by_frame)
 
     def per_frame(self) -> pd.DataFrame:
-        """Time series of totals and distribution statistics (see :func:`demsplit.aggregate.per_frame`)."""
+        """Time series of totals and distribution statistics (see :func:`demsplit.results.aggregate.per_frame`)."""
         from .aggregate import per_frame
 
         return per_frame(self.particles, self.walls, self.frames)
 
     def split_comparison(self, *, by_frame: bool = True) -> pd.DataFrame:
         """Material law against 50/50 and radius splits per type (see
-        :func:`demsplit.aggregate.split_comparison`)."""
+        :func:`demsplit.results.aggregate.split_comparison`)."""
         from .aggregate import split_comparison
 
         return split_comparison(self.particles, by_frame=by_frame)
 
     def contact_point_shift(self, *, by_frame: bool = True) -> pd.DataFrame:
-        """|cp - cp_sim|/delta statistics (see :func:`demsplit.aggregate.contact_point_shift`)."""
+        """|cp - cp_sim|/delta statistics (see :func:`demsplit.results.aggregate.contact_point_shift`)."""
         from .aggregate import contact_point_shift
 
         return contact_point_shift(self.contacts, by_frame=by_frame)
 
     def per_clump(self) -> pd.DataFrame:
-        """Energy per YADE clump and frame, summed over its member spheres (see :func:`demsplit.aggregate.per_clump`)."""
+        """Energy per YADE clump and frame, summed over its member spheres (see :func:`demsplit.results.aggregate.per_clump`)."""
         from .aggregate import per_clump
 
         return per_clump(self.particles)
 
     def wall_energy(self) -> pd.DataFrame:
-        """Energy per wall and frame, with the wall names (see :func:`demsplit.aggregate.wall_energy`)."""
+        """Energy per wall and frame, with the wall names (see :func:`demsplit.results.aggregate.wall_energy`)."""
         from .aggregate import wall_energy
 
         return wall_energy(self.walls, self.walls_meta, self.frames)
@@ -265,11 +186,3 @@ class Results:
 def _with_units(df: pd.DataFrame, like: pd.DataFrame) -> pd.DataFrame:
     df.attrs["units"] = dict(like.attrs.get("units", {}))
     return df
-
-
-def load_results(path: str | Path, *, steps: Iterable[int] | None = None) -> Results:
-    """Read a result store written by :class:`demsplit.store.ResultWriter`
-    (all frames, or only timesteps ``steps``)."""
-    from .store import read_store
-
-    return read_store(path, steps=steps)

@@ -1,0 +1,100 @@
+"""The result tables' schema: the single list of tables, columns, dtypes and units.
+
+Every table of a result set is a dict of 1-D numpy arrays (or a DataFrame of
+them), one row per observation; :data:`TABLES` names them in stored order,
+:data:`UNITS` gives every known column's unit, :func:`canonical_table` gives
+every column its canonical dtype. The tables themselves are described in
+:mod:`demsplit.results.tables`. A leaf: it imports the errors only (and pandas
+where a DataFrame is made).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..errors import StoreError
+
+if TYPE_CHECKING:  # pandas is imported where a DataFrame is made: writing a store needs none
+    import pandas as pd
+
+Table = dict[str, np.ndarray]
+
+TABLES = ("particles", "contacts", "walls", "frames")
+"""The tables of a result set, in the order they are stored."""
+
+_ENERGY = {c: "J" for c in ("u", "u_n", "u_t", "u_equal", "u_radius", "u_springs", "u1", "u2", "u_particles",
+                            "u_walls")}
+_LENGTH = {c: "m" for c in ("radius", "delta", "depth1", "cpx", "cpy", "cpz", "cpx_sim", "cpy_sim", "cpz_sim")}
+_COUNT = {c: "1" for c in ("step", "id", "clump", "n_members", "id1", "id2", "wall", "type", "n_contacts", "n_particles",
+                           "n_wall_contacts", "share_n1", "share_t1", "overlap_max_rel_error")}
+UNITS: dict[str, str] = {**_ENERGY, **_LENGTH, **_COUNT, "time": "s"}
+"""Unit of every known column; a column not listed here gets the unit ``""`` (unknown)."""
+
+_INT64 = ("step", "id", "clump", "n_members", "id1", "id2", "wall", "n_contacts", "n_particles", "n_wall_contacts")
+_INT32 = ("type",)
+
+
+def canonical_column(name: str, values: np.ndarray, *, table: str = "", step: int | None = None) -> np.ndarray:
+    """``values`` as the canonical dtype of column ``name``: int64 for steps,
+    ids, wall indices and counts, int32 for types, float64 for everything else.
+
+    Integer columns given as floats must hold integral values (a NaN id or a
+    ``1.23457e+06`` count is an error, never a silent cast).
+    """
+    values = np.asarray(values)
+    if name in _INT64 or name in _INT32:
+        dtype = np.int64 if name in _INT64 else np.int32
+        if values.dtype.kind == "f":
+            bad = ~np.isfinite(values) | (values != np.round(values))
+            if bad.any():
+                row = int(np.flatnonzero(bad)[0])
+                raise StoreError(
+                    f"column {table}.{name} must hold integers, found {values[row]!r} in row {row}.",
+                    step=step,
+                    fix="pass integer arrays for ids, types, steps and counts.",
+                )
+        elif values.dtype.kind not in "iub":
+            raise StoreError(
+                f"column {table}.{name} must hold integers, found dtype {values.dtype}.",
+                step=step,
+                fix="pass integer arrays for ids, types, steps and counts.",
+            )
+        return values.astype(dtype, copy=False)
+    if values.dtype.kind not in "fiub":
+        raise StoreError(
+            f"column {table}.{name} must be numeric, found dtype {values.dtype}.",
+            step=step,
+            fix="pass numeric numpy arrays for every result column.",
+        )
+    return values.astype(np.float64, copy=False)
+
+
+def canonical_table(name: str, table: Mapping[str, np.ndarray], *, step: int | None = None) -> Table:
+    """Every column of ``table`` in its canonical dtype, all of one length."""
+    out = {col: canonical_column(col, vals, table=name, step=step) for col, vals in table.items()}
+    lengths = {col: len(v) for col, v in out.items()}
+    if len(set(lengths.values())) > 1:
+        raise StoreError(
+            f"table {name!r} has columns of different lengths: {lengths}.",
+            step=step,
+            fix="give every column of a table one value per row.",
+        )
+    return out
+
+
+def to_dataframe(table: Mapping[str, np.ndarray]) -> pd.DataFrame:
+    """A DataFrame of ``table`` (column order kept) with ``attrs['units']`` set."""
+    import pandas as pd
+
+    df = pd.DataFrame({col: np.asarray(vals) for col, vals in table.items()})
+    df.attrs["units"] = {col: UNITS.get(col, "") for col in df.columns}
+    return df
+
+
+def walls_meta_from_scene(scene) -> list[dict]:
+    """``walls_meta`` (one JSON-able dict per wall index: ``wall``, ``name``,
+    ``kind``, ``type``) from a :class:`demsplit.scene.Scene`."""
+    return [{"wall": k, "name": w.name, "kind": w.kind, "type": int(w.type)} for k, w in enumerate(scene.walls)]
