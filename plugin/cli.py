@@ -21,6 +21,7 @@ import sys
 import traceback
 
 from .errors import DemsplitError
+from .physics import laws
 from .readers.liggghts_script import NORMAL, TANGENTIAL
 from .scene import Material
 
@@ -63,18 +64,23 @@ def _reader_options(args: argparse.Namespace) -> dict:
         opts["force_positions"] = True
     if getattr(args, "plane_as_plane", False):
         opts["plane_as_plane"] = True
+    if getattr(args, "law", None):
+        opts["law"] = args.law
     if getattr(args, "input", None) is None:  # no script: the scene comes from these options
         scene = {k: getattr(args, k) for k in ("columns", "wall_columns", "wall_type", "model", "tangential",
                                                 "characteristic_velocity", "boundary")
                  if getattr(args, k, None) is not None}
         opts["scene_options"] = scene
+    elif getattr(args, "wall_type", None) is not None:
+        opts["wall_type"] = args.wall_type
     return opts
 
 
 def _add_input(p: argparse.ArgumentParser) -> None:
     p.add_argument("input", nargs="?", default=None,
-                   help="LIGGGHTS input script, or a demsplit.yade snapshot file (omit it to describe the "
-                   "scene with --atoms, --contacts, --material and --columns)")
+                   help="LIGGGHTS input script, a demsplit.yade snapshot file, an ingest cache or a YADE "
+                   "VTKExporter spheres file (omit it to describe a LIGGGHTS scene with --atoms, --contacts, "
+                   "--material and --columns)")
     g = p.add_argument_group("LIGGGHTS inputs (default: the files the script's dump lines write)")
     g.add_argument("--atoms", help="atom dump (dump custom, text, .bin, or compressed)")
     g.add_argument("--contacts", help="pair contact dump (dump local of compute pair/gran/local)")
@@ -92,7 +98,8 @@ def _add_input(p: argparse.ArgumentParser) -> None:
     n.add_argument("--columns", metavar="KEYWORDS",
                    help='keywords of the compute pair/gran/local behind --contacts, e.g. "pos id delta history"')
     n.add_argument("--wall-columns", metavar="KEYWORDS", help="keywords of the compute wall/gran/local behind --walls")
-    n.add_argument("--wall-type", type=int, metavar="T", help="material type of the mesh walls")
+    n.add_argument("--wall-type", type=int, metavar="T",
+                   help="material type of the mesh walls (LIGGGHTS) or of the wall, facet and box bodies (YADE VTK)")
     n.add_argument("--model", choices=tuple(NORMAL), help="pair_style gran model (default hertz)")
     n.add_argument("--tangential", choices=TANGENTIAL, help="tangential model (default history)")
     n.add_argument("--characteristic-velocity", type=float, metavar="V", help="for model hooke (m/s)")
@@ -100,6 +107,8 @@ def _add_input(p: argparse.ArgumentParser) -> None:
     y = p.add_argument_group("YADE inputs")
     y.add_argument("--plane-as-plane", action="store_true",
                    help="treat YADE walls/facets/boxes as planes (R = inf) instead of YADE's refR")
+    y.add_argument("--law", choices=[k for k in laws.supported() if k.startswith("yade:")],
+                   help="the run's contact law, for YADE VTKExporter files (which do not hold it)")
 
 
 def _options(args: argparse.Namespace):
@@ -133,14 +142,14 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 
 def cmd_info(args: argparse.Namespace) -> int:
-    from .readers.inspect import describe_file
+    from .inspection import describe_file
 
     print(describe_file(args.file))
     return 0
 
 
 def cmd_check(args: argparse.Namespace) -> int:
-    from .readers.inspect import check_run
+    from .inspection import check_run
 
     text, ok = check_run(args.input, **_reader_options(args))
     print(text)

@@ -1,18 +1,12 @@
-"""Readers: one per source format, all behind :func:`open_run`.
+"""Readers: one class per source format, each registered by itself, all behind :func:`open_run`.
 
-``open_run(path, **options)`` looks at ``path`` and returns a
-:class:`~demsplit.readers.base.Run`:
-
-* a LIGGGHTS input script (the run's dumps are found from its ``dump``
-  lines, or given as ``atoms=``, ``contacts=``, ``walls=``):
-  :class:`demsplit.readers.liggghts.LiggghtsRun`;
-* ``None``: LIGGGHTS dumps given as ``atoms=``, ``contacts=`` (``walls=``)
-  with the scene as options (``materials=``, ``scene_options=``; see
-  :func:`demsplit.readers.liggghts.scene_script`);
-* a snapshot file written by :func:`demsplit.yade.snapshot`:
-  :class:`demsplit.readers.yade_snapshot.YadeSnapshotRun`;
-* an ingest cache written by ``demsplit convert`` (an HDF5 file whose
-  ``format`` attribute says so): :class:`demsplit.readers.cache.CacheRun`.
+``open_run(path, **options)`` reads the first bytes of ``path`` and asks
+every registered reader (:data:`demsplit.readers.base.REGISTRY`, highest
+``priority`` first) whether it reads it (``detect``); the first that says
+yes opens it. ``path=None`` means a run given by options alone (LIGGGHTS
+dumps with ``atoms=``, ``contacts=`` and the scene as options). The readers
+of this package are imported on first use (:data:`READER_MODULES`), so
+``import demsplit`` stays light.
 
 Format sniffing, column mapping and precision facts live in this package and
 nowhere else.
@@ -20,13 +14,27 @@ nowhere else.
 
 from __future__ import annotations
 
+from importlib import import_module
 from pathlib import Path
 
 from ..errors import InputFormatError
-from .base import Run
+from .base import REGISTRY, Run
+
+READER_MODULES = ("cache", "yade_snapshot", "yade_export", "liggghts")
+"""Modules of this package that define readers (each registers its classes when imported)."""
+
+HEAD_BYTES = 4096
+"""Bytes of a file a reader's ``detect`` sees."""
 
 
-def read_head(path: Path, size: int = 4096) -> bytes:
+def readers() -> list[type[Run]]:
+    """Every registered reader, highest priority first (registration order among equals)."""
+    for name in READER_MODULES:
+        import_module(f"{__name__}.{name}")
+    return sorted(REGISTRY.values(), key=lambda cls: -cls.priority)
+
+
+def read_head(path: Path, size: int = HEAD_BYTES) -> bytes:
     """The first ``size`` bytes of ``path``, for sniffing its kind; a missing file is an error."""
     if not path.is_file():
         raise InputFormatError("no such file.", file=path, fix="check the path.")
@@ -34,28 +42,22 @@ def read_head(path: Path, size: int = 4096) -> bytes:
         return f.read(size)
 
 
-def sniff(path: str | Path) -> str:
-    """Kind of run file: ``'cache'``, ``'yade-snapshot'`` or ``'liggghts-script'``."""
-    from ..yade import HDF5_SIGNATURE, NPY_STREAM_MAGIC
-
-    path = Path(path)
-    head = read_head(path)
-    if head.startswith(HDF5_SIGNATURE):
-        from .cache import is_cache
-
-        return "cache" if is_cache(path) else "yade-snapshot"
-    if head.startswith(NPY_STREAM_MAGIC):
-        return "yade-snapshot"
+def reader_for(path: str | Path | None) -> type[Run]:
+    """The reader class that reads ``path`` (None: a run given by options)."""
+    path = None if path is None else Path(path)
+    head = b"" if path is None else read_head(path)
+    for cls in readers():
+        if cls.detect(path, head):
+            return cls
     if b"ITEM: TIMESTEP" in head:
         raise InputFormatError(
             "this is a dump file, not a run: demsplit needs the run's input script for the materials, "
             "the contact model and the column layout of the contact dumps.", file=path,
             fix="pass the LIGGGHTS input script (demsplit run in.script --atoms DUMP --contacts DUMP), "
             "or describe the scene with --material TYPE:E:NU and --columns.")
-    if b"\0" in head:
-        raise InputFormatError("unrecognised binary file.", file=path,
-                               fix="pass a LIGGGHTS input script or a demsplit.yade snapshot file.")
-    return "liggghts-script"
+    accepted = "; ".join(f for cls in readers() for f in cls.formats)
+    raise InputFormatError("unrecognised file: no reader reads it.", file=path,
+                           fix=f"pass one of: {accepted}.")
 
 
 def open_run(path: str | Path | None, **options) -> Run:
@@ -64,21 +66,9 @@ def open_run(path: str | Path | None, **options) -> Run:
     The returned run remembers ``(path, options)`` as ``run.spec`` so that
     worker processes can open the same run again.
     """
-    kind = "liggghts-dumps" if path is None else sniff(path)
-    if kind == "cache":
-        from .cache import open_cache
-
-        run = open_cache(path, **options)
-    elif kind == "yade-snapshot":
-        from .yade_snapshot import open_yade_snapshot
-
-        run = open_yade_snapshot(path, **options)
-    else:
-        from .liggghts import open_liggghts_run
-
-        run = open_liggghts_run(path, **options)
+    run = reader_for(path).open(None if path is None else Path(path), **options)
     run.spec = {"path": None if path is None else str(path), **options}
     return run
 
 
-__all__ = ["Run", "open_run", "sniff"]
+__all__ = ["REGISTRY", "Run", "open_run", "reader_for", "readers"]

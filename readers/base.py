@@ -1,30 +1,128 @@
-"""The one interface every run reader implements.
+"""The one interface every run reader implements, and the registry the readers fill themselves.
 
 A *run* is what a simulation left on disk. Opening it gives a :class:`Run`:
-its :class:`~demsplit.scene.Scene`, the number of frames, random access to
-frame ``k`` and iteration that yields one :class:`~demsplit.frame.Frame` at a
-time (a frame is the unit of memory). ``describe()`` says what the reader
-found: files, kinds, precision, where the overlaps come from.
+its :class:`~demsplit.scene.Scene`, the timesteps of its frames, random
+access to frame ``k`` and iteration that yields one
+:class:`~demsplit.frame.Frame` at a time (a frame is the unit of memory).
+``describe()`` says what the reader found: files, kinds, precision, where the
+overlaps come from.
+
+Readers register themselves (OVITO's file readers, MDAnalysis'
+``coordinates``): every subclass that sets ``format_name`` is added to
+:data:`REGISTRY` when its module is imported, and says with
+:meth:`Run.detect` whether it reads a file. :func:`demsplit.readers.open_run`
+asks them; nothing else knows the formats.
 """
 
 from __future__ import annotations
 
-from typing import Iterator, Protocol, runtime_checkable
+import inspect
+from abc import ABC, abstractmethod
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any, ClassVar
 
+import numpy as np
+
+from ..errors import InputFormatError
 from ..frame import Frame
 from ..scene import Scene
 
+REGISTRY: dict[str, type[Run]] = {}
+"""``format_name`` -> reader class, in registration order."""
 
-@runtime_checkable
-class Run(Protocol):
-    """A run opened for reading (see module docstring)."""
+
+class Run(ABC):
+    """A run opened for reading (see the module docstring).
+
+    Class attributes a reader sets: ``format_name`` (its registry key),
+    ``formats`` (the inputs it accepts, in words, for messages and ``info``)
+    and ``priority`` (readers with a higher priority are asked first; a
+    reader whose ``detect`` is a weak guess, like "any text file is a script",
+    asks last).
+
+    Instance attributes every reader sets: ``scene``, ``steps`` (timestep of
+    every frame, int64), ``sources`` (the input files, for provenance),
+    ``notes`` (what the reader could not provide, and why); ``spec`` (the path
+    and options it was opened with) is set by ``open_run``.
+    """
+
+    format_name: ClassVar[str]
+    formats: ClassVar[tuple[str, ...]]
+    priority: ClassVar[int] = 0
 
     scene: Scene
+    steps: np.ndarray
+    sources: list[Any]
+    notes: list[str]
+    spec: dict
 
-    def __len__(self) -> int: ...
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if "format_name" in cls.__dict__:
+            REGISTRY[cls.format_name] = cls
 
-    def frame(self, k: int) -> Frame: ...
+    @classmethod
+    @abstractmethod
+    def detect(cls, path: Path | None, head: bytes) -> bool:
+        """Whether this reader reads the run at ``path`` whose first bytes are ``head``
+        (``path`` None: the run is given by options alone)."""
 
-    def __iter__(self) -> Iterator[Frame]: ...
+    @classmethod
+    def open(cls, path: Path | None, **options: Any) -> Run:
+        """Open the run at ``path`` with reader ``options``; an option this reader does not take is an
+        error that names it (options are the keyword parameters of the reader's constructor)."""
+        taken = list(inspect.signature(cls.__init__).parameters)[2:]  # after self and the path
+        unknown = sorted(set(options) - set(taken))
+        if unknown:
+            raise InputFormatError(f"option(s) {unknown} do not apply to {cls.formats[0]}.", file=path,
+                                   fix=f"leave them out; this reader takes {sorted(taken) or 'none'}.")
+        return cls(path, **options)
 
-    def close(self) -> None: ...
+    @classmethod
+    def describe_file(cls, path: Path) -> str:
+        """What ``demsplit info`` prints about a file this reader reads."""
+        with cls.open(path) as run:
+            scene = run.scene
+            lines = [f"{path}: {cls.formats[0]}", f"  frames:   {len(run)}",
+                     f"  model:    {scene.model.describe()}",
+                     "  materials: " + ", ".join(f"{t}: E={m.E:g} Pa nu={m.nu:g}"
+                                                 for t, m in sorted(scene.materials.items())),
+                     f"  walls:    {len(scene.walls)}"]
+        return "\n".join(lines)
+
+    @abstractmethod
+    def __len__(self) -> int:
+        """The number of frames."""
+
+    @abstractmethod
+    def frame(self, k: int) -> Frame:
+        """Frame ``k`` (0 <= k < len(self))."""
+
+    def __iter__(self) -> Iterator[Frame]:
+        """The frames in order, one in memory at a time (readers may stream them faster)."""
+        for k in range(len(self)):
+            yield self.frame(k)
+
+    def describe(self) -> dict:
+        """Files, kinds and precision, for provenance and ``demsplit check``."""
+        return {"kind": self.format_name, "sources": [str(s) for s in self.sources]}
+
+    def check_files(self, out: list[str]) -> list[str]:
+        """Problems of the run's files that reading frame by frame does not show (timesteps missing
+        from one of several dumps, ...), for ``demsplit check``; lines describing the files go to
+        ``out``. Default: none."""
+        return []
+
+    def locate(self, frame: Frame, row: int) -> tuple[str | None, int | None]:
+        """File and line of contact ``row`` of ``frame``, for messages (line None: unknown)."""
+        return (frame.source[0] if frame.source else None), None
+
+    def close(self) -> None:
+        """Release the files (idempotent)."""
+
+    def __enter__(self) -> Run:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

@@ -42,7 +42,6 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Iterator
 from pathlib import Path
 
 import h5py
@@ -54,9 +53,12 @@ from ..errors import DemsplitError, InputFormatError
 from ..frame import Box, Frame
 from ..scene import scene_from_dict, scene_to_dict
 from ..threads import pool
+from .base import Run
 
 FORMAT = "demsplit-ingest-cache"
-VERSION = 1
+VERSION = 2
+"""2: the scene's contact model is (law, params) of the law registry; 1 (normal, tangential) is not read."""
+HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 
 
 # --------------------------------------------------------------------------- scene <-> JSON
@@ -82,8 +84,8 @@ def convert_run(input: str | Path, output: str | Path, **reader_options) -> Path
             h5.attrs["format"] = FORMAT
             h5.attrs["version"] = VERSION
             h5.attrs["scene"] = json.dumps(scene_to_dict(run.scene))
-            h5.attrs["describe"] = json.dumps(run.describe() if hasattr(run, "describe") else {}, default=str)
-            h5.attrs["sources"] = json.dumps([str(s) for s in getattr(run, "sources", [input])])
+            h5.attrs["describe"] = json.dumps(run.describe(), default=str)
+            h5.attrs["sources"] = json.dumps([str(s) for s in run.sources])
             frames = h5.create_group("frames")
             steps = []
             for k in range(len(run)):
@@ -94,7 +96,7 @@ def convert_run(input: str | Path, output: str | Path, **reader_options) -> Path
                     g.attrs["error"] = json.dumps({"class": type(exc).__name__, "message": exc.message,
                                                    "file": exc.file, "step": exc.step, "line": exc.line,
                                                    "fix": exc.fix})
-                    steps.append(exc.step if exc.step is not None else _run_step(run, k))
+                    steps.append(exc.step if exc.step is not None else int(run.steps[k]))
                     continue
                 _write_frame(g, frame)
                 steps.append(frame.step)
@@ -104,11 +106,6 @@ def convert_run(input: str | Path, output: str | Path, **reader_options) -> Path
     finally:
         run.close()
     return output
-
-
-def _run_step(run, k: int) -> int | None:
-    steps = getattr(run, "steps", None)
-    return None if steps is None else int(steps[k])
 
 
 def _write_frame(g: h5py.Group, frame: Frame) -> None:
@@ -141,24 +138,45 @@ def is_cache(path: str | Path) -> bool:
         return False
 
 
-class CacheRun:
-    """A run read from an ingest cache (see the module docstring); implements
-    :class:`demsplit.readers.base.Run`."""
+class CacheRun(Run):
+    """A run read from an ingest cache (see the module docstring)."""
+
+    format_name = "demsplit-cache"
+    formats = ("an ingest cache written by demsplit convert",)
+    priority = 10  # an HDF5 file: asked before the YADE snapshot reader, which takes any other HDF5 file
+
+    @classmethod
+    def detect(cls, path: Path | None, head: bytes) -> bool:
+        return path is not None and head.startswith(HDF5_SIGNATURE) and is_cache(path)
+
+    @classmethod
+    def open(cls, path: Path | None, **options) -> CacheRun:
+        """Open an ingest cache; reader options are not accepted (they were applied by ``convert``)."""
+        if options:
+            raise InputFormatError(f"reader options {sorted(options)} do not apply to an ingest cache: they "
+                                   "were fixed when it was written.", file=path,
+                                   fix="convert the run again with these options, or pass the original run.")
+        return cls(path)
 
     def __init__(self, path: str | Path) -> None:
         self.path = str(path)
         self._h5 = h5py.File(path, "r")
         attrs = self._h5.attrs
         if attrs.get("format") != FORMAT:
+            self._h5.close()
             raise InputFormatError(f"not a demsplit ingest cache (format attribute {attrs.get('format')!r}).",
                                    file=path, fix="write one with 'demsplit convert RUN -o CACHE.h5'.")
-        if int(attrs["version"]) > VERSION:
-            raise InputFormatError(f"cache format version {int(attrs['version'])} is newer than this demsplit "
-                                   f"reads ({VERSION}).", file=path,
-                                   fix="upgrade demsplit, or convert the run again with this version.")
+        if int(attrs["version"]) != VERSION:
+            version = int(attrs["version"])
+            self._h5.close()
+            raise InputFormatError(f"cache format version {version} is "
+                                   f"{'newer' if version > VERSION else 'older'} than this demsplit reads "
+                                   f"({VERSION}).", file=path,
+                                   fix="convert the run again with this version of demsplit.")
         self.scene = scene_from_dict(json.loads(attrs["scene"]))
         self.steps = np.asarray(attrs["steps"], dtype=np.int64)
         self.sources = [self.path] + json.loads(attrs["sources"])
+        self.notes = []
         self._describe = json.loads(attrs["describe"])
         self._frames = self._h5["frames"]
         self._fd = os.open(path, os.O_RDONLY)
@@ -193,17 +211,15 @@ class CacheRun:
                      overlap_source=str(a["overlap_source"]),
                      overlap_error=arrays.get(("overlap_error", None)), notes=json.loads(a["notes"]))
 
-    def __iter__(self) -> Iterator[Frame]:
-        for k in range(len(self)):
-            yield self.frame(k)
-
     def describe(self) -> dict:
         """The original reader's description, with the cache named."""
         return {**self._describe, "cache": self.path}
 
     def close(self) -> None:
-        self._h5.close()
-        os.close(self._fd)
+        if self._fd >= 0:
+            self._h5.close()
+            os.close(self._fd)
+            self._fd = -1
 
     def _read(self, datasets: dict) -> dict:
         """The arrays of ``datasets`` (same keys), read in parallel where the
@@ -231,12 +247,3 @@ class CacheRun:
                 raise InputFormatError(f"the cache ends inside a dataset (byte {offset + done}).", file=self.path,
                                        fix="the file was cut short: convert the run again.")
             done += got
-
-
-def open_cache(path: str | Path, **options) -> CacheRun:
-    """Open an ingest cache; reader options are not accepted (they were applied by ``convert``)."""
-    if options:
-        raise InputFormatError(f"reader options {sorted(options)} do not apply to an ingest cache: they were "
-                               "fixed when it was written.", file=path,
-                               fix="convert the run again with these options, or pass the original run.")
-    return CacheRun(path)

@@ -265,6 +265,13 @@ def _looks_like_text(head: bytes) -> bool:
     return b"\0" not in sample
 
 
+def looks_like_dump(path: Path, head: bytes) -> bool:
+    """Whether a file whose first bytes are ``head`` is a dump by its look alone: a text dump's
+    marker, a compressed stream, or a ``.bin`` file; for ``demsplit info``, which asks the run readers
+    about everything else."""
+    return head.startswith(MARKER) or any(head.startswith(m) for m in _MAGIC) or path.suffix == ".bin"
+
+
 class DumpFile(ABC):
     """A dump file: an index of its frames and readers for them.
 

@@ -8,7 +8,7 @@ column, then joins per timestep
 * the pair contact dump (``dump local`` of ``compute pair/gran/local``),
 * the mesh-wall contact dump (``dump local`` of ``compute wall/gran/local``),
 * the primitive-wall contacts, rebuilt from positions (LIGGGHTS never dumps
-  them; :mod:`demsplit.walls`),
+  them; :mod:`demsplit.readers.liggghts_walls`),
 
 into one :class:`~demsplit.frame.Frame`. Geometry comes from the atom dump
 (minimum image across periodic boundaries); the overlap from the best source
@@ -37,10 +37,11 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ContactError, InputFormatError, MaterialError, PrecisionError
-from ..frame import Box, Frame, ParticleIndex, Table
+from ..frame import Box, Frame, ParticleIndex, Table, describe_steps
 from ..scene import Material, Scene
 from ..physics.shares import contact_point
-from ..walls import primitive_wall_contacts
+from .liggghts_walls import primitive_wall_contacts
+from .base import Run
 from .lammps_dump import HEADER_LINES, DumpFile, DumpFrame, open_dump
 from .liggghts_script import read_script
 from .precision import position_error, printed_step, relative_rounding
@@ -118,8 +119,36 @@ def scene_script(*, materials: dict[int, Material], contacts: Path, walls: Path 
     return "\n".join(lines) + "\n"
 
 
-class LiggghtsRun:
+class LiggghtsRun(Run):
     """A LIGGGHTS run opened for reading (see the module docstring)."""
+
+    format_name = "liggghts"
+    formats = ("a LIGGGHTS input script (its dumps found from its dump lines, or given as options)",
+               "LIGGGHTS dumps given as options (atoms=, contacts=) with the scene as options")
+    priority = -10  # any text file that no other reader claims is taken for a script
+
+    @classmethod
+    def detect(cls, path: Path | None, head: bytes) -> bool:
+        return path is None or (b"\0" not in head and b"ITEM: TIMESTEP" not in head)
+
+    @classmethod
+    def describe_file(cls, path: Path) -> str:
+        """The script's scene and dumps, without reading the dumps."""
+        script = read_script(path)
+        scene = script.scene
+        lines = [f"{path}: LIGGGHTS input script",
+                 f"  model:    {scene.model.describe()}",
+                 f"  timestep: {script.timestep} s; periodic {list(script.periodic)}",
+                 "  materials: " + ", ".join(f"{t}: E={m.E:g} Pa nu={m.nu:g}"
+                                             for t, m in sorted(scene.materials.items())),
+                 "  walls:    " + (", ".join(f"{w.name} ({w.kind}, type {w.type})" for w in scene.walls) or "none"),
+                 "  dumps:"]
+        for d in script.dumps:
+            what = d.layout.kind + " contacts" if d.layout is not None else d.style
+            lines.append(f"    {d.id:<10} {what:<15} every {d.every:<7} {d.file}"
+                         f"  ({'full precision' if d.full_precision else 'printed precision'})")
+        lines += [f"  warning: {w}" for w in script.warnings]
+        return "\n".join(lines)
 
     def __init__(self, script: str | Path | None, *, atoms: str | Path | None = None,
                  contacts: str | Path | None = None, walls: str | Path | None = None,
@@ -535,13 +564,53 @@ class LiggghtsRun:
                 "overlap_tolerance": self.overlap_tolerance, "force_positions": self.force_positions,
                 "notes": self.notes}
 
+    def check_files(self, out: list[str]) -> list[str]:
+        """The dumps, their frames, the timesteps the atom and contact dumps share, damaged headers."""
+        problems = []
+        for name, dump in (("atoms", self.atoms), ("pairs", self.pairs), ("walls", self.walls)):
+            if dump is None:
+                out.append(f"  {name + ':':<10} none")
+                continue
+            steps = dump.steps
+            out.append(f"  {name + ':':<10} {dump.path} ({len(steps)} frames, steps {describe_steps(steps)})")
+            values, counts = np.unique(steps, return_counts=True)
+            if np.any(counts > 1):
+                problems.append(str(InputFormatError(
+                    f"timestep(s) {values[counts > 1][:5].tolist()} appear more than once in this dump; "
+                    "only the first frame of each is read.", file=dump.path,
+                    fix="the dump holds two runs appended to one file: keep one of them.")))
+            if dump is not self.atoms:
+                problems += [str(err) for err in dump.damaged]
+                missing = np.setdiff1d(self.steps, steps)
+                extra = np.setdiff1d(steps, self.steps)
+                if len(missing):
+                    problems.append(str(InputFormatError(
+                        f"{len(missing)} timestep(s) of the atom dump have no frame here, e.g. "
+                        f"{missing[:5].tolist()}.", file=dump.path, step=int(missing[0]),
+                        fix="write the atom and contact dumps every N steps with the same N.")))
+                if len(extra):
+                    problems.append(str(InputFormatError(
+                        f"{len(extra)} frame(s) have no atom frame and would be ignored, e.g. steps "
+                        f"{extra[:5].tolist()}.", file=dump.path, step=int(extra[0]),
+                        fix="write the atom and contact dumps every N steps with the same N.")))
+        return problems
+
+    def locate(self, frame: Frame, row: int) -> tuple[str | None, int | None]:
+        """Contact rows are pair rows, then mesh-wall rows, then primitive-wall rows rebuilt from
+        positions (those have the atom dump and no line)."""
+        offset = 0
+        for dump in (self.pairs, self.walls):
+            if dump is None:
+                continue
+            k = int(np.flatnonzero(dump.steps == frame.step)[0])
+            n = int(dump.rows[k])
+            if row < offset + n:
+                f = dump.frame(k, columns=dump.columns[:1])
+                return str(dump.path), f.line_of(row - offset)
+            offset += n
+        return str(self.atoms.path), None
+
     def close(self) -> None:
         for d in (self.atoms, self.pairs, self.walls):
             if d is not None and hasattr(d, "close"):
                 d.close()
-
-
-def open_liggghts_run(script: str | Path | None, **options) -> LiggghtsRun:
-    """Open a LIGGGHTS run from its input script, or (``script=None``) from
-    dumps and a scene given as options (see :class:`LiggghtsRun` and :func:`scene_script`)."""
-    return LiggghtsRun(script, **options)

@@ -1,6 +1,10 @@
-"""Readers of YADE's own text exports: ``yade.export.VTKExporter`` legacy ASCII
-VTK files (spheres, interactions) and ``yade.export.text``/``textExt`` sphere
-files.
+"""YADE's own ``yade.export.VTKExporter`` files (legacy ASCII VTK: spheres, interactions) as a run.
+
+:class:`YadeVtkRun` reads a series of ``NAME-spheres-N.vtk`` files, each with
+its ``NAME-intrs-N.vtk``; the materials, the law and the walls' material are
+not in the files and come as options. ``yade.export.text``/``textExt`` sphere
+files are not read: they hold no wall, facet or box contact at all, so a run
+read from them could not be whole.
 
 All of them print ``%g`` (6 significant digits). An overlap recomputed from
 such positions, delta = r1 + r2 - |x2 - x1|, has an absolute error up to
@@ -23,9 +27,6 @@ What the files hold (yade 2023.02a, py/export.py):
   ``id2`` and reads, when present, ``penetrationDepth``, ``normal``,
   ``refR1``, ``refR2``, ``kno``, ``kso``, ``kn``, ``ks``, ``normalForce``,
   ``shearForce``, ``contactPoint``. Without ``what`` the file has no data.
-- ``text``/``textExt``: ``#format x_y_z_r`` (or ``x_y_z_r_matId``,
-  ``id_x_y_z_r_matId``) then one sphere per line, unwrapped positions, no
-  contacts: contacts are recomputed from positions.
 """
 
 from __future__ import annotations
@@ -34,9 +35,14 @@ from pathlib import Path
 
 import numpy as np
 
+import re
+from typing import Any
+
 from demsplit.errors import InputFormatError, MaterialError, PrecisionError
 from demsplit.frame import Box, Frame, Table
+from demsplit.scene import ContactModel, Material, Scene, Wall
 
+from .base import Run
 from .precision import position_error, printed_step
 from .yade_snapshot import particle_first
 
@@ -230,6 +236,14 @@ def vtk_particles(spheres: VtkPolyData, *, default_type: int | None = None) -> T
 def read_vtk_frame(spheres_path: str | Path, interactions_path: str | Path | None = None, *,
                    tolerance: float = 1e-3, step: int | None = None, default_type: int | None = None,
                    wall_ids: list[int] | None = None, box: Box | None = None) -> Frame:
+    """One Frame from VTKExporter's sphere file and (optionally) interaction file: see :func:`vtk_frame`."""
+    return vtk_frame(spheres_path, interactions_path, tolerance=tolerance, step=step, default_type=default_type,
+                     wall_ids=wall_ids, box=box)[0]
+
+
+def vtk_frame(spheres_path: str | Path, interactions_path: str | Path | None = None, *,
+              tolerance: float = 1e-3, step: int | None = None, default_type: int | None = None,
+              wall_ids: list[int] | None = None, box: Box | None = None) -> tuple[Frame, np.ndarray]:
     """One Frame from VTKExporter's sphere file and (optionally) interaction file.
 
     ``delta`` is the dumped ``penetrationDepth`` field when present (``%g`` of
@@ -240,6 +254,7 @@ def read_vtk_frame(spheres_path: str | Path, interactions_path: str | Path | Non
     ``refR1`` and ``refR2`` fields; their wall index is the position of the
     body id in ``wall_ids`` (default: the sorted non-sphere ids found).
     ``step`` defaults to the number in the file name (VTKExporter's numLabel).
+    Returns the frame and the wall body ids (wall index k is body ``wall_ids[k]``).
     """
     spheres = read_vtk(spheres_path)
     if step is None:
@@ -249,7 +264,7 @@ def read_vtk_frame(spheres_path: str | Path, interactions_path: str | Path | Non
     notes = ["YADE VTKExporter export (%g)"]
     if interactions_path is None:
         return Frame(step=step, particles=particles, contacts={}, box=box, source=(str(spheres_path),),
-                     notes=notes + ["no interaction file: no contacts"])
+                     notes=notes + ["no interaction file: no contacts"]), np.zeros(0, np.int64)
     inter = read_vtk(interactions_path)
     path = inter.path
     cdata = inter.cell_data
@@ -331,117 +346,84 @@ def read_vtk_frame(spheres_path: str | Path, interactions_path: str | Path | Non
         notes.append(f"wall index k is YADE body wall_ids[k], wall_ids = {wall_ids.tolist()}")
     return Frame(step=step, particles=particles, contacts=contacts, box=box,
                  source=(str(spheres_path), str(interactions_path)), overlap_source=overlap_source,
-                 overlap_error=bound, notes=notes)
+                 overlap_error=bound, notes=notes), wall_ids
 
 
 # --------------------------------------------------------------------------
-# export.text / textExt
+# The run: a series of VTKExporter files
 # --------------------------------------------------------------------------
 
-TEXT_FORMATS = {"x_y_z_r": ("x", "y", "z", "radius"),
-                "x_y_z_r_matId": ("x", "y", "z", "radius", "type"),
-                "id_x_y_z_r_matId": ("id", "x", "y", "z", "radius", "type")}
+_SPHERES = re.compile(r"^(?P<base>.*)-spheres-(?P<step>\d+)\.vtk$")
 
 
-def overlapping_pairs(x: np.ndarray, radius: np.ndarray, box: Box | None = None,
-                      chunk: int = 2048) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """All pairs i < j of spheres that overlap (delta > 0): ``(i, j, d)`` with
-    d = x_j - x_i (minimum image in a periodic ``box``).
+class YadeVtkRun(Run):
+    """VTKExporter files of a YADE run (module docstring).
 
-    Sweep along x: spheres sorted by x, each compared with the followers
-    within r_i + r_max (vectorised over chunks of spheres).
+    ``path``: one ``NAME-spheres-N.vtk`` file; every ``NAME-spheres-*.vtk`` of
+    its directory is a frame (ordered by N), read with its ``NAME-intrs-N.vtk``.
+    ``materials`` (YADE material id -> Material), ``law`` (a ``yade:`` key of the
+    law registry) and, when there are wall, facet or box contacts, ``wall_type``
+    (their material id) are required: the files do not hold them.
     """
-    n = len(x)
-    order = np.argsort(x[:, 0], kind="stable")
-    xs, rs = x[order], radius[order]
-    rmax = rs.max() if n else 0.0
-    periodic_x = box is not None and box.periodic[0]
-    I, J = [], []
-    for lo in range(0, n, chunk):
-        hi = min(n, lo + chunk)
-        i = np.arange(lo, hi)
-        if periodic_x:  # every pair is a candidate along a periodic x: compare with all followers
-            end = np.full(len(i), n)
-        else:
-            end = np.searchsorted(xs[:, 0], xs[i, 0] + rs[i] + rmax, side="right")
-        counts = end - i - 1
-        ii = np.repeat(i, counts)
-        jj = ii + 1 + (np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts))
-        d = xs[jj] - xs[ii]
-        if box is not None:
-            d = box.minimum_image(d)
-        hit = np.einsum("ij,ij->i", d, d) < (rs[ii] + rs[jj]) ** 2
-        I.append(ii[hit])
-        J.append(jj[hit])
-    ii, jj = (np.concatenate(I), np.concatenate(J)) if I else (np.zeros(0, np.int64),) * 2
-    d = xs[jj] - xs[ii]
-    if box is not None:
-        d = box.minimum_image(d)
-    return order[ii], order[jj], d
 
+    format_name = "yade-vtk"
+    formats = ("YADE VTKExporter files (NAME-spheres-N.vtk beside NAME-intrs-N.vtk) with --material for every "
+               "material id, --law and --wall-type",)
 
-def read_export_text(path: str | Path, *, tolerance: float = 1e-3, step: int = 0,
-                     default_type: int | None = None, sequential_ids: bool = False,
-                     box: Box | None = None) -> Frame:
-    """One Frame from an ``export.text``/``textExt`` sphere file.
+    @classmethod
+    def detect(cls, path: Path | None, head: bytes) -> bool:
+        return path is not None and head.startswith(b"# vtk DataFile")
 
-    Formats ``x_y_z_r``, ``x_y_z_r_matId``, ``id_x_y_z_r_matId``. Without ids
-    the file cannot be related to YADE's bodies: pass ``sequential_ids=True``
-    to number the spheres 0, 1, ... in file order. Without material ids pass
-    ``default_type``. Contacts are the overlapping sphere pairs recomputed from
-    the ``%g`` positions (walls are not in the file); they are refused with
-    :class:`PrecisionError` when the error bound exceeds ``tolerance``. Pass
-    the periodic cell as ``box`` for periodic runs (positions are unwrapped).
-    """
-    path = Path(path)
-    with open(path) as f:
-        first = f.readline()
-    if not first.startswith("#format "):
-        raise InputFormatError(f"expected the '#format <name>' line of yade.export.textExt, found {first[:40]!r}.",
-                               file=path, line=1, fix="give a file written by yade.export.text or textExt.")
-    fmt = first.split()[1]
-    if fmt not in TEXT_FORMATS:
-        raise InputFormatError(f"format {fmt!r} is not readable (readable: {sorted(TEXT_FORMATS)}).", file=path,
-                               line=1, fix="export with textExt(format='id_x_y_z_r_matId').")
-    cols = TEXT_FORMATS[fmt]
-    try:
-        data = np.loadtxt(path, comments="#", ndmin=2)
-    except ValueError as err:
-        raise InputFormatError(f"a sphere line is not {len(cols)} numbers ({err}).", file=path,
-                               fix="the file is damaged; export again.") from None
-    if data.size and data.shape[1] != len(cols):
-        raise InputFormatError(f"format {fmt} has {len(cols)} columns, the file has {data.shape[1]}.", file=path,
-                               fix="export again with textExt.")
-    table = {c: data[:, k] for k, c in enumerate(cols)}
-    missing = [fact for fact, ok in (("sphere ids", "id" in table or sequential_ids),
-                                     ("material ids", "type" in table or default_type is not None)) if not ok]
-    if missing:
-        raise InputFormatError(
-            f"format {fmt} lacks {' and '.join(missing)}.", file=path, line=1,
-            fix="export with textExt(format='id_x_y_z_r_matId'), or pass sequential_ids=True / default_type=.")
-    n = len(data)
-    ids = (check_percent_g_ids(table["id"], path=path, what="sphere ids") if "id" in table
-           else np.arange(n, dtype=np.int64))
-    types = (check_percent_g_ids(table["type"], path=path, what="material ids") if "type" in table
-             else np.full(n, default_type, dtype=np.int64))
-    x = np.stack([table["x"], table["y"], table["z"]], axis=-1)
-    particles = {"id": ids, "type": types.astype(np.int32), "x": x[:, 0], "y": x[:, 1], "z": x[:, 2],
-                 "radius": table["radius"]}
-    i, j, d = overlapping_pairs(x, table["radius"], box)
-    flip = ids[i] > ids[j]  # id1 < id2, as YADE orders sphere pairs
-    i, j = np.where(flip, j, i), np.where(flip, i, j)
-    d = np.where(flip[:, None], -d, d)
-    dist = np.linalg.norm(d, axis=1)
-    delta = table["radius"][i] + table["radius"][j] - dist
-    bound = overlap_error_bound(x[i], x[i] + d, delta)
-    check_overlap_precision(bound, tolerance, path=path, step=step, what="export.text's %g positions")
-    n_vec = d / dist[:, None]
-    contacts = {"id1": ids[i], "id2": ids[j], "wall": np.full(len(i), -1, dtype=np.int64), "delta": delta,
-                "nx": n_vec[:, 0], "ny": n_vec[:, 1], "nz": n_vec[:, 2],
-                "x1": x[i, 0], "y1": x[i, 1], "z1": x[i, 2], "r1": table["radius"][i], "r2": table["radius"][j],
-                "type1": types[i].astype(np.int32), "type2": types[j].astype(np.int32)}
-    notes = ["YADE export.text (%g): sphere-sphere overlaps recomputed from positions; wall contacts are not in the file"]
-    if "id" not in table:
-        notes.append("ids are the sphere order in the file, not YADE body ids")
-    return Frame(step=step, particles=particles, contacts=contacts, box=box, source=(str(path),),
-                 overlap_source="recomputed from export.text %g positions", overlap_error=bound, notes=notes)
+    def __init__(self, path: Path, *, materials: dict[int, Material] | None = None, law: str | None = None,
+                 wall_type: int | None = None, overlap_tolerance: float | None = None) -> None:
+        path = Path(path)
+        match = _SPHERES.match(path.name)
+        if match is None:
+            raise InputFormatError("not a VTKExporter sphere file name (NAME-spheres-N.vtk).", file=path,
+                                   fix="give the spheres file of exportSpheres(numLabel=O.iter).")
+        missing = [what for what, given in (("the materials (--material ID:E:NU for every YADE material id)",
+                                             materials), ("the contact law (--law yade:Law2_...)", law))
+                   if not given]
+        if missing:
+            raise InputFormatError(f"VTKExporter files do not hold {' and '.join(missing)}.", file=path,
+                                   fix="give them as options, or write full-precision snapshots with "
+                                       "demsplit.yade.snapshot(), which hold everything.")
+        base = match.group("base")
+        found = sorted((int(m.group("step")), p) for p in path.parent.iterdir()
+                       if (m := _SPHERES.match(p.name)) and m.group("base") == base)
+        self.steps = np.array([step for step, _ in found], dtype=np.int64)
+        self._spheres = [p for _, p in found]
+        self._tolerance = 1e-3 if overlap_tolerance is None else overlap_tolerance
+        self.sources = [p for sp in self._spheres for p in (sp, self._interactions(sp))]
+        self.notes = []
+        # the walls are the non-sphere bodies in contact in the first frame
+        _, self._wall_ids = vtk_frame(self._spheres[0], self._interactions(self._spheres[0]), tolerance=np.inf,
+                                      step=int(self.steps[0]))
+        if len(self._wall_ids) and wall_type is None:
+            raise InputFormatError("the interactions include wall, facet or box contacts, whose material the "
+                                   "files do not hold.", file=self._interactions(self._spheres[0]),
+                                   fix="give it with --wall-type ID (a YADE material id).")
+        self.scene = Scene(materials=dict(materials), model=ContactModel(law),
+                           walls=[Wall(name=f"YADE body {int(b)}", kind="yade_wall", type=int(wall_type))
+                                  for b in self._wall_ids], source=str(path))
+
+    @staticmethod
+    def _interactions(spheres: Path) -> Path:
+        return spheres.with_name(_SPHERES.sub(r"\g<base>-intrs-\g<step>.vtk", spheres.name))
+
+    def __len__(self) -> int:
+        return len(self._spheres)
+
+    def frame(self, k: int) -> Frame:
+        spheres = self._spheres[k]
+        interactions = self._interactions(spheres)
+        if not interactions.is_file():
+            raise InputFormatError("the interactions file of this sphere file is missing: the frame's contacts "
+                                   "are unknown.", file=interactions, step=int(self.steps[k]),
+                                   fix="export with VTKExporter.exportInteractions at the same iteration.")
+        return vtk_frame(spheres, interactions, tolerance=self._tolerance, step=int(self.steps[k]),
+                         wall_ids=self._wall_ids)[0]
+
+    def describe(self) -> dict[str, Any]:
+        return {"kind": self.format_name, "spheres": [str(p) for p in self._spheres],
+                "overlap_tolerance": self._tolerance}

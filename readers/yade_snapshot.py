@@ -19,17 +19,19 @@ from __future__ import annotations
 import io
 import json
 import zlib
-from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 
-from demsplit.errors import (ContactError, InputFormatError, MaterialError, TruncatedFileError,
+from demsplit.errors import (ContactError, DemsplitError, InputFormatError, MaterialError, TruncatedFileError,
                              UnsupportedModelError)
 from demsplit.frame import Box, Frame, Table
 from demsplit.scene import ContactModel, Material, Scene, Wall
 from demsplit.physics import laws as law_registry
-from demsplit.yade import FORMAT_NAME, FORMAT_VERSION, RECORD_TAIL, YADE_PREFIX, npy_records, sniff_format
+from demsplit.yade import (FORMAT_NAME, FORMAT_VERSION, HDF5_SIGNATURE, NPY_STREAM_MAGIC, RECORD_TAIL, YADE_PREFIX,
+                           npy_records, sniff_format)
+
+from .base import Run
 
 LAW_MODELS = {key[len(YADE_PREFIX):]: ContactModel(key) for key in law_registry.supported()
               if key.startswith(YADE_PREFIX)}
@@ -330,7 +332,7 @@ def frame_from_snapshot(meta: dict, tables: dict[str, Table], scene_walls: dict[
     return frame, np.flatnonzero(keep)
 
 
-class YadeSnapshotRun:
+class YadeSnapshotRun(Run):
     """A snapshot file opened for reading: ``.scene``, ``len(run)``,
     ``run.meta(k)`` (the snapshot's metadata: ``energy``, ``law_energies``,
     functors, ...) and iteration over Frames, one snapshot at a time.
@@ -338,6 +340,43 @@ class YadeSnapshotRun:
     A snapshot that was cut short raises :class:`TruncatedFileError` when the
     iteration reaches it (the complete ones before it are yielded).
     """
+
+    format_name = "yade-snapshot"
+    formats = ("a YADE snapshot file written by demsplit.yade.snapshot() (HDF5 or npy stream)",)
+
+    @classmethod
+    def detect(cls, path: Path | None, head: bytes) -> bool:
+        return path is not None and (head.startswith(HDF5_SIGNATURE) or head.startswith(NPY_STREAM_MAGIC))
+
+    @classmethod
+    def describe_file(cls, path: Path) -> str:
+        """Snapshots, iterations, bodies and interactions, the law, materials, walls and functors."""
+        with cls(path) as run:
+            scene = run.scene
+            meta0 = run.meta(0)
+            lines = [f"{path}: demsplit.yade snapshot file", f"  snapshots: {len(run)}",
+                     f"  YADE {meta0.get('yade_version')}, {meta0.get('precision_name')}, "
+                     f"periodic {meta0.get('periodic')}",
+                     f"  model:    {scene.model.describe()}",
+                     "  materials: " + ", ".join(f"{t}: E={m.E:g} Pa nu={m.nu:g}"
+                                                 for t, m in sorted(scene.materials.items())),
+                     "  walls:    " + (", ".join(f"{w.name} ({w.kind}, type {w.type})" for w in scene.walls)
+                                       or "none"),
+                     "  iteration   time (s)       bodies  interactions (real)"]
+            for k in range(len(run)):
+                try:
+                    meta = run.meta(k)
+                    frame = run.frame(k)
+                except DemsplitError as exc:
+                    lines.append(f"  snapshot {k}: {exc}")
+                    continue
+                lines.append(f"  {meta['iter']:>9}   {meta.get('time', float('nan')):<13.6g}  "
+                             f"{frame.n_particles + len(scene.walls):>6}  {frame.n_contacts:>12}")
+            functors = meta0.get("functors")
+            if isinstance(functors, dict):
+                for kind, items in functors.items():
+                    lines.append(f"  functors {kind}: " + ", ".join(i.get("class", "?") for i in items))
+        return "\n".join(lines)
 
     def __init__(self, path: str | Path, *, plane_as_plane: bool = False) -> None:
         self.path = Path(path)
@@ -353,6 +392,10 @@ class YadeSnapshotRun:
                 file=self.path, fix="update demsplit.")
         self.scene = scene_from_snapshot(meta, tables["bodies"], path=self.path, step=int(meta["iter"]),
                                          plane_as_plane=plane_as_plane)
+        self.sources = [self.path]
+        self.notes = []
+        self.steps = np.array([int(self._store.meta(k)["iter"]) for k in range(len(self._store))
+                               if not self._store.problem(k)], dtype=np.int64)
         kinds = _text(tables["bodies"]["kind"])
         wall_ids = tables["bodies"]["id"][np.isin(kinds, list(WALL_KINDS))]
         self._walls = {int(b): k for k, b in enumerate(wall_ids)}
@@ -401,18 +444,11 @@ class YadeSnapshotRun:
         _, rows = self._frame(meta, tables)
         return _text(tables["interactions"]["depth_text"][rows])
 
-    def __iter__(self) -> Iterator[Frame]:
-        for k in range(len(self)):
-            yield self.frame(k)
+    def describe(self) -> dict:
+        return {"kind": self.format_name, "path": str(self.path), "plane_as_plane": self.plane_as_plane}
 
     def close(self) -> None:
         self._store.close()
-
-    def __enter__(self) -> "YadeSnapshotRun":
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.close()
 
 
 def open_yade_snapshot(path: str | Path, *, plane_as_plane: bool = False) -> YadeSnapshotRun:

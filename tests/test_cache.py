@@ -12,7 +12,7 @@ import pytest
 from demsplit.cli import main
 from demsplit.errors import DemsplitError, InputFormatError
 from demsplit.pipeline import analyze
-from demsplit.readers import open_run, sniff
+from demsplit.readers import open_run, reader_for
 from demsplit.readers.cache import FORMAT, CacheRun, convert_run
 
 from test_parallel import assert_same_results
@@ -45,7 +45,7 @@ def assert_same_frames(a, b) -> None:
                                  "yade/mindlin_box.h5", "yade/cundall_periodic.h5"])
 def test_cache_frames_equal_the_original_reader(run, samples, tmp_path):
     cache = convert_run(samples / run, tmp_path / "cache.h5")
-    assert sniff(cache) == "cache"
+    assert reader_for(cache) is CacheRun
     original, cached = open_run(samples / run), open_run(cache)
     assert isinstance(cached, CacheRun)
     assert cached.scene == original.scene
@@ -141,7 +141,7 @@ def test_reader_options_are_refused_and_foreign_hdf5_is_not_a_cache(samples, tmp
     other = tmp_path / "other.h5"
     with h5py.File(other, "w") as h5:
         h5.attrs["format"] = "something else"
-    assert sniff(other) != "cache"
+    assert reader_for(other) is not CacheRun
     shutil.copy(cache, tmp_path / "copy.h5")
     with h5py.File(tmp_path / "copy.h5", "r") as h5:
         assert h5.attrs["format"] == FORMAT

@@ -101,7 +101,7 @@ def test_truncated_between_frames(run_dir):
 def test_truncated_exactly_at_a_frame_boundary_is_found_by_check(run_dir):
     """A cut at a frame boundary leaves a valid shorter dump: run computes the
     frames it has, check reports the contact frames that lost their atoms."""
-    from demsplit.readers.inspect import check_run
+    from demsplit.inspection import check_run
 
     edit_lines(run_dir / "atoms_full.txt", lambda lines: lines.__delitem__(slice(618, -1)))
     assert demsplit.analyze(run_dir / "in.packing").frames["step"].tolist() == list(STEPS[:2])

@@ -13,7 +13,9 @@ import pytest
 
 from demsplit.errors import DemsplitError, InputFormatError, PrecisionError, TruncatedFileError
 from demsplit.physics.partition import partition
-from demsplit.readers.yade_export import overlap_error_bound, read_export_text, read_vtk, read_vtk_frame
+import demsplit as ds
+from demsplit.readers import open_run
+from demsplit.readers.yade_export import YadeVtkRun, overlap_error_bound, read_vtk, read_vtk_frame
 from demsplit.readers.yade_snapshot import _open_store, open_yade_snapshot
 from demsplit.yade import write_snapshot
 
@@ -207,21 +209,21 @@ def test_vtk_without_penetration_depth_is_refused():
     assert frame.n_contacts == 425 and frame.overlap_error.max() > 1e-3
 
 
-def test_text_export_is_refused_above_tolerance():
-    with pytest.raises(PrecisionError) as info:
-        read_export_text(YADE / "mindlin_box.txt")
-    assert "demsplit.yade.snapshot()" in str(info.value) and "mindlin_box.txt" in str(info.value)
-    frame = read_export_text(YADE / "mindlin_box.txt", tolerance=np.inf)
-    ref = open_yade_snapshot(YADE / "mindlin_box.h5").frame(2)
-    pair = ref.contacts["wall"] < 0
-    assert frame.n_contacts == pair.sum()  # the sphere-sphere contacts, found again from positions
-    key = lambda c, m=slice(None): sorted(zip(c["id1"][m].tolist(), c["id2"][m].tolist()))  # noqa: E731
-    assert key(frame.contacts) == key(ref.contacts, pair)
-
-
-def test_text_export_without_ids_names_what_is_missing():
-    with pytest.raises(InputFormatError, match="lacks sphere ids and material ids"):
-        read_export_text(YADE / "cundall_periodic.txt")
+def test_vtk_export_is_a_registered_run_whose_energies_match_the_snapshot():
+    """open_run reads VTKExporter files with the scene given as options; the energies (kno, %g) are the
+    snapshot's to %g precision."""
+    materials = {0: ds.Material(2e7, 0.3), 1: ds.Material(1e8, 0.2)}
+    with pytest.raises(InputFormatError, match="do not hold the materials"):
+        open_run(YADE / "mindlin_box-spheres-00024000.vtk")
+    run = open_run(YADE / "mindlin_box-spheres-00024000.vtk", materials=materials,
+                   law="yade:Law2_ScGeom_MindlinPhys_Mindlin", wall_type=1)
+    assert isinstance(run, YadeVtkRun) and run.steps.tolist() == [24000] and len(run) == 1
+    frame = run.frame(0)
+    ref_run = open_yade_snapshot(YADE / "mindlin_box.h5")
+    ref = ref_run.frame(2)
+    e, e_ref = partition(frame.contacts, run.scene, frame.particles), partition(ref.contacts, ref_run.scene,
+                                                                                ref.particles)
+    np.testing.assert_allclose(e.u_n.sum(), e_ref.u_n.sum(), rtol=3e-5)
 
 
 def test_percent_g_error_bound_by_hand():

@@ -17,8 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .frame import Table
-from .scene import Wall
+from ..frame import Table
+from ..scene import Wall
 
 _OTHER_AXES = {0: (1, 2), 1: (2, 0), 2: (0, 1)}  # LIGGGHTS' cyclic order for cylinder centres
 

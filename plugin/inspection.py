@@ -22,8 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ContactError, DemsplitError, InputFormatError, MaterialError, StoreError
-from ..frame import Frame, describe_steps
+from .errors import ContactError, DemsplitError, InputFormatError, MaterialError, StoreError
+from .frame import Frame, describe_steps
 
 MAX_LISTED = 20
 """Problems listed by ``check_run`` before the rest is only counted."""
@@ -32,27 +32,24 @@ MAX_LISTED = 20
 # --------------------------------------------------------------------------- info
 
 def describe_file(path: str | Path) -> str:
-    """A human-readable description of ``path`` (see the module docstring)."""
-    from ..yade import HDF5_SIGNATURE, NPY_STREAM_MAGIC
-    from . import read_head
-    from .lammps_dump import MARKER, _MAGIC
+    """A human-readable description of ``path`` (see the module docstring): a result store or a
+    dump (which are not runs), else what the reader that reads it says (``Run.describe_file``)."""
+    from .readers import read_head, reader_for
+    from .readers.lammps_dump import looks_like_dump
 
     path = Path(path)
     head = read_head(path)
     if not head:
         raise InputFormatError("the file is empty.", file=path, fix="check that the program that writes it ran.")
-    if head.startswith(HDF5_SIGNATURE):
-        return _describe_hdf5(path)
-    if head.startswith(NPY_STREAM_MAGIC):
-        return _describe_snapshots(path)
-    if head.startswith(MARKER) or any(head.startswith(m) for m in _MAGIC) or path.suffix == ".bin" \
-            or b"\0" in head:
+    if _is_store(path, head):
+        return _describe_store(path)
+    if looks_like_dump(path, head):
         return _describe_dump(path)
-    return _describe_script(path)
+    return reader_for(path).describe_file(path)
 
 
 def _describe_dump(path: Path) -> str:
-    from .lammps_dump import BinaryDump, open_dump
+    from .readers.lammps_dump import BinaryDump, open_dump
 
     dump = open_dump(path)
     binary = isinstance(dump, BinaryDump)
@@ -86,26 +83,34 @@ def _range(a: np.ndarray) -> str:
     return str(lo) if lo == hi else f"{lo}..{hi}"
 
 
-def _describe_hdf5(path: Path) -> str:
-    import h5py
+def _is_store(path: Path, head: bytes) -> bool:
+    """True for an HDF5 file whose ``format`` attribute says it is a result store."""
+    from .results.store import FORMAT as STORE_FORMAT
+    from .yade import HDF5_SIGNATURE
 
-    from ..results.store import FORMAT as STORE_FORMAT
-    from ..yade import FORMAT_NAME
+    if not head.startswith(HDF5_SIGNATURE):
+        return False
+    import h5py
 
     try:
         with h5py.File(path, "r") as h5:
-            fmt = h5.attrs.get("format")
-            if fmt == STORE_FORMAT:
-                return _describe_store(path, h5)
+            return h5.attrs.get("format") == STORE_FORMAT
+    except OSError:
+        return False
+
+
+def _describe_store(path: Path) -> str:
+    import h5py
+
+    try:
+        with h5py.File(path, "r") as h5:
+            return _store_lines(path, h5)
     except (OSError, KeyError, ValueError) as exc:  # unreadable file, or a group/attribute missing
-        raise StoreError(f"not a readable HDF5 file or result store ({type(exc).__name__}: {exc}).", file=path,
+        raise StoreError(f"not a readable result store ({type(exc).__name__}: {exc}).", file=path,
                          fix="the file is damaged or still being written; rerun demsplit run to rewrite it.") from None
-    if fmt == FORMAT_NAME:
-        return _describe_snapshots(path)
-    return f"{path}: HDF5 file, format attribute {fmt!r} (not a demsplit result store or YADE snapshot file)"
 
 
-def _describe_store(path: Path, h5) -> str:
+def _store_lines(path: Path, h5) -> str:
     steps = h5["index/step"][()]
     prov = json.loads(h5.attrs.get("provenance", "{}"))
     lines = [f"{path}: demsplit result store (format version {int(h5.attrs['format_version'])}, "
@@ -118,7 +123,7 @@ def _describe_store(path: Path, h5) -> str:
             n = h5[name][cols[0]].shape[0] if cols else 0
             lines.append(f"    {name:<10} {n:>9} rows  {' '.join(cols)}")
     model = prov.get("model", {})
-    lines.append(f"  model:    {model.get('normal')} / {model.get('tangential')}")
+    lines.append(f"  model:    {model.get('law')} {model.get('params', {})}")
     for f in prov.get("inputs", []):
         lines.append(f"  input:    {f.get('path')}  ({f.get('size')} bytes, sha256 {str(f.get('sha256'))[:12]}...)")
     options = prov.get("options", {})
@@ -133,68 +138,8 @@ def _describe_store(path: Path, h5) -> str:
     return "\n".join(lines)
 
 
-def _describe_snapshots(path: Path) -> str:
-    from .yade_snapshot import open_yade_snapshot
-
-    with open_yade_snapshot(path) as run:
-        lines = [f"{path}: demsplit.yade snapshot file", f"  snapshots: {len(run)}"]
-        meta0 = run.meta(0)
-        lines.append(f"  YADE {meta0.get('yade_version')}, {meta0.get('precision_name')}, "
-                     f"periodic {meta0.get('periodic')}")
-        lines.append(f"  model:    {run.scene.model.describe()}")
-        lines.append("  materials: " + ", ".join(f"{t}: E={m.E:g} Pa nu={m.nu:g}"
-                                                 for t, m in sorted(run.scene.materials.items())))
-        lines.append(f"  walls:    {_walls(run.scene)}")
-        lines.append("  iteration   time (s)       bodies  interactions (real)")
-        for k in range(len(run)):
-            try:
-                meta = run.meta(k)
-                frame = run.frame(k)
-            except DemsplitError as exc:
-                lines.append(f"  snapshot {k}: {exc}")
-                continue
-            lines.append(f"  {meta['iter']:>9}   {meta.get('time', float('nan')):<13.6g}  "
-                         f"{frame.n_particles + len(run.scene.walls):>6}  {frame.n_contacts:>12}")
-        functors = meta0.get("functors")
-        if isinstance(functors, str):
-            functors = _literal(functors)
-        if isinstance(functors, dict):
-            for kind, items in functors.items():
-                lines.append(f"  functors {kind}: " + ", ".join(i.get("class", "?") for i in items))
-    return "\n".join(lines)
-
-
-def _literal(text: str):
-    import ast
-
-    try:
-        return ast.literal_eval(text)
-    except (ValueError, SyntaxError):
-        return None
-
-
 def _walls(scene) -> str:
     return ", ".join(f"{w.name} ({w.kind}, type {w.type})" for w in scene.walls) or "none"
-
-
-def _describe_script(path: Path) -> str:
-    from .liggghts_script import read_script
-
-    script = read_script(path)
-    scene = script.scene
-    lines = [f"{path}: LIGGGHTS input script",
-             f"  model:    {scene.model.describe()}",
-             f"  timestep: {script.timestep} s; periodic {list(script.periodic)}",
-             "  materials: " + ", ".join(f"{t}: E={m.E:g} Pa nu={m.nu:g}" for t, m in sorted(scene.materials.items())),
-             f"  walls:    {_walls(scene)}",
-             "  dumps:"]
-    for d in script.dumps:
-        what = d.layout.kind + " contacts" if d.layout is not None else d.style
-        lines.append(f"    {d.id:<10} {what:<15} every {d.every:<7} {d.file}"
-                     f"  ({'full precision' if d.full_precision else 'printed precision'})")
-    for w in script.warnings:
-        lines.append(f"  warning: {w}")
-    return "\n".join(lines)
 
 
 # --------------------------------------------------------------------------- check
@@ -202,7 +147,7 @@ def _describe_script(path: Path) -> str:
 def check_run(input: str | Path, **reader_options) -> tuple[str, bool]:
     """Validate the run ``input`` (a LIGGGHTS script or a YADE snapshot file)
     without computing energies. Returns the report and whether it found no problem."""
-    from . import open_run
+    from .readers import open_run
 
     out = [f"demsplit check {input}"]
     problems: list[str] = []
@@ -216,8 +161,7 @@ def check_run(input: str | Path, **reader_options) -> tuple[str, bool]:
         out.append("  materials: " + ", ".join(f"{t}: E={m.E:g} Pa nu={m.nu:g}"
                                               for t, m in sorted(scene.materials.items())))
         out.append(f"  walls:     {_walls(scene)}")
-        if hasattr(run, "atoms"):
-            problems += _check_liggghts_files(run, out)
+        problems += run.check_files(out)
         types: set[int] = set()
         first: Frame | None = None
         out.append("  frame  step        particles  contacts  wall contacts  overlap bound")
@@ -254,39 +198,6 @@ def _finish(out: list[str], problems: list[str]) -> tuple[str, bool]:
     return "\n".join(out), not problems
 
 
-def _check_liggghts_files(run, out: list[str]) -> list[str]:
-    """Files, their frames, timesteps shared by the atom and contact dumps, damaged headers."""
-    problems = []
-    atom_steps = run.steps
-    for name, dump in (("atoms", run.atoms), ("pairs", run.pairs), ("walls", run.walls)):
-        if dump is None:
-            out.append(f"  {name + ':':<10} none")
-            continue
-        steps = dump.steps
-        out.append(f"  {name + ':':<10} {dump.path} ({len(steps)} frames, steps {describe_steps(steps)})")
-        values, counts = np.unique(steps, return_counts=True)
-        if np.any(counts > 1):
-            problems.append(str(InputFormatError(
-                f"timestep(s) {values[counts > 1][:5].tolist()} appear more than once in this dump; "
-                "only the first frame of each is read.", file=dump.path,
-                fix="the dump holds two runs appended to one file: keep one of them.")))
-        if dump is not run.atoms:
-            problems += [str(err) for err in dump.damaged]
-            missing = np.setdiff1d(atom_steps, steps)
-            extra = np.setdiff1d(steps, atom_steps)
-            if len(missing):
-                problems.append(str(InputFormatError(
-                    f"{len(missing)} timestep(s) of the atom dump have no frame here, e.g. {missing[:5].tolist()}.",
-                    file=dump.path, step=int(missing[0]),
-                    fix="write the atom and contact dumps every N steps with the same N.")))
-            if len(extra):
-                problems.append(str(InputFormatError(
-                    f"{len(extra)} frame(s) have no atom frame and would be ignored, e.g. steps {extra[:5].tolist()}.",
-                    file=dump.path, step=int(extra[0]),
-                    fix="write the atom and contact dumps every N steps with the same N.")))
-    return problems
-
-
 def _check_overlaps(run, frame: Frame) -> list[str]:
     """0 < delta <= min(r1, r2) for every contact (first offending row of each kind)."""
     c = frame.contacts
@@ -296,7 +207,9 @@ def _check_overlaps(run, frame: Frame) -> list[str]:
                       (delta > np.minimum(c["r1"], c["r2"]), "overlap larger than the smaller radius")):
         if bad.any():
             row = int(np.flatnonzero(bad)[0])
-            file, line, who = _locate(run, frame, row)
+            who = (f"particles {int(c['id1'][row])}-{int(c['id2'][row])}" if c["wall"][row] < 0
+                   else f"particle {int(c['id1'][row])} on wall {run.scene.walls[int(c['wall'][row])].name}")
+            file, line = run.locate(frame, row)
             problems.append(str(ContactError(
                 f"{int(np.count_nonzero(bad))} contact(s) with {what}, the first {who} with delta = "
                 f"{delta[row]!r} (r1 = {c['r1'][row]:g}, r2 = {c['r2'][row]:g}).",
@@ -304,27 +217,6 @@ def _check_overlaps(run, frame: Frame) -> list[str]:
                 fix="check that the contact and atom dumps belong to the same run and timestep, and that the "
                     "run is physically sound (timestep, stiffness).")))
     return problems
-
-
-def _locate(run, frame: Frame, row: int) -> tuple[str | None, int | None, str]:
-    """File, line and a description of contact ``row`` of a frame (LIGGGHTS:
-    pair rows first, then mesh-wall rows, then primitive-wall rows rebuilt from positions)."""
-    c = frame.contacts
-    who = (f"particles {int(c['id1'][row])}-{int(c['id2'][row])}" if c["wall"][row] < 0
-           else f"particle {int(c['id1'][row])} on wall {run.scene.walls[int(c['wall'][row])].name}")
-    if not hasattr(run, "pairs"):
-        return (frame.source[0] if frame.source else None), None, who
-    offset = 0
-    for dump in (run.pairs, run.walls):
-        if dump is None:
-            continue
-        k = int(np.flatnonzero(dump.steps == frame.step)[0])
-        n = int(dump.rows[k])
-        if row < offset + n:
-            f = dump.frame(k, columns=dump.columns[:1])
-            return dump.path, f.line_of(row - offset), who
-        offset += n
-    return run.atoms.path, None, who + " (primitive wall, rebuilt from positions)"
 
 
 def _check_materials(scene, types: set[int]) -> list[str]:
@@ -340,7 +232,7 @@ def _check_materials(scene, types: set[int]) -> list[str]:
 def _what_run_computes(run, frame: Frame) -> list[str]:
     """What ``demsplit run`` would compute from which columns (from the first readable frame):
     each law's one-line description, and the modes the columns do not allow, with why."""
-    from ..physics.partition import contact_energies
+    from .physics.partition import contact_energies
 
     scene = run.scene
     lines = ["run would compute:",
@@ -354,7 +246,7 @@ def _what_run_computes(run, frame: Frame) -> list[str]:
         skipped = {"energies": str(exc)}
     for what, why in skipped.items():
         lines.append(f"  not computed: {what}: {why}")
-    for note in list(getattr(run, "notes", [])) + frame.notes:
+    for note in run.notes + frame.notes:
         lines.append(f"  note: {note}")
     lines.append(f"  walls:       {len(scene.walls)} ({_walls(scene)})")
     return lines
