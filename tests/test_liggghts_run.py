@@ -41,8 +41,22 @@ from demsplit.pipeline import frame_tables, run_to_store
 from demsplit.readers import open_run
 from demsplit.readers.lammps_dump import open_dump
 from demsplit.readers.liggghts import LiggghtsRun
+from reader_contract import ReaderContract
 
 SAMPLES = Path(__file__).resolve().parent.parent / "sample_dumps" / "liggghts"
+
+
+class TestPackingSample(ReaderContract):
+    reader = LiggghtsRun
+    path = SAMPLES / "packing" / "in.packing"
+
+
+class TestPeriodicSampleWithFullPrecisionDumps(ReaderContract):
+    reader = LiggghtsRun
+    path = SAMPLES / "periodic" / "in.periodic"
+    options = {"atoms": SAMPLES / "periodic" / "atoms_full.txt.gz",
+               "contacts": SAMPLES / "periodic" / "pairs_full.txt.gz",
+               "walls": SAMPLES / "periodic" / "wall_full.txt.gz"}
 PRIMITIVE = ("plane", "cylinder")
 
 # Force balance of a particle without primitive-wall contacts, relative to the sum of

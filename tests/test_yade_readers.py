@@ -16,14 +16,32 @@ from demsplit.physics.partition import partition
 import demsplit as ds
 from demsplit.readers import open_run
 from demsplit.readers.yade_export import YadeVtkRun, overlap_error_bound, read_vtk, read_vtk_frame
-from demsplit.readers.yade_snapshot import _open_store, open_yade_snapshot
+from demsplit.readers.yade_snapshot import YadeSnapshotRun, _open_store, open_yade_snapshot
 from demsplit.yade import write_snapshot
+from reader_contract import ReaderContract
 
 from pathlib import Path
 
 SAMPLES = Path(__file__).resolve().parent.parent / "sample_dumps"
 
 YADE = SAMPLES / "yade"
+
+
+class TestMindlinSnapshotsHdf5(ReaderContract):
+    reader = YadeSnapshotRun
+    path = YADE / "mindlin_box.h5"
+
+
+class TestPeriodicSnapshotsNpy(ReaderContract):
+    reader = YadeSnapshotRun
+    path = YADE / "cundall_periodic.npys"
+
+
+class TestVtkExport(ReaderContract):
+    reader = YadeVtkRun
+    path = YADE / "mindlin_box-spheres-00024000.vtk"
+    options = {"materials": {0: ds.Material(2e7, 0.3), 1: ds.Material(1e8, 0.2)},
+               "law": "yade:Law2_ScGeom_MindlinPhys_Mindlin", "wall_type": 1}
 MINDLIN = ("mindlin_box.h5", "mindlin_box.npys")
 CUNDALL = ("cundall_periodic.h5", "cundall_periodic.npys")
 
