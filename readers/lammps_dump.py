@@ -255,8 +255,9 @@ def open_dump(path: str | Path, columns: Sequence[str] | None = None) -> "DumpFi
         return TextDump(path, None, head, columns)
     if path.suffix == ".bin" or not _looks_like_text(head):
         return BinaryDump(path, columns)
-    first = head.split(b"\n", 1)[0][:80].decode("utf-8", "replace")
-    raise InputFormatError(f"expected a LAMMPS dump starting with 'ITEM: TIMESTEP', found '{first}'",
+    first = head.split(b"\n", 1)[0]
+    excerpt = repr(first[:40])[2:-1] + ("..." if len(first) > 40 else "")  # bounded and printable
+    raise InputFormatError(f"expected a LAMMPS dump starting with 'ITEM: TIMESTEP', found '{excerpt}'",
                            file=path, line=1, fix="pass a file written by the dump command")
 
 

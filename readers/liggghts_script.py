@@ -67,16 +67,15 @@ format prints garbage, because every ``c_`` value is a double (measured:
 
 from __future__ import annotations
 
-import math
-import os
 import re
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Iterator, Sequence
+from typing import Sequence
 
 import numpy as np
 
 from ..errors import DemsplitError, MaterialError, ScriptError, UnsupportedModelError
+from .lammps_input import Unevaluable, Variables, Where, logical_lines, split_words, strip_comment, substitute
 from ..physics.laws import law_class
 from ..physics.laws._liggghts import SHEAR as SHEAR_COLUMNS
 from ..physics.laws._liggghts import TANGENTIAL_MODELS
@@ -266,284 +265,6 @@ class LiggghtsScript:
 # --------------------------------------------------------------------------
 
 
-@dataclass(frozen=True)
-class _Where:
-    file: Path
-    line: int
-
-
-class _Unevaluable(Exception):
-    """A variable whose value demsplit cannot know (thermo keywords, atom styles...)."""
-
-
-def _logical_lines(path: Path) -> Iterator[tuple[int, str]]:
-    """(first physical line number, text) of each command: a line whose last
-    non-blank character is ``&`` continues on the next one (``input.cpp``
-    ``file()``: the ``&`` is dropped, the next line appended as is)."""
-    try:
-        text = path.read_text()
-    except OSError as exc:
-        raise ScriptError(f"cannot read the input script ({exc.strerror}).", file=path,
-                          fix="check the path.") from None
-    except UnicodeDecodeError as exc:
-        line = exc.object[: exc.start].count(b"\n") + 1
-        raise ScriptError(f"byte 0x{exc.object[exc.start]:02x} at offset {exc.start} is not UTF-8 text; "
-                          "expected a LIGGGHTS input script.", file=path, line=line,
-                          fix="pass the input script (a text file), or remove the damaged bytes.") from None
-    start, pending = 0, ""
-    for number, raw in enumerate(text.splitlines(), start=1):
-        body = raw.rstrip()
-        if not pending:
-            start = number
-        if body.endswith("&"):
-            pending += body[:-1]
-            continue
-        yield start, pending + body
-        pending = ""
-    if pending:
-        yield start, pending
-
-
-def _strip_comment(text: str) -> str:
-    quote = ""
-    for i, ch in enumerate(text):
-        if ch == "#" and not quote:
-            return text[:i]
-        if ch == quote:
-            quote = ""
-        elif not quote and ch in "\"'":
-            quote = ch
-    return text
-
-
-def _split_words(text: str, where: _Where) -> list[str]:
-    """Words of a line; quoted text is one word, quotes stripped (``nextword``)."""
-    words, i, n = [], 0, len(text)
-    while True:
-        while i < n and text[i].isspace():
-            i += 1
-        if i >= n:
-            return words
-        if text[i] in "\"'":
-            stop = text.find(text[i], i + 1)
-            if stop < 0:
-                raise ScriptError(f"unbalanced quotes in: {text.strip()!r}.", file=where.file,
-                                  line=where.line, fix="close the quote.")
-            if stop + 1 < n and not text[stop + 1].isspace():
-                raise ScriptError(f"a closing quote must be followed by a blank: {text.strip()!r}.",
-                                  file=where.file, line=where.line, fix="add a space after the quote.")
-            words.append(text[i + 1:stop])
-            i = stop + 1
-        else:
-            j = i
-            while j < n and not text[j].isspace():
-                j += 1
-            words.append(text[i:j])
-            i = j
-
-
-# --------------------------------------------------------------------------
-# Variables and a small arithmetic evaluator for equal-style formulas
-# --------------------------------------------------------------------------
-
-_TOKEN = re.compile(r"\s*(?:(?P<num>(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)|(?P<name>[A-Za-z_]\w*)|(?P<op>[-+*/^(),]))")
-_FUNCTIONS = {"sqrt": math.sqrt, "exp": math.exp, "ln": math.log, "log": math.log10, "abs": abs,
-              "sin": math.sin, "cos": math.cos, "tan": math.tan, "asin": math.asin,
-              "acos": math.acos, "atan": math.atan, "floor": math.floor, "ceil": math.ceil,
-              "round": round}
-_CONSTANTS = {"PI": math.pi}
-
-
-class _Variables:
-    """LAMMPS variables as LIGGGHTS' ``Variable`` class keeps them: ``index``,
-    ``loop``, ``world``, ``universe``, ``uloop`` (first value), ``string``,
-    ``equal`` (a formula, evaluated when used), ``getenv``. Command-line values
-    are index variables defined first, so the script cannot redefine them."""
-
-    def __init__(self, cli: dict[str, str]) -> None:
-        self.values: dict[str, tuple[str, str]] = {k: ("index", str(v)) for k, v in cli.items()}
-        self.cli = set(cli)
-
-    def define(self, words: list[str], where: _Where) -> None:
-        if len(words) < 2:
-            raise ScriptError(f"variable command needs NAME STYLE ARGS, got {words}.",
-                              file=where.file, line=where.line, fix="complete the variable command.")
-        name, style, args = words[0], words[1], words[2:]
-        if name in self.cli:
-            return
-        if style == "delete":
-            self.values.pop(name, None)
-            return
-        if style in ("index", "loop", "world", "universe", "uloop") and name in self.values:
-            return  # the first definition wins (variable.cpp: "if (find(arg[0]) >= 0) return")
-        if style in ("index", "loop", "world", "universe", "uloop", "string", "equal", "getenv") and not args:
-            raise ScriptError(f"variable {name} {style} needs a value.", file=where.file,
-                              line=where.line, fix=f"give variable {name} a value.")
-        if style == "loop":  # loop N [pad] counts from 1, loop N1 N2 [pad] from N1
-            value = "1" if len(args) == 1 or args[1] == "pad" else args[0]
-        elif style in ("index", "world", "universe", "uloop", "string"):
-            value = args[0]
-        elif style == "equal":
-            value = " ".join(args)
-        elif style == "getenv":
-            value = os.environ.get(args[0], "")
-        else:  # atom, atomfile, file, python...: values demsplit cannot know
-            value = ""
-        self.values[name] = (style, value)
-
-    def retrieve(self, name: str, where: _Where, depth: int = 0) -> str:
-        """Text a ``${name}`` reference becomes (equal-style: ``%.15g``)."""
-        if name not in self.values:
-            raise ScriptError(
-                f"variable {name!r} is used but not defined.", file=where.file, line=where.line,
-                fix=f"define it in the script ('variable {name} index VALUE') or pass "
-                f"variables={{'{name}': VALUE}} (LIGGGHTS: -var {name} VALUE).")
-        style, value = self.values[name]
-        if style == "equal":
-            return f"{self.evaluate(value, where, depth + 1):.15g}"
-        if style not in ("index", "loop", "world", "universe", "uloop", "string", "getenv"):
-            raise _Unevaluable(f"variable {name} is {style}-style")
-        return value
-
-    def evaluate(self, expr: str, where: _Where, depth: int = 0) -> float:
-        """Value of an equal-style formula: numbers, ``+ - * / ^``, parentheses,
-        ``v_name``, ``PI`` and the functions in ``_FUNCTIONS``. Unary minus
-        binds tighter than ``^`` in LIGGGHTS 3.8 (measured: ``-2^2`` is 4)."""
-        if depth > 50:
-            raise ScriptError(f"variables refer to each other in a loop ({expr!r}).", file=where.file,
-                              line=where.line, fix="break the circular variable definitions.")
-        tokens, pos = [], 0
-        expr = expr.strip()
-        while pos < len(expr):
-            m = _TOKEN.match(expr, pos)
-            if not m or m.end() == pos:
-                raise _Unevaluable(f"cannot evaluate {expr!r}")
-            tokens.append((m.lastgroup, m.group(m.lastgroup)))
-            pos = m.end()
-            while pos < len(expr) and expr[pos].isspace():
-                pos += 1
-        return _Evaluator(tokens, self, where, depth).run(expr)
-
-
-class _Evaluator:
-    """Recursive descent: sum := product (('+'|'-') product)*;
-    product := power (('*'|'/') power)*; power := unary ('^' power)?;
-    unary := '-' unary | '+' unary | atom."""
-
-    def __init__(self, tokens: list[tuple[str, str]], variables: _Variables, where: _Where, depth: int):
-        self.tokens, self.i, self.vars, self.where, self.depth = tokens, 0, variables, where, depth
-
-    def run(self, expr: str) -> float:
-        value = self.sum()
-        if self.i != len(self.tokens):
-            raise _Unevaluable(f"cannot evaluate {expr!r}")
-        return value
-
-    def peek(self) -> str | None:
-        return self.tokens[self.i][1] if self.i < len(self.tokens) else None
-
-    def take(self) -> tuple[str, str]:
-        if self.i >= len(self.tokens):
-            raise _Unevaluable("formula ends too early")
-        self.i += 1
-        return self.tokens[self.i - 1]
-
-    def sum(self) -> float:
-        value = self.product()
-        while self.peek() in ("+", "-"):
-            op = self.take()[1]
-            value = value + self.product() if op == "+" else value - self.product()
-        return value
-
-    def product(self) -> float:
-        value = self.power()
-        while self.peek() in ("*", "/"):
-            op = self.take()[1]
-            right = self.power()
-            if op == "/" and right == 0:
-                raise ScriptError("division by zero in a variable formula.", file=self.where.file,
-                                  line=self.where.line, fix="correct the formula.")
-            value = value * right if op == "*" else value / right
-        return value
-
-    def power(self) -> float:
-        base = self.unary()
-        if self.peek() == "^":
-            self.take()
-            return base ** self.power()
-        return base
-
-    def unary(self) -> float:
-        if self.peek() == "-":
-            self.take()
-            return -self.unary()
-        if self.peek() == "+":
-            self.take()
-            return self.unary()
-        return self.atom()
-
-    def atom(self) -> float:
-        kind, text = self.take()
-        if kind == "num":
-            return float(text)
-        if text == "(":
-            value = self.sum()
-            if self.take()[1] != ")":
-                raise _Unevaluable("missing ')'")
-            return value
-        if kind == "name":
-            if text.startswith("v_"):
-                return float(self.vars.retrieve(text[2:], self.where, self.depth))
-            if text in _CONSTANTS:
-                return _CONSTANTS[text]
-            if text in _FUNCTIONS and self.peek() == "(":
-                self.take()
-                value = self.sum()
-                if self.take()[1] != ")":
-                    raise _Unevaluable(f"{text}() takes one argument here")
-                return float(_FUNCTIONS[text](value))
-        raise _Unevaluable(f"{text!r} is not known before the run")
-
-
-def _substitute(text: str, variables: _Variables, where: _Where) -> str:
-    """Replace ``${name}``, ``$x`` and ``$(expr)`` outside quotes (``Input::substitute``)."""
-    out, i, quote, n = [], 0, "", len(text)
-    while i < n:
-        ch = text[i]
-        if ch == "$" and not quote:
-            if text.startswith("{", i + 1):
-                end = text.find("}", i + 2)
-                if end < 0:
-                    raise ScriptError(f"'${{' without '}}' in: {text.strip()!r}.", file=where.file,
-                                      line=where.line, fix="close the variable name with '}'.")
-                out.append(variables.retrieve(text[i + 2:end], where))
-                i = end + 1
-            elif text.startswith("(", i + 1):
-                level, j = 0, i + 2
-                while j < n and not (text[j] == ")" and level == 0):
-                    level += {"(": 1, ")": -1}.get(text[j], 0)
-                    j += 1
-                if j >= n:
-                    raise ScriptError(f"'$(' without ')' in: {text.strip()!r}.", file=where.file,
-                                      line=where.line, fix="close the immediate variable with ')'.")
-                out.append(f"{variables.evaluate(text[i + 2:j], where):.20g}")
-                i = j + 1
-            elif i + 1 < n:
-                out.append(variables.retrieve(text[i + 1], where))
-                i += 2
-            else:
-                raise ScriptError("'$' at the end of a line.", file=where.file, line=where.line,
-                                  fix="remove the '$' or name a variable after it.")
-            continue
-        if ch == quote:
-            quote = ""
-        elif not quote and ch in "\"'":
-            quote = ch
-        out.append(ch)
-        i += 1
-    return "".join(out)
-
-
 # --------------------------------------------------------------------------
 # Contact models
 # --------------------------------------------------------------------------
@@ -566,7 +287,7 @@ class _ModelSpec:
     tangential: str
     rolling: str
     settings: dict[str, str]
-    where: _Where
+    where: Where
 
     def on(self, name: str) -> bool:
         return self.settings.get(name, "off") in ("on", "yes")
@@ -576,7 +297,7 @@ class _ModelSpec:
                                elastic_potential=self.on("computeElasticPotential"))
 
 
-def _parse_model(words: list[str], stop: tuple[str, ...], where: _Where,
+def _parse_model(words: list[str], stop: tuple[str, ...], where: Where,
                  warnings: list[str], what: str) -> tuple[_ModelSpec, int]:
     """Parse ``model X tangential Y [cohesion C] [rolling_friction R] [surface S]
     [setting on|off ...]`` up to a word in ``stop``; return the spec and the
@@ -670,22 +391,22 @@ def _format_full_precision(fmt: str, local: bool) -> bool:
 class _Reader:
     def __init__(self, path: Path, variables: dict[str, str]) -> None:
         self.root = path
-        self.vars = _Variables(variables)
+        self.vars = Variables(variables)
         self.warnings: list[str] = []
         self.units: str | None = None
         self.periodic = (False, False, False)
         self.ntypes: int | None = None
-        self.properties: dict[str, tuple[str, object, _Where]] = {}
+        self.properties: dict[str, tuple[str, object, Where]] = {}
         self.pair: _ModelSpec | None = None
         self.walls: dict[str, tuple[list[Wall], _ModelSpec, bool]] = {}
         self.meshes: dict[str, Wall] = {}
-        self.computes: dict[str, tuple[str, list[str], _Where]] = {}
+        self.computes: dict[str, tuple[str, list[str], Where]] = {}
         self.dumps: dict[str, DumpSpec] = {}
-        self.dump_where: dict[str, _Where] = {}
+        self.dump_where: dict[str, Where] = {}
         self.gravity: np.ndarray | None = None
         self.timestep: float | None = None
         self.run_steps: list[int] = []
-        self.type_uses: list[tuple[int, str, _Where]] = []
+        self.type_uses: list[tuple[int, str, Where]] = []
         self.include_stack: list[Path] = []
 
     # -- driver ------------------------------------------------------------
@@ -695,18 +416,18 @@ class _Reader:
             raise ScriptError(f"{path} includes itself.", file=self.include_stack[-1],
                               fix="remove the circular include.")
         self.include_stack.append(path)
-        for number, text in _logical_lines(path):
-            self.command(text, _Where(path, number))
+        for number, text in logical_lines(path):
+            self.command(text, Where(path, number))
         self.include_stack.pop()
 
-    def command(self, text: str, where: _Where) -> None:
-        stripped = _strip_comment(text)
+    def command(self, text: str, where: Where) -> None:
+        stripped = strip_comment(text)
         words0 = stripped.split()
         if not words0:
             return
         try:
-            words = _split_words(_substitute(stripped, self.vars, where), where)
-        except _Unevaluable as exc:
+            words = split_words(substitute(stripped, self.vars, where), where)
+        except Unevaluable as exc:
             if words0[0] in _INTERPRETED:
                 raise ScriptError(f"{exc}: its value is only known while LIGGGHTS runs.",
                                   file=where.file, line=where.line,
@@ -723,34 +444,34 @@ class _Reader:
             self.warnings.append(f"{where.file}:{where.line}: '{name}' is not followed; demsplit reads "
                                  "the script once, top to bottom.")
 
-    def error(self, cls: type[DemsplitError], message: str, where: _Where, fix: str) -> DemsplitError:
+    def error(self, cls: type[DemsplitError], message: str, where: Where, fix: str) -> DemsplitError:
         return cls(message, file=where.file, line=where.line, fix=fix)
 
-    def number(self, text: str, where: _Where, what: str) -> float:
+    def number(self, text: str, where: Where, what: str) -> float:
         try:
             return float(text)
         except ValueError:
             raise self.error(ScriptError, f"{what}: expected a number, found {text!r}.", where,
                              "write a number (or a variable that holds one).") from None
 
-    def integer(self, text: str, where: _Where, what: str) -> int:
+    def integer(self, text: str, where: Where, what: str) -> int:
         try:
             return int(text)
         except ValueError:
             raise self.error(ScriptError, f"{what}: expected an integer, found {text!r}.", where,
                              "write an integer.") from None
 
-    def need(self, args: list[str], n: int, where: _Where, what: str, syntax: str) -> None:
+    def need(self, args: list[str], n: int, where: Where, what: str, syntax: str) -> None:
         if len(args) < n:
             raise self.error(ScriptError, f"{what}: expected '{syntax}', found {' '.join(args)!r}.",
                              where, f"write '{syntax}'.")
 
     # -- commands ----------------------------------------------------------
 
-    def cmd_variable(self, args: list[str], where: _Where) -> None:
+    def cmd_variable(self, args: list[str], where: Where) -> None:
         self.vars.define(args, where)
 
-    def cmd_include(self, args: list[str], where: _Where) -> None:
+    def cmd_include(self, args: list[str], where: Where) -> None:
         self.need(args, 1, where, "include", "include FILE")
         target = Path(args[0])
         if not target.is_absolute():
@@ -760,46 +481,46 @@ class _Reader:
                              "check the path (relative paths are taken from the main script's directory).")
         self.read(target)
 
-    def cmd_units(self, args: list[str], where: _Where) -> None:
+    def cmd_units(self, args: list[str], where: Where) -> None:
         self.need(args, 1, where, "units", "units si")
         if args[0] != "si":
             raise self.error(UnsupportedModelError, f"units {args[0]!r}: demsplit reads SI runs only.",
                              where, "run the simulation with 'units si'.")
         self.units = "si"
 
-    def cmd_boundary(self, args: list[str], where: _Where) -> None:
+    def cmd_boundary(self, args: list[str], where: Where) -> None:
         self.need(args, 3, where, "boundary", "boundary X Y Z")
         self.periodic = tuple("p" in a for a in args[:3])
 
-    def cmd_create_box(self, args: list[str], where: _Where) -> None:
+    def cmd_create_box(self, args: list[str], where: Where) -> None:
         self.need(args, 1, where, "create_box", "create_box NTYPES REGION")
         self.ntypes = self.integer(args[0], where, "create_box")
 
-    def cmd_timestep(self, args: list[str], where: _Where) -> None:
+    def cmd_timestep(self, args: list[str], where: Where) -> None:
         self.need(args, 1, where, "timestep", "timestep DT")
         self.timestep = self.number(args[0], where, "timestep")
 
-    def cmd_run(self, args: list[str], where: _Where) -> None:
+    def cmd_run(self, args: list[str], where: Where) -> None:
         self.need(args, 1, where, "run", "run N")
         self.run_steps.append(self.integer(args[0], where, "run"))
 
-    def cmd_create_atoms(self, args: list[str], where: _Where) -> None:
+    def cmd_create_atoms(self, args: list[str], where: Where) -> None:
         if args and args[0].isdigit():
             self.type_uses.append((int(args[0]), "create_atoms", where))
 
-    def cmd_pair_style(self, args: list[str], where: _Where) -> None:
+    def cmd_pair_style(self, args: list[str], where: Where) -> None:
         self.need(args, 1, where, "pair_style", "pair_style gran model hertz tangential history")
         if args[0] != "gran":
             raise self.error(UnsupportedModelError, f"pair_style {args[0]!r} is not supported.", where,
                              "use 'pair_style gran model hertz|hooke tangential history|no_history'.")
         self.pair, _ = _parse_model(args[1:], (), where, self.warnings, "pair_style gran")
 
-    def cmd_unfix(self, args: list[str], where: _Where) -> None:
+    def cmd_unfix(self, args: list[str], where: Where) -> None:
         if args and args[0] in self.walls:
             self.warnings.append(f"{where.file}:{where.line}: wall fix {args[0]} is removed here; it "
                                  "stays in the scene's wall list for the frames before.")
 
-    def cmd_fix(self, args: list[str], where: _Where) -> None:
+    def cmd_fix(self, args: list[str], where: Where) -> None:
         self.need(args, 3, where, "fix", "fix ID GROUP STYLE ...")
         fid, style, rest = args[0], args[2], args[3:]
         if style == "property/global":
@@ -823,7 +544,7 @@ class _Reader:
             self.warnings.append(f"{where.file}:{where.line}: fix style {style} ({fid}) is not "
                                  "interpreted by demsplit; check that it does not change the contacts.")
 
-    def property_global(self, fid: str, rest: list[str], where: _Where) -> None:
+    def property_global(self, fid: str, rest: list[str], where: Where) -> None:
         self.need(rest, 2, where, f"fix {fid} property/global", "NAME STYLE VALUES")
         name, style, values = rest[0], rest[1], rest[2:]
         what = f"fix {fid} property/global {name}"
@@ -850,7 +571,7 @@ class _Reader:
             value = np.array(nums)
         self.properties[name] = (style, value, where)
 
-    def fix_gravity(self, rest: list[str], where: _Where) -> None:
+    def fix_gravity(self, rest: list[str], where: Where) -> None:
         self.need(rest, 2, where, "fix gravity", "fix ID GROUP gravity G vector X Y Z")
         if rest[1] != "vector" or len(rest) < 5:
             self.warnings.append(f"{where.file}:{where.line}: fix gravity style {rest[1]!r} is not read; "
@@ -869,7 +590,7 @@ class _Reader:
                              "give a non-zero direction.")
         self.gravity = g * d / norm
 
-    def mesh_surface(self, fid: str, rest: list[str], where: _Where) -> None:
+    def mesh_surface(self, fid: str, rest: list[str], where: Where) -> None:
         syntax = "fix ID GROUP mesh/surface file FILE type T [scale S] [move DX DY DZ] [rotate axis AX AY AZ angle DEG]"
         self.need(rest, 4, where, f"fix {fid} mesh/surface", syntax)
         if rest[0] != "file" or rest[2] != "type":
@@ -906,7 +627,7 @@ class _Reader:
         self.meshes[fid] = wall
         self.type_uses.append((wall_type, f"fix {fid} mesh/surface", where))
 
-    def wall_gran(self, fid: str, rest: list[str], where: _Where) -> None:
+    def wall_gran(self, fid: str, rest: list[str], where: Where) -> None:
         what = f"fix {fid} wall/gran"
         spec, i = _parse_model(rest, ("primitive", "mesh"), where, self.warnings, what)
         if i >= len(rest):
@@ -957,13 +678,13 @@ class _Reader:
         spec.settings.update({a: b for a, b in zip(tail, tail[1:]) if b in ("on", "off")})
         self.walls[fid] = (walls, spec, rest[i] == "mesh")
 
-    def cmd_compute(self, args: list[str], where: _Where) -> None:
+    def cmd_compute(self, args: list[str], where: Where) -> None:
         self.need(args, 3, where, "compute", "compute ID GROUP STYLE ...")
         style = args[2]
         if style in ("pair/gran/local", "wall/gran/local"):
             self.computes[args[0]] = (style.split("/")[0], args[3:], where)
 
-    def cmd_dump(self, args: list[str], where: _Where) -> None:
+    def cmd_dump(self, args: list[str], where: Where) -> None:
         self.need(args, 5, where, "dump", "dump ID GROUP STYLE N FILE ...")
         did, style = args[0], args[2]
         every = self.integer(args[3], where, f"dump {did} N")
@@ -973,7 +694,7 @@ class _Reader:
         self.dumps[did] = DumpSpec(id=did, style=style, every=every, file=str(file), keywords=args[5:])
         self.dump_where[did] = where
 
-    def cmd_dump_modify(self, args: list[str], where: _Where) -> None:
+    def cmd_dump_modify(self, args: list[str], where: Where) -> None:
         self.need(args, 1, where, "dump_modify", "dump_modify ID KEYWORD VALUE ...")
         dump = self.dumps.get(args[0])
         if dump is None:
@@ -1126,8 +847,8 @@ class _Reader:
         variables = {}
         for name in self.vars.values:
             try:
-                variables[name] = self.vars.retrieve(name, _Where(self.root, 0))
-            except (_Unevaluable, DemsplitError):
+                variables[name] = self.vars.retrieve(name, Where(self.root, 0))
+            except (Unevaluable, DemsplitError):
                 continue
         return LiggghtsScript(
             path=self.root, scene=scene, periodic=self.periodic, dumps=list(self.dumps.values()),
