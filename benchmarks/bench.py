@@ -92,13 +92,13 @@ def child(name: str, d: Path, work: Path, index_file: str) -> dict:
     """Run one measurement in this (fresh) process; return what it wants reported."""
     script, atoms, pairs = d / "in.bench", d / "atoms.txt", d / "pairs.txt"
     if name == "imports":  # what demsplit run -q imports (its kernel modules import numba)
-        import h5py  # noqa: F401
         import demsplit.cli  # noqa: F401
         import demsplit.kernels  # noqa: F401
         import demsplit.pipeline  # noqa: F401
         import demsplit.readers.fastparse  # noqa: F401
         import demsplit.readers.liggghts  # noqa: F401
         import demsplit.results.store  # noqa: F401
+        import h5py  # noqa: F401
         return {}
     if name == "warm-up":
         from demsplit.cli import main
@@ -215,7 +215,6 @@ def _ovito(atoms: Path, pairs: Path) -> dict:
 
 def _kernel(script: Path, work: Path) -> dict:
     import numpy as np
-
     from demsplit.frame import ParticleIndex
     from demsplit.physics.bodies import ContactBodies
     from demsplit.physics.partition import contact_energies, partition, per_particle
@@ -408,7 +407,8 @@ def report(m: dict, d: Path, load0, load1, repeat: int) -> None:
         base = m["imports"]["peak_rss_mb"]
         print(f"\npeak memory above imports ({base:.0f} MB), in units of one frame's arrays "
               f"({fb:.0f} MiB: particles + contacts tables)")
-        for n in ("demsplit-run", "demsplit-run-gzip", "demsplit-run-lzf", "demsplit-run-nocompress", "demsplit-run-nocompare", "demsplit-run-nocontacts", "demsplit-compute",
+        for n in ("demsplit-run", "demsplit-run-gzip", "demsplit-run-lzf", "demsplit-run-nocompress",
+                  "demsplit-run-nocompare", "demsplit-run-nocontacts", "demsplit-compute",
                   "demsplit-read", "cache-read", "convert"):
             if n in m and "error" not in m[n]:
                 print(f"  {n:28s} {(m[n]['peak_rss_mb'] - base) / fb:6.2f}x")

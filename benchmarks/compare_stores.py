@@ -13,7 +13,6 @@ from __future__ import annotations
 import sys
 
 import numpy as np
-
 from demsplit.results import TABLES, load_results
 
 

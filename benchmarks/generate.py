@@ -42,7 +42,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-
 from demsplit.physics.elastic import hertz_force
 from demsplit.physics.moduli import effective_radius, effective_shear_modulus
 
@@ -232,7 +231,8 @@ pair_style      gran model hertz tangential history
 pair_coeff      * *
 timestep        2.0e-6
 
-compute cpgl all pair/gran/local pos vel id force force_normal force_tangential torque torque_normal torque_tangential history contactArea delta contactPoint
+compute cpgl all pair/gran/local pos vel id force force_normal force_tangential &
+    torque torque_normal torque_tangential history contactArea delta contactPoint
 
 dump datoms all custom {EVERY} {atoms} {' '.join(ATOM_COLUMNS)}
 dump dpair  all local {EVERY} {pairs} {local}

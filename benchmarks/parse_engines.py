@@ -159,7 +159,7 @@ def parse(engine: str, path: Path, usecols: list[int]) -> dict[int, np.ndarray]:
 def run_one(engine: str, path: str, usecols: list[int]) -> None:
     """Child process: time one parse, print JSON (seconds, peak RSS MiB above
     the RSS after importing every engine, rows)."""
-    import pandas, polars, pyarrow.csv  # noqa: F401  (imports are not timed)
+    import pyarrow.csv  # noqa: F401  (imports are not timed)
 
     base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     t0 = time.perf_counter()

@@ -44,10 +44,10 @@ from __future__ import annotations
 
 import argparse
 import time
+from functools import partial
 from pathlib import Path
 
 import numpy as np
-
 from demsplit.frame import ParticleIndex, take_rows
 from demsplit.physics.partition import ContactLawEnergy, contact_energies, partition, per_particle
 from demsplit.readers.lammps_dump import open_dump
@@ -127,7 +127,7 @@ def study(frames: dict[str, list], reference: list, scene, fns, min_time: float)
                 has = pr["u"] > 0
                 per_part.append(np.abs(pt["u"] - pr["u"])[has] / pr["u"][has])
                 per_frame.append(abs(pt["u"].sum() - pr["u"].sum()) / pr["u"].sum())
-                t_total += timed(lambda: compute(variant, c, p, scene, split, fn), min_time)
+                t_total += timed(partial(compute, variant, c, p, scene, split, fn), min_time)
                 n_total += len(c["delta"])
             rows.append({"variant": variant, "split": split, "contacts_per_s": n_total / t_total,
                          "contact": stats(np.concatenate(per_contact)),

@@ -25,12 +25,11 @@ import tempfile
 import time
 import zlib
 
-import numpy as np
-from isal import isal_zlib
-
 import demsplit.results.store as S
+import numpy as np
 from demsplit.pipeline import Options, frame_tables
 from demsplit.readers import open_run
+from isal import isal_zlib
 
 
 def real_frames(path: str) -> list[dict]:

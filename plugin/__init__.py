@@ -4,26 +4,29 @@ Each contact's elastic energy (normal and tangential, with the contact law the
 run used) is split between the two bodies by the Feng & Gao distribution law,
 and the contact point is placed by the same ratio.
 
-The physics core (:mod:`demsplit.physics`) needs only numpy and is imported eagerly, so ``demsplit.yade`` works inside YADE's own
-Python. Everything that needs pandas, h5py or matplotlib is imported on first
-use.
+The physics core (:mod:`demsplit.physics`) needs only numpy and is imported
+eagerly, so ``demsplit.yade`` works inside YADE's own Python. Everything that
+needs pandas, h5py or matplotlib is imported on first use.
 """
 
 from __future__ import annotations
 
 from importlib import import_module
 
-from .errors import (ContactError, DemsplitError, InputFormatError, MaterialError, PrecisionError,
-                     ScriptError, StoreError, TruncatedFileError, UnsupportedModelError)
+from .errors import (
+    ContactError, DemsplitError, InputFormatError, MaterialError, PrecisionError, ScriptError, StoreError,
+    TruncatedFileError, UnsupportedModelError,
+)
 from .frame import Box, Frame
-from .physics.elastic import (hertz_energy, hertz_force, hooke_energy, power_law_energy, shear_spring_energy,
-                              tangential_spring_energy)
+from .physics.elastic import (
+    hertz_energy, hertz_force, hooke_energy, power_law_energy, shear_spring_energy, tangential_spring_energy,
+)
 from .physics.laws.yade_mindlin import hertz_energy_from_kno
-from .physics.moduli import (effective_modulus, effective_radius, effective_shear_modulus, mindlin_compliance,
-                             plane_strain_compliance)
+from .physics.moduli import (
+    effective_modulus, effective_radius, effective_shear_modulus, mindlin_compliance, plane_strain_compliance,
+)
 from .physics.partition import ContactEnergy, contact_energies, partition, per_particle
-from .physics.shares import (contact_point, normal_share, overlap_depths, radius_share, springs_share,
-                             tangential_share)
+from .physics.shares import contact_point, normal_share, overlap_depths, radius_share, springs_share, tangential_share
 from .scene import ContactModel, Material, Scene, Wall
 
 __version__ = "0.1.0"

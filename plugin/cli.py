@@ -157,8 +157,8 @@ def cmd_check(args: argparse.Namespace) -> int:
 
 
 def cmd_report(args: argparse.Namespace) -> int:
-    from .results.report import text_summary, write_html
     from .results import load_results
+    from .results.report import text_summary, write_html
 
     results = load_results(args.results)
     if args.output:
@@ -217,7 +217,8 @@ def build_parser() -> argparse.ArgumentParser:
     _add_input(p)
     p.add_argument("-o", "--output", required=True, help="output HDF5 file")
     p.add_argument("--jobs", "-j", type=int, default=1, help="worker processes (frames in parallel)")
-    p.add_argument("--dask", metavar="ADDRESS", help="run on a Dask cluster: tcp://HOST:PORT, a scheduler file, or local:N")
+    p.add_argument("--dask", metavar="ADDRESS",
+                   help="run on a Dask cluster: tcp://HOST:PORT, a scheduler file, or local:N")
     p.add_argument("--resume", action="store_true", help="continue an interrupted run from its last complete frame")
     p.add_argument("--on-bad-frame", choices=("stop", "skip"), default="stop",
                    help="stop at a bad frame (default), or skip it and list it in the output")

@@ -60,7 +60,7 @@ class DemsplitError(Exception):
         file: str | Path | None = None,
         step: int | None = None,
         line: int | None = None,
-    ) -> "DemsplitError":
+    ) -> DemsplitError:
         """Return a copy of this error with missing location facts filled in."""
         return type(self)(
             self.message,

@@ -23,7 +23,7 @@ from .fingerprint import hash_in_background
 from .frame import CONTACT_REQUIRED, PARTICLE_REQUIRED, Frame, ParticleIndex, require_columns
 from .physics.bodies import ContactBodies
 from .physics.modes import MODE_COLUMNS
-from .physics.partition import contact_energies, partition, particle_energy, per_particle
+from .physics.partition import contact_energies, particle_energy, partition, per_particle
 from .scene import Scene
 
 Tables = dict[str, dict[str, np.ndarray]]

@@ -15,6 +15,7 @@ import numpy as np
 from .errors import MaterialError, UnsupportedModelError
 from .physics import laws
 
+
 @dataclass(frozen=True)
 class Material:
     """Elastic constants of one material.

@@ -356,7 +356,8 @@ def npy_records(path: Path) -> tuple[list[tuple[int, int]], str | None]:
             head = f.read(RECORD_HEAD)
             k = len(records)
             if len(head) < RECORD_HEAD or not head.startswith(b"DSREC ") or head[-1:] != b"\n":
-                return records, f"snapshot {k} at byte {offset} is cut short or damaged: its record header reads {head[:24]!r}"
+                return records, (f"snapshot {k} at byte {offset} is cut short or damaged: its record header "
+                                 f"reads {head[:24]!r}")
             length = int(head[6:22])
             end = offset + RECORD_HEAD + length
             f.seek(end)

@@ -34,7 +34,6 @@ produces a different number.
 from __future__ import annotations
 
 import numpy as np
-
 from demsplit.jit import kernel
 
 __all__ = ["scan_chunk", "count_newlines", "next_newline", "parse_rows", "OK", "SHAPE", "FALLBACK"]

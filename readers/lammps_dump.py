@@ -105,7 +105,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING, BinaryIO
 
 import numpy as np
-
 from demsplit.errors import DemsplitError, InputFormatError, PrecisionError, TruncatedFileError
 from demsplit.frame import Box, describe_steps
 from demsplit.threads import THREADS, pool
@@ -225,7 +224,7 @@ class _BinaryEntry:
 
 # --------------------------------------------------------------------------- opening
 
-def open_dump(path: str | Path, columns: Sequence[str] | None = None) -> "DumpFile":
+def open_dump(path: str | Path, columns: Sequence[str] | None = None) -> DumpFile:
     """Open a LAMMPS/LIGGGHTS dump, sniffing its format from its first bytes.
 
     ``columns`` names the columns of a binary dump (which carries none); for a
@@ -345,7 +344,8 @@ class DumpFile(ABC):
         """The first frame written at timestep ``step``."""
         hits = np.flatnonzero(self.steps == step)
         if hits.size == 0:
-            raise InputFormatError(f"no frame at timestep {step}; the dump has {len(self.steps)} frame(s), steps {describe_steps(self.steps)}",
+            raise InputFormatError(f"no frame at timestep {step}; the dump has {len(self.steps)} frame(s), "
+                                   f"steps {describe_steps(self.steps)}",
                                    file=self.path, step=step, fix="pick one of the dumped timesteps")
         return self.frame(int(hits[0]), columns)
 
@@ -521,7 +521,7 @@ class TextDump(DumpFile):
                          {n: digits[i] for n, i in zip(names, idx)})
 
     def _parse_block(self, e: _TextEntry, block: bytes, row: int, n: int, trailing: bool,
-                     cols: "_Columns") -> None:
+                     cols: _Columns) -> None:
         """polars parse of one block of ``n`` whole, well-formed rows (the fallback of
         the compiled parse) into ``cols`` from ``row`` on; an integer-looking column
         that holds a real here turns every integer column of the frame into float64."""
@@ -567,7 +567,7 @@ class TextDump(DumpFile):
                                 line=e.first_line + row0, fix=FIX_COUNT)
 
 
-def _csv(block: bytes, n_fields: int, dtypes: dict[int, np.dtype]) -> "pl.DataFrame":
+def _csv(block: bytes, n_fields: int, dtypes: dict[int, np.dtype]) -> pl.DataFrame:
     """polars (multi-threaded, compiled) parse of whole rows of ``n_fields`` fields: only
     the columns ``dtypes`` names (0-based) are converted, to Int64 or Float64."""
     import polars as pl
@@ -880,7 +880,7 @@ def _digits(sample: tuple[np.ndarray, np.ndarray, np.ndarray], ncols: int, idx: 
     real = ~int_like
     precision = int(observed[:ncols][real].max()) if real.any() else 0
     out: dict[int, int | None] = {}
-    for (name, values), i in zip(cols.items(), idx):
+    for (_name, values), i in zip(cols.items(), idx):
         if values.dtype.kind in "iu":
             out[i] = None
         elif np.unique(values[: max(1, int(np.count_nonzero(col == i)))]).size <= LOW_VARIETY:

@@ -38,12 +38,12 @@ import numpy as np
 
 from ..errors import ContactError, InputFormatError, MaterialError, PrecisionError
 from ..frame import Box, Frame, ParticleIndex, Table, describe_steps
-from ..scene import Material, Scene
 from ..physics.shares import contact_point
-from .liggghts_walls import primitive_wall_contacts
+from ..scene import Material, Scene
 from .base import Run
 from .lammps_dump import HEADER_LINES, DumpFile, DumpFrame, open_dump
 from .liggghts_script import read_script
+from .liggghts_walls import primitive_wall_contacts
 from .precision import position_error, printed_step, relative_rounding
 
 DEFAULT_OVERLAP_TOLERANCE = 1e-3
@@ -424,7 +424,8 @@ class LiggghtsRun(Run):
 
     def _pairs(self, pf: DumpFrame, index: ParticleIndex, xyzr: np.ndarray, h: np.ndarray | None,
                box: Box) -> Table:
-        from demsplit.kernels import pair_geometry, repeated_pair as repeated_rows  # compiled, lazily
+        from demsplit.kernels import pair_geometry  # compiled, lazily
+        from demsplit.kernels import repeated_pair as repeated_rows
 
         names = self._pair_names
         col = {c: pf.columns[t] for c, t in names.items() if t in pf.columns}
@@ -515,7 +516,8 @@ class LiggghtsRun(Run):
             raise ContactError(exc.message, file=f.file, step=f.step, line=f.line_of(row), fix=exc.fix) from None
 
     @staticmethod
-    def _delta_error(f: DumpFrame, names: dict[str, str], h: np.ndarray, delta_from_positions: np.ndarray) -> np.ndarray:
+    def _delta_error(f: DumpFrame, names: dict[str, str], h: np.ndarray,
+                     delta_from_positions: np.ndarray) -> np.ndarray:
         """Relative error bound of each contact's overlap: the rounding of the
         dumped ``delta`` column, or the position bound when there is none."""
         token = names.get("delta")

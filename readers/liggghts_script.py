@@ -68,18 +68,18 @@ format prints garbage, because every ``c_`` value is a double (measured:
 from __future__ import annotations
 
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 
 from ..errors import DemsplitError, MaterialError, ScriptError, UnsupportedModelError
-from .lammps_input import Unevaluable, Variables, Where, logical_lines, split_words, strip_comment, substitute
 from ..physics.laws import law_class
 from ..physics.laws._liggghts import SHEAR as SHEAR_COLUMNS
 from ..physics.laws._liggghts import TANGENTIAL_MODELS
 from ..scene import ContactModel, Material, Scene, Wall
+from .lammps_input import Unevaluable, Variables, Where, logical_lines, split_words, strip_comment, substitute
 
 __all__ = ["read_script", "LiggghtsScript", "DumpSpec", "LocalLayout", "local_layout", "history_columns"]
 
@@ -741,7 +741,7 @@ class _Reader:
             raise ScriptError(f"the script defines no {' and no '.join(missing)}.", file=self.root,
                               fix="add 'fix ID all property/global youngsModulus|poissonsRatio "
                               "peratomtype V1 ... VN'.")
-        for name, (style, values, where) in found.items():
+        for name, (style, _values, where) in found.items():
             if style != "peratomtype":
                 raise self.error(MaterialError, f"{name} must be given 'peratomtype', found {style!r}.",
                                  where, f"write 'property/global {name} peratomtype V1 ... VN'.")

@@ -31,13 +31,11 @@ What the files hold (yade 2023.02a, py/export.py):
 
 from __future__ import annotations
 
-from pathlib import Path
-
-import numpy as np
-
 import re
+from pathlib import Path
 from typing import Any
 
+import numpy as np
 from demsplit.errors import InputFormatError, MaterialError, PrecisionError
 from demsplit.frame import Box, Frame, Table
 from demsplit.scene import ContactModel, Material, Scene, Wall
@@ -49,7 +47,8 @@ from .yade_snapshot import particle_first
 SNAPSHOT_FIX = ("write full-precision snapshots with demsplit.yade.snapshot() from a PyRunner "
                 "(see docs/yade.md), or raise the tolerance")
 VTK_ID_FIX = ("export with VTKExporter.exportSpheres(what=dict(id='b.id', matId='b.material.id')) and "
-              "exportInteractions(what=dict(id1='i.id1', id2='i.id2', penetrationDepth='i.geom.penetrationDepth', ...))")
+              "exportInteractions(what=dict(id1='i.id1', id2='i.id2', "
+              "penetrationDepth='i.geom.penetrationDepth', ...))")
 PERCENT_G_DIGITS = 6
 PERCENT_G_MAX_INT = 999_999
 """Integers above this are printed by ``%g`` as ``1.23457e+06``: ids destroyed."""

@@ -22,14 +22,16 @@ import zlib
 from pathlib import Path
 
 import numpy as np
-
-from demsplit.errors import (ContactError, DemsplitError, InputFormatError, MaterialError, TruncatedFileError,
-                             UnsupportedModelError)
+from demsplit.errors import (
+    ContactError, DemsplitError, InputFormatError, MaterialError, TruncatedFileError, UnsupportedModelError,
+)
 from demsplit.frame import Box, Frame, Table
-from demsplit.scene import ContactModel, Material, Scene, Wall
 from demsplit.physics import laws as law_registry
-from demsplit.yade import (FORMAT_NAME, FORMAT_VERSION, HDF5_SIGNATURE, NPY_STREAM_MAGIC, RECORD_TAIL, YADE_PREFIX,
-                           npy_records, sniff_format)
+from demsplit.scene import ContactModel, Material, Scene, Wall
+from demsplit.yade import (
+    FORMAT_NAME, FORMAT_VERSION, HDF5_SIGNATURE, NPY_STREAM_MAGIC, RECORD_TAIL, YADE_PREFIX, npy_records,
+    sniff_format,
+)
 
 from .base import Run
 
@@ -286,7 +288,8 @@ def frame_from_snapshot(meta: dict, tables: dict[str, Table], scene_walls: dict[
             f"{int(bad.sum())} interaction(s) involve no sphere or an unsupported shape, e.g. bodies "
             f"{int(inter['id1'][i])} ({bodies['shape_class'][ra[i]].decode()}) and "
             f"{int(inter['id2'][i])} ({bodies['shape_class'][rb[i]].decode()}).",
-            file=path, step=step, fix="demsplit reads sphere-sphere, sphere-Wall, sphere-Facet and sphere-Box contacts.")
+            file=path, step=step,
+            fix="demsplit reads sphere-sphere, sphere-Wall, sphere-Facet and sphere-Box contacts.")
 
     # Body 2 sits at pos2 + hSize.cellDist in the frame of the normal.
     shift = np.zeros((len(ra), 3))

@@ -24,7 +24,6 @@ from typing import Any, ClassVar
 
 import numpy as np
 import pytest
-
 from demsplit.frame import CONTACT_REQUIRED, PARTICLE_REQUIRED, Frame
 from demsplit.readers import REGISTRY, open_run, reader_for
 from demsplit.readers.cache import convert_run
@@ -100,7 +99,7 @@ class ReaderContract:
                 if frame.n_contacts:
                     normal = np.sqrt(c["nx"] ** 2 + c["ny"] ** 2 + c["nz"] ** 2)
                     np.testing.assert_allclose(normal, 1.0, rtol=1e-5)  # %g normals: 6 digits
-                    assert np.all((c["wall"] >= -1)) and np.all(c["r1"] > 0) and np.all(c["r2"] > 0)
+                    assert np.all(c["wall"] >= -1) and np.all(c["r1"] > 0) and np.all(c["r2"] > 0)
 
     def test_length_steps_and_random_access(self, run_path):
         with self.open(run_path) as run:

@@ -22,10 +22,9 @@ import math
 
 import numpy as np
 import pytest
-
-from demsplit.results.aggregate import gini, size_bins, top_share
 from demsplit.errors import DemsplitError
 from demsplit.results import Results
+from demsplit.results.aggregate import gini, size_bins, top_share
 
 U = np.array([1.0, 2, 3, 4, 0, 10])
 TYPE = np.array([1, 1, 1, 1, 2, 2])

@@ -9,16 +9,13 @@ from pathlib import Path
 import h5py
 import numpy as np
 import pytest
-
 from demsplit.cli import main
 from demsplit.errors import DemsplitError, InputFormatError
 from demsplit.pipeline import analyze
 from demsplit.readers import open_run, reader_for
 from demsplit.readers.cache import FORMAT, CacheRun, convert_run
-
 from reader_contract import ReaderContract, assert_frames_equal
 from test_parallel import assert_same_results
-
 
 SAMPLES = Path(__file__).resolve().parent.parent / "sample_dumps"
 

@@ -9,9 +9,8 @@ import subprocess
 import sys
 from pathlib import Path
 
-import pytest
-
 import demsplit
+import pytest
 
 SAMPLES = Path(__file__).resolve().parent.parent / "sample_dumps"
 PACKING = SAMPLES / "liggghts" / "packing"
@@ -54,7 +53,6 @@ def test_debug_shows_the_traceback(run_dir, tmp_path):
 def test_damaged_store_is_one_message(tmp_path):
     """A store file with the format mark but no tables: report and info say so, exit 2."""
     import h5py
-
     from demsplit.results.store import FORMAT
 
     bad = tmp_path / "weird.h5"
@@ -89,7 +87,8 @@ def test_a_bug_is_an_internal_error_exit_3(monkeypatch, capsys):
     (PACKING / "atoms.bin", ["binary", "frames:   3", "col16"]),
     (SAMPLES / "yade" / "mindlin_box.h5", ["snapshot file", "snapshots: 3", "yade:Law2_ScGeom_MindlinPhys_Mindlin",
                                           "Law2_ScGeom_MindlinPhys_Mindlin", "24000"]),
-    (SAMPLES / "yade" / "cundall_periodic.npys", ["snapshot file", "yade:Law2_ScGeom_FrictPhys_CundallStrack", "periodic True"]),
+    (SAMPLES / "yade" / "cundall_periodic.npys",
+     ["snapshot file", "yade:Law2_ScGeom_FrictPhys_CundallStrack", "periodic True"]),
     (PACKING / "in.packing", ["LIGGGHTS input script", "liggghts:hertz (tangential='history')", "1: E=1e+08 Pa nu=0.25",
                               "wpost (cylinder, type 3)", "dpair17", "full precision"]),
 ])

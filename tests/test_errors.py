@@ -16,11 +16,12 @@ import subprocess
 import sys
 from pathlib import Path
 
-import pytest
-
 import demsplit
-from demsplit import (ContactError, DemsplitError, InputFormatError, MaterialError, PrecisionError, ScriptError,
-                      TruncatedFileError, UnsupportedModelError)
+import pytest
+from demsplit import (
+    ContactError, DemsplitError, InputFormatError, MaterialError, PrecisionError, ScriptError, TruncatedFileError,
+    UnsupportedModelError,
+)
 from demsplit.readers import open_run
 
 PACKING = Path(__file__).resolve().parent.parent / "sample_dumps" / "liggghts" / "packing"

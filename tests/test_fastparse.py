@@ -12,15 +12,14 @@ import sys
 import tempfile
 from pathlib import Path
 
+import demsplit.readers.lammps_dump as ld
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
-
-import demsplit.readers.lammps_dump as ld
 from demsplit.errors import InputFormatError, TruncatedFileError
 from demsplit.readers import fastparse as fp
 from demsplit.readers.lammps_dump import open_dump
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 REPO = Path(__file__).resolve().parent.parent
 SAMPLES = REPO / "sample_dumps" / "liggghts"
@@ -390,7 +389,8 @@ def test_kernels_load_from_the_cache():
             "fp.scan_chunk(a, a.size, np.empty(2, np.int64), np.empty(2, np.int64))\n"
             "fp.count_newlines(a, 0, a.size); fp.next_newline(a, 0)\n"
             "k = (fp.parse_rows, fp.scan_chunk, fp.count_newlines, fp.next_newline)\n"
-            "print(sum(sum(f.stats.cache_misses.values()) for f in k), sum(sum(f.stats.cache_hits.values()) for f in k))\n")
+            "print(sum(sum(f.stats.cache_misses.values()) for f in k), "
+            "sum(sum(f.stats.cache_hits.values()) for f in k))\n")
     env = dict(os.environ)
     env.pop("NUMBA_DISABLE_JIT", None)
     for _ in range(2):

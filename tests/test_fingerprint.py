@@ -8,11 +8,9 @@ import os
 import shutil
 
 import pytest
-
+from conftest import SAMPLES
 from demsplit import fingerprint
 from demsplit.errors import StoreError
-
-from conftest import SAMPLES
 
 
 def test_background_digest_is_the_sha256_and_a_change_invalidates_it(tmp_path):
@@ -52,7 +50,6 @@ def test_a_run_stores_the_sha256_of_every_input(tmp_path):
     import json
 
     import h5py
-
     from demsplit.cli import main
 
     out = tmp_path / "o.h5"

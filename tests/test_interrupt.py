@@ -18,13 +18,12 @@ import sys
 import time
 from pathlib import Path
 
+import demsplit
+import demsplit.results.store
 import h5py
 import numpy as np
 import pandas as pd
 import pytest
-
-import demsplit
-import demsplit.results.store
 
 PACKING = Path(__file__).resolve().parent.parent / "sample_dumps" / "liggghts" / "packing"
 N_FRAMES = 60

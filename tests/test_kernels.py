@@ -11,12 +11,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import demsplit as ds
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
-
-import demsplit as ds
 from demsplit.frame import ParticleIndex
 from demsplit.physics import elastic, formulas, moduli
 from demsplit.physics.bodies import ContactBodies
@@ -24,6 +21,8 @@ from demsplit.physics.partition import contact_energies, particle_energy
 from demsplit.physics.shares import contact_point, normal_share, radius_share, tangential_share
 from demsplit.pipeline import Options, frame_tables
 from demsplit.readers import open_run
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 kernels = pytest.importorskip("demsplit.kernels")
 

@@ -11,7 +11,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from demsplit.errors import InputFormatError, PrecisionError, TruncatedFileError
 from demsplit.readers.lammps_dump import open_dump
 

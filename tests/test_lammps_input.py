@@ -6,7 +6,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-
 from demsplit.errors import ScriptError
 from demsplit.readers.lammps_input import Variables, Where, logical_lines, split_words, substitute
 from demsplit.readers.liggghts_script import read_script

@@ -11,10 +11,9 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
+import demsplit as ds
 import numpy as np
 import pytest
-
-import demsplit as ds
 from demsplit.errors import UnsupportedModelError
 from demsplit.frame import ParticleIndex
 from demsplit.physics import laws

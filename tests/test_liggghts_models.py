@@ -11,14 +11,12 @@ from __future__ import annotations
 import shutil
 import subprocess
 
+import demsplit
 import numpy as np
 import pytest
-
-import demsplit
+from conftest import SAMPLES
 from demsplit.readers import open_run
 from demsplit.readers.lammps_dump import open_dump
-
-from conftest import SAMPLES
 
 V = 0.5  # characteristicVelocity (m/s)
 

@@ -30,10 +30,9 @@ import subprocess
 from dataclasses import dataclass
 from pathlib import Path
 
+import demsplit
 import numpy as np
 import pytest
-
-import demsplit
 from demsplit.cli import main as cli_main
 from demsplit.errors import InputFormatError, MaterialError, PrecisionError, TruncatedFileError
 from demsplit.frame import Frame, ParticleIndex

@@ -12,10 +12,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from demsplit.errors import MaterialError, ScriptError, UnsupportedModelError
-from demsplit.readers.liggghts_script import (
-    CODE_ORDER, DEFAULT_KEYWORDS, local_layout, read_script)
+from demsplit.readers.liggghts_script import CODE_ORDER, DEFAULT_KEYWORDS, local_layout, read_script
 
 HEADER = """\
 units si
@@ -239,7 +237,8 @@ def test_variables_continuation_comments_quotes_include(tmp_path):
 
 
 def test_command_line_variables_win(tmp_path):
-    body = "variable r index 0.2\nvariable r string 0.3\nfix m2 all property/global poissonsRatio peratomtype ${r} $r\n" \
+    body = "variable r index 0.2\nvariable r string 0.3\n" \
+           "fix m2 all property/global poissonsRatio peratomtype ${r} $r\n" \
            "pair_style gran model hertz tangential history\n"
     assert script(tmp_path, body).scene.materials[1].nu == 0.3
     assert script(tmp_path, body, variables={"r": "0.45"}).scene.materials[2].nu == 0.45

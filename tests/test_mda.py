@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from demsplit.errors import InputFormatError
 from demsplit.mda import universe_with_energies
 from demsplit.results import Results
@@ -111,14 +110,13 @@ def test_real_liggghts_dump_agrees_with_demsplit_reader(samples, run):
     ids and positions of real LIGGGHTS 3.8.0 dumps (%g, rows in storage order), every frame.
     MDAnalysis holds float32 positions shifted by the box origin (added back here)."""
     import MDAnalysis as mda
-
     from demsplit.readers.lammps_dump import open_dump
 
     path = samples / "liggghts" / run / "atoms.txt"
     dump = open_dump(path)
     u = mda.Universe(str(path), format="LAMMPSDUMP", topology_format="LAMMPSDUMP")
     assert len(u.trajectory) == dump.n_frames
-    for k, ts in enumerate(u.trajectory):
+    for k, _ts in enumerate(u.trajectory):
         f = dump.frame(k, columns=["id", "x", "y", "z"])
         order = np.argsort(f.int_column("id"))
         np.testing.assert_array_equal(u.atoms.ids, f.int_column("id")[order])

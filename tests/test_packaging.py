@@ -16,8 +16,9 @@ def test_wheel_installs_only_demsplit(tmp_path):
     names = zipfile.ZipFile(wheel).namelist()
     top = {n.split("/")[0] for n in names}
     assert top == {"demsplit", next(t for t in top if t.endswith(".dist-info"))}
-    for module in ("demsplit/__init__.py", "demsplit/physics/partition.py", "demsplit/physics/laws/liggghts_hertz.py", "demsplit/yade.py",
-                   "demsplit/readers/__init__.py", "demsplit/readers/liggghts.py"):
+    for module in ("demsplit/__init__.py", "demsplit/physics/partition.py", "demsplit/physics/laws/liggghts_hertz.py",
+                   "demsplit/results/store.py", "demsplit/yade.py", "demsplit/readers/__init__.py",
+                   "demsplit/readers/liggghts.py"):
         assert module in names
     entry = zipfile.ZipFile(wheel).read(next(n for n in names if n.endswith("entry_points.txt"))).decode()
     assert "demsplit = demsplit.cli:main" in entry

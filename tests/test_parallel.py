@@ -11,7 +11,6 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
-
 from demsplit.pipeline import analyze, run_to_store
 from demsplit.results import load_results
 

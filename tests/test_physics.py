@@ -4,14 +4,13 @@ from __future__ import annotations
 
 import tracemalloc
 
+import demsplit as ds
 import mpmath
 import numpy as np
 import pytest
+from demsplit.physics.bodies import ContactBodies
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
-import demsplit as ds
-from demsplit.physics.bodies import ContactBodies
 
 GPa = 1e9
 mm = 1e-3

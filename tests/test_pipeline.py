@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
+import demsplit as ds
 import numpy as np
 import pytest
-
-import demsplit as ds
 from demsplit.frame import Box, Frame
 from demsplit.pipeline import Options, frame_tables
 from demsplit.results import Results
@@ -27,7 +26,8 @@ def chain_frame(clump):
                 "x1": x[[0, 1, 0]], "y1": np.zeros(3), "z1": np.full(3, 5e-3),
                 "r1": r[[0, 1, 0]], "r2": np.array([r[1], r[2], np.inf])}
     scene = ds.Scene({1: ds.Material(70 * GPa, 0.22), 2: ds.Material(3 * GPa, 0.35), 3: ds.Material(200 * GPa, 0.3)},
-                     model=ds.ContactModel("liggghts:hertz", {"tangential": "no_history"}), walls=[ds.Wall("floor", "plane", 3)])
+                     model=ds.ContactModel("liggghts:hertz", {"tangential": "no_history"}),
+                     walls=[ds.Wall("floor", "plane", 3)])
     return Frame(step=7, particles=particles, contacts=contacts, box=Box([-1, -1, -1], [1, 1, 1])), scene
 
 

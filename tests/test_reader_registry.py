@@ -9,11 +9,10 @@ import pytest
 import test_cache
 import test_liggghts_run
 import test_yade_readers
-from reader_contract import ReaderContract
-
 from demsplit.errors import InputFormatError
 from demsplit.readers import REGISTRY, open_run, reader_for, readers
 from demsplit.readers.base import Run
+from reader_contract import ReaderContract
 
 SAMPLES = Path(__file__).resolve().parent.parent / "sample_dumps"
 

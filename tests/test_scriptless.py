@@ -2,13 +2,11 @@
 
 from __future__ import annotations
 
-import numpy as np
-
 import demsplit
+import numpy as np
+from conftest import SAMPLES
 from demsplit.cli import main
 from demsplit.scene import Material
-
-from conftest import SAMPLES
 
 PACKING = SAMPLES / "liggghts" / "packing"
 KEYWORDS = ("pos vel id force force_normal force_tangential torque torque_normal torque_tangential history "

@@ -8,17 +8,16 @@ import subprocess
 import sys
 import textwrap
 
+import demsplit.results.store as store
 import h5py
 import numpy as np
 import pandas as pd
 import pandas.testing as pdt
 import pytest
-from result_frames import PROVENANCE, WALLS_META, synthetic_frame
-
-import demsplit.results.store as store
 from demsplit.errors import StoreError
 from demsplit.results import TABLES, Results, load_results
 from demsplit.results.store import ResultWriter, export_tables, file_fingerprint, read_store
+from result_frames import PROVENANCE, WALLS_META, synthetic_frame
 
 STEPS = (2000, 0, 1000)  # appended out of order: the store is in step order
 

@@ -8,12 +8,10 @@ from __future__ import annotations
 
 import json
 
+import demsplit
 import numpy as np
 import pytest
-
-import demsplit
 from demsplit.readers.yade_snapshot import open_yade_snapshot
-
 from test_yade_simulator import run_yade
 
 # Three clumps (a 3-sphere rod and a 2-sphere dumbbell on the floor, a 3-sphere

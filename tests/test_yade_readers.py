@@ -7,20 +7,18 @@ reference energies are in the *.log files printed by YADE.
 from __future__ import annotations
 
 import shutil
+from pathlib import Path
 
+import demsplit as ds
 import numpy as np
 import pytest
-
 from demsplit.errors import DemsplitError, InputFormatError, PrecisionError, TruncatedFileError
 from demsplit.physics.partition import partition
-import demsplit as ds
 from demsplit.readers import open_run
 from demsplit.readers.yade_export import YadeVtkRun, overlap_error_bound, read_vtk, read_vtk_frame
 from demsplit.readers.yade_snapshot import YadeSnapshotRun, _open_store, open_yade_snapshot
 from demsplit.yade import write_snapshot
 from reader_contract import ReaderContract
-
-from pathlib import Path
 
 SAMPLES = Path(__file__).resolve().parent.parent / "sample_dumps"
 
@@ -212,7 +210,8 @@ def test_vtk_export_agrees_with_the_snapshot_to_percent_g():
     for c in ("id1", "id2", "wall"):
         np.testing.assert_array_equal(frame.contacts[c], ref.contacts[c])
     for c in ("delta", "nx", "ny", "nz", "r1", "r2", "kno", "ftx", "ks"):  # %g: 6 digits
-        np.testing.assert_allclose(frame.contacts[c], ref.contacts[c], rtol=5e-6, atol=1e-12 * np.abs(ref.contacts[c]).max(), err_msg=c)
+        np.testing.assert_allclose(frame.contacts[c], ref.contacts[c], rtol=5e-6,
+                                   atol=1e-12 * np.abs(ref.contacts[c]).max(), err_msg=c)
 
 
 def test_vtk_without_penetration_depth_is_refused():

@@ -10,12 +10,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
+from conftest import require_program
 from demsplit.frame import ParticleIndex
 from demsplit.physics.partition import partition, per_particle
 from demsplit.readers.yade_snapshot import open_yade_snapshot
-
-from conftest import require_program
 
 SAMPLE_SCRIPTS = Path(__file__).resolve().parent.parent / "sample_dumps" / "yade"
 SITE = sysconfig.get_paths()["purelib"]  # where demsplit is installed (editable) for this Python

@@ -11,12 +11,12 @@ these contacts that a contact law gets (:class:`demsplit.physics.laws.ContactRow
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike
 
 from ..errors import ContactError, InputFormatError
 from ..frame import ParticleIndex, Table
 from ..scene import Scene
 from .moduli import reduced_mass
+
 
 class ContactBodies:
     """Material types and elastic constants of both sides of every contact.
@@ -38,7 +38,7 @@ class ContactBodies:
 
     @classmethod
     def build(cls, contacts: Table, scene: Scene, particles: Table | None = None,
-              index: ParticleIndex | None = None) -> "ContactBodies":
+              index: ParticleIndex | None = None) -> ContactBodies:
         if scene.single_material:
             m = next(iter(scene.materials.values()))
             return cls(None, None, m.E, m.nu, m.E, m.nu, True)

@@ -292,7 +292,7 @@ class ResultWriter:
         """Timesteps already written (by this writer or the resumed run)."""
         return set(self._steps)
 
-    def __enter__(self) -> "ResultWriter":
+    def __enter__(self) -> ResultWriter:
         return self
 
     def __exit__(self, exc_type, exc, tb) -> None:

@@ -73,7 +73,7 @@ class Results:
         tables: Mapping[str, Mapping[str, np.ndarray]],
         provenance: dict | None = None,
         walls_meta: list[dict] | None = None,
-    ) -> "Results":
+    ) -> Results:
         """Results from tables that already hold every frame (missing tables are empty)."""
         unknown = set(tables) - set(TABLES)
         if unknown:
@@ -91,7 +91,7 @@ class Results:
         frames: Iterable[Mapping[str, Mapping[str, np.ndarray]]],
         provenance: dict | None = None,
         walls_meta: list[dict] | None = None,
-    ) -> "Results":
+    ) -> Results:
         """Results from per-frame tables (the dicts the pipeline hands to
         :meth:`demsplit.results.store.ResultWriter.append`), concatenated in step order.
 
@@ -126,10 +126,11 @@ class Results:
         """Timesteps of the frames, in stored order."""
         return self.frames["step"].to_numpy() if "step" in self.frames else np.empty(0, np.int64)
 
-    def frame(self, step: int) -> "Results":
+    def frame(self, step: int) -> Results:
         """The results of one frame (timestep ``step``)."""
         if step not in set(self.steps.tolist()):
-            raise StoreError(f"no frame with timestep {step}; the results hold {len(self.steps)} frame(s), timesteps {describe_steps(self.steps)}.",
+            raise StoreError(f"no frame with timestep {step}; the results hold {len(self.steps)} frame(s), "
+                             f"timesteps {describe_steps(self.steps)}.",
                              fix="pick one of the stored timesteps.")
         pick = {name: getattr(self, name) for name in TABLES}
         return Results(
@@ -171,7 +172,8 @@ class Results:
         return contact_point_shift(self.contacts, by_frame=by_frame)
 
     def per_clump(self) -> pd.DataFrame:
-        """Energy per YADE clump and frame, summed over its member spheres (see :func:`demsplit.results.aggregate.per_clump`)."""
+        """Energy per YADE clump and frame, summed over its member spheres
+        (see :func:`demsplit.results.aggregate.per_clump`)."""
         from .aggregate import per_clump
 
         return per_clump(self.particles)

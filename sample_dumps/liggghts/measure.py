@@ -12,9 +12,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tests"))
 from test_liggghts_samples_facts import (  # noqa: E402
-    AREA, CONTACT_POINT, DELTA, FORCE_N, FORCE_T, HISTORY, ID1, ID2, PERIODIC, POISSON,
-    SAMPLES, YOUNG, force_balance, full, minimum_image, plane_strain_modulus_pair,
-    read_text_dump, row_index,
+    AREA, CONTACT_POINT, DELTA, FORCE_N, FORCE_T, HISTORY, ID1, ID2, PERIODIC, POISSON, SAMPLES, YOUNG,
+    force_balance, full, minimum_image, plane_strain_modulus_pair, read_text_dump, row_index,
 )
 
 
@@ -33,7 +32,7 @@ for scene in ("packing", "periodic", "analytic"):
     atoms_full = read_text_dump(full(scene, "atoms"))
     pairs_full = read_text_dump(full(scene, "pairs"))
     walls_full = read_text_dump(full(scene, "wall"))
-    for k, (a, p, w) in enumerate(zip(atoms_full, pairs_full, walls_full)):
+    for _k, (a, p, w) in enumerate(zip(atoms_full, pairs_full, walls_full)):
         ids, x, r, t = a.data[:, 0], a.data[:, 2:5], a.data[:, 14], a.data[:, 1].astype(int)
         d = p.data
         i1, i2 = row_index(ids, d[:, ID1]), row_index(ids, d[:, ID2])

@@ -5,11 +5,13 @@
 # h5py imports), cundall_periodic.npys (numpy-only snapshot format), and, at
 # the last snapshot, cundall_periodic-spheres/-intrs VTKExporter files and
 # cundall_periodic.txt (export.text, format x_y_z_r: %g, no ids).
-import os, site
+import os
+import site
+
 if os.environ.get("DEMSPLIT_SITE"):
     site.addsitedir(os.environ["DEMSPLIT_SITE"])  # appended: Debian's numpy stays first
 import demsplit.yade
-from yade import pack, utils, export
+from yade import export, pack, utils
 
 out = os.environ.get("DEMSPLIT_OUT", ".")
 N_ITER = int(os.environ.get("DEMSPLIT_ITER", "9000"))

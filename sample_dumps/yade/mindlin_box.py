@@ -6,11 +6,13 @@
 # imports), mindlin_box.npys (the numpy-only snapshot format), and, at the last
 # snapshot, mindlin_box-spheres/-intrs VTKExporter files and mindlin_box.txt
 # (export.textExt, format id_x_y_z_r_matId).
-import os, site
+import os
+import site
+
 if os.environ.get("DEMSPLIT_SITE"):
     site.addsitedir(os.environ["DEMSPLIT_SITE"])  # appended: Debian's numpy stays first
 import demsplit.yade
-from yade import pack, utils, export
+from yade import export, pack, utils
 
 out = os.environ.get("DEMSPLIT_OUT", ".")
 N_ITER = int(os.environ.get("DEMSPLIT_ITER", "24000"))
