@@ -20,7 +20,10 @@ import signal
 import sys
 import traceback
 
+import numpy as np
+
 from .errors import DemsplitError
+from .outputs import check_output_path
 from .physics import laws
 from .readers.liggghts_script import NORMAL, TANGENTIAL
 from .scene import Material
@@ -160,6 +163,8 @@ def cmd_report(args: argparse.Namespace) -> int:
     from .results import load_results
     from .results.report import text_summary, write_html
 
+    if args.output:
+        check_output_path(args.output, [args.results])
     results = load_results(args.results)
     if args.output:
         write_html(results, args.output)
@@ -179,7 +184,7 @@ def cmd_export(args: argparse.Namespace) -> int:
     results = load_results(args.results)
     for fmt, directory in (("parquet", args.parquet), ("csv", args.csv)):
         if directory:
-            for path in export_tables(results, directory, fmt=fmt):
+            for path in export_tables(results, directory, fmt=fmt, inputs=[args.results]):
                 if not args.quiet:
                     print(f"wrote {path}")
     return 0
@@ -267,7 +272,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     previous = signal.signal(signal.SIGTERM, _raise_terminated)
     try:
-        return args.func(args)
+        with np.errstate(all="ignore"):  # every number is checked explicitly (demsplit.validate): no warnings
+            return args.func(args)
     except DemsplitError as exc:
         if args.debug:
             traceback.print_exc()

@@ -20,6 +20,8 @@ import numpy as np
 
 from .errors import DemsplitError
 from .fingerprint import hash_in_background
+from .outputs import check_output_path
+from .validate import check_finite_energies, validated_frame
 from .frame import CONTACT_REQUIRED, PARTICLE_REQUIRED, Frame, ParticleIndex, require_columns
 from .physics.bodies import ContactBodies
 from .physics.modes import MODE_COLUMNS
@@ -63,13 +65,16 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = Options()) -> Ta
     compares them with).
     """
     source = frame.source[0] if frame.source else None
+    require_columns(frame.particles, PARTICLE_REQUIRED, "particles", file=source, step=frame.step)
+    require_columns(frame.contacts, CONTACT_REQUIRED, "contacts", file=source, step=frame.step)
+    frame = validated_frame(frame)  # canonical dtypes; every number finite, in range and plausible
     particles, contacts = frame.particles, frame.contacts
-    require_columns(particles, PARTICLE_REQUIRED, "particles", file=source, step=frame.step)
-    require_columns(contacts, CONTACT_REQUIRED, "contacts", file=source, step=frame.step)
     index = ParticleIndex(particles["id"], file=source, step=frame.step)
     try:
         bodies = ContactBodies.build(contacts, scene, particles, index)
         energies = contact_energies(contacts, scene, particles, bodies, index)
+        check_finite_energies(energies.u, contacts, file=frame.source[-1] if frame.source else None,
+                              step=frame.step)
         main = partition(contacts, scene, particles, split="material", tangential_rule=options.tangential_rule,
                          energies=energies, bodies=bodies, index=index)
         ptable, wtable = per_particle(contacts, main, particles, n_walls=len(scene.walls), index=index)
@@ -332,8 +337,9 @@ def run_to_store(path: str | Path, out: str | Path, *, options: Options = Option
     check_output(out, resume=resume)  # before any work: no output directory, or an unresumed interrupted run
     run = open_run(path, **reader_options)
     try:
+        sources = run.sources
+        check_output_path(out, sources)  # before anything is written: never over an input or a device
         report = RunReport()
-        sources = getattr(run, "sources", [path])
         hash_in_background(sources)
         # A new run computes its first frame while the inputs are hashed, then opens the store (its
         # provenance holds their sha256); a resumed run opens the store first, to skip its frames.
@@ -343,8 +349,7 @@ def run_to_store(path: str | Path, out: str | Path, *, options: Options = Option
 
         frames = None if resume else frames_after(set())
         first = None if frames is None else next(frames, None)
-        provenance = build_provenance(sources, scene=run.scene, options=asdict(options),
-                                      run=run.describe() if hasattr(run, "describe") else {})
+        provenance = build_provenance(sources, scene=run.scene, options=asdict(options), run=run.describe())
         with ResultWriter(out, provenance, resume=resume, walls_meta=walls_meta_from_scene(run.scene),
                           compression=compression) as writer:
             if frames is None:

@@ -51,6 +51,7 @@ from .. import errors
 from ..atomic import atomic_path
 from ..errors import DemsplitError, InputFormatError
 from ..frame import Box, Frame
+from ..outputs import check_output_path
 from ..scene import scene_from_dict, scene_to_dict
 from ..threads import pool
 from .base import Run
@@ -73,12 +74,9 @@ def convert_run(input: str | Path, output: str | Path, **reader_options) -> Path
     """
     from . import open_run
 
-    output = Path(output)
-    if output.resolve() == Path(input).resolve():
-        raise InputFormatError("the cache would overwrite its own input.", file=output,
-                               fix="give another output path with -o.")
     run = open_run(input, **reader_options)
     try:
+        output = check_output_path(output, run.sources)
         # no chunk cache: each dataset is written once, whole (a cache only holds memory)
         with atomic_path(output) as tmp, h5py.File(tmp, "w", rdcc_nbytes=0) as h5:
             h5.attrs["format"] = FORMAT

@@ -336,7 +336,7 @@ def vtk_frame(spheres_path: str | Path, interactions_path: str | Path | None = N
     types = particles["type"]
     contacts["type1"] = types[np.where(sa, ra, rb)]
     # wall types are not in the export: they come from the scene's wall list
-    keep = contacts["delta"] >= 0
+    keep = ~(contacts["delta"] < 0)  # a NaN depth is kept, for the validation to name it
     if not keep.all():
         notes.append(f"{int((~keep).sum())} interaction(s) with negative overlap left out (no elastic energy)")
         contacts = {c: v[keep] for c, v in contacts.items()}

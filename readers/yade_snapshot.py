@@ -321,7 +321,7 @@ def frame_from_snapshot(meta: dict, tables: dict[str, Table], scene_walls: dict[
     n_virtual = int(meta["n_interactions_potential"]) - int(meta["n_interactions_real"])
     if n_virtual:
         notes.append(f"{n_virtual} potential (non-real) interaction(s) not in the contacts table")
-    keep = inter["depth"] >= 0
+    keep = ~(inter["depth"] < 0)  # a NaN depth is kept, for the validation to name it
     if not keep.all():
         notes.append(f"{int((~keep).sum())} real interaction(s) with penetrationDepth < 0 (neverErase) "
                      "left out of the contacts table: they carry no elastic energy")

@@ -51,6 +51,7 @@ from .. import threads
 from ..atomic import atomic_path, publish
 from ..errors import StoreError
 from ..fingerprint import file_fingerprint  # noqa: F401  (part of this module's API)
+from ..outputs import check_output_path
 from ..scene import scene_to_dict
 from .schema import TABLES, UNITS, Table, canonical_table, to_dataframe
 from .tables import Results
@@ -133,13 +134,11 @@ def work_dir_of(path: str | Path) -> Path:
 
 
 def check_output(path: str | Path, *, resume: bool = False) -> None:
-    """Raise :class:`StoreError` when a store cannot be started at ``path``:
-    its directory is missing, or an interrupted run's work directory is there
-    and ``resume`` is false (it is never silently discarded)."""
-    path = Path(path)
-    if not path.parent.is_dir():
-        raise StoreError("the output directory does not exist.", file=path.parent,
-                         fix="create it, or choose another output path.")
+    """Raise :class:`StoreError` when a store cannot be started at ``path``: it is not a
+    writable output (:func:`demsplit.outputs.check_output_path`: empty, a directory, a device, in a
+    missing directory), or an interrupted run's work directory is there and ``resume`` is false (it
+    is never silently discarded)."""
+    path = check_output_path(path)
     work = work_dir_of(path)
     if work.exists() and not resume:
         raise StoreError(f"an interrupted run left its finished frames in {work}.", file=path,
@@ -718,15 +717,21 @@ def read_last_frame(path: str | Path) -> Results:
     return read_store(path, steps=stored[-1:], every_frame_row=True)
 
 
-def export_tables(results: Results, directory: str | Path, fmt: str = "parquet") -> list[Path]:
+def export_tables(results: Results, directory: str | Path, fmt: str = "parquet",
+                  inputs: Iterable[str | Path] = ()) -> list[Path]:
     """Write each table to ``directory/<table>.parquet`` (or ``.csv``) and the
     provenance to ``provenance.json``, each file atomically. Parquet files carry
     the units (field metadata ``unit``) and the provenance (schema metadata).
-    CSV numbers are written with 17 significant digits (round-trip exact)."""
+    CSV numbers are written with 17 significant digits (round-trip exact).
+    No file is written over one of ``inputs`` (:func:`demsplit.outputs.check_output_path`)."""
     if fmt not in ("parquet", "csv"):
         raise StoreError(f"unknown export format {fmt!r}.", fix="use 'parquet' or 'csv'.")
     directory = Path(directory)
+    if directory.exists() and not directory.is_dir():
+        raise StoreError("the export directory is a file.", file=directory, fix="give a directory name.")
     directory.mkdir(parents=True, exist_ok=True)
+    for name in (*(f"{t}.{fmt}" for t in TABLES), "provenance.json"):
+        check_output_path(directory / name, inputs)
     prov = _to_json({"provenance": results.provenance, "walls_meta": results.walls_meta}, "provenance")
     written = []
     for name in TABLES:

@@ -1,0 +1,138 @@
+"""One validation for every reader's frames: dtypes, finiteness, ranges and plausibility, before any physics.
+
+Readers parse; this module checks what they hand over, the same way for every
+format (DESIGN.md, "Precision and plausibility"), so a NaN in a YADE snapshot,
+an ``inf`` position in a binary dump or an ``int8`` stiffness never reaches an
+energy. :func:`validated_frame` returns the frame with every column in its
+canonical dtype (integers as int64, types as int32, reals as float64: safe
+upcasts only) or raises one :class:`~demsplit.errors.InputFormatError` (a
+:class:`~demsplit.errors.ContactError` for implausible geometry) that names
+the file, the timestep, the table, the column and the row. The checks:
+
+* integer columns hold integers (an integer dtype, or floats with integral
+  values); real columns are numbers (no strings or objects);
+* every real is finite, except ``r2 = inf`` (a plane);
+* radius, r1, r2 > 0; stored stiffnesses (``kn ks kno kso``) >= 0; the normal
+  is a unit vector (to 1e-5, the precision of ``%g`` exports);
+* the box is finite with lo < hi;
+* an overlap is not larger than the smaller of the two radii.
+
+:func:`check_finite_energies` refuses a result that is not finite (a dumped
+shear history of 1e200 gives ``inf`` energies) before it is stored.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from .errors import ContactError, InputFormatError
+from .frame import Frame, Table
+
+INTEGER_COLUMNS = {"id": np.int64, "type": np.int32, "clump": np.int64, "id1": np.int64, "id2": np.int64,
+                   "wall": np.int64, "type1": np.int64, "type2": np.int64}
+"""Integer columns and their canonical dtypes; every other column is a real (float64)."""
+POSITIVE = ("radius", "r1", "r2")
+NOT_NEGATIVE = ("kn", "ks", "kno", "kso", "mass")
+MAY_BE_INFINITE = ("r2",)  # a plane: R = inf
+UNIT_TOLERANCE = 1e-5
+
+
+def validated_frame(frame: Frame) -> Frame:
+    """``frame`` with canonical dtypes, or the error of its first invalid value (module docstring)."""
+    source = frame.source[-1] if frame.source else None  # the contact file of a joined LIGGGHTS frame
+    where = {"file": frame.source[0] if frame.source else None, "step": frame.step}
+    particles = _canonical("particles", frame.particles, where)
+    contacts = _canonical("contacts", frame.contacts, {**where, "file": source})
+    if frame.box is not None:
+        lo, hi = frame.box.lo, frame.box.hi
+        if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi)) and np.all(lo < hi)):
+            raise InputFormatError(f"the box bounds are not finite with lo < hi (lo {lo.tolist()}, hi "
+                                   f"{hi.tolist()}).", **where, fix="check the box lines of the file.")
+    if contacts and len(contacts["delta"]):
+        _check_geometry(contacts, {**where, "file": source})
+    return replace(frame, particles=particles, contacts=contacts)
+
+
+def _who(table: str, t: Table, row: int) -> str:
+    if table == "particles":
+        return f"particle {int(t['id'][row])}" if "id" in t else f"particle row {row}"
+    if int(t["wall"][row]) >= 0:
+        return f"the contact of particle {int(t['id1'][row])} with wall {int(t['wall'][row])}"
+    return f"the contact of particles {int(t['id1'][row])}-{int(t['id2'][row])}"
+
+
+def _canonical(table: str, t: Table, where: dict) -> Table:
+    out: Table = {}
+    for col, values in t.items():
+        values = np.asarray(values)
+        if col in INTEGER_COLUMNS:
+            out[col] = _integers(table, col, values, INTEGER_COLUMNS[col], where)
+            continue
+        if values.dtype.kind not in "fiub":
+            raise InputFormatError(f"column {table}.{col} holds {values.dtype} values, not numbers.", **where,
+                                   fix="the reader or the file is damaged: check the file.")
+        values = values.astype(np.float64, copy=False)
+        bad = ~np.isfinite(values)
+        if col in MAY_BE_INFINITE:
+            bad &= ~(values == np.inf)
+        _refuse(bad, table, col, values, "is not a finite number", t, where)
+        if col in POSITIVE:
+            _refuse(~(values > 0), table, col, values, "must be > 0", t, where)
+        elif col in NOT_NEGATIVE:
+            _refuse(values < 0, table, col, values, "must be >= 0", t, where)
+        out[col] = values
+    return out
+
+
+def _integers(table: str, col: str, values: np.ndarray, dtype, where: dict) -> np.ndarray:
+    if values.dtype.kind in "iu":
+        info = np.iinfo(dtype)
+        if len(values) and (values.min() < info.min or values.max() > info.max):
+            raise InputFormatError(f"column {table}.{col} has values beyond {np.dtype(dtype).name}.", **where,
+                                   fix="check the file: ids and types this large are not a DEM run's.")
+        return values.astype(dtype, copy=False)
+    if values.dtype.kind == "f":
+        bad = ~np.isfinite(values) | (values != np.round(values))
+        if bad.any():
+            row = int(np.flatnonzero(bad)[0])
+            raise InputFormatError(f"column {table}.{col} must hold integers, row {row} holds {values[row]!r}.",
+                                   **where, fix="check the file: ids and types are exact integers.")
+        return values.astype(dtype)
+    raise InputFormatError(f"column {table}.{col} holds {values.dtype} values, not integers.", **where,
+                           fix="the reader or the file is damaged: check the file.")
+
+
+def _refuse(bad: np.ndarray, table: str, col: str, values: np.ndarray, what: str, t: Table, where: dict) -> None:
+    if bad.any():
+        row = int(np.flatnonzero(bad)[0])
+        raise InputFormatError(f"{_who(table, t, row)} (row {row}): {col} = {float(values[row])!r} {what}; "
+                               f"{int(np.count_nonzero(bad))} such value(s) in column {table}.{col}.", **where,
+                               fix="check the file at that row: a damaged or foreign value.")
+
+
+def _check_geometry(c: Table, where: dict) -> None:
+    norm = np.sqrt(c["nx"] ** 2 + c["ny"] ** 2 + c["nz"] ** 2)
+    _refuse(np.abs(norm - 1.0) > UNIT_TOLERANCE, "contacts", "|n|", norm, "is not a unit normal", c, where)
+    too_deep = c["delta"] > np.minimum(c["r1"], c["r2"])
+    if too_deep.any():
+        row = int(np.flatnonzero(too_deep)[0])
+        raise ContactError(
+            f"{_who('contacts', c, row)} (row {row}) has an overlap of {float(c['delta'][row]):g} m, larger than "
+            f"its smaller radius ({float(min(c['r1'][row], c['r2'][row])):g} m): not a plausible DEM contact; "
+            f"{int(np.count_nonzero(too_deep))} such contact(s).", **where,
+            fix="check that the contact and atom dumps belong to the same run and timestep.")
+
+
+def check_finite_energies(u: np.ndarray, contacts: Table, *, file: str | None, step: int) -> None:
+    """Refuse energies (shape (modes, n) or (n,)) that are not finite, naming the first contact."""
+    bad = ~np.isfinite(u)
+    if bad.ndim == 2:
+        bad = bad.any(axis=0)
+    if bad.any():
+        row = int(np.flatnonzero(bad)[0])
+        raise ContactError(f"{_who('contacts', contacts, row)} (row {row}) has an energy that is not finite: "
+                           "a stored force, stiffness or spring history of an implausible size; "
+                           f"{int(np.count_nonzero(bad))} such contact(s).", file=file, step=step,
+                           fix="check the contact file at that row (a damaged or foreign value).")

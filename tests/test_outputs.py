@@ -1,0 +1,79 @@
+"""The output-path policy, for every command that writes: an output that is (or leads to) an input, a
+directory, a device or an empty name is refused before anything is written, and the input is untouched."""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+from pathlib import Path
+
+import pytest
+
+from demsplit.cli import main
+
+SAMPLES = Path(__file__).resolve().parent.parent / "sample_dumps"
+
+
+def digest(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+@pytest.fixture
+def packing(tmp_path):
+    shutil.copytree(SAMPLES / "liggghts" / "packing", tmp_path / "packing")
+    return tmp_path / "packing"
+
+
+def aliases(tmp_path: Path, target: Path) -> dict[str, Path]:
+    """Other names of ``target``: a symbolic link, a hard link and a path through '..'."""
+    (tmp_path / "link.h5").symlink_to(target)
+    os.link(target, tmp_path / "hard.h5")
+    return {"itself": target, "symlink": tmp_path / "link.h5", "hard link": tmp_path / "hard.h5",
+            "dot-dot": target.parent / ".." / target.parent.name / target.name}
+
+
+INPUTS = ["in.packing", "atoms_full.txt.gz", "pairs_full.txt.gz", "wall_full.txt.gz"]
+
+
+def test_the_inputs_are_what_the_run_reads(packing):
+    from demsplit.readers import open_run
+
+    with open_run(packing / "in.packing") as run:
+        assert sorted(Path(s).name for s in run.sources) == sorted(INPUTS)
+
+
+@pytest.mark.parametrize("which", INPUTS)
+@pytest.mark.parametrize("alias", ["itself", "symlink", "hard link", "dot-dot"])
+def test_run_never_writes_over_an_input(packing, tmp_path, capsys, which, alias):
+    target = packing / which
+    before = digest(target)
+    out = aliases(tmp_path, target)[alias]
+    assert main(["run", str(packing / "in.packing"), "-o", str(out), "-q"]) == 2
+    assert "one of the run's inputs" in capsys.readouterr().err
+    assert digest(target) == before and not (tmp_path / ".link.h5.partial").exists()
+
+
+@pytest.mark.parametrize("command", ["run", "convert"])
+@pytest.mark.parametrize("out, message", [("", "empty"), ("/dev/null", "not a regular file"),
+                                          ("{dir}", "a directory"), ("{dir}/no/such/dir/x.h5", "does not exist")])
+def test_outputs_that_are_not_new_or_regular_files_are_refused(packing, tmp_path, capsys, command, out, message):
+    out = out.format(dir=tmp_path)
+    assert main([command, str(packing / "in.packing"), "-o", out, "-q"]) == 2
+    assert message in capsys.readouterr().err
+    assert os.path.exists("/dev/null") and not Path("/dev/null").is_file()  # the device is still a device
+
+
+def test_convert_report_and_export_never_write_over_their_input(packing, tmp_path, capsys):
+    run_input = packing / "in.packing"
+    before = digest(run_input)
+    assert main(["convert", str(run_input), "-o", str(run_input), "-q"]) == 2
+    assert digest(run_input) == before
+    store = tmp_path / "out.h5"
+    assert main(["run", str(run_input), "-o", str(store), "-q"]) == 0
+    stored = digest(store)
+    assert main(["report", str(store), "-o", str(store), "-q"]) == 2
+    os.link(store, tmp_path / "particles.csv")
+    assert main(["export", str(store), "--csv", str(tmp_path), "-q"]) == 2
+    assert "one of the run's inputs" in capsys.readouterr().err
+    assert digest(store) == stored

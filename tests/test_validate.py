@@ -1,0 +1,96 @@
+"""One validation for every reader's frames (plugin/validate.py), by class of bad input: a non-finite
+number, a value out of range, a narrow or foreign dtype, an implausible overlap, an energy that overflows.
+Each is one message (exit 2) that names the file, the timestep, the column and the row; nothing is stored."""
+
+from __future__ import annotations
+
+import struct
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from demsplit.cli import main
+from demsplit.readers.yade_snapshot import _open_store
+from demsplit.yade import write_snapshot
+
+SAMPLES = Path(__file__).resolve().parent.parent / "sample_dumps"
+SNAPSHOT = SAMPLES / "yade" / "mindlin_box.npys"
+
+
+def damaged_snapshot(tmp_path: Path, table: str, column: str, value, row: int = 3, dtype=None) -> Path:
+    """The last snapshot of the Mindlin sample with one value (or one column's dtype) changed."""
+    meta, tables = _open_store(SNAPSHOT).snapshot(2)
+    col = tables[table][column].copy()
+    if dtype is not None:
+        col = col.astype(dtype)
+    else:
+        col[row] = value
+    tables[table][column] = col
+    out = tmp_path / f"{column}.npys"
+    write_snapshot(out, meta, tables, format="npy")
+    return out
+
+
+def run(path: Path, tmp_path: Path, capsys) -> tuple[int, str]:
+    rc = main(["run", str(path), "-o", str(tmp_path / "out.h5"), "-q"])
+    return rc, capsys.readouterr().err
+
+
+@pytest.mark.parametrize("table, column, value", [
+    ("interactions", "depth", np.nan), ("interactions", "fsx", np.inf), ("interactions", "nx", np.nan),
+    ("interactions", "kno", -np.inf), ("bodies", "radius", np.nan), ("bodies", "x", np.inf),
+])
+def test_a_non_finite_number_is_refused_with_its_place(tmp_path, capsys, table, column, value):
+    rc, err = run(damaged_snapshot(tmp_path, table, column, value), tmp_path, capsys)
+    assert rc == 2 and "timestep 24000" in err and "row" in err
+    assert "not a finite number" in err or "unit normal" in err  # a NaN component makes |n| NaN too
+    assert not (tmp_path / "out.h5").exists()
+
+
+@pytest.mark.parametrize("table, column, value, what", [
+    ("bodies", "radius", -1e-3, "must be > 0"), ("interactions", "kno", -5.0, "must be >= 0"),
+    ("interactions", "nx", 0.9, "unit normal"), ("interactions", "depth", 1.0, "larger than its smaller radius"),
+])
+def test_a_value_out_of_range_or_implausible_is_refused(tmp_path, capsys, table, column, value, what):
+    rc, err = run(damaged_snapshot(tmp_path, table, column, value), tmp_path, capsys)
+    assert rc == 2 and what in err and "timestep 24000" in err and "(row " in err
+    assert not (tmp_path / "out.h5").exists()
+
+
+def test_a_narrow_integer_stiffness_is_upcast_not_wrapped(tmp_path, capsys):
+    """kn stored as int16 must give the energies of the same values as float64, never negative ones."""
+    meta, tables = _open_store(SAMPLES / "yade" / "cundall_periodic.npys").snapshot(2)
+    tables["interactions"]["kn"] = np.full(len(tables["interactions"]["kn"]), 30000, dtype=np.int16)
+    path = tmp_path / "int16.npys"
+    write_snapshot(path, meta, tables, format="npy")
+    assert main(["run", str(path), "-o", str(tmp_path / "out.h5"), "-q"]) == 0
+    from demsplit.results import load_results
+
+    u_n = load_results(tmp_path / "out.h5").contacts["u_n"].to_numpy()
+    assert np.all(u_n >= 0) and np.any(u_n > 0)
+
+
+def test_an_energy_that_overflows_is_refused(tmp_path, capsys):
+    rc, err = run(damaged_snapshot(tmp_path, "interactions", "fsx", 1e200), tmp_path, capsys)
+    assert rc == 2 and "energy that is not finite" in err
+    assert not (tmp_path / "out.h5").exists()
+
+
+def test_a_binary_atom_dump_with_an_infinite_position_is_refused(tmp_path, capsys):
+    """A LAMMPS binary dump (atoms.bin of the periodic sample) with x = inf in one atom."""
+    src = SAMPLES / "liggghts" / "periodic"
+    data = bytearray((src / "atoms.bin").read_bytes())
+    # header: step (q), n (q), triclinic (i), boundary (6i), box (6d), size_one (i), nchunk (i), n values (i)
+    head = struct.calcsize("=qqi6i6dii")
+    n = struct.unpack_from("=i", data, head)[0]
+    assert n > 16
+    struct.pack_into("=d", data, head + 4 + 8 * 2, np.inf)  # the first atom's x (columns id type x ...)
+    for name in ("in.periodic", "pairs.txt", "wall.txt", "floor.stl"):
+        (tmp_path / name).write_bytes((src / name).read_bytes())
+    (tmp_path / "atoms.bin").write_bytes(bytes(data))
+    rc = main(["run", str(tmp_path / "in.periodic"), "--atoms", str(tmp_path / "atoms.bin"),
+               "-o", str(tmp_path / "out.h5"), "-q"])
+    err = capsys.readouterr().err
+    assert rc == 2 and "x = inf is not a finite number" in err and "atoms.bin" in err
+    assert not (tmp_path / "out.h5").exists()
