@@ -1,7 +1,7 @@
 """Fingerprints (size and sha256) of input files, for provenance.
 
 Hashing a multi-GB dump costs a full read of it at the speed of sha256
-(1.3-1.8 GB/s here). A pipeline that will need the fingerprints starts them
+(``docs/performance.md``). A pipeline that will need the fingerprints starts them
 early with :func:`hash_in_background`: one daemon thread hashes the files
 while the first frame is read and computed, and :func:`file_fingerprint`
 waits for that thread's result (a digest is reused as long as the file's

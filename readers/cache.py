@@ -29,8 +29,7 @@ reads each column with ``os.preadv`` straight into its array, the columns
 spread over :func:`demsplit.threads.pool` (``preadv`` releases the GIL). A
 dataset that is not contiguous, native-endian and unfiltered (a cache someone
 repacked with ``h5repack``, say) is read through h5py, into native byte
-order. On the benchmark's cache (3 frames, 1 GB of arrays) this takes the
-frames from 0.21-0.26 s to 0.13 s on 2 cores.
+order (what it saves: ``docs/performance.md``).
 
 The file is written to a temporary name in the same directory and renamed
 when complete, so a cache is either whole or absent. A frame the reader

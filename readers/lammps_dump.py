@@ -23,8 +23,7 @@ Index
     counts the newlines and finds the ``ITEM: TIMESTEP`` markers; no per-line
     Python. (The sha256 for the provenance is not taken here but by
     :mod:`demsplit.fingerprint`, in the background while the first frame is
-    computed: with the hash, the scan of the benchmark's contact dump had
-    taken 1.5 s against 0.64 s without.) Each frame's entry holds its step, header row count, box,
+    computed.) Each frame's entry holds its step, header row count, box,
     column names, the byte range of its rows and their line numbers. The
     index is cached on the object. Binary files are indexed by hopping from
     header to header.
@@ -38,7 +37,7 @@ Reading a frame
     dtype are the rows of one 2-D array): the text of a frame is never in
     memory at once, so memory is the requested columns plus one block.
 
-Parser (measured)
+Parser
     Each block is cut into line-aligned slices, one per core, parsed by the
     compiled kernel :func:`~demsplit.readers.fastparse.parse_rows` in a
     thread pool (it releases the GIL): in one pass it checks every row's
@@ -50,16 +49,12 @@ Parser (measured)
     token in 77 000 rows of the benchmark's contacts) is converted by
     ``float`` (at most 4096 per slice). A block holding anything else
     (``%.17g`` text beyond that count, ``nan``, a non-number, a real in an
-    integer column) is parsed again by the general path, ``polars.read_csv`` (full schema, only the requested
-    columns converted), which also makes an integer column real and, for
-    bad input, leads to the located error. ``fast_blocks`` and
-    ``fallback_blocks`` on a :class:`TextDump` count the two. Measured
-    (``docs/performance.md``, "Parser and index": fresh processes, shared
-    2-core machine at load 3): the benchmark's 2.57 GB, 41-column contact
-    dump was indexed (and hashed, as it then was) in 1.45-1.95 s and its 10 columns parsed in
-    2.35-3.7 s, against 4.25-4.96 s and 6.1-6.5 s for the numpy scan and the
-    polars parse plus numpy shape check this replaced; one thread converts
-    15 columns of those rows at 0.75-0.84 GB/s.
+    integer column) is parsed again by the general path, ``polars.read_csv``
+    (full schema, only the requested columns converted), which also makes an
+    integer column real and, for bad input, leads to the located error.
+    ``fast_blocks`` and ``fallback_blocks`` on a :class:`TextDump` count the
+    two. What it costs, and what it replaced: ``docs/performance.md``,
+    "Parser and index".
 
 Validation (every frame that is read)
     * the header's ``NUMBER OF ATOMS/ENTRIES`` equals the number of lines
@@ -79,7 +74,7 @@ Printed precision (``DumpFrame.digits``)
     or ``%g`` integers below 1e6) get ``None`` (exact), as do all binary
     columns. For the others, the significant mantissa digits of each token of
     the frame's first 128 KiB of rows are counted with vectorised byte
-    arithmetic (leading zeros and the exponent excluded; the sample is 128 KiB), the maximum taken per
+    arithmetic (leading zeros and the exponent excluded), the maximum taken per
     column (``observed``), and the frame's precision ``P`` = the largest
     ``observed`` over all real-valued columns. A column whose sampled values
     take at most 16 distinct values (a radius 0.001, a mass, zeros), which
