@@ -284,6 +284,13 @@ def main(argv: list[str] | None = None) -> int:
 
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
+    except OSError as exc:  # the system's fault (disk full, read-only, permissions), not a bug: name the path
+        if args.debug:
+            traceback.print_exc()
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"demsplit: error: {where}{exc.strerror or exc}. Fix: free space, or give a path you can "
+              "write (and read).", file=sys.stderr)
+        return EXIT_ERROR
     except (KeyboardInterrupt, Terminated) as exc:
         what = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
         resume = "; run again with --resume to continue from the last complete frame" if args.command == "run" else ""

@@ -93,6 +93,7 @@ import lzma
 import mmap
 import os
 import struct
+import zlib
 from abc import ABC, abstractmethod
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
@@ -441,7 +442,12 @@ class TextDump(DumpFile):
         if stream is None:
             with self._stream() as s:
                 return self._read(e, columns, s)
-        stream.seek(e.data_start)  # a forward seek in a compressed stream decompresses only the header
+        try:  # a forward seek in a compressed stream decompresses only the header
+            stream.seek(e.data_start)
+        except (*_DECOMPRESSION_ERRORS, OSError):
+            raise TruncatedFileError(f"the compressed data is damaged before the frame at timestep {e.step} "
+                                     f"(line {e.header_line})", file=self.path, step=e.step,
+                                     fix=FIX_TRUNCATED) from None
         return self._parse(e, stream, idx)
 
     def _check_count(self, e: _TextEntry) -> None:
@@ -743,14 +749,30 @@ def _windows(f: BinaryIO) -> Iterator[tuple[int, np.ndarray, int]]:
 
 
 def _read_into(f: BinaryIO, view: memoryview) -> int:
-    """Fill ``view`` from ``f`` as far as the stream goes; bytes read (0 at the end)."""
+    """Fill ``view`` from ``f`` as far as the stream goes; bytes read (0 at the end).
+
+    A compressed stream ends where its data is damaged or cut (what a killed
+    simulation leaves): the dump then reads like a cut text file, whose last
+    frame is short, and the frames before it stay readable.
+    """
     total = 0
     while total < len(view):
-        n = f.readinto(view[total:])
+        try:
+            n = f.readinto(view[total:])
+        except _DECOMPRESSION_ERRORS:
+            break
+        except OSError:  # bz2 says "Invalid data stream" with a plain OSError
+            if not isinstance(f, bz2.BZ2File):
+                raise
+            break
         if not n:
             break
         total += n
     return total
+
+
+_DECOMPRESSION_ERRORS = (EOFError, zlib.error, lzma.LZMAError, gzip.BadGzipFile)
+"""What gzip, zlib and xz raise on a damaged or cut stream."""
 
 
 def _header_short(path: str, header_line: int, n_complete: int, last: bool) -> DemsplitError:

@@ -77,3 +77,11 @@ def test_convert_report_and_export_never_write_over_their_input(packing, tmp_pat
     assert main(["export", str(store), "--csv", str(tmp_path), "-q"]) == 2
     assert "one of the run's inputs" in capsys.readouterr().err
     assert digest(store) == stored
+
+
+@pytest.mark.skipif(not Path("/proc/self").is_dir(), reason="needs Linux /proc")
+def test_a_system_error_on_the_output_side_is_one_message_naming_the_path(packing, capsys):
+    """/proc refuses new files: an OSError of the system, exit 2 with the path, not an internal error."""
+    assert main(["run", str(packing / "in.packing"), "-o", "/proc/demsplit-out.h5", "-q"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("demsplit: error: /proc/") and "internal error" not in err and err.count("\n") == 1

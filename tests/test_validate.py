@@ -94,3 +94,29 @@ def test_a_binary_atom_dump_with_an_infinite_position_is_refused(tmp_path, capsy
     err = capsys.readouterr().err
     assert rc == 2 and "x = inf is not a finite number" in err and "atoms.bin" in err
     assert not (tmp_path / "out.h5").exists()
+
+
+@pytest.mark.parametrize("damage", ["cut", "flipped byte", "cut member"])
+def test_a_damaged_compressed_dump_reads_like_a_cut_file(tmp_path, capsys, damage):
+    """What a killed simulation leaves in a .gz dump: exit 2 naming the file and the frame where it stops,
+    and with --on-bad-frame skip the frames before it are analysed."""
+    import gzip
+
+    src = SAMPLES / "liggghts" / "packing"
+    for name in ("in.packing", "atoms_full.txt.gz", "wall_full.txt.gz", "floor.stl"):
+        (tmp_path / name).write_bytes((src / name).read_bytes())
+    data = (src / "pairs_full.txt.gz").read_bytes()
+    if damage == "cut":
+        data = data[: int(len(data) * 0.8)]
+    elif damage == "flipped byte":
+        k = int(len(data) * 0.8)
+        data = data[:k] + bytes([data[k] ^ 0xFF]) + data[k + 1:]
+    else:  # a second gzip member cut short: the first member is whole
+        data = data + gzip.compress(b"ITEM: TIMESTEP\n206000\nITEM: NUMBER OF ENTRIES\n")[:20]
+    (tmp_path / "pairs_full.txt.gz").write_bytes(data)
+    out = tmp_path / "out.h5"
+    rc = main(["run", str(tmp_path / "in.packing"), "-o", str(out), "-q"])
+    err = capsys.readouterr().err
+    assert rc == 2 and "pairs_full.txt.gz" in err and "timestep" in err and "internal error" not in err, err
+    rc = main(["run", str(tmp_path / "in.packing"), "-o", str(out), "-q", "--on-bad-frame", "skip"])
+    assert rc == 0 and out.exists()
