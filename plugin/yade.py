@@ -358,7 +358,13 @@ def npy_records(path: Path) -> tuple[list[tuple[int, int]], str | None]:
             if len(head) < RECORD_HEAD or not head.startswith(b"DSREC ") or head[-1:] != b"\n":
                 return records, (f"snapshot {k} at byte {offset} is cut short or damaged: its record header "
                                  f"reads {head[:24]!r}")
-            length = int(head[6:22])
+            try:
+                length = int(head[6:22])
+            except ValueError:
+                length = -1
+            if not 0 <= length <= size - offset - RECORD_HEAD - RECORD_TAIL:  # bounded by the file, or damaged
+                return records, (f"snapshot {k} at byte {offset} is damaged: its record header declares a length "
+                                 f"of {head[6:22]!r}, which the file cannot hold")
             end = offset + RECORD_HEAD + length
             f.seek(end)
             tail = f.read(RECORD_TAIL)

@@ -54,6 +54,7 @@ from ..outputs import check_output_path
 from ..scene import scene_from_dict, scene_to_dict
 from ..threads import pool
 from .base import Run
+from .hdf5_inputs import refuse_foreign_storage
 
 FORMAT = "demsplit-ingest-cache"
 VERSION = 2
@@ -170,6 +171,11 @@ class CacheRun(Run):
                                    f"{'newer' if version > VERSION else 'older'} than this demsplit reads "
                                    f"({VERSION}).", file=path,
                                    fix="convert the run again with this version of demsplit.")
+        try:
+            refuse_foreign_storage(self._h5, path)
+        except InputFormatError:
+            self._h5.close()
+            raise
         self.scene = scene_from_dict(json.loads(attrs["scene"]))
         self.steps = np.asarray(attrs["steps"], dtype=np.int64)
         self.sources = [self.path] + json.loads(attrs["sources"])

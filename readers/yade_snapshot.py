@@ -34,6 +34,7 @@ from demsplit.yade import (
 )
 
 from .base import Run
+from .hdf5_inputs import refuse_foreign_storage
 
 LAW_MODELS = {key[len(YADE_PREFIX):]: ContactModel(key) for key in law_registry.supported()
               if key.startswith(YADE_PREFIX)}
@@ -66,6 +67,7 @@ class _Hdf5Store:
                 f"HDF5 file without the {FORMAT_NAME!r} format attribute "
                 f"(found {self._file.attrs.get('format')!r}).",
                 file=path, fix="give the file written by demsplit.yade.snapshot().")
+        refuse_foreign_storage(self._file, path)
         self._names = sorted(self._file["snapshots"]) if "snapshots" in self._file else []
 
     def __len__(self) -> int:
@@ -254,9 +256,8 @@ def frame_from_snapshot(meta: dict, tables: dict[str, Table], scene_walls: dict[
     bodies, inter = tables["bodies"], tables["interactions"]
     kinds = _text(bodies["kind"])
     ids = bodies["id"]
-    size = int(ids.max()) + 1 if len(ids) else 0
-    row_of = np.full(size, -1, dtype=np.int64)
-    row_of[ids] = np.arange(len(ids))
+    order = np.argsort(ids, kind="stable")  # ids present, sorted: memory by the bodies, not the largest id
+    sorted_ids = ids[order]
     periodic = bool(meta["periodic"])
 
     sphere = kinds == "sphere"
@@ -272,7 +273,8 @@ def frame_from_snapshot(meta: dict, tables: dict[str, Table], scene_walls: dict[
     }
 
     def rows(body_ids: np.ndarray, which: str) -> np.ndarray:
-        r = np.where((body_ids >= 0) & (body_ids < size), row_of[np.clip(body_ids, 0, max(size - 1, 0))], -1)
+        at = np.clip(np.searchsorted(sorted_ids, body_ids), 0, max(len(ids) - 1, 0))
+        r = np.where(sorted_ids[at] == body_ids, order[at], -1) if len(ids) else np.full(len(body_ids), -1)
         if (r < 0).any():
             bad = int(body_ids[r < 0][0])
             raise ContactError(f"interaction names body {bad} ({which}), which is not in the bodies table.",
@@ -299,9 +301,9 @@ def frame_from_snapshot(meta: dict, tables: dict[str, Table], scene_walls: dict[
     pos = np.stack([bodies["x"], bodies["y"], bodies["z"]], axis=-1)
     xa, xb = pos[ra], pos[rb] + shift
 
-    wall_of = np.full(size, -1, dtype=np.int64)
+    wall_of_row = np.full(len(ids), -1, dtype=np.int64)  # wall index of each body row (-1: not a wall)
     for body_id, index in scene_walls.items():
-        wall_of[body_id] = index
+        wall_of_row[rows(np.array([body_id]), "wall")] = index
     yade_order = {
         **{c: inter[c] for c in ("id1", "id2", "nx", "ny", "nz", "refR1", "refR2", "fnx", "fny", "fnz",
                                  "fsx", "fsy", "fsz", "kn", "ks", "cpx", "cpy", "cpz")},
@@ -311,7 +313,7 @@ def frame_from_snapshot(meta: dict, tables: dict[str, Table], scene_walls: dict[
     }
     if np.isfinite(inter["kno"]).any():
         yade_order["kno"], yade_order["kso"] = inter["kno"], inter["kso"]
-    contacts = particle_first(yade_order, sa, wall_of[inter["id1"]], wall_of[inter["id2"]])
+    contacts = particle_first(yade_order, sa, wall_of_row[ra], wall_of_row[rb])
     pair = sa & sb
     if plane_as_plane:
         contacts["r2"] = np.where(pair, contacts["r2"], np.inf)

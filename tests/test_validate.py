@@ -120,3 +120,63 @@ def test_a_damaged_compressed_dump_reads_like_a_cut_file(tmp_path, capsys, damag
     assert rc == 2 and "pairs_full.txt.gz" in err and "timestep" in err and "internal error" not in err, err
     rc = main(["run", str(tmp_path / "in.packing"), "-o", str(out), "-q", "--on-bad-frame", "skip"])
     assert rc == 0 and out.exists()
+
+
+@pytest.mark.parametrize("length", [b"-000000000000100", b"9999999999999999", b"abcdefghijklmnop"])
+def test_a_record_length_beyond_the_file_is_damage_not_a_hang(tmp_path, length):
+    """A .npys record whose declared length is negative, larger than the file or not a number: the records
+    before it are read, the damaged one is named (it looped forever on a negative length)."""
+    from demsplit.yade import NPY_STREAM_MAGIC, npy_records
+
+    data = bytearray(SNAPSHOT.read_bytes())
+    records, problem = npy_records(SNAPSHOT)
+    assert problem is None and len(records) == 3
+    head = records[1][0] - 23  # the second record's header: 'DSREC ' + 16 digits + newline
+    assert data[head:head + 6] == b"DSREC " and len(NPY_STREAM_MAGIC) < head
+    data[head + 6:head + 22] = length
+    bad = tmp_path / "bad.npys"
+    bad.write_bytes(bytes(data))
+    records, problem = npy_records(bad)
+    assert len(records) == 1 and "snapshot 1" in problem and "damaged" in problem
+
+
+def test_memory_follows_the_bodies_not_the_largest_id(tmp_path, capsys):
+    """A YADE body id of 1e12 (the dense id table needed 8 TB, MemoryError) is read like any other."""
+    meta, tables = _open_store(SNAPSHOT).snapshot(2)
+    ids, inter = tables["bodies"]["id"], tables["interactions"]
+    big = 10**12
+    old = int(ids[5])
+    ids[5] = big
+    for c in ("id1", "id2"):
+        inter[c][inter[c] == old] = big
+    path = tmp_path / "big.npys"
+    write_snapshot(path, meta, tables, format="npy")
+    assert main(["run", str(path), "-o", str(tmp_path / "out.h5"), "-q"]) == 0, capsys.readouterr().err
+    from demsplit.results import load_results
+
+    assert big in set(load_results(tmp_path / "out.h5").particles["id"].tolist())
+
+
+@pytest.mark.parametrize("kind", ["external storage", "external link", "virtual dataset"])
+def test_hdf5_inputs_never_read_data_from_elsewhere(tmp_path, capsys, kind):
+    """A snapshot whose dataset points at /etc/passwd (or links to another file) is refused."""
+    import shutil
+
+    h5py = pytest.importorskip("h5py")
+    snap = tmp_path / "snap.h5"
+    shutil.copy(SAMPLES / "yade" / "mindlin_box.h5", snap)
+    secret = tmp_path / "secret.bin"
+    secret.write_bytes(b"root:x:0:0:root:/root:/bin/bash\n" * 64)
+    with h5py.File(snap, "a") as f:
+        group = f["snapshots"][sorted(f["snapshots"])[0]]
+        if kind == "external storage":
+            group.create_dataset("stolen", shape=(256,), dtype="f8", external=[(str(secret), 0, 2048)])
+        elif kind == "external link":
+            group["stolen"] = h5py.ExternalLink(str(secret), "/x")
+        else:
+            layout = h5py.VirtualLayout(shape=(4,), dtype="f8")
+            layout[:] = h5py.VirtualSource(str(secret), "x", shape=(4,))
+            group.create_virtual_dataset("stolen", layout)
+    rc = main(["run", str(snap), "-o", str(tmp_path / "out.h5"), "-q"])
+    err = capsys.readouterr().err
+    assert rc == 2 and "outside" in err and "root:x" not in err
