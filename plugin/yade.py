@@ -362,12 +362,14 @@ def npy_records(path: Path) -> tuple[list[tuple[int, int]], str | None]:
                 length = int(head[6:22])
             except ValueError:
                 length = -1
-            if not 0 <= length <= size - offset - RECORD_HEAD - RECORD_TAIL:  # bounded by the file, or damaged
-                return records, (f"snapshot {k} at byte {offset} is damaged: its record header declares a length "
-                                 f"of {head[6:22]!r}, which the file cannot hold")
+            if length < 0:  # a record always moves forward; beyond the file, the end marker check below fails
+                return records, (f"snapshot {k} at byte {offset} is cut short or damaged: its record header "
+                                 f"declares a length of {head[6:22]!r}")
             end = offset + RECORD_HEAD + length
-            f.seek(end)
-            tail = f.read(RECORD_TAIL)
+            tail = b""
+            if end + RECORD_TAIL <= size:  # else the file ends before the record does
+                f.seek(end)
+                tail = f.read(RECORD_TAIL)
             if len(tail) < RECORD_TAIL or not tail.startswith(b"DSEND ") or tail[-1:] != b"\n":
                 return records, (f"snapshot {k} at byte {offset} is cut short or damaged: it declares {length} "
                                  f"bytes but the file ends or is damaged before its end marker")

@@ -137,7 +137,7 @@ def test_a_record_length_beyond_the_file_is_damage_not_a_hang(tmp_path, length):
     bad = tmp_path / "bad.npys"
     bad.write_bytes(bytes(data))
     records, problem = npy_records(bad)
-    assert len(records) == 1 and "snapshot 1" in problem and "damaged" in problem
+    assert len(records) == 1 and "snapshot 1" in problem and "cut short or damaged" in problem
 
 
 def test_memory_follows_the_bodies_not_the_largest_id(tmp_path, capsys):
