@@ -186,6 +186,9 @@ class LiggghtsRun(Run):
         if script is None:
             self.notes.append("no input script: primitive walls (never dumped by LIGGGHTS) are unknown, "
                               "so contacts with them are not included")
+        for dump in (self.atoms, self.pairs, self.walls):
+            if dump is not None:
+                _refuse_repeated_steps(dump)
         self.steps = np.asarray(self.atoms.steps, dtype=np.int64)
         self.damaged = self.atoms.damaged  # atom frames whose header is unreadable: frames len(steps)...
         self.sources = ([] if script is None else [self.script.path]) + [
@@ -325,7 +328,7 @@ class LiggghtsRun(Run):
 
     def _wanted(self, names: dict[str, str]) -> list[str]:
         """Dump tokens of the contact columns the join needs and the laws read."""
-        keep = ["id1", "id2", "mesh_index", "delta", "cpx", "cpy", "cpz", "wall_cpx", "wall_cpy", "wall_cpz"]
+        keep = ["id1", "id2", "mesh_index", "tri_id", "delta", "cpx", "cpy", "cpz", "wall_cpx", "wall_cpy", "wall_cpz"]
         keep += [c for c in self._law_columns() if c not in keep]
         return [names[c] for c in keep if c in names]
 
@@ -470,6 +473,7 @@ class LiggghtsRun(Run):
                 f"mesh index {int(mesh[row])} is not one of the {len(wall_of_mesh)} meshes of the script's "
                 "last mesh 'fix wall/gran'.", file=wf.file, step=wf.step, line=wf.line_of(row),
                 fix="pass the input script that wrote this dump.")
+        self._refuse_repeated_wall_contacts(wf, pid, mesh, col)
         (rows,) = self._rows(index, wf, pid)
         r = particles["radius"][rows]
         if all(c in col for c in ("wall_cpx", "wall_cpy", "wall_cpz")):
@@ -492,6 +496,26 @@ class LiggghtsRun(Run):
         out.update({c: col[c] for c in self._law_columns() if c in col})
         out.update(cpx=on_wall[:, 0], cpy=on_wall[:, 1], cpz=on_wall[:, 2])
         return out
+
+    def _refuse_repeated_wall_contacts(self, wf: DumpFrame, pid: np.ndarray, mesh: np.ndarray, col: Table) -> None:
+        """A mesh-wall contact (particle, mesh, triangle; without ``tri_id`` the whole row) listed twice in a
+        frame would be counted twice: a ContactError naming both lines."""
+        if len(pid) < 2:
+            return
+        keys = [pid, mesh] + ([wf.int_column(self._wall_names["tri_id"])] if "tri_id" in self._wall_names
+                              else [col[c] for c in ("delta", "wall_cpx", "wall_cpy", "wall_cpz") if c in col])
+        order = np.lexsort(keys[::-1])
+        same = np.ones(len(pid) - 1, dtype=bool)
+        for k in keys:
+            same &= k[order][1:] == k[order][:-1]
+        if same.any():
+            at = int(np.flatnonzero(same)[0])
+            first, repeat = sorted((int(order[at]), int(order[at + 1])))
+            raise ContactError(
+                f"the contact of particle {int(pid[repeat])} with mesh {int(mesh[repeat])} is listed twice in this "
+                f"frame (lines {wf.line_of(first)} and {wf.line_of(repeat)}).", file=wf.file, step=wf.step,
+                line=wf.line_of(repeat), fix="each contact must appear once per frame: check that the dump is "
+                "not the concatenation of two runs or of two MPI ranks' output for the same step.")
 
     @staticmethod
     def _pair_rows(index: ParticleIndex, f: DumpFrame, id1: np.ndarray, id2: np.ndarray,
@@ -575,12 +599,6 @@ class LiggghtsRun(Run):
                 continue
             steps = dump.steps
             out.append(f"  {name + ':':<10} {dump.path} ({len(steps)} frames, steps {describe_steps(steps)})")
-            values, counts = np.unique(steps, return_counts=True)
-            if np.any(counts > 1):
-                problems.append(str(InputFormatError(
-                    f"timestep(s) {values[counts > 1][:5].tolist()} appear more than once in this dump; "
-                    "only the first frame of each is read.", file=dump.path,
-                    fix="the dump holds two runs appended to one file: keep one of them.")))
             if dump is not self.atoms:
                 problems += [str(err) for err in dump.damaged]
                 missing = np.setdiff1d(self.steps, steps)
@@ -616,3 +634,14 @@ class LiggghtsRun(Run):
         for d in (self.atoms, self.pairs, self.walls):
             if d is not None and hasattr(d, "close"):
                 d.close()
+
+
+def _refuse_repeated_steps(dump: DumpFile) -> None:
+    """A timestep written twice to one dump (a LIGGGHTS restart appending to it) is refused: which copy
+    holds the run's state is the user's call, not a silent first-copy read."""
+    values, counts = np.unique(dump.steps, return_counts=True)
+    if np.any(counts > 1):
+        raise InputFormatError(
+            f"timestep(s) {values[counts > 1][:5].tolist()} appear more than once in this dump (a restart that "
+            "appended to it writes its first step again).", file=dump.path, step=int(values[counts > 1][0]),
+            fix="keep one copy of each timestep: cut the earlier or the later run out of the dump.")

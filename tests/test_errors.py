@@ -300,3 +300,23 @@ def test_cli_prints_one_message_for_bad_input(run_dir, tmp_path):
     assert proc.stderr.count("\n") == 1 and proc.stderr.startswith("demsplit: error: ")
     assert "pairs.txt:18, timestep 200000" in proc.stderr and "9999" in proc.stderr
     assert not out.exists() and not (tmp_path / ".out.h5.partial").exists()  # nothing written, nothing left
+
+
+def test_a_mesh_wall_contact_listed_twice_is_refused(run_dir):
+    """It was counted twice; pairs listed twice were already refused."""
+    edit_lines(run_dir / "wall.txt", lambda lines: lines.__setitem__(25 - 1, lines[10 - 1]))
+    err = analyze_error(run_dir)
+    assert isinstance(err, ContactError)
+    assert_where(err, "wall.txt", STEPS[0], 25)
+    assert "listed twice" in str(err) and "lines 10 and 25" in str(err)
+
+
+def test_a_timestep_written_twice_is_refused_not_read_from_its_first_copy(run_dir):
+    """What a restart appending to a dump leaves: the same step twice. Refused, naming the dump and the step."""
+    atoms = run_dir / "atoms_full.txt"
+    text = atoms.read_bytes()
+    first = text[: text.index(b"ITEM: TIMESTEP", 1)]
+    atoms.write_bytes(text + first)
+    err = analyze_error(run_dir)
+    assert isinstance(err, InputFormatError) and err.step == STEPS[0]
+    assert Path(err.file).name == "atoms_full.txt" and "more than once" in str(err)
