@@ -212,7 +212,7 @@ def _check_overlaps(run, frame: Frame) -> list[str]:
             file, line = run.locate(frame, row)
             problems.append(str(ContactError(
                 f"{int(np.count_nonzero(bad))} contact(s) with {what}, the first {who} with delta = "
-                f"{delta[row]!r} (r1 = {c['r1'][row]:g}, r2 = {c['r2'][row]:g}).",
+                f"{float(delta[row])!r} (r1 = {c['r1'][row]:g}, r2 = {c['r2'][row]:g}).",
                 file=file, step=frame.step, line=line,
                 fix="check that the contact and atom dumps belong to the same run and timestep, and that the "
                     "run is physically sound (timestep, stiffness).")))

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import DemsplitError
+from .errors import DemsplitError, InputFormatError
 from .fingerprint import hash_in_background
 from .outputs import check_output_path
 from .validate import check_finite_energies, validated_frame
@@ -360,6 +360,12 @@ def run_to_store(path: str | Path, out: str | Path, *, options: Options = Option
             for tables in frames:
                 writer.append(tables)
                 del tables  # stored: free it before the next frame is computed
+            if report.bad_frames and not writer.done_steps:  # nothing to store: a failed run, with or without -q
+                listed = "; ".join(f"frame {b['frame']} (step {b['step']}): {b['error']}"
+                                   for b in report.bad_frames[:3])
+                raise InputFormatError(f"every frame of the run is bad ({len(report.bad_frames)}), so there is "
+                                       f"nothing to store: {listed}.", file=sources[0] if sources else None,
+                                       fix="fix the first bad frame; --on-bad-frame skip only leaves out some.")
             writer.provenance.update(bad_frames=report.bad_frames, notes=report.notes)
         return report, run.scene
     finally:

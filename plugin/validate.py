@@ -97,7 +97,7 @@ def _integers(table: str, col: str, values: np.ndarray, dtype, where: dict) -> n
         bad = ~np.isfinite(values) | (values != np.round(values))
         if bad.any():
             row = int(np.flatnonzero(bad)[0])
-            raise InputFormatError(f"column {table}.{col} must hold integers, row {row} holds {values[row]!r}.",
+            raise InputFormatError(f"column {table}.{col} must hold integers, row {row} holds {float(values[row])!r}.",
                                    **where, fix="check the file: ids and types are exact integers.")
         return values.astype(dtype)
     raise InputFormatError(f"column {table}.{col} holds {values.dtype} values, not integers.", **where,

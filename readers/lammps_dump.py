@@ -177,7 +177,7 @@ class DumpFrame:
             row = int(np.flatnonzero(bad)[0])
             raise PrecisionError(
                 f"column '{name}' must hold integer ids but row {row + 1} of the frame holds "
-                f"{col[row]!r}, which is not an exact integer"
+                f"{col[row].item()!r}, which is not an exact integer"
                 + (f" at the {p} significant digits printed" if p is not None else "")
                 + "; ids printed with %g above 999999 are destroyed",
                 file=self.file, step=self.step, line=self.line_of(row),
@@ -513,7 +513,7 @@ class TextDump(DumpFile):
             if bad is not None and bad.any():
                 row = int(np.flatnonzero(bad)[0])
                 raise InputFormatError(
-                    f"column {i + 1} ('{n}') of row {row + 1} is {out[n][row]!r}; expected a finite number",
+                    f"column {i + 1} ('{n}') of row {row + 1} is {out[n][row].item()!r}; expected a finite number",
                     file=self.path, step=e.step, line=e.first_line + row,
                     fix="the simulation produced NaN/inf (unstable run: smaller timestep, check materials); "
                         "dump a frame before it diverged")
@@ -756,9 +756,11 @@ def _read_into(f: BinaryIO, view: memoryview) -> int:
     frame is short, and the frames before it stay readable.
     """
     total = 0
+    # a decompressor loses what it decoded in the call that fails: small calls lose at most one step
+    step = DECOMPRESSED_STEP if isinstance(f, (gzip.GzipFile, bz2.BZ2File, lzma.LZMAFile)) else len(view)
     while total < len(view):
         try:
-            n = f.readinto(view[total:])
+            n = f.readinto(view[total:total + step])
         except _DECOMPRESSION_ERRORS:
             break
         except OSError:  # bz2 says "Invalid data stream" with a plain OSError
@@ -773,6 +775,8 @@ def _read_into(f: BinaryIO, view: memoryview) -> int:
 
 _DECOMPRESSION_ERRORS = (EOFError, zlib.error, lzma.LZMAError, gzip.BadGzipFile)
 """What gzip, zlib and xz raise on a damaged or cut stream."""
+DECOMPRESSED_STEP = 1 << 16
+"""Bytes asked of a decompressor per call (64 KiB): what a damaged stream can lose before its damage."""
 
 
 def _header_short(path: str, header_line: int, n_complete: int, last: bool) -> DemsplitError:

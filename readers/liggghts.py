@@ -372,7 +372,7 @@ class LiggghtsRun(Run):
             particles["mass"] = af.columns["mass"]
         if np.any(~(particles["radius"] > 0)):
             row = int(np.flatnonzero(~(particles["radius"] > 0))[0])
-            raise InputFormatError(f"particle radius must be > 0, found {particles['radius'][row]!r}.",
+            raise InputFormatError(f"particle radius must be > 0, found {float(particles['radius'][row])!r}.",
                                    file=af.file, step=step, line=af.line_of(row),
                                    fix="check the atom dump's radius column.")
         unknown = ~np.isin(particles["type"], list(self.scene.materials))

@@ -320,3 +320,17 @@ def test_a_timestep_written_twice_is_refused_not_read_from_its_first_copy(run_di
     err = analyze_error(run_dir)
     assert isinstance(err, InputFormatError) and err.step == STEPS[0]
     assert Path(err.file).name == "atoms_full.txt" and "more than once" in str(err)
+
+
+@pytest.mark.parametrize("quiet", [[], ["-q"]])
+def test_every_frame_bad_under_skip_is_one_failure_with_or_without_quiet(run_dir, tmp_path, capsys, quiet):
+    """One rule: nothing to store is exit 2 and no store, whether or not -q is given."""
+    from demsplit.cli import main
+
+    pairs = run_dir / "pairs.txt"
+    pairs.write_bytes(pairs.read_bytes().replace(b"ITEM: NUMBER OF CONTACTS\n", b"ITEM: NUMBER OF CONTACTS\n9"))
+    out = tmp_path / "out.h5"
+    assert main(["run", str(run_dir / "in.packing"), "-o", str(out), "--on-bad-frame", "skip", *quiet]) == 2
+    err = capsys.readouterr().err
+    assert "every frame of the run is bad (3)" in err and not out.exists()
+    assert not list(tmp_path.glob(".out.h5*"))  # nothing left behind

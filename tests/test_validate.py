@@ -118,8 +118,12 @@ def test_a_damaged_compressed_dump_reads_like_a_cut_file(tmp_path, capsys, damag
     rc = main(["run", str(tmp_path / "in.packing"), "-o", str(out), "-q"])
     err = capsys.readouterr().err
     assert rc == 2 and "pairs_full.txt.gz" in err and "timestep" in err and "internal error" not in err, err
-    rc = main(["run", str(tmp_path / "in.packing"), "-o", str(out), "-q", "--on-bad-frame", "skip"])
-    assert rc == 0 and out.exists()
+    skipped = tmp_path / "skipped.h5"  # (out's committed frames wait for --resume)
+    rc = main(["run", str(tmp_path / "in.packing"), "-o", str(skipped), "-q", "--on-bad-frame", "skip"])
+    assert rc == 0
+    from demsplit.results import load_results
+
+    assert load_results(skipped).steps.tolist()[:2] == [200000, 202000]  # the frames before the damage
 
 
 @pytest.mark.parametrize("length", [b"-000000000000100", b"9999999999999999", b"abcdefghijklmnop"])

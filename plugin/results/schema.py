@@ -52,7 +52,7 @@ def canonical_column(name: str, values: np.ndarray, *, table: str = "", step: in
             if bad.any():
                 row = int(np.flatnonzero(bad)[0])
                 raise StoreError(
-                    f"column {table}.{name} must hold integers, found {values[row]!r} in row {row}.",
+                    f"column {table}.{name} must hold integers, found {values[row].item()!r} in row {row}.",
                     step=step,
                     fix="pass integer arrays for ids, types, steps and counts.",
                 )
