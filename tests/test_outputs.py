@@ -85,3 +85,25 @@ def test_a_system_error_on_the_output_side_is_one_message_naming_the_path(packin
     assert main(["run", str(packing / "in.packing"), "-o", "/proc/demsplit-out.h5", "-q"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("demsplit: error: /proc/") and "internal error" not in err and err.count("\n") == 1
+
+
+def test_a_second_run_on_a_live_output_is_told_another_run_writes_it(packing, tmp_path, capsys):
+    """Not to delete the live run's work (which it used to suggest): the lock's owner is alive."""
+    import subprocess
+    import sys
+
+    from demsplit.results.store import work_dir_of
+
+    out = tmp_path / "out.h5"
+    live = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"])
+    try:
+        work = work_dir_of(out)
+        work.mkdir()
+        (work / "lock").write_text(str(live.pid))
+        assert main(["run", str(packing / "in.packing"), "-o", str(out), "-q"]) == 2
+        err = capsys.readouterr().err
+        assert f"another demsplit process (pid {live.pid}) is writing this store" in err and "delete" not in err
+        assert (work / "lock").read_text() == str(live.pid)  # the live run's work is untouched
+    finally:
+        live.kill()
+        live.wait()

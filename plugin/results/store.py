@@ -140,6 +140,10 @@ def check_output(path: str | Path, *, resume: bool = False) -> None:
     is never silently discarded)."""
     path = check_output_path(path)
     work = work_dir_of(path)
+    writer = _live_writer(work)
+    if writer:
+        raise StoreError(f"another demsplit process (pid {writer}) is writing this store.", file=path,
+                         fix="wait for it to finish, or write to another path.")
     if work.exists() and not resume:
         raise StoreError(f"an interrupted run left its finished frames in {work}.", file=path,
                          fix=f"resume it (resume=True, demsplit run --resume), or delete {work} to start over.")
@@ -224,11 +228,8 @@ class ResultWriter:
         try:
             fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
         except FileExistsError:
-            try:
-                pid = int(lock.read_text() or "0")
-            except (OSError, ValueError):
-                pid = 0
-            if pid > 0 and _alive(pid):
+            pid = _live_writer(self.work_dir)
+            if pid:
                 raise StoreError(f"another demsplit process (pid {pid}) is writing this store.", file=self.path,
                                  fix="wait for it to finish, or write to another path.") from None
             lock.unlink(missing_ok=True)
@@ -597,6 +598,15 @@ def _write_records(path: Path, header: Mapping, tables: Mapping[str, Table]) -> 
                 np.save(f, values, allow_pickle=False)
 
     _write_atomic(path, write, durable=False)
+
+
+def _live_writer(work: Path) -> int | None:
+    """The pid of the live process that holds the lock of the work directory ``work``, or None."""
+    try:
+        pid = int((work / _LOCK).read_text() or "0")
+    except (OSError, ValueError):
+        return None
+    return pid if pid > 0 and pid != os.getpid() and _alive(pid) else None
 
 
 def _alive(pid: int) -> bool:
