@@ -10,6 +10,7 @@ HDF5 store, serially, in worker processes (``jobs``) or on a Dask cluster
 
 from __future__ import annotations
 
+import os
 import sys
 from collections import deque
 from collections.abc import Callable, Iterator
@@ -154,6 +155,27 @@ def _worker_frame(spec_key: tuple, spec: dict, k: int, options: Options) -> tupl
         return k, exc, []
 
 
+def _exit_with_parent(parent: int) -> None:
+    """Worker initializer: a daemon thread ends the worker when ``parent`` (the process running the pool)
+    is gone. A worker's own parent is multiprocessing's fork server, which outlives a killed main process,
+    so without this a SIGKILLed ``demsplit run -j N`` left its workers, the fork server and the resource
+    tracker running."""
+    import threading
+    import time
+
+    def watch() -> None:
+        while True:
+            time.sleep(0.5)
+            try:
+                os.kill(parent, 0)
+            except ProcessLookupError:
+                os._exit(1)
+            except PermissionError:  # alive, owned by someone else: cannot be ours, but keep waiting
+                pass
+
+    threading.Thread(target=watch, name="demsplit-parent-watch", daemon=True).start()
+
+
 def _spec_key(spec: dict) -> tuple:
     return tuple(sorted((k, repr(v)) for k, v in spec.items()))
 
@@ -197,7 +219,8 @@ def _processes(run, indices: list[int], options: Options, jobs: int) -> Iterator
     spec = run.spec
     key = _spec_key(spec)
     ctx = mp.get_context("forkserver" if sys.platform != "win32" else "spawn")
-    with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx) as pool:
+    with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_exit_with_parent,
+                             initargs=(os.getpid(),)) as pool:
         yield from _windowed(lambda k: pool.submit(_worker_frame, key, spec, k, options),
                              lambda fut: fut.result(), indices, 2 * jobs)
 

@@ -11,6 +11,7 @@ takes a few seconds and can be interrupted after its first frames.
 from __future__ import annotations
 
 import gzip
+import os
 import shutil
 import signal
 import subprocess
@@ -134,3 +135,44 @@ def test_interrupted_run_resumes_to_the_same_results(long_run, reference, tmp_pa
     assert_complete_or_absent(out)
     assert_same_results(demsplit.load_results(out), reference)
     assert len(reference.frames) == N_FRAMES
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not Path("/proc/self/environ").exists(), reason="needs Linux /proc")
+def test_sigkill_of_a_parallel_run_leaves_no_process_behind(tmp_path):
+    """demsplit run -j 2 killed with SIGKILL: its workers, the fork server and the resource tracker are
+    gone within 5 s (they were left running)."""
+    import uuid
+
+    mark = f"DEMSPLIT_TEST_MARK={uuid.uuid4().hex}".encode()
+
+    def marked() -> list[int]:
+        found = []
+        for p in Path("/proc").iterdir():
+            try:
+                if p.name.isdigit() and mark in (p / "environ").read_bytes():
+                    found.append(int(p.name))
+            except OSError:
+                continue
+        return found
+
+    repo = Path(__file__).resolve().parents[1]
+    subprocess.run([sys.executable, str(repo / "benchmarks" / "generate.py"), str(tmp_path / "run"), "--particles",
+                    "20000", "--contacts", "40000", "--frames", "6"], check=True, capture_output=True)
+    script = tmp_path / "run" / "in.bench"  # a run long enough to be killed while its workers compute
+    env = dict(os.environ, DEMSPLIT_TEST_MARK=mark.split(b"=")[1].decode())
+    proc = subprocess.Popen([sys.executable, "-m", "demsplit.cli", "run", str(script), "-o", str(tmp_path / "o.h5"),
+                             "-j", "2", "-q"], env=env, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 30
+    while len(marked()) < 4 and time.monotonic() < deadline:  # the run, the fork server, two workers
+        time.sleep(0.05)
+    assert len(marked()) >= 4
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    deadline = time.monotonic() + 5
+    while marked() and time.monotonic() < deadline:
+        time.sleep(0.1)
+    left = marked()
+    for pid in left:
+        os.kill(pid, signal.SIGKILL)
+    assert left == []
