@@ -209,7 +209,10 @@ def cmd_yade_path(args: argparse.Namespace) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from . import __version__
+
     parser = argparse.ArgumentParser(prog="demsplit", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--version", action="version", version=f"demsplit {__version__}")
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("--debug", action="store_true", help="show the traceback of an error")
     common.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors; no progress bar")

@@ -35,11 +35,24 @@ def readers() -> list[type[Run]]:
 
 
 def read_head(path: Path, size: int = HEAD_BYTES) -> bytes:
-    """The first ``size`` bytes of ``path``, for sniffing its kind; a missing file is an error."""
+    """The first ``size`` bytes of ``path``, for sniffing its kind; a missing file is an error, and a
+    directory is answered with the files in it that a reader takes."""
+    if path.is_dir():
+        found = sorted(p.name for p in path.iterdir() if p.is_file() and _looks_like_a_run(p))
+        raise InputFormatError("this is a directory, not a run.", file=path,
+                               fix=("give one of the runs it holds: " + ", ".join(found[:10])) if found
+                               else "give the run's input script or snapshot file.")
     if not path.is_file():
         raise InputFormatError("no such file.", file=path, fix="check the path.")
     with open(path, "rb") as f:
         return f.read(size)
+
+
+def _looks_like_a_run(path: Path) -> bool:
+    """Whether a reader other than the text-script fallback, or a LIGGGHTS script name (``in.*``), takes it."""
+    with open(path, "rb") as f:
+        head = f.read(HEAD_BYTES)
+    return path.name.startswith("in.") or any(cls.detect(path, head) for cls in readers() if cls.priority >= 0)
 
 
 def reader_for(path: str | Path | None) -> type[Run]:

@@ -371,7 +371,7 @@ class YadeVtkRun(Run):
 
     @classmethod
     def detect(cls, path: Path | None, head: bytes) -> bool:
-        return path is not None and head.startswith(b"# vtk DataFile")
+        return path is not None and head.startswith(b"# vtk DataFile") and _SPHERES.match(path.name) is not None
 
     def __init__(self, path: Path, *, materials: dict[int, Material] | None = None, law: str | None = None,
                  wall_type: int | None = None, overlap_tolerance: float | None = None) -> None:

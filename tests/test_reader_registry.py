@@ -65,3 +65,21 @@ def test_an_unrecognised_binary_file_lists_the_formats(tmp_path):
     with pytest.raises(InputFormatError, match="no reader reads it") as err:
         open_run(junk)
     assert "demsplit.yade.snapshot" in str(err.value) and "LIGGGHTS input script" in str(err.value)
+
+
+def test_a_directory_is_answered_with_the_runs_it_holds():
+    with pytest.raises(InputFormatError, match="a directory, not a run") as err:
+        open_run(SAMPLES / "yade")
+    assert "mindlin_box.h5" in str(err.value) and "mindlin_box-spheres-00024000.vtk" in str(err.value)
+    assert "intrs" not in str(err.value)  # an interactions file is not a run of its own
+    with pytest.raises(InputFormatError, match="in.packing"):
+        open_run(SAMPLES / "liggghts" / "packing")
+
+
+def test_version(capsys):
+    from demsplit import __version__
+    from demsplit.cli import main
+
+    with pytest.raises(SystemExit) as exit_:
+        main(["--version"])
+    assert exit_.value.code == 0 and capsys.readouterr().out.strip() == f"demsplit {__version__}"
