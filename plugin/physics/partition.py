@@ -217,7 +217,7 @@ def per_particle(contacts: Table, energy: ContactEnergy, particles: Table, n_wal
                  index: ParticleIndex | None = None) -> tuple[Table, Table]:
     """Sum each body's energy over its contacts (one compiled pass, :func:`demsplit.kernels.body_sums`).
 
-    Returns ``(particle_table, wall_table)``: per particle ``id type radius u``,
+    Returns ``(particle_table, wall_table)``: per particle ``id type x y z radius u``,
     the energy of every mode (J) and ``n_contacts``, in the particles' row
     order; per wall ``wall u``, every mode, ``n_contacts``. ``u`` is the sum of
     the modes. Conservation: sum of particle u + sum of wall u = sum over
@@ -234,7 +234,7 @@ def per_particle(contacts: Table, energy: ContactEnergy, particles: Table, n_wal
     ptable = {
         "id": np.asarray(particles["id"], dtype=np.int64),
         "type": np.asarray(particles["type"], dtype=np.int32),
-        "radius": np.asarray(particles["radius"], dtype=np.float64),
+        **{c: np.asarray(particles[c], dtype=np.float64) for c in ("x", "y", "z", "radius")},
         "u": _total(pu), **dict(zip(MODE_COLUMNS, pu)), "n_contacts": n_contacts,
     }
     wtable = {"wall": np.arange(n_walls, dtype=np.int64), "u": _total(wu), **dict(zip(MODE_COLUMNS, wu)),

@@ -3,7 +3,8 @@
 :class:`Results` holds one DataFrame per table, one row per observation:
 
 ``particles``
-    one row per particle and frame: ``step``, ``id``, ``type``, ``radius`` (m),
+    one row per particle and frame: ``step``, ``id``, ``type``, ``x y z`` (m, the centre as the
+    reader gives it: wrapped into a periodic box), ``radius`` (m),
     ``u``, ``u_n``, ``u_t`` (J, material distribution law), ``u_equal`` (J, 50/50
     split), ``u_radius`` (J, radius-weighted split), ``n_contacts``; optionally
     ``u_springs`` (J).
