@@ -232,14 +232,6 @@ def vtk_particles(spheres: VtkPolyData, *, default_type: int | None = None) -> T
     }
 
 
-def read_vtk_frame(spheres_path: str | Path, interactions_path: str | Path | None = None, *,
-                   tolerance: float = 1e-3, step: int | None = None, default_type: int | None = None,
-                   wall_ids: list[int] | None = None, box: Box | None = None) -> Frame:
-    """One Frame from VTKExporter's sphere file and (optionally) interaction file: see :func:`vtk_frame`."""
-    return vtk_frame(spheres_path, interactions_path, tolerance=tolerance, step=step, default_type=default_type,
-                     wall_ids=wall_ids, box=box)[0]
-
-
 def vtk_frame(spheres_path: str | Path, interactions_path: str | Path | None = None, *,
               tolerance: float = 1e-3, step: int | None = None, default_type: int | None = None,
               wall_ids: list[int] | None = None, box: Box | None = None) -> tuple[Frame, np.ndarray]:

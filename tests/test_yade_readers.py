@@ -15,7 +15,7 @@ import pytest
 from demsplit.errors import DemsplitError, InputFormatError, PrecisionError, TruncatedFileError
 from demsplit.physics.partition import partition
 from demsplit.readers import open_run
-from demsplit.readers.yade_export import YadeVtkRun, overlap_error_bound, read_vtk, read_vtk_frame
+from demsplit.readers.yade_export import YadeVtkRun, overlap_error_bound, read_vtk, vtk_frame
 from demsplit.readers.yade_snapshot import YadeSnapshotRun, _open_store, open_yade_snapshot
 from demsplit.yade import write_snapshot
 from reader_contract import ReaderContract
@@ -23,6 +23,10 @@ from reader_contract import ReaderContract
 SAMPLES = Path(__file__).resolve().parent.parent / "sample_dumps"
 
 YADE = SAMPLES / "yade"
+
+
+def _vtk_frame(*args, **kwargs):
+    return vtk_frame(*args, **kwargs)[0]
 
 
 class TestMindlinSnapshotsHdf5(ReaderContract):
@@ -203,7 +207,7 @@ def test_writer_round_trip(tmp_path, fmt):
 
 
 def test_vtk_export_agrees_with_the_snapshot_to_percent_g():
-    frame = read_vtk_frame(YADE / "mindlin_box-spheres-00024000.vtk", YADE / "mindlin_box-intrs-00024000.vtk")
+    frame = _vtk_frame(YADE / "mindlin_box-spheres-00024000.vtk", YADE / "mindlin_box-intrs-00024000.vtk")
     ref = open_yade_snapshot(YADE / "mindlin_box.h5").frame(2)
     assert frame.step == ref.step == 24000
     assert frame.n_contacts == ref.n_contacts == 235
@@ -218,11 +222,11 @@ def test_vtk_without_penetration_depth_is_refused():
     spheres = YADE / "cundall_periodic-spheres-00009000.vtk"
     intrs = YADE / "cundall_periodic-intrs-00009000.vtk"
     with pytest.raises(PrecisionError) as info:
-        read_vtk_frame(spheres, intrs)
+        _vtk_frame(spheres, intrs)
     msg = str(info.value)
     assert "timestep 9000" in msg and "cundall_periodic-intrs-00009000.vtk" in msg
     assert "demsplit.yade.snapshot()" in msg
-    frame = read_vtk_frame(spheres, intrs, tolerance=np.inf)
+    frame = _vtk_frame(spheres, intrs, tolerance=np.inf)
     assert frame.n_contacts == 425 and frame.overlap_error.max() > 1e-3
 
 
@@ -272,15 +276,15 @@ def test_vtk_sphere_file_without_ids(tmp_path):
     path.write_text(VTK_SPHERES)
     assert read_vtk(path).point_data["radius"].tolist() == [0.01, 0.01]
     with pytest.raises(InputFormatError, match=r"lacks the field\(s\) \['id'\]") as info:
-        read_vtk_frame(path)
+        _vtk_frame(path)
     assert "exportSpheres(what=dict(id='b.id'" in str(info.value)
     path.write_text(VTK_SPHERES + "\nSCALARS id double 1\nLOOKUP_TABLE default\n1.23457e+06\n1.23457e+06\n")
     with pytest.raises(PrecisionError, match="ids above 999999 are destroyed"):
-        read_vtk_frame(path)
+        _vtk_frame(path)
     path.write_text(VTK_SPHERES + "\nSCALARS id double 1\nLOOKUP_TABLE default\n0\n1\n")
     with pytest.raises(DemsplitError, match="no material id field"):
-        read_vtk_frame(path)
-    assert read_vtk_frame(path, default_type=0).particles["id"].tolist() == [0, 1]
+        _vtk_frame(path)
+    assert _vtk_frame(path, default_type=0).particles["id"].tolist() == [0, 1]
     path.write_text(VTK_SPHERES[:-10])
     with pytest.raises(InputFormatError, match="expected 2 numbers"):
         read_vtk(path)

@@ -119,17 +119,6 @@ class ContactBodies:
         return table, code
 
 
-def contact_types(contacts: Table, scene: Scene, particles: Table | None = None,
-                  index: ParticleIndex | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Material type of body 1 and body 2 of each contact.
-
-    Taken from the ``type1``/``type2`` columns when the reader set them,
-    otherwise from the particles table (by id) and the wall list.
-    """
-    type1, type2, pairs = _contact_pairs(contacts, scene, particles, index)
-    return (type1, type2) if type1 is not None else _types_of_codes(pairs[0], scene)
-
-
 def _types_of_codes(code: np.ndarray, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     """(type1, type2) of pair codes type1 * n_types + type2."""
     n_types = len(scene.material_tables()[0])
