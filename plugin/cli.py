@@ -179,14 +179,20 @@ def cmd_export(args: argparse.Namespace) -> int:
     from .results import load_results
     from .results.store import export_tables
 
-    if not (args.parquet or args.csv):
-        raise DemsplitError("nothing to export to.", fix="give --parquet DIR or --csv DIR.")
+    from .results.vtk import export_vtk
+
+    if not (args.parquet or args.csv or args.vtk):
+        raise DemsplitError("nothing to export to.", fix="give --parquet DIR, --csv DIR or --vtk DIR.")
     results = load_results(args.results)
+    written = []
     for fmt, directory in (("parquet", args.parquet), ("csv", args.csv)):
         if directory:
-            for path in export_tables(results, directory, fmt=fmt, inputs=[args.results]):
-                if not args.quiet:
-                    print(f"wrote {path}")
+            written += export_tables(results, directory, fmt=fmt, inputs=[args.results])
+    if args.vtk:
+        written += export_vtk(results, args.vtk, inputs=[args.results])
+    if not args.quiet:
+        for path in written:
+            print(f"wrote {path}")
     return 0
 
 
@@ -254,10 +260,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", help="HTML file to write")
     p.set_defaults(func=cmd_report)
 
-    p = add("export", "export a result file's tables to Parquet or CSV")
-    p.add_argument("results")
-    p.add_argument("--parquet", metavar="DIR")
-    p.add_argument("--csv", metavar="DIR")
+    p = add("export", "export a result file's tables to Parquet or CSV, or as a VTK series for ParaView")
+    p.add_argument("results", help="a store written by demsplit run")
+    p.add_argument("--parquet", metavar="DIR", help="one Parquet file per table (units in the field metadata)")
+    p.add_argument("--csv", metavar="DIR", help="one CSV file per table")
+    p.add_argument("--vtk", metavar="DIR",
+                   help="one VTK file per frame for particles and contacts, and a .pvd series of each "
+                        "(needs the vtk extra: pip install 'demsplit[vtk]')")
     p.set_defaults(func=cmd_export)
 
     p = add("yade-path", "print the directory to site.addsitedir() inside YADE so that 'import demsplit.yade' works")

@@ -1,0 +1,70 @@
+"""Results as VTK files for ParaView (and any VTK reader): one file per frame and a ``.pvd`` series.
+
+:func:`export_vtk` writes, for every frame of a result set, the particles as
+points (``particles_<step>.vtu``: the centre, with every per-particle column:
+id, type, radius, the energy of every mode, ``u``, the comparison splits,
+``n_contacts``) and, when the store has the per-contact table, the contacts
+as points at the material-weighted contact point (``contacts_<step>.vtu``:
+ids, wall, overlap, the energies, shares, ``u1 u2 depth1``), plus
+``particles.pvd`` and ``contacts.pvd``: ParaView opens a ``.pvd`` as one time
+series. Units are SI (m, J). The files are VTK XML unstructured grids of
+vertex cells, written by meshio (pure Python, 2 MB, against 566 MB for
+VTK's own writer: ``python benchmarks/vtk_writers.py`` measures both).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from pathlib import Path
+from xml.sax.saxutils import quoteattr
+
+import numpy as np
+
+from ..atomic import atomic_path
+from ..errors import StoreError
+from ..outputs import check_output_path
+from .tables import Results
+
+POSITIONS = {"particles": ("x", "y", "z"), "contacts": ("cpx", "cpy", "cpz")}
+"""Where each table's rows are drawn: the particle centre, the contact point (m)."""
+
+
+def export_vtk(results: Results, directory: str | Path, inputs: Iterable[str | Path] = ()) -> list[Path]:
+    """Write the VTK series of ``results`` into ``directory`` (module docstring); return the files written.
+    No file is written over one of ``inputs``."""
+    try:
+        import meshio
+    except ImportError:
+        raise StoreError("the VTK export needs meshio, which is not installed.",
+                         fix="pip install 'demsplit[vtk]'.") from None
+    directory = Path(directory)
+    if directory.exists() and not directory.is_dir():
+        raise StoreError("the export directory is a file.", file=directory, fix="give a directory name.")
+    directory.mkdir(parents=True, exist_ok=True)
+    tables = {name: getattr(results, name) for name, position in POSITIONS.items()
+              if not getattr(results, name).empty and set(position) <= set(getattr(results, name).columns)}
+    plan = {name: [(int(step), directory / f"{name}_{int(step):012d}.vtu") for step in df["step"].unique()]
+            for name, df in tables.items()}
+    for name, files in plan.items():  # every path checked before anything is written
+        for _, path in [*files, (None, directory / f"{name}.pvd")]:
+            check_output_path(path, inputs)
+    written = []
+    for name, df in tables.items():
+        position = POSITIONS[name]
+        path_of = dict(plan[name])
+        for step, frame in df.groupby("step", sort=False):
+            path = path_of[int(step)]
+            points = frame[list(position)].to_numpy(dtype=np.float64)
+            data = {c: frame[c].to_numpy() for c in frame.columns if c not in (*position, "step")}
+            mesh = meshio.Mesh(points, [("vertex", np.arange(len(points)).reshape(-1, 1))], point_data=data)
+            with atomic_path(path) as tmp:
+                meshio.write(tmp, mesh, file_format="vtu", binary=True, compression=None)
+            written.append(path)
+        rows = "\n".join(f'    <DataSet timestep="{step}" part="0" file={quoteattr(path.name)}/>'
+                         for step, path in plan[name])
+        pvd = directory / f"{name}.pvd"
+        with atomic_path(pvd) as tmp:
+            tmp.write_text('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n  <Collection>\n'
+                           f"{rows}\n  </Collection>\n</VTKFile>\n")
+        written.append(pvd)
+    return written
