@@ -179,10 +179,11 @@ def cmd_export(args: argparse.Namespace) -> int:
     from .results import load_results
     from .results.store import export_tables
 
+    from .results.dump import export_dump
     from .results.vtk import export_vtk
 
-    if not (args.parquet or args.csv or args.vtk):
-        raise DemsplitError("nothing to export to.", fix="give --parquet DIR, --csv DIR or --vtk DIR.")
+    if not (args.parquet or args.csv or args.vtk or args.dump):
+        raise DemsplitError("nothing to export to.", fix="give --parquet DIR, --csv DIR, --vtk DIR or --dump FILE.")
     results = load_results(args.results)
     written = []
     for fmt, directory in (("parquet", args.parquet), ("csv", args.csv)):
@@ -190,6 +191,8 @@ def cmd_export(args: argparse.Namespace) -> int:
             written += export_tables(results, directory, fmt=fmt, inputs=[args.results])
     if args.vtk:
         written += export_vtk(results, args.vtk, inputs=[args.results])
+    if args.dump:
+        written.append(export_dump(results, args.dump, inputs=[args.results]))
     if not args.quiet:
         for path in written:
             print(f"wrote {path}")
@@ -267,6 +270,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--vtk", metavar="DIR",
                    help="one VTK file per frame for particles and contacts, and a .pvd series of each "
                         "(needs the vtk extra: pip install 'demsplit[vtk]')")
+    p.add_argument("--dump", metavar="FILE",
+                   help="the per-particle table as a LAMMPS-style dump (positions, radius, energies), "
+                        "which OVITO opens directly")
     p.set_defaults(func=cmd_export)
 
     p = add("yade-path", "print the directory to site.addsitedir() inside YADE so that 'import demsplit.yade' works")

@@ -1,0 +1,46 @@
+"""Per-particle results as a LAMMPS-style text dump, which OVITO (and MDAnalysis, LAMMPS' tools) open directly.
+
+:func:`export_dump` writes one ``ITEM: TIMESTEP`` frame per stored frame:
+``ITEM: ATOMS id type x y z radius`` followed by every other per-particle
+column (``u u_n u_t``, the comparison splits, ``n_contacts``, ...), reals at
+full precision (``%.17g``). OVITO maps ``id type x y z radius`` to its
+standard properties and keeps the others under their own names, so a
+``ColorCodingModifier(property='u')`` colours the particles by their energy
+(``docs/visualization.md``). The store keeps no box, so each frame's box is
+the particles' extent (centres +- radius), non-periodic.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from pathlib import Path
+
+import numpy as np
+
+from ..atomic import atomic_path
+from ..outputs import check_output_path
+from .tables import Results
+
+LEADING = ("id", "type", "x", "y", "z", "radius")
+"""The columns every frame starts with, in OVITO's and LAMMPS' names."""
+
+
+def export_dump(results: Results, path: str | Path, inputs: Iterable[str | Path] = ()) -> Path:
+    """Write the per-particle table of every frame of ``results`` to the dump ``path`` (module docstring)."""
+    path = check_output_path(path, inputs)
+    df = results.particles
+    columns = [*LEADING, *(c for c in df.columns if c not in (*LEADING, "step"))]
+    integer = [df[c].dtype.kind in "iu" for c in columns]
+    with atomic_path(path) as tmp, open(tmp, "w") as f:
+        for step, frame in df.groupby("step", sort=False):
+            x = frame[["x", "y", "z"]].to_numpy()
+            r = frame["radius"].to_numpy()[:, None]
+            lo, hi = (x - r).min(axis=0), (x + r).max(axis=0)
+            f.write(f"ITEM: TIMESTEP\n{int(step)}\nITEM: NUMBER OF ATOMS\n{len(frame)}\n"
+                    "ITEM: BOX BOUNDS ff ff ff\n"
+                    + "".join(f"{a!r} {b!r}\n" for a, b in zip(lo.tolist(), hi.tolist()))
+                    + "ITEM: ATOMS " + " ".join(columns) + "\n")
+            values = frame[columns].to_numpy(dtype=object) if any(integer) else frame[columns].to_numpy()
+            fmt = " ".join("%d" if i else "%.17g" for i in integer)
+            np.savetxt(f, values, fmt=fmt)
+    return path
