@@ -7,6 +7,7 @@ import os
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
 
 import demsplit.results.store as store
 import h5py
@@ -490,3 +491,18 @@ def test_a_commit_record_replaced_while_it_is_read_is_read_whole(tmp_path):
     finally:
         stop.set()
         thread.join()
+
+
+def test_parquet_export_keeps_units_and_wall_names_where_pandas_users_look(tmp_path):
+    """pd.read_parquet(...).attrs holds the units and the walls (they were only in field metadata and JSON)."""
+    import pandas as pd
+
+    from demsplit.pipeline import run_to_store
+
+    sample = Path(__file__).resolve().parents[1] / "sample_dumps" / "yade" / "mindlin_box.h5"
+    run_to_store(sample, tmp_path / "out.h5", progress=False)
+    export_tables(load_results(tmp_path / "out.h5"), tmp_path / "pq", fmt="parquet")
+    particles = pd.read_parquet(tmp_path / "pq" / "particles.parquet")
+    walls = pd.read_parquet(tmp_path / "pq" / "walls.parquet")
+    assert particles.attrs["units"]["u"] == "J" and particles.attrs["units"]["x"] == "m"
+    assert [w["name"] for w in walls.attrs["walls"]][:1] == ["body 160 (yade_wall)"]

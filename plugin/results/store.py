@@ -752,9 +752,11 @@ def export_tables(results: Results, directory: str | Path, fmt: str = "parquet",
             import pyarrow.parquet as pq
 
             units = df.attrs.get("units", {})
+            df = df.copy(deep=False)
+            df.attrs = {"units": units, "walls": results.walls_meta}  # pandas keeps attrs in its own metadata
             table = pa.Table.from_pandas(df, preserve_index=False)
             fields = [f.with_metadata({"unit": units.get(f.name, "")}) for f in table.schema]
-            schema = pa.schema(fields, metadata={b"demsplit": prov.encode()})
+            schema = pa.schema(fields, metadata={**table.schema.metadata, b"demsplit": prov.encode()})
             table = table.cast(schema)
             _write_atomic(out, lambda f, t=table: pq.write_table(t, f))
         else:
