@@ -1,30 +1,38 @@
 """Compare two result stores table by table, column by column, bit for bit.
 
-    python benchmarks/compare_stores.py BEFORE.h5 AFTER.h5 [BEFORE2.h5 AFTER2.h5 ...]
+    python benchmarks/compare_stores.py [--added-columns] BEFORE.h5 AFTER.h5 [BEFORE2.h5 AFTER2.h5 ...]
+    python benchmarks/compare_stores.py [--added-columns] BEFORE_DIR AFTER_DIR   (every store of BEFORE_DIR)
 
 For refactors that must not change a number: every table of ``demsplit run``'s
 store (particles, contacts, walls, frames) must have the same columns, dtypes
-and bytes (NaN equal to NaN). Provenance (version, options, paths) is not
-compared. Prints one line per store pair and exits 1 on any difference.
+and bytes (NaN equal to NaN). With ``--added-columns`` the AFTER stores may
+have more columns (a feature that adds results): those are listed, and every
+column both have must still be the same bytes. Provenance (version, options,
+paths) is not compared. Prints one line per store pair and exits 1 on any
+difference. ``benchmarks/sample_stores.sh`` writes the stores of every sample.
 """
 
 from __future__ import annotations
 
 import sys
+from pathlib import Path
 
 import numpy as np
 from demsplit.results import TABLES, load_results
 
 
-def differences(before: str, after: str) -> list[str]:
-    """What differs between the tables of two stores (empty: identical)."""
+def differences(before: str, after: str, added_columns: bool = False) -> tuple[list[str], list[str]]:
+    """What differs between the tables of two stores (empty: identical), and the columns AFTER adds."""
     a, b = load_results(before), load_results(after)
-    out = []
+    out, added = [], []
     for name in TABLES:
         ta, tb = getattr(a, name), getattr(b, name)
-        if list(ta.columns) != list(tb.columns):
+        new = [c for c in tb.columns if c not in ta.columns]
+        kept = [c for c in tb.columns if c in ta.columns]
+        if kept != list(ta.columns) or (new and not added_columns):
             out.append(f"{name}: columns {list(ta.columns)} != {list(tb.columns)}")
             continue
+        added += [f"{name}.{c}" for c in new]
         for col in ta.columns:
             x, y = ta[col].to_numpy(), tb[col].to_numpy()
             if x.dtype != y.dtype or x.shape != y.shape:
@@ -32,17 +40,22 @@ def differences(before: str, after: str) -> list[str]:
             elif not np.array_equal(x.view(np.uint8) if x.dtype.kind != "O" else x,
                                     y.view(np.uint8) if y.dtype.kind != "O" else y):
                 out.append(f"{name}.{col}: values differ")
-    return out
+    return out, added
 
 
 def main(argv: list[str]) -> int:
+    added_columns = "--added-columns" in argv
+    argv = [a for a in argv if a != "--added-columns"]
+    if len(argv) == 2 and all(Path(a).is_dir() for a in argv):
+        argv = [str(p) for b in sorted(Path(argv[0]).glob("*.h5")) for p in (b, Path(argv[1]) / b.name)]
     if len(argv) < 2 or len(argv) % 2:
         print(__doc__)
         return 2
     bad = 0
     for before, after in zip(argv[::2], argv[1::2]):
-        diff = differences(before, after)
-        print(f"{'identical' if not diff else 'DIFFERENT'}: {before} vs {after}")
+        diff, added = differences(before, after, added_columns)
+        print(f"{'identical' if not diff else 'DIFFERENT'}: {before} vs {after}"
+              + (f" (added: {' '.join(added)})" if added else ""))
         for line in diff:
             print(f"  {line}")
         bad += bool(diff)
