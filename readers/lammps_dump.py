@@ -551,7 +551,18 @@ class TextDump(DumpFile):
             tokens = raw.split(b" ")
             if trailing and tokens and tokens[-1] == b"":
                 tokens = tokens[:-1]
-            if len(tokens) != ncols or b"" in tokens:
+            if raw.endswith(b"\r"):
+                return InputFormatError(
+                    f"row {row0 + k + 1} ends with a carriage return (CR LF, Windows line ends); LAMMPS writes LF",
+                    file=self.path, step=e.step, line=line,
+                    fix="convert the file's line ends to LF (dos2unix FILE), or read the run's original dump")
+            if b"" in tokens:
+                gap = ("starts with a space" if raw.startswith(b" ") else
+                       f"has two spaces in a row before value {tokens.index(b'') + 1}")
+                return InputFormatError(f"row {row0 + k + 1} {gap}; LAMMPS separates values by one space",
+                                        file=self.path, step=e.step, line=line,
+                                        fix="the row was edited or damaged: rewrite the dump, or repair that line")
+            if len(tokens) != ncols:
                 return InputFormatError(
                     f"row {row0 + k + 1} has {len([t for t in tokens if t])} values, expected {ncols} (one per "
                     f"header name{', then a trailing space' if trailing else ''}, single spaces between)",

@@ -334,3 +334,16 @@ def test_every_frame_bad_under_skip_is_one_failure_with_or_without_quiet(run_dir
     err = capsys.readouterr().err
     assert "every frame of the run is bad (3)" in err and not out.exists()
     assert not list(tmp_path.glob(".out.h5*"))  # nothing left behind
+
+
+@pytest.mark.parametrize("change, message", [
+    (lambda line: line + b"\r", "ends with a carriage return (CR LF"),
+    (lambda line: b" " + line, "starts with a space"),
+    (lambda line: line.replace(b" ", b"  ", 1), "two spaces in a row before value 2"),
+])
+def test_row_shape_faults_are_named_as_what_they_are(run_dir, change, message):
+    """They were 'row 1 has 17 values, expected 16' (CR LF) and '41 values, expected 41' (a leading space)."""
+    edit_lines(run_dir / "pairs.txt", lambda lines: lines.__setitem__(13 - 1, change(lines[13 - 1])))
+    err = analyze_error(run_dir)
+    assert isinstance(err, InputFormatError) and message in str(err)
+    assert_where(err, "pairs.txt", STEPS[0], 13)

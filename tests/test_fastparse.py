@@ -321,7 +321,7 @@ def ld_write(tmp_path: Path, text: str, name: str = "d.txt") -> Path:
 @pytest.mark.parametrize("bad, expect", [
     ("7 0.5", "row 8 has 2 values, expected 3"),
     ("7 0.5 0.25 1", "row 8 has 4 values, expected 3"),
-    ("7 0.5  0.25", "row 8 has 3 values, expected 3"),     # double space: an empty field
+    ("7 0.5  0.25", "row 8 has two spaces in a row before value 3"),  # an empty field
     ("7 0.5 abc", "column 3 ('c3') of row 8 is 'abc'; expected a number"),
 ])
 @pytest.mark.parametrize("block", [None, 64])
