@@ -29,6 +29,8 @@ def test_text_summary_shows_the_last_frame_per_type():
     assert "timestep 100" in text_summary(res, step=100)
     with pytest.raises(StoreError, match="no frame with timestep 7"):
         text_summary(res, step=7)
+    with pytest.raises(StoreError, match="the results hold no frames"):
+        text_summary(Results.from_frames([]))
 
 
 @pytest.mark.parametrize("simulator_point, n_figures", [(True, 5), (False, 4)])

@@ -21,6 +21,7 @@ import numpy as np
 import pandas as pd
 
 from ..atomic import atomic_path
+from ..errors import StoreError
 from .tables import Results
 
 SCATTER_MAX_POINTS = 100_000
@@ -31,8 +32,6 @@ random subset, stated in the caption)."""
 def _pick_step(results: Results, step: int | None) -> int:
     steps = results.steps
     if len(steps) == 0:
-        from .errors import StoreError
-
         raise StoreError("the results hold no frames.", fix="run demsplit on a run with at least one frame.")
     if step is None:
         return int(steps.max())
