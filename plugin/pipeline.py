@@ -27,6 +27,7 @@ from .frame import CONTACT_REQUIRED, PARTICLE_REQUIRED, Frame, ParticleIndex, re
 from .physics.bodies import ContactBodies
 from .physics.modes import MODE_COLUMNS
 from .physics.partition import contact_energies, particle_energy, partition, per_particle
+from .readers.base import Run
 from .scene import Scene
 
 Tables = dict[str, dict[str, np.ndarray]]
@@ -132,7 +133,7 @@ class RunReport:
     notes: list[str] = field(default_factory=list)
 
 
-def _open(spec: dict):
+def _open(spec: dict) -> Run:
     from .readers import open_run
 
     spec = dict(spec)
@@ -180,7 +181,7 @@ def _spec_key(spec: dict) -> tuple:
     return tuple(sorted((k, repr(v)) for k, v in spec.items()))
 
 
-def _serial(run, indices: list[int], options: Options) -> Iterator[tuple[int, Tables | DemsplitError, list]]:
+def _serial(run: Run, indices: list[int], options: Options) -> Iterator[tuple[int, Tables | DemsplitError, list]]:
     for k in indices:
         try:
             frame = run.frame(k)
@@ -212,7 +213,7 @@ def _windowed(submit: Callable[[int], object], result: Callable[[object], tuple]
         del fut  # its result is the consumer's now
 
 
-def _processes(run, indices: list[int], options: Options, jobs: int) -> Iterator[tuple]:
+def _processes(run: Run, indices: list[int], options: Options, jobs: int) -> Iterator[tuple]:
     import multiprocessing as mp
     from concurrent.futures import ProcessPoolExecutor
 
@@ -225,7 +226,7 @@ def _processes(run, indices: list[int], options: Options, jobs: int) -> Iterator
                              lambda fut: fut.result(), indices, 2 * jobs)
 
 
-def _dask(run, indices: list[int], options: Options, address: str) -> Iterator[tuple]:
+def _dask(run: Run, indices: list[int], options: Options, address: str) -> Iterator[tuple]:
     from distributed import Client, LocalCluster
 
     spec = run.spec
@@ -248,7 +249,7 @@ def _dask(run, indices: list[int], options: Options, address: str) -> Iterator[t
             cluster.close()
 
 
-def process_run(run, options: Options = Options(), *, jobs: int = 1, dask: str | None = None,
+def process_run(run: Run, options: Options = Options(), *, jobs: int = 1, dask: str | None = None,
                 on_bad_frame: str = "stop", skip_steps: set[int] | None = None,
                 steps: list[int] | None = None, progress: bool | None = None,
                 report: RunReport | None = None) -> Iterator[Tables]:
@@ -264,7 +265,7 @@ def process_run(run, options: Options = Options(), *, jobs: int = 1, dask: str |
     if on_bad_frame not in ("stop", "skip"):
         raise ValueError(f"on_bad_frame must be 'stop' or 'skip', not {on_bad_frame!r}")
     report = report if report is not None else RunReport()
-    for note in getattr(run, "notes", []):  # what the reader found it could not provide
+    for note in run.notes:  # what the reader found it could not provide
         if note not in report.notes:
             report.notes.append(note)
     all_steps = run_steps(run)
@@ -303,11 +304,11 @@ def process_run(run, options: Options = Options(), *, jobs: int = 1, dask: str |
         bar.close()
 
 
-def run_steps(run) -> list:
-    """Timestep of every frame of ``run`` (from the reader's index when it has one;
-    ``None`` for frames past it, e.g. a LIGGGHTS frame with a damaged header)."""
-    steps = [int(s) for s in getattr(run, "steps", ())]
-    return steps + [None] * (len(run) - len(steps))  # None: frames whose step cannot be read
+def run_steps(run: Run) -> list[int | None]:
+    """Timestep of every frame of ``run``: ``run.steps``, then ``None`` for the damaged frames past them
+    (a LIGGGHTS frame with a damaged header, a YADE snapshot cut short), whose step cannot be read."""
+    steps = [int(s) for s in run.steps]
+    return steps + [None] * (len(run) - len(steps))
 
 
 def analyze(path: str | Path, *, options: Options = Options(), jobs: int = 1, dask: str | None = None,
@@ -325,19 +326,18 @@ def analyze(path: str | Path, *, options: Options = Options(), jobs: int = 1, da
     run = open_run(path, **reader_options)
     try:
         report = RunReport()
-        hash_in_background(getattr(run, "sources", [path]))  # the provenance's sha256, while frames are computed
+        hash_in_background(run.sources)  # the provenance's sha256, while frames are computed
         frames = list(process_run(run, options, jobs=jobs, dask=dask, on_bad_frame=on_bad_frame,
                                   progress=progress, report=report))
-        provenance = build_provenance(getattr(run, "sources", [path]), scene=run.scene,
+        provenance = build_provenance(run.sources, scene=run.scene,
                                       options=asdict(options), **_report_provenance(run, report))
         return Results.from_frames(frames, provenance, walls_meta_from_scene(run.scene))
     finally:
         run.close()
 
 
-def _report_provenance(run, report: RunReport) -> dict:
-    described = run.describe() if hasattr(run, "describe") else {}
-    return {"run": described, "bad_frames": report.bad_frames, "notes": report.notes}
+def _report_provenance(run: Run, report: RunReport) -> dict:
+    return {"run": run.describe(), "bad_frames": report.bad_frames, "notes": report.notes}
 
 
 def run_to_store(path: str | Path, out: str | Path, *, options: Options = Options(), jobs: int = 1,
@@ -351,7 +351,7 @@ def run_to_store(path: str | Path, out: str | Path, *, options: Options = Option
     compression : ``"auto"`` (gzip only for the columns that compress well,
         readable by every HDF5 tool), ``"gzip"`` (every column; smallest,
         slowest), ``"lzf"`` (h5py only) or ``"none"``/``None`` (fastest,
-        largest); see ``docs/store.md`` for the measured cost of each.
+        largest); see ``docs/performance.md``, "The result store", for the measured cost of each.
     """
     from .readers import open_run
     from .results import walls_meta_from_scene

@@ -45,10 +45,9 @@ Parser
     newline) and converts the requested columns, integers exactly, reals by
     Clinger's fast path (correctly rounded: bit for bit Python's ``float``).
     The rare real outside that path (a mantissa above 2**53: 17 digits, some
-    of 16; or a decimal exponent beyond +-22 such as ``8.4781e-19``: one
-    token in 77 000 rows of the benchmark's contacts) is converted by
-    ``float`` (at most 4096 per slice). A block holding anything else
-    (``%.17g`` text beyond that count, ``nan``, a non-number, a real in an
+    of 16; or a decimal exponent beyond +-22 such as ``8.4781e-19``) is
+    converted by ``float`` (at most 4096 per slice). A block holding anything
+    else (``%.17g`` text beyond that count, ``nan``, a non-number, a real in an
     integer column) is parsed again by the general path, ``polars.read_csv``
     (full schema, only the requested columns converted), which also makes an
     integer column real and, for bad input, leads to the located error.
@@ -108,7 +107,7 @@ from demsplit.threads import THREADS, pool
 if TYPE_CHECKING:  # polars is imported where the fallback parse needs it
     import polars as pl
 
-__all__ = ["open_dump", "DumpFile", "DumpFrame"]
+__all__ = ["open_dump", "describe_dump", "looks_like_dump", "DumpFile", "DumpFrame"]
 
 MARKER = b"ITEM: TIMESTEP"
 HEADER_LINES = 9            # TIMESTEP, step, NUMBER OF, n, BOX BOUNDS, 3 bounds, ITEM: <label> names
@@ -266,6 +265,34 @@ def looks_like_dump(path: Path, head: bytes) -> bool:
     marker, a compressed stream, or a ``.bin`` file; for ``demsplit info``, which asks the run readers
     about everything else."""
     return head.startswith(MARKER) or any(head.startswith(m) for m in _MAGIC) or path.suffix == ".bin"
+
+
+def describe_dump(path: str | Path) -> str:
+    """What ``demsplit info`` prints about a dump: format, kind, frames, steps, rows per frame,
+    damaged headers, and the first frame's box and columns with their printed significant digits."""
+    dump = open_dump(path)
+    form = ("binary (LAMMPS dump custom, native byte order; no column names in the file)"
+            if isinstance(dump, BinaryDump) else
+            f"text{', ' + dump.compression + '-compressed' if dump.compression else ''}")
+    rows = dump.rows
+    lo, hi = (int(rows.min()), int(rows.max())) if len(rows) else (0, 0)
+    lines = [f"{path}: LAMMPS/LIGGGHTS dump",
+             f"  format:   {form}",
+             f"  kind:     {dump.kind} (label {dump.label})",
+             f"  frames:   {dump.n_frames}, steps {describe_steps(dump.steps)}",
+             f"  rows:     {lo if lo == hi else f'{lo}..{hi}'} per frame"]
+    lines += [f"  DAMAGED frame header: {err}" for err in dump.damaged]
+    if dump.n_frames:
+        first = dump.frame(0)
+        lines.append(f"  box (first frame): lo {first.box.lo.tolist()}, hi {first.box.hi.tolist()}, "
+                     f"periodic {list(first.box.periodic)}")
+        lines.append(f"  columns ({len(first.columns)}), printed significant digits in the first frame "
+                     "('exact': integers or full precision):")
+        for name, values in first.columns.items():
+            d = first.digits.get(name)
+            lines.append(f"    {name:<16} {'exact' if d is None else d:>5}   "
+                         + (f"{np.min(values):.6g} .. {np.max(values):.6g}" if len(values) else "(no rows)"))
+    return "\n".join(lines)
 
 
 class DumpFile(ABC):
@@ -730,10 +757,9 @@ def _windows(f: BinaryIO) -> Iterator[tuple[int, np.ndarray, int]]:
 
     A plain file's windows are memory maps of it, one per window (unmapped
     when the next is asked for, so the resident memory stays one or two
-    windows): no copy (the scan of the 2.57 GB benchmark contact dump took
-    0.82-0.90 s with ``read()`` copying the file out of the page cache,
-    0.51-0.64 s mapped, four alternating runs of each). A compressed stream is
-    read into one reused buffer of ``HEADER_MAX + CHUNK`` bytes, the last
+    windows): no copy out of the page cache, which is most of a scan's time
+    with ``read()`` (docs/performance.md, "Parser and index"). A compressed
+    stream is read into one reused buffer of ``HEADER_MAX + CHUNK`` bytes, the last
     ``HEADER_MAX`` bytes of each window moving to the front for the next.
     """
     # (an empty file cannot be mapped: it takes the buffered path, which reads nothing)

@@ -3,7 +3,7 @@
 Layout (see docs/store.md)::
 
     /                 attrs: format, format_version, demsplit_version,
-                             provenance (JSON), walls_meta (JSON)
+                             provenance (JSON), walls_meta (JSON), compression
     /particles/<col>  one 1-D dataset per column, chunked, compressed, resizable
     /contacts/<col>   (group attrs: columns (JSON list, stored order), units (JSON))
     /walls/<col>
@@ -30,9 +30,9 @@ Compression (``compression="auto"``, the default): each dataset is gzip
 (level :data:`GZIP_LEVEL`, with shuffle) when its first chunk compresses to at
 most :data:`AUTO_MAX_RATIO` of its size, else stored without filter; the
 choice is the dataset's HDF5 filter pipeline, which every HDF5 reader decodes.
-The deflate streams are made by ISA-L (``isal``), 8-30x faster than zlib
-level 1 at ratios within a few percent (``python
-benchmarks/store_compression.py --columns``); any inflate decodes them.
+The deflate streams are made by ISA-L (``isal``), for its speed (measured
+against zlib in docs/performance.md, "The result store"); they are standard
+zlib streams, which any inflate decodes.
 """
 
 from __future__ import annotations
@@ -64,14 +64,15 @@ COMPRESSIONS = ("auto", "gzip", "lzf", "none")
 (h5py's filter, not in every HDF5 reader); ``none``: no filter."""
 COMPRESSION = "auto"
 GZIP_LEVEL = 1
-"""Deflate level of the gzip filter: on real results level 4 shrinks the columns
-gzip is kept for only a little more, at half the speed (docs/store.md)."""
+"""Deflate level of the gzip filter: a higher level shrinks the columns gzip is
+kept for only a little more, at a fraction of the speed (docs/performance.md)."""
 AUTO_MAX_RATIO = 0.5
 """``auto`` gzips a column when its first chunk, shuffled and deflated, is at
-most this fraction of its raw size (measured, docs/store.md: integer columns
-and shares 0.004-0.2, contact points 0.3-0.6, energies and overlaps 0.83-0.89).
-A table without rows in its first frame is decided by dtype: integers gzip,
-reals none."""
+most this fraction of its raw size: below it deflating costs less than writing
+the bytes it saves; integer columns and shares fall far below it, energies and
+overlaps (full-mantissa floats) far above (measured per column:
+docs/performance.md, "The result store"). A table without rows in its first
+frame is decided by dtype: integers gzip, reals none."""
 CHUNK_ROWS = 65536
 """Rows per HDF5 chunk (512 KiB of float64 before compression), at most: a
 table whose first frame is smaller gets smaller chunks (:func:`chunk_rows`)."""

@@ -8,8 +8,9 @@ as points at the material-weighted contact point (``contacts_<step>.vtu``:
 ids, wall, overlap, the energies, shares, ``u1 u2 depth1``), plus
 ``particles.pvd`` and ``contacts.pvd``: ParaView opens a ``.pvd`` as one time
 series. Units are SI (m, J). The files are VTK XML unstructured grids of
-vertex cells, written by meshio (pure Python, 2 MB, against 566 MB for
-VTK's own writer: ``python benchmarks/vtk_writers.py`` measures both).
+vertex cells, written by meshio: pure Python and a small fraction of VTK's
+size (the two writers measured: ``python benchmarks/vtk_writers.py``, figures
+in docs/performance.md).
 """
 
 from __future__ import annotations
