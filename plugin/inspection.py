@@ -2,10 +2,11 @@
 
 :func:`describe_file` says what one file is and holds: a LAMMPS/LIGGGHTS dump
 (kind, label, frames, steps, columns with their printed digits, rows per
-frame, compression), a ``demsplit.yade`` snapshot file (snapshots,
-iterations, bodies, interactions, functors), a demsplit result store (frames,
-tables, provenance) or a LIGGGHTS input script (materials, model, walls,
-dumps).
+frame, compression), a demsplit result store (frames, tables, provenance), a
+VTK file that is part of a run (points, fields), or whatever a run reader
+reads, described by that reader (``Run.describe_file``: a LIGGGHTS input
+script's materials, model, walls and dumps; a ``demsplit.yade`` snapshot
+file's snapshots, iterations, bodies, interactions and functors; ...).
 
 :func:`check_run` opens a run the way ``demsplit run`` does and validates
 every frame: the readers' own checks (counts, numbers, ids, duplicates,
@@ -32,55 +33,22 @@ MAX_LISTED = 20
 # --------------------------------------------------------------------------- info
 
 def describe_file(path: str | Path) -> str:
-    """A human-readable description of ``path`` (see the module docstring): a result store or a
-    dump (which are not runs), else what the reader that reads it says (``Run.describe_file``)."""
+    """A human-readable description of ``path`` (see the module docstring): a result store, a dump or a
+    VTK file that is part of a run (none of which is a run), else what the reader that reads it says
+    (``Run.describe_file``)."""
     from .readers import read_head, reader_for
-    from .readers.lammps_dump import looks_like_dump
+    from .readers.lammps_dump import describe_dump, looks_like_dump
+    from .readers.yade_export import describe_vtk, is_vtk_part
 
     path = Path(path)
     head = read_head(path)
     if not head:
         raise InputFormatError("the file is empty.", file=path, fix="check that the program that writes it ran.")
-    if _is_store(path, head):
-        return _describe_store(path)
-    if looks_like_dump(path, head):
-        return _describe_dump(path)
+    for looks_like, describe in ((_is_store, _describe_store), (looks_like_dump, describe_dump),
+                                 (is_vtk_part, describe_vtk)):
+        if looks_like(path, head):
+            return describe(path)
     return reader_for(path).describe_file(path)
-
-
-def _describe_dump(path: Path) -> str:
-    from .readers.lammps_dump import BinaryDump, open_dump
-
-    dump = open_dump(path)
-    binary = isinstance(dump, BinaryDump)
-    form = "binary (LAMMPS dump custom, native byte order; no column names in the file)" if binary else \
-        f"text{', ' + dump.compression + '-compressed' if dump.compression else ''}"
-    rows = dump.rows
-    lines = [f"{path}: LAMMPS/LIGGGHTS dump",
-             f"  format:   {form}",
-             f"  kind:     {dump.kind} (label {dump.label})",
-             f"  frames:   {dump.n_frames}, steps {describe_steps(dump.steps)}",
-             f"  rows:     {_range(rows)} per frame"]
-    for err in dump.damaged:
-        lines.append(f"  DAMAGED frame header: {err}")
-    if dump.n_frames:
-        first = dump.frame(0)
-        lines.append(f"  box (first frame): lo {first.box.lo.tolist()}, hi {first.box.hi.tolist()}, "
-                     f"periodic {list(first.box.periodic)}")
-        lines.append(f"  columns ({len(first.columns)}), printed significant digits in the first frame "
-                     "('exact': integers or full precision):")
-        for name, values in first.columns.items():
-            d = first.digits.get(name)
-            lines.append(f"    {name:<16} {'exact' if d is None else d:>5}   "
-                         + (f"{np.min(values):.6g} .. {np.max(values):.6g}" if len(values) else "(no rows)"))
-    return "\n".join(lines)
-
-
-def _range(a: np.ndarray) -> str:
-    if len(a) == 0:
-        return "0"
-    lo, hi = int(np.min(a)), int(np.max(a))
-    return str(lo) if lo == hi else f"{lo}..{hi}"
 
 
 def _is_store(path: Path, head: bytes) -> bool:

@@ -42,7 +42,9 @@ class Run(ABC):
     asks last).
 
     Instance attributes every reader sets: ``scene``, ``steps`` (timestep of
-    every frame, int64), ``sources`` (the input files, for provenance),
+    every readable frame, int64; frames ``len(steps)`` to ``len(self) - 1``, if
+    any, are damaged ones whose step cannot be read and whose ``frame(k)``
+    raises their error), ``sources`` (the input files, for provenance),
     ``notes`` (what the reader could not provide, and why); ``spec`` (the path
     and options it was opened with) is set by ``open_run``.
     """

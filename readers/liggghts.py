@@ -630,11 +630,6 @@ class LiggghtsRun(Run):
             offset += n
         return str(self.atoms.path), None
 
-    def close(self) -> None:
-        for d in (self.atoms, self.pairs, self.walls):
-            if d is not None and hasattr(d, "close"):
-                d.close()
-
 
 def _refuse_repeated_steps(dump: DumpFile) -> None:
     """A timestep written twice to one dump (a LIGGGHTS restart appending to it) is refused: which copy

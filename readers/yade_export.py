@@ -37,7 +37,7 @@ from typing import Any
 
 import numpy as np
 from demsplit.errors import InputFormatError, MaterialError, PrecisionError
-from demsplit.frame import Box, Frame, Table
+from demsplit.frame import Box, Frame, Table, describe_steps
 from demsplit.scene import ContactModel, Material, Scene, Wall
 
 from .base import Run
@@ -49,6 +49,8 @@ SNAPSHOT_FIX = ("write full-precision snapshots with demsplit.yade.snapshot() fr
 VTK_ID_FIX = ("export with VTKExporter.exportSpheres(what=dict(id='b.id', matId='b.material.id')) and "
               "exportInteractions(what=dict(id1='i.id1', id2='i.id2', "
               "penetrationDepth='i.geom.penetrationDepth', ...))")
+VTK_MAGIC = b"# vtk DataFile"
+"""The first bytes of a legacy VTK file."""
 PERCENT_G_DIGITS = 6
 PERCENT_G_MAX_INT = 999_999
 """Integers above this are printed by ``%g`` as ``1.23457e+06``: ids destroyed."""
@@ -82,7 +84,7 @@ def read_vtk(path: str | Path) -> VtkPolyData:
     path = Path(path)
     text = path.read_text()
     head = text.split("\n", 3)
-    if len(head) < 4 or not head[0].startswith("# vtk DataFile"):
+    if len(head) < 4 or not head[0].startswith(VTK_MAGIC.decode()):
         raise InputFormatError(f"not a legacy VTK file: first line {head[0][:40]!r}, expected '# vtk DataFile ...'.",
                                file=path, line=1, fix="give a file written by yade.export.VTKExporter.")
     if head[2].strip() != "ASCII":
@@ -347,6 +349,44 @@ def vtk_frame(spheres_path: str | Path, interactions_path: str | Path | None = N
 _SPHERES = re.compile(r"^(?P<base>.*)-spheres-(?P<step>\d+)\.vtk$")
 
 
+def vtk_series(path: Path) -> tuple[np.ndarray, list[Path]]:
+    """The steps (int64) and sphere files of the series the sphere file ``path`` belongs to: every
+    ``NAME-spheres-N.vtk`` of its directory, ordered by N."""
+    match = _SPHERES.match(path.name)
+    if match is None:
+        raise InputFormatError("not a VTKExporter sphere file name (NAME-spheres-N.vtk).", file=path,
+                               fix="give the spheres file of exportSpheres(numLabel=O.iter).")
+    found = sorted((int(m.group("step")), p) for p in path.parent.iterdir()
+                   if (m := _SPHERES.match(p.name)) and m.group("base") == match.group("base"))
+    return np.array([step for step, _ in found], dtype=np.int64), [p for _, p in found]
+
+
+def interactions_file(spheres: Path) -> Path:
+    """The ``NAME-intrs-N.vtk`` beside the sphere file ``NAME-spheres-N.vtk`` (it may not exist)."""
+    return spheres.with_name(_SPHERES.sub(r"\g<base>-intrs-\g<step>.vtk", spheres.name))
+
+
+def is_vtk_part(path: Path, head: bytes) -> bool:
+    """Whether ``path`` (first bytes ``head``) is a legacy VTK file that is not a run's sphere file
+    (VTKExporter's interactions file, say): part of a run, for ``demsplit info``."""
+    return head.startswith(VTK_MAGIC) and not YadeVtkRun.detect(path, head)
+
+
+def describe_vtk(path: Path) -> str:
+    """What ``demsplit info`` prints about a VTK file that is part of a run (:func:`is_vtk_part`)."""
+    return "\n".join(_vtk_lines(path) + ["  not a run of its own: demsplit reads NAME-spheres-N.vtk, with "
+                                         "NAME-intrs-N.vtk beside it"])
+
+
+def _vtk_lines(path: Path) -> list[str]:
+    """One legacy VTK file in words: its points, lines and data fields."""
+    data = read_vtk(path)
+    return [f"{path}: legacy VTK file ({data.comment.strip()})",
+            f"  points:   {len(data.points)}" + ("" if data.lines is None else f", lines: {len(data.lines)}"),
+            "  point fields: " + (", ".join(sorted(data.point_data)) or "none"),
+            "  cell fields:  " + (", ".join(sorted(data.cell_data)) or "none")]
+
+
 class YadeVtkRun(Run):
     """VTKExporter files of a YADE run (module docstring).
 
@@ -363,15 +403,32 @@ class YadeVtkRun(Run):
 
     @classmethod
     def detect(cls, path: Path | None, head: bytes) -> bool:
-        return path is not None and head.startswith(b"# vtk DataFile") and _SPHERES.match(path.name) is not None
+        return path is not None and head.startswith(VTK_MAGIC) and _SPHERES.match(path.name) is not None
+
+    @classmethod
+    def describe_file(cls, path: Path) -> str:
+        """The series' frames, the first frame's counts and fields, and the options a run needs (the files
+        hold no materials, law or wall material)."""
+        steps, spheres = vtk_series(path)
+        intrs = interactions_file(spheres[0])
+        frame, wall_ids = vtk_frame(spheres[0], intrs if intrs.is_file() else None, tolerance=np.inf,
+                                    step=int(steps[0]))
+        needs = [f"--material ID:E:NU for the material ids {np.unique(frame.particles['type']).tolist()}",
+                 "--law yade:Law2_..."]
+        if len(wall_ids):
+            needs.append(f"--wall-type ID (the material of YADE bodies {wall_ids.tolist()})")
+        lines = [f"{path}: YADE VTKExporter files",
+                 f"  frames:   {len(steps)}, steps {describe_steps(steps)}",
+                 f"  first frame: {frame.n_particles} spheres, {frame.n_contacts} contacts; overlaps: "
+                 f"{frame.overlap_source or 'no interactions file'}",
+                 "  run needs: " + ", ".join(needs)]
+        lines += ["  " + line for f in (spheres[0], intrs) if f.is_file() for line in _vtk_lines(f)]
+        return "\n".join(lines)
 
     def __init__(self, path: Path, *, materials: dict[int, Material] | None = None, law: str | None = None,
                  wall_type: int | None = None, overlap_tolerance: float | None = None) -> None:
         path = Path(path)
-        match = _SPHERES.match(path.name)
-        if match is None:
-            raise InputFormatError("not a VTKExporter sphere file name (NAME-spheres-N.vtk).", file=path,
-                                   fix="give the spheres file of exportSpheres(numLabel=O.iter).")
+        self.steps, self._spheres = vtk_series(path)
         missing = [what for what, given in (("the materials (--material ID:E:NU for every YADE material id)",
                                              materials), ("the contact law (--law yade:Law2_...)", law))
                    if not given]
@@ -379,41 +436,36 @@ class YadeVtkRun(Run):
             raise InputFormatError(f"VTKExporter files do not hold {' and '.join(missing)}.", file=path,
                                    fix="give them as options, or write full-precision snapshots with "
                                        "demsplit.yade.snapshot(), which hold everything.")
-        base = match.group("base")
-        found = sorted((int(m.group("step")), p) for p in path.parent.iterdir()
-                       if (m := _SPHERES.match(p.name)) and m.group("base") == base)
-        self.steps = np.array([step for step, _ in found], dtype=np.int64)
-        self._spheres = [p for _, p in found]
         self._tolerance = 1e-3 if overlap_tolerance is None else overlap_tolerance
-        self.sources = [p for sp in self._spheres for p in (sp, self._interactions(sp))]
+        # the files that exist (a frame whose interactions file is missing is refused when it is read)
+        self.sources = [p for sp in self._spheres for p in (sp, interactions_file(sp)) if p.is_file()]
         self.notes = []
         # the walls are the non-sphere bodies in contact in the first frame
-        _, self._wall_ids = vtk_frame(self._spheres[0], self._interactions(self._spheres[0]), tolerance=np.inf,
+        _, self._wall_ids = vtk_frame(self._spheres[0], self._interactions(0), tolerance=np.inf,
                                       step=int(self.steps[0]))
         if len(self._wall_ids) and wall_type is None:
             raise InputFormatError("the interactions include wall, facet or box contacts, whose material the "
-                                   "files do not hold.", file=self._interactions(self._spheres[0]),
+                                   "files do not hold.", file=self._interactions(0),
                                    fix="give it with --wall-type ID (a YADE material id).")
         self.scene = Scene(materials=dict(materials), model=ContactModel(law),
                            walls=[Wall(name=f"YADE body {int(b)}", kind="yade_wall", type=int(wall_type))
                                   for b in self._wall_ids], source=str(path))
 
-    @staticmethod
-    def _interactions(spheres: Path) -> Path:
-        return spheres.with_name(_SPHERES.sub(r"\g<base>-intrs-\g<step>.vtk", spheres.name))
+    def _interactions(self, k: int) -> Path:
+        """The interactions file of frame ``k``; a missing one is an error (the frame's contacts are unknown)."""
+        interactions = interactions_file(self._spheres[k])
+        if not interactions.is_file():
+            raise InputFormatError("the interactions file of this sphere file is missing: the frame's contacts "
+                                   "are unknown.", file=interactions, step=int(self.steps[k]),
+                                   fix="export with VTKExporter.exportInteractions at the same iteration.")
+        return interactions
 
     def __len__(self) -> int:
         return len(self._spheres)
 
     def frame(self, k: int) -> Frame:
-        spheres = self._spheres[k]
-        interactions = self._interactions(spheres)
-        if not interactions.is_file():
-            raise InputFormatError("the interactions file of this sphere file is missing: the frame's contacts "
-                                   "are unknown.", file=interactions, step=int(self.steps[k]),
-                                   fix="export with VTKExporter.exportInteractions at the same iteration.")
-        return vtk_frame(spheres, interactions, tolerance=self._tolerance, step=int(self.steps[k]),
-                         wall_ids=self._wall_ids)[0]
+        return vtk_frame(self._spheres[k], self._interactions(k), tolerance=self._tolerance,
+                         step=int(self.steps[k]), wall_ids=self._wall_ids)[0]
 
     def describe(self) -> dict[str, Any]:
         return {"kind": self.format_name, "spheres": [str(p) for p in self._spheres],

@@ -288,3 +288,40 @@ def test_vtk_sphere_file_without_ids(tmp_path):
     path.write_text(VTK_SPHERES[:-10])
     with pytest.raises(InputFormatError, match="expected 2 numbers"):
         read_vtk(path)
+
+
+VTK_OPTIONS = TestVtkExport.options
+
+
+def test_vtk_series_of_several_steps_and_a_missing_interactions_file(tmp_path):
+    """Every NAME-spheres-N.vtk beside the one given is a frame, by N; a frame whose interactions file is
+    missing is refused when it is read (a bad frame), the first frame's when the run is opened."""
+    for step in (24000, 25000):
+        shutil.copy(YADE / "mindlin_box-spheres-00024000.vtk", tmp_path / f"mindlin_box-spheres-{step:08d}.vtk")
+    shutil.copy(YADE / "mindlin_box-intrs-00024000.vtk", tmp_path / "mindlin_box-intrs-00024000.vtk")
+    with open_run(tmp_path / "mindlin_box-spheres-00025000.vtk", **VTK_OPTIONS) as run:
+        assert run.steps.tolist() == [24000, 25000] and len(run) == 2
+        assert [Path(s).name for s in run.sources] == ["mindlin_box-spheres-00024000.vtk",
+                                                       "mindlin_box-intrs-00024000.vtk",
+                                                       "mindlin_box-spheres-00025000.vtk"]
+        assert run.frame(0).n_contacts == 235
+        with pytest.raises(InputFormatError, match="interactions file of this sphere file is missing") as err:
+            run.frame(1)
+        assert err.value.step == 25000 and "mindlin_box-intrs-00025000.vtk" in str(err.value)
+    (tmp_path / "mindlin_box-intrs-00024000.vtk").unlink()
+    with pytest.raises(InputFormatError, match="interactions file of this sphere file is missing"):
+        open_run(tmp_path / "mindlin_box-spheres-00025000.vtk", **VTK_OPTIONS)
+
+
+def test_info_on_vtk_files():
+    """info describes a sphere file as the run it starts (with the options a run needs) and an
+    interactions file as a part of one."""
+    from demsplit.inspection import describe_file
+
+    text = describe_file(YADE / "mindlin_box-spheres-00024000.vtk")
+    assert "YADE VTKExporter files" in text and "frames:   1" in text and "160 spheres, 235 contacts" in text
+    assert "--material ID:E:NU for the material ids [0, 1]" in text and "--wall-type" in text
+    assert "cell fields:  contactPoint, id1, id2" in text
+    text = describe_file(YADE / "mindlin_box-intrs-00024000.vtk")
+    assert "legacy VTK file" in text and "lines: 235" in text and "not a run of its own" in text
+    assert "LIGGGHTS" not in text
