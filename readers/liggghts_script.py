@@ -79,7 +79,8 @@ from ..physics.laws import law_class
 from ..physics.laws._liggghts import SHEAR as SHEAR_COLUMNS
 from ..physics.laws._liggghts import TANGENTIAL_MODELS
 from ..scene import ContactModel, Material, Scene, Wall
-from .lammps_input import Unevaluable, Variables, Where, logical_lines, split_words, strip_comment, substitute
+from .lammps_input import (Unevaluable, Variables, Where, excerpt, logical_lines, split_words,
+                           strip_comment, substitute)
 
 __all__ = ["read_script", "LiggghtsScript", "DumpSpec", "LocalLayout", "local_layout", "history_columns"]
 
@@ -432,7 +433,7 @@ class _Reader:
                 raise ScriptError(f"{exc}: its value is only known while LIGGGHTS runs.",
                                   file=where.file, line=where.line,
                                   fix="replace it by a number, or pass the value with variables=.") from None
-            self.warnings.append(f"{where.file}:{where.line}: '{words0[0]}' ignored ({exc}).")
+            self.warnings.append(f"{where.file}:{where.line}: {excerpt(words0[0])} ignored ({exc}).")
             return
         if not words:
             return
@@ -451,19 +452,19 @@ class _Reader:
         try:
             return float(text)
         except ValueError:
-            raise self.error(ScriptError, f"{what}: expected a number, found {text!r}.", where,
+            raise self.error(ScriptError, f"{what}: expected a number, found {excerpt(text)}.", where,
                              "write a number (or a variable that holds one).") from None
 
     def integer(self, text: str, where: Where, what: str) -> int:
         try:
             return int(text)
         except ValueError:
-            raise self.error(ScriptError, f"{what}: expected an integer, found {text!r}.", where,
+            raise self.error(ScriptError, f"{what}: expected an integer, found {excerpt(text)}.", where,
                              "write an integer.") from None
 
     def need(self, args: list[str], n: int, where: Where, what: str, syntax: str) -> None:
         if len(args) < n:
-            raise self.error(ScriptError, f"{what}: expected '{syntax}', found {' '.join(args)!r}.",
+            raise self.error(ScriptError, f"{what}: expected '{syntax}', found {excerpt(' '.join(args))}.",
                              where, f"write '{syntax}'.")
 
     # -- commands ----------------------------------------------------------
@@ -484,7 +485,7 @@ class _Reader:
     def cmd_units(self, args: list[str], where: Where) -> None:
         self.need(args, 1, where, "units", "units si")
         if args[0] != "si":
-            raise self.error(UnsupportedModelError, f"units {args[0]!r}: demsplit reads SI runs only.",
+            raise self.error(UnsupportedModelError, f"units {excerpt(args[0])}: demsplit reads SI runs only.",
                              where, "run the simulation with 'units si'.")
         self.units = "si"
 
@@ -511,7 +512,7 @@ class _Reader:
     def cmd_pair_style(self, args: list[str], where: Where) -> None:
         self.need(args, 1, where, "pair_style", "pair_style gran model hertz tangential history")
         if args[0] != "gran":
-            raise self.error(UnsupportedModelError, f"pair_style {args[0]!r} is not supported.", where,
+            raise self.error(UnsupportedModelError, f"pair_style {excerpt(args[0])} is not supported.", where,
                              "use 'pair_style gran model hertz|hooke tangential history|no_history'.")
         self.pair, _ = _parse_model(args[1:], (), where, self.warnings, "pair_style gran")
 
@@ -574,7 +575,7 @@ class _Reader:
     def fix_gravity(self, rest: list[str], where: Where) -> None:
         self.need(rest, 2, where, "fix gravity", "fix ID GROUP gravity G vector X Y Z")
         if rest[1] != "vector" or len(rest) < 5:
-            self.warnings.append(f"{where.file}:{where.line}: fix gravity style {rest[1]!r} is not read; "
+            self.warnings.append(f"{where.file}:{where.line}: fix gravity style {excerpt(rest[1])} is not read; "
                                  "script.gravity is None.")
             return
         try:
@@ -595,7 +596,7 @@ class _Reader:
         self.need(rest, 4, where, f"fix {fid} mesh/surface", syntax)
         if rest[0] != "file" or rest[2] != "type":
             raise self.error(ScriptError, f"fix {fid} mesh/surface: expected 'file FILE type T', found "
-                             f"{' '.join(rest[:4])!r}.", where, f"write '{syntax}'.")
+                             f"{excerpt(' '.join(rest[:4]))}.", where, f"write '{syntax}'.")
         file = Path(rest[1])
         if not file.is_absolute():
             file = self.root.parent / file
@@ -639,7 +640,7 @@ class _Reader:
             syntax = "primitive type T xplane|yplane|zplane C  or  primitive type T zcylinder R C1 C2"
             self.need(geo, 4, where, what, syntax)
             if geo[0] != "type":
-                raise self.error(ScriptError, f"{what}: expected 'primitive type T', found {geo[0]!r}.",
+                raise self.error(ScriptError, f"{what}: expected 'primitive type T', found {excerpt(geo[0])}.",
                                  where, f"write '{syntax}'.")
             wall_type = self.integer(geo[1], where, f"{what} type")
             shape = geo[2]
@@ -652,7 +653,7 @@ class _Reader:
                 wall = Wall(name=fid, kind="cylinder", type=wall_type, axis=_CYLINDERS[shape],
                             radius=r, center=(c1, c2))
             else:
-                raise self.error(UnsupportedModelError, f"{what}: primitive {shape!r} is not supported.",
+                raise self.error(UnsupportedModelError, f"{what}: primitive {excerpt(shape)} is not supported.",
                                  where, "use xplane|yplane|zplane or xcylinder|ycylinder|zcylinder, or a mesh.")
             self.type_uses.append((wall_type, what, where))
             walls.append(wall)
@@ -669,7 +670,7 @@ class _Reader:
                                  where, "list exactly n_meshes mesh fix ids after 'meshes'.")
             for m in names:
                 if m not in self.meshes:
-                    raise self.error(ScriptError, f"{what}: mesh {m!r} is not a fix mesh/surface defined "
+                    raise self.error(ScriptError, f"{what}: mesh {excerpt(m)} is not a fix mesh/surface defined "
                                      "before.", where, "define 'fix M all mesh/surface file F type T' first.")
                 walls.append(self.meshes[m])
             tail = geo[3 + k:]
@@ -698,14 +699,14 @@ class _Reader:
         self.need(args, 1, where, "dump_modify", "dump_modify ID KEYWORD VALUE ...")
         dump = self.dumps.get(args[0])
         if dump is None:
-            raise self.error(ScriptError, f"dump_modify: no dump with id {args[0]!r} is defined before.",
+            raise self.error(ScriptError, f"dump_modify: no dump with id {excerpt(args[0])} is defined before.",
                              where, "define the dump before modifying it.")
         i, rest = 0, args[1:]
         while i < len(rest):
             key = rest[i]
             arity = _DUMP_MODIFY_ARITY.get(key)
             if arity is None:
-                self.warnings.append(f"{where.file}:{where.line}: dump_modify keyword {key!r} not "
+                self.warnings.append(f"{where.file}:{where.line}: dump_modify keyword {excerpt(key)} not "
                                      "understood; the rest of the line is ignored.")
                 return
             self.need(rest[i + 1:], arity, where, f"dump_modify {key}", f"{key} VALUE")
@@ -743,7 +744,7 @@ class _Reader:
                               "peratomtype V1 ... VN'.")
         for name, (style, _values, where) in found.items():
             if style != "peratomtype":
-                raise self.error(MaterialError, f"{name} must be given 'peratomtype', found {style!r}.",
+                raise self.error(MaterialError, f"{name} must be given 'peratomtype', found {excerpt(style)}.",
                                  where, f"write 'property/global {name} peratomtype V1 ... VN'.")
         (_, E, wE), (_, nu, wnu) = found["youngsModulus"], found["poissonsRatio"]
         if len(E) != len(nu):

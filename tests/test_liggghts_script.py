@@ -5,7 +5,6 @@ computes: hand-written scripts for every parsing rule, and runs of Debian's
 from __future__ import annotations
 
 import itertools
-import math
 import subprocess
 import textwrap
 from pathlib import Path
@@ -244,19 +243,6 @@ def test_command_line_variables_win(tmp_path):
     assert script(tmp_path, body, variables={"r": "0.45"}).scene.materials[2].nu == 0.45
 
 
-def test_unary_minus_binds_tighter_than_power(tmp_path):
-    s = script(tmp_path, "variable a equal -2^2\nvariable b equal 2^-1\nvariable c equal 7-PI\n")
-    assert s.variables["a"] == "4" and s.variables["b"] == "0.5"
-    assert float(s.variables["c"]) == pytest.approx(7 - math.pi, rel=1e-14)
-
-
-def test_undefined_variable(tmp_path):
-    with pytest.raises(ScriptError, match="'radius' is used but not defined") as err:
-        script(tmp_path, "\n\nfix ins all particletemplate/sphere 1 atom_type 1 radius constant ${radius}\n")
-    assert err.value.line == HEADER.count("\n") + 3
-    assert "-var radius" in err.value.fix
-
-
 def test_fixes_that_could_matter_are_listed(tmp_path):
     s = script(tmp_path, "fix push all addforce 0 0 1\nfix integr all nve/sphere\njump SELF loop\n")
     assert any("addforce" in w for w in s.warnings) and not any("nve/sphere" in w for w in s.warnings)
@@ -268,12 +254,6 @@ def test_runtime_only_variables(tmp_path):
     assert any("count" in w for w in s.warnings)
     with pytest.raises(ScriptError, match="only known while LIGGGHTS runs"):
         script(tmp_path, "variable n equal step\nrun ${n}\n")
-
-
-def test_continuation_line_number_and_unbalanced_quote(tmp_path):
-    with pytest.raises(ScriptError, match="unbalanced quotes") as err:
-        script(tmp_path, "dump d all custom 10 a.txt id &\n   x y\ndump_modify d format \"%d %g %g\n")
-    assert err.value.line == HEADER.count("\n") + 3
 
 
 def test_include_cycle(tmp_path):
