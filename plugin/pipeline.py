@@ -25,7 +25,7 @@ from .outputs import check_output_path
 from .validate import check_finite_energies, validated_frame
 from .frame import CONTACT_REQUIRED, PARTICLE_REQUIRED, Frame, ParticleIndex, require_columns
 from .physics.bodies import ContactBodies
-from .physics.modes import MODE_COLUMNS
+from .physics.modes import ADHESION_COLUMN
 from .physics.partition import contact_energies, particle_energy, partition, per_particle
 from .readers.base import Run
 from .scene import Scene
@@ -111,7 +111,8 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = Options()) -> Ta
         "n_particles": np.array([len(ptable["id"])], dtype=np.int64),
         "n_contacts": np.array([n], dtype=np.int64),
         "n_wall_contacts": np.array([int(np.count_nonzero(contacts["wall"] >= 0))], dtype=np.int64),
-        **{column: np.array([main.u[k].sum()]) for k, column in enumerate(MODE_COLUMNS)},
+        **{mode.column: np.array([main.u[k].sum()]) for k, mode in enumerate(main.modes)},
+        **({ADHESION_COLUMN: np.array([main.u_adh.sum()])} if main.u_adh is not None else {}),
         "u_particles": np.array([ptable["u"].sum()]),
         "u_walls": np.array([wtable["u"].sum()]),
         "overlap_max_rel_error": np.array([np.nan if err is None or len(err) == 0 else float(np.max(err))]),

@@ -75,9 +75,9 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import DemsplitError, MaterialError, ScriptError, UnsupportedModelError
-from ..physics.laws import law_class
+from ..physics.laws import ContactLaw, law_class
+from ..physics.laws._liggghts import COHESION_MODELS, ROLLING_MODELS, ROLLING_TORQUE, TANGENTIAL_MODELS
 from ..physics.laws._liggghts import SHEAR as SHEAR_COLUMNS
-from ..physics.laws._liggghts import TANGENTIAL_MODELS
 from ..scene import ContactModel, Material, Scene, Wall
 from .lammps_input import (Unevaluable, Variables, Where, excerpt, logical_lines, split_words,
                            strip_comment, substitute)
@@ -124,8 +124,6 @@ _WALL_BLOCKS: dict[str, list[str]] = {
     "contactPoint": _xyz("unwritten_cp"),
 }
 
-_ROLLING_HISTORY = {"off": 0, "cdt": 0, "epsd": 3, "epsd2": 3, "epsd3": 3}
-"""History values each rolling-friction model adds (``r_torque{x,y,z}_old``)."""
 
 _ELASTIC_POTENTIAL_HISTORY = {"pair": 10, "wall": 14}
 """History values ``computeElasticPotential on`` adds (pair measured; wall: 17 - 3)."""
@@ -139,9 +137,9 @@ def history_columns(kind: str, *, tangential: str = "history", rolling: str = "o
     ``tangential`` is the LIGGGHTS ``tangential`` model (``history`` or
     ``no_history``); ``rolling`` the LIGGGHTS ``rolling_friction`` model.
     """
-    names = list(SHEAR_COLUMNS) if tangential == "history" else []
-    if _ROLLING_HISTORY[rolling]:
-        names += _xyz("rolling_torque")
+    names = list(SHEAR_COLUMNS) if TANGENTIAL_MODELS[tangential] else []
+    if ROLLING_MODELS[rolling]:
+        names += list(ROLLING_TORQUE)
     if elastic_potential:
         n = _ELASTIC_POTENTIAL_HISTORY[kind]
         names += ["elastic_potential"] + [f"elastic_history{k}" for k in range(2, n + 1)]
@@ -274,7 +272,9 @@ NORMAL = {"hertz": "liggghts:hertz", "hooke": "liggghts:hooke"}
 """LIGGGHTS ``model`` word -> contact-law registry key (:mod:`demsplit.physics.laws`)."""
 TANGENTIAL = TANGENTIAL_MODELS
 """LIGGGHTS ``tangential`` words, passed to the law as its ``tangential`` parameter."""
-PROPERTY_PARAMETERS = {"characteristicVelocity": "characteristic_velocity"}
+PROPERTY_PARAMETERS = {"characteristicVelocity": "characteristic_velocity",
+                       "coefficientRollingFriction": "rolling_friction", "coeffRollStiffness": "rolling_stiffness",
+                       "cohesionEnergyDensity": "cohesion_energy_density"}
 """``fix property/global`` scalar -> the law parameter it gives, where the law declares that parameter."""
 _MODEL_KEYS = ("model", "tangential", "cohesion", "rolling_friction", "surface")
 
@@ -287,6 +287,7 @@ class _ModelSpec:
     law: str
     tangential: str
     rolling: str
+    cohesion: str
     settings: dict[str, str]
     where: Where
 
@@ -329,21 +330,18 @@ def _parse_model(words: list[str], stop: tuple[str, ...], where: Where,
         raise unsupported(f"tangential model {tangential!r} is not supported.",
                           ", ".join(f"tangential {w}" for w in TANGENTIAL))
     cohesion = kinds.get("cohesion", "off")
-    if cohesion != "off":
-        raise unsupported(f"cohesion model {cohesion!r} changes the elastic contact energy and "
-                          "demsplit does not implement it.", "no cohesion")
+    if cohesion not in COHESION_MODELS:
+        raise unsupported(f"cohesion model {cohesion!r} is not supported (its work needs the per-atom liquid "
+                          "content, which demsplit does not read).",
+                          ", ".join(f"cohesion {c}" for c in COHESION_MODELS))
     rolling = kinds.get("rolling_friction", "off")
-    if rolling not in _ROLLING_HISTORY:
+    if rolling not in ROLLING_MODELS:
         raise unsupported(f"rolling friction model {rolling!r} is not supported.",
-                          ", ".join(f"rolling_friction {r}" for r in _ROLLING_HISTORY))
-    if rolling != "off":
-        warnings.append(f"{where.file}:{where.line}: {what} uses rolling_friction {rolling}: its "
-                        "rolling torque is not counted, demsplit's energy is the normal and tangential "
-                        "elastic energy of the contact only.")
+                          ", ".join(f"rolling_friction {r}" for r in ROLLING_MODELS))
     surface = kinds.get("surface", "default")
     if surface != "default":
         raise unsupported(f"surface model {surface!r} is not supported.", "surface default")
-    return _ModelSpec(NORMAL[normal], tangential, rolling, settings, where), i
+    return _ModelSpec(NORMAL[normal], tangential, rolling, cohesion, settings, where), i
 
 
 # --------------------------------------------------------------------------
@@ -720,18 +718,24 @@ class _Reader:
         """The contact model of a ``pair_style gran`` or ``fix wall/gran``: the law's key and the
         parameters it declares, from the model's words and the script's global properties."""
         declared = law_class(spec.law).parameters
-        params: dict = {"tangential": spec.tangential}
+        params: dict = {"tangential": spec.tangential, "rolling": spec.rolling, "cohesion": spec.cohesion}
         for prop, name in PROPERTY_PARAMETERS.items():
             if name not in declared:
                 continue
             value = self.properties.get(prop)
             if value is None:
-                raise self.error(ScriptError, f"{spec.law} needs 'fix ID all property/global {prop} scalar V', "
-                                 "which the script does not define.", spec.where, f"add the {prop} the run used.")
-            params[name] = float(value[1])
+                if declared[name][0] is ContactLaw.REQUIRED:
+                    raise self.error(ScriptError, f"{spec.law} needs 'fix ID all property/global {prop} scalar V', "
+                                     "which the script does not define.", spec.where,
+                                     f"add the {prop} the run used.")
+                continue
+            params[name] = float(value[1]) if np.ndim(value[1]) == 0 else value[1]
         if "kt_to_kn" in declared:
             params["kt_to_kn"] = 2.0 / 7.0 if spec.on("ktToKnUser") else 1.0
-        return ContactModel(spec.law, params)
+        try:
+            return ContactModel(spec.law, params)
+        except DemsplitError as exc:  # a parameter the model's words need, missing from the script
+            raise exc.located(file=spec.where.file, line=spec.where.line) from None
 
     def materials(self) -> dict[int, Material]:
         found = {name: self.properties.get(name) for name in _MATERIAL_PROPERTIES}

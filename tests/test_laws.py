@@ -18,7 +18,7 @@ from demsplit.errors import UnsupportedModelError
 from demsplit.frame import ParticleIndex
 from demsplit.physics import laws
 from demsplit.physics.bodies import ContactBodies, LawRows
-from demsplit.physics.modes import MODE_COLUMNS
+from demsplit.physics.modes import ADHESION_COLUMN, MODE_COLUMNS
 from demsplit.physics.partition import contact_energies
 from demsplit.scene import scene_from_dict, scene_to_dict
 
@@ -90,7 +90,7 @@ def test_declarations(key):
     law = laws.make(key, cls.example_params)
     line = law.describe()
     assert key in line and "\n" not in line and cls.summary in line
-    assert law.modes and set(law.modes) <= set(MODE_COLUMNS)
+    assert law.modes and set(law.modes) <= {*MODE_COLUMNS, ADHESION_COLUMN}
     assert set(law.mode_columns) <= set(law.modes)
     for name, (_, meaning) in cls.parameters.items():
         assert meaning, name
@@ -111,8 +111,9 @@ def test_energy_is_finite_and_not_negative(key):
     result = law.energies(rows)
     assert set(result.modes) == set(law.modes) and not result.skipped
     for mode, u in result.modes.items():
-        assert u.shape == (N,) and np.all(np.isfinite(u)) and np.all(u >= 0), mode
-        assert np.any(u > 0), mode
+        assert u.shape == (N,) and np.all(np.isfinite(u)), mode
+        assert mode == ADHESION_COLUMN or np.all(u >= 0), mode  # cohesion work is signed
+        assert np.any(u != 0), mode
 
 
 @pytest.mark.parametrize("key", KEYS)
@@ -178,24 +179,32 @@ def test_swapping_the_bodies_swaps_the_shares(key):
     assert np.any(e.shares[0] != 0.5)  # two materials: the test means something
 
 
+def law_modes(key: str) -> tuple[str, ...]:
+    return laws.make(key, laws.law_class(key).example_params).modes
+
+
 @pytest.mark.parametrize("key", KEYS)
 def test_conservation_per_mode(key):
     particles, contacts = frame_of(key, seed=13)
     scene = scene_of(key)
     e = ds.partition(contacts, scene, particles)
     pt, wt = ds.per_particle(contacts, e, particles, n_walls=1)
-    for k, mode in enumerate(MODE_COLUMNS):
-        total = e.u[k].sum()
-        assert abs(pt[mode].sum() + wt[mode].sum() - total) <= 1e-12 * max(total, 1e-300), mode
+    assert [m.column for m in e.modes][:2] == ["u_n", "u_t"]
+    assert {m.column for m in e.modes} >= set(law_modes(key)) - {ADHESION_COLUMN}
+    totals = {m.column: e.u[k].sum() for k, m in enumerate(e.modes)}
+    if e.u_adh is not None:
+        totals[ADHESION_COLUMN] = e.u_adh.sum()
+    assert (e.u_adh is not None) == (ADHESION_COLUMN in law_modes(key))
+    for mode, total in totals.items():
+        assert abs(pt[mode].sum() + wt[mode].sum() - total) <= 1e-12 * max(abs(total), 1e-300), mode
 
 
 @pytest.mark.parametrize("key", KEYS)
 def test_a_mode_the_law_lacks_is_zero_and_said(key):
     particles, contacts = frame_of(key)
     e = contact_energies(contacts, scene_of(key), particles)
-    law = laws.make(key, laws.law_class(key).example_params)
-    for k, mode in enumerate(MODE_COLUMNS):
-        if mode not in law.modes:
+    for k, mode in enumerate(m.column for m in e.modes):
+        if mode not in law_modes(key):
             assert np.all(e.u[k] == 0) and mode in e.skipped
 
 

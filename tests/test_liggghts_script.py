@@ -101,7 +101,9 @@ def test_materials_model_coefficients_gravity(tmp_path):
     """)
     assert s.scene.materials[1].E == 5e6 and s.scene.materials[2].nu == 0.3
     assert s.scene.model.law == "liggghts:hooke"
-    assert s.scene.model.params == {"tangential": "history", "characteristic_velocity": 2.5, "kt_to_kn": 2 / 7}
+    assert s.scene.model.params == {"tangential": "history", "characteristic_velocity": 2.5, "kt_to_kn": 2 / 7,
+                                    "rolling": "off", "cohesion": "off", "rolling_friction": None,
+                                    "rolling_stiffness": None, "cohesion_energy_density": None}
     np.testing.assert_array_equal(s.coefficients["coefficientFriction"], [[0.5, 0.6], [0.6, 0.7]])
     assert s.coefficients["characteristicVelocity"] == 2.5
     np.testing.assert_allclose(s.gravity, [0, 9.81 * 0.6, -9.81 * 0.8])
@@ -111,7 +113,7 @@ def test_materials_model_coefficients_gravity(tmp_path):
 
 def test_hertz_no_history_is_the_default_tangential(tmp_path):
     s = script(tmp_path, "pair_style gran model hertz\n")
-    assert s.scene.model.law == "liggghts:hertz" and s.scene.model.params == {"tangential": "no_history"}
+    assert s.scene.model.law == "liggghts:hertz" and s.scene.model.params["tangential"] == "no_history"
 
 
 def test_walls_primitive_and_mesh(tmp_path):
@@ -134,7 +136,9 @@ def test_walls_primitive_and_mesh(tmp_path):
 
 @pytest.mark.parametrize("pair, cls, match", [
     ("model hertz/stiffness tangential history", UnsupportedModelError, "hertz/stiffness"),
-    ("model hertz tangential history cohesion sjkr", UnsupportedModelError, "cohesion"),
+    ("model hertz tangential history cohesion easo/capillary/viscous", UnsupportedModelError, "liquid content"),
+    ("model hertz tangential history cohesion sjkr", UnsupportedModelError, "cohesion_energy_density"),
+    ("model hertz tangential history rolling_friction epsd", UnsupportedModelError, "rolling_friction"),
     ("model hertz tangential history_mdm", UnsupportedModelError, "history_mdm"),
     ("model hertz tangential history surface superquadric", UnsupportedModelError, "superquadric"),
     ("tangential history", ScriptError, "no 'model'"),
@@ -145,15 +149,29 @@ def test_unsupported_models(tmp_path, pair, cls, match):
     assert err.value.line == HEADER.count("\n") + 1 and err.value.fix
 
 
-def test_rolling_friction_is_a_warning_and_widens_history(tmp_path):
+def test_rolling_friction_is_a_mode_and_widens_history(tmp_path):
     s = script(tmp_path, """
+        fix m6 all property/global coefficientRollingFriction peratomtypepair 2 0.1 0.2 0.2 0.3
         pair_style gran model hertz tangential history rolling_friction epsd computeElasticPotential on
         compute cp all pair/gran/local history
     """)
-    assert any("rolling_friction epsd" in w for w in s.warnings)
+    assert not any("rolling" in w for w in s.warnings)
+    law = s.scene.model.contact_law
+    assert law.modes == ("u_n", "u_t", "u_r")
+    assert law.params["rolling_friction"] == ((0.1, 0.2), (0.2, 0.3))
     cols = s.local_computes["cp"].columns
     assert cols[:6] == ["shearx", "sheary", "shearz", "rolling_torquex", "rolling_torquey", "rolling_torquez"]
     assert len(cols) == 3 + 3 + 10 and cols[6] == "elastic_potential"
+
+
+def test_cohesion_sjkr_is_the_cohesion_mode(tmp_path):
+    s = script(tmp_path, """
+        fix m6 all property/global cohesionEnergyDensity peratomtypepair 2 0 1e5 1e5 2e5
+        pair_style gran model hertz tangential history cohesion sjkr2
+    """)
+    law = s.scene.model.contact_law
+    assert law.modes == ("u_n", "u_t", "u_adh") and law.params["cohesion"] == "sjkr2"
+    assert law.params["cohesion_energy_density"] == ((0.0, 1e5), (1e5, 2e5))
 
 
 def test_units_other_than_si_are_refused(tmp_path):

@@ -10,6 +10,8 @@ these contacts that a contact law gets (:class:`demsplit.physics.laws.ContactRow
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from ..errors import ContactError, InputFormatError
@@ -41,7 +43,7 @@ class ContactBodies:
               index: ParticleIndex | None = None) -> ContactBodies:
         if scene.single_material:
             m = next(iter(scene.materials.values()))
-            return cls(None, None, m.E, m.nu, m.E, m.nu, True)
+            return cls(None, None, m.E, m.nu, m.E, m.nu, True, scene)
         type1, type2, pairs = _contact_pairs(contacts, scene, particles, index)
         bodies = cls(type1, type2, None, None, None, None, False, scene, pairs=pairs)
         code, pairs = bodies._pair_codes()
@@ -194,6 +196,25 @@ class LawRows:
         if len(code):
             return values, code[self.rows]
         return (values[self.rows] if len(values) > 1 else values), code
+
+    def type_pair(self, table: Sequence[Sequence[float]]) -> np.ndarray | float:
+        """A per-type-pair property (``table[t1 - 1][t2 - 1]``, LIGGGHTS ``peratomtypepair``, types from 1)
+        of every row; a scalar when the table holds one value."""
+        values = np.asarray(table, dtype=np.float64)
+        if np.all(values == values.flat[0]):
+            return float(values.flat[0])
+        type1, type2 = self.bodies.type1, self.bodies.type2
+        if type1 is None:  # a single-material scene: the types were not needed until now
+            type1, type2, pairs = _contact_pairs(self.contacts, self.bodies.scene, self.particles, self.index)
+            if type1 is None:
+                type1, type2 = _types_of_codes(pairs[0], self.bodies.scene)
+        t1, t2 = np.asarray(type1)[self.rows], np.asarray(type2)[self.rows]
+        n = len(values)
+        if np.any((t1 < 1) | (t1 > n) | (t2 < 1) | (t2 > n)):
+            raise InputFormatError(f"the contact law {self.law} has a per-type-pair table for types 1..{n}, "
+                                   f"but contacts have types {sorted(set(np.concatenate([t1, t2]).tolist()))}.",
+                                   fix="give the property one value per pair of atom types, wall types included.")
+        return values[t1 - 1, t2 - 1]
 
     def reduced_mass(self) -> np.ndarray:
         c, rows = self.contacts, self.rows

@@ -41,6 +41,16 @@ def mindlin_compliance(E: ArrayLike, nu: ArrayLike) -> np.ndarray:
     return 2.0 * (2.0 - nu) * (1.0 + nu) / f64(E)
 
 
+def torsional_compliance(E: ArrayLike, nu: ArrayLike) -> np.ndarray:
+    """Torsional compliance 1/G = 2 (1 + nu)/E (1/Pa).
+
+    A half-space twisted by a torsional traction on a circle of radius a
+    rotates by an angle proportional to 1/G alone (Johnson, sec. 7.4: M = (16/3) G a^3 beta),
+    so each body's share of a twisting spring's energy is proportional to 1/G.
+    """
+    return 2.0 * (1.0 + f64(nu)) / f64(E)
+
+
 def paper_tangential_compliance(E: ArrayLike, nu: ArrayLike) -> np.ndarray:
     """The paper's eq. (22) factor (1 - 2 nu)/G = 2 (1 - 2 nu)(1 + nu)/E (1/Pa).
 

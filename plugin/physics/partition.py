@@ -6,7 +6,7 @@ every mode it has (:mod:`demsplit.physics.laws`); :func:`partition` gives each
 body its share of every mode by that mode's rule
 (:mod:`demsplit.physics.modes`) and places the contact point;
 :func:`per_particle` sums per particle and per wall. Energies are arrays of
-shape (modes, contacts), row m the mode ``MODES[m]``.
+shape (modes, contacts), row m the mode ``modes[m]`` of the scene (:func:`~demsplit.physics.modes.scene_modes`).
 
     u1 = sum_m s_m u_m,  u2 = sum_m (1 - s_m) u_m,  depth1 = s_n delta,  x_c = x1 + (r1 - depth1) n.
 
@@ -26,40 +26,46 @@ from ..errors import ContactError
 from ..frame import ParticleIndex, Table, table_length
 from ..scene import ContactModel, Scene
 from .bodies import ContactBodies, LawRows
-from .modes import MODE_COLUMNS, MODES
+from .modes import ADHESION_COLUMN, ADHESION_SHARE, ALWAYS, Mode, scene_modes
 from .shares import SPLITS, radius_share, springs_share
-
-_SHARE_COLUMNS = tuple(m.share_column for m in MODES)
 
 
 class _ByMode:
     """Attribute access to the rows of ``u`` (and ``shares``) by mode column: ``x.u_n``, ``x.share_t1``."""
 
     u: np.ndarray
+    modes: tuple[Mode, ...]
 
     def __getattr__(self, name: str) -> np.ndarray:
-        if name in MODE_COLUMNS:
-            return self.u[MODE_COLUMNS.index(name)]
-        if name in _SHARE_COLUMNS and "shares" in self.__dict__:
-            return self.__dict__["shares"][_SHARE_COLUMNS.index(name)]
+        modes = self.__dict__.get("modes", ())
+        for k, m in enumerate(modes):
+            if name == m.column:
+                return self.__dict__["u"][k]
+            if name == m.share_column and "shares" in self.__dict__:
+                return self.__dict__["shares"][k]
         raise AttributeError(f"{type(self).__name__!r} has no attribute {name!r}")
 
 
 @dataclass
 class ContactLawEnergy(_ByMode):
     """Elastic energy of every mode of every contact under the run's own law(s) (J), shape (modes, n),
-    and the modes that could not be computed, with why (``u_n``, ``u_t``: the rows by mode)."""
+    row k the mode ``modes[k]`` (also as ``u_n``, ``u_t``, ...); ``u_adh``: the cohesion work of
+    every contact (J, signed), or None when no law of the scene has cohesion; ``skipped``: the modes
+    that could not be computed, with why."""
 
     u: np.ndarray
     skipped: dict[str, str] = field(default_factory=dict)
+    modes: tuple[Mode, ...] = ALWAYS
+    u_adh: np.ndarray | None = None
 
 
 @dataclass
 class ContactEnergy(_ByMode):
     """Per-contact results of :func:`partition`.
 
-    ``u`` (J) and ``shares`` (fraction to body 1): shape (modes, n), also as
-    ``u_n u_t`` and ``share_n1 share_t1``; ``u1``, ``u2`` (J): energy of each
+    ``u`` (J) and ``shares`` (fraction to body 1): shape (modes, n), row k the
+    mode ``modes[k]``, also as ``u_n u_t`` and ``share_n1 share_t1``; ``u_adh``:
+    cohesion work (J, signed; None without cohesion); ``u1``, ``u2`` (J): elastic energy of each
     body; ``depth1`` (m): approach of body 1; ``cp`` (m, shape (n, 3), stored by
     coordinate: ``cp[:, 0]`` is contiguous): contact point; ``separated``:
     contacts with delta < 0 (zero energy, kept and flagged); ``skipped``:
@@ -75,11 +81,16 @@ class ContactEnergy(_ByMode):
     separated: np.ndarray
     split: str = "material"
     skipped: dict[str, str] = field(default_factory=dict)
+    modes: tuple[Mode, ...] = ALWAYS
+    u_adh: np.ndarray | None = None
 
     def table(self) -> Table:
-        """The per-contact columns as a table: every mode's energy and share, ``u1 u2 depth1 cpx cpy cpz``."""
-        out = {m.column: self.u[k] for k, m in enumerate(MODES)}
-        out.update({m.share_column: self.shares[k] for k, m in enumerate(MODES)})
+        """The per-contact columns as a table: every mode's energy and share, ``u_adh`` when the scene
+        has cohesion, ``u1 u2 depth1 cpx cpy cpz``."""
+        out = {m.column: self.u[k] for k, m in enumerate(self.modes)}
+        if self.u_adh is not None:
+            out[ADHESION_COLUMN] = self.u_adh
+        out.update({m.share_column: self.shares[k] for k, m in enumerate(self.modes)})
         out.update(u1=self.u1, u2=self.u2, depth1=self.depth1, cpx=self.cp[:, 0], cpy=self.cp[:, 1],
                    cpz=self.cp[:, 2])
         return out
@@ -120,19 +131,27 @@ def contact_energies(contacts: Table, scene: Scene, particles: Table | None = No
     """
     n = table_length(contacts)
     bodies = bodies or ContactBodies.build(contacts, scene, particles, index)
-    u = np.zeros((len(MODES), n))
+    groups = [(model.contact_law, rows) for model, rows in law_groups(contacts, scene)]
+    modes = scene_modes(c for law, _ in groups for c in law.modes)
+    u = np.zeros((len(modes), n))
+    with_adhesion = any(ADHESION_COLUMN in law.modes for law, _ in groups)
+    u_adh = np.zeros(n) if with_adhesion else None
     skipped: dict[str, str] = {}
-    for model, rows in law_groups(contacts, scene):
-        law = model.contact_law
+    for law, rows in groups:
         result = law.energies(LawRows(contacts, rows, bodies, law.key, particles, index), compiled=compiled)
-        for k, column in enumerate(MODE_COLUMNS):
-            if column in result.modes:
-                u[k, rows] = result.modes[column]
-            elif column in result.skipped:
-                skipped[column] = result.skipped[column]
+        for k, mode in enumerate(modes):
+            if mode.column in result.modes:
+                u[k, rows] = result.modes[mode.column]
+            elif mode.column in result.skipped:
+                skipped[mode.column] = result.skipped[mode.column]
             else:
-                skipped.setdefault(column, f"the contact law {law.key} has no {MODES[k].name} energy (0)")
-    return ContactLawEnergy(u, skipped)
+                skipped.setdefault(mode.column, f"the contact law {law.key} has no {mode.name} energy (0)")
+        if u_adh is not None:
+            if ADHESION_COLUMN in result.modes:
+                u_adh[rows] = result.modes[ADHESION_COLUMN]
+            else:
+                skipped.setdefault(ADHESION_COLUMN, f"the contact law {law.key} has no cohesion (0)")
+    return ContactLawEnergy(u, skipped, modes, u_adh)
 
 
 def _per_contact(x: ArrayLike) -> np.ndarray:
@@ -159,14 +178,15 @@ def comparison_shares(contacts: Table, bodies: ContactBodies, split: str) -> np.
     raise ValueError(f"unknown split {split!r}; use one of {SPLITS}")
 
 
-def _material_shares(bodies: ContactBodies, n: int, tangential_rule: str) -> tuple[np.ndarray, np.ndarray]:
+def _material_shares(bodies: ContactBodies, n: int, tangential_rule: str,
+                     modes: tuple[Mode, ...]) -> tuple[np.ndarray, np.ndarray]:
     """Shares of body 1 of every mode under the material law, as ``(values, code)`` for the loops:
     one value per pair of types present (coded) in a multi-material scene, 1/2 in a single-material one."""
     from ..kernels import NO_CODE
 
     if bodies.single_material:
         return np.full((1, 1), 0.5), NO_CODE
-    rows = [bodies.pair_values(mode.rule(tangential_rule)) for mode in MODES]
+    rows = [bodies.pair_values(mode.rule(tangential_rule)) for mode in modes]
     code = rows[0][1]
     if len(code):
         return np.stack([values for values, _ in rows]), code
@@ -203,14 +223,15 @@ def partition(contacts: Table, scene: Scene, particles: Table | None = None, *,
     from ..kernels import NO_CODE, split_contacts  # compiled: see the module docstring
 
     if split == "material":
-        values, code = _material_shares(bodies, n, tangential_rule)
+        values, code = _material_shares(bodies, n, tangential_rule, energies.modes)
     else:
         values, code = comparison_shares(contacts, bodies, split), NO_CODE
     delta = np.asarray(contacts["delta"], dtype=np.float64)
     shares, u1, u2, depth1, cp = split_contacts(
         values, code, energies.u, delta,
         *(np.asarray(contacts[c], dtype=np.float64) for c in ("x1", "y1", "z1", "nx", "ny", "nz", "r1")))
-    return ContactEnergy(energies.u, shares, u1, u2, depth1, cp.T, delta < 0, split, dict(energies.skipped))
+    return ContactEnergy(energies.u, shares, u1, u2, depth1, cp.T, delta < 0, split, dict(energies.skipped),
+                         energies.modes, energies.u_adh)
 
 
 def per_particle(contacts: Table, energy: ContactEnergy, particles: Table, n_walls: int = 0,
@@ -218,10 +239,10 @@ def per_particle(contacts: Table, energy: ContactEnergy, particles: Table, n_wal
     """Sum each body's energy over its contacts (one compiled pass, :func:`demsplit.kernels.body_sums`).
 
     Returns ``(particle_table, wall_table)``: per particle ``id type x y z radius u``,
-    the energy of every mode (J) and ``n_contacts``, in the particles' row
-    order; per wall ``wall u``, every mode, ``n_contacts``. ``u`` is the sum of
-    the modes. Conservation: sum of particle u + sum of wall u = sum over
-    contacts of every mode, to rounding.
+    the energy of every mode (J), ``u_adh`` with cohesion, and ``n_contacts``, in the particles' row
+    order; per wall ``wall u``, every mode, ``u_adh``, ``n_contacts``. ``u`` is the sum of
+    the elastic modes; ``u_adh`` gets half of each contact's cohesion work. Conservation: sum of
+    particle u + sum of wall u = sum over contacts of every mode, to rounding.
     """
     from ..kernels import body_sums, max_wall  # compiled: see the module docstring
 
@@ -231,14 +252,20 @@ def per_particle(contacts: Table, energy: ContactEnergy, particles: Table, n_wal
     n_walls = max(n_walls, int(max_wall(rows2)) + 1)
     pu, n_contacts, wu, w_contacts = body_sums(rows1, rows2, energy.shares, energy.u, table_length(particles),
                                                n_walls)
+    columns = [m.column for m in energy.modes]
     ptable = {
         "id": np.asarray(particles["id"], dtype=np.int64),
         "type": np.asarray(particles["type"], dtype=np.int32),
         **{c: np.asarray(particles[c], dtype=np.float64) for c in ("x", "y", "z", "radius")},
-        "u": _total(pu), **dict(zip(MODE_COLUMNS, pu)), "n_contacts": n_contacts,
+        "u": _total(pu), **dict(zip(columns, pu)), "n_contacts": n_contacts,
     }
-    wtable = {"wall": np.arange(n_walls, dtype=np.int64), "u": _total(wu), **dict(zip(MODE_COLUMNS, wu)),
+    wtable = {"wall": np.arange(n_walls, dtype=np.int64), "u": _total(wu), **dict(zip(columns, wu)),
               "n_contacts": w_contacts}
+    if energy.u_adh is not None:  # the interface's work, half to each body
+        half = np.full((1, len(energy.u_adh)), ADHESION_SHARE)
+        p_adh, _, w_adh, _ = body_sums(rows1, rows2, half, energy.u_adh[None, :], table_length(particles), n_walls)
+        ptable[ADHESION_COLUMN] = p_adh[0]
+        wtable[ADHESION_COLUMN] = w_adh[0]
     return ptable, wtable
 
 

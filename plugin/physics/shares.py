@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike
 
 from ..errors import ContactError
 from .formulas import contact_point_coordinate
-from .moduli import mindlin_compliance, paper_tangential_compliance, plane_strain_compliance
+from .moduli import mindlin_compliance, paper_tangential_compliance, plane_strain_compliance, torsional_compliance
 
 SPLITS = ("material", "equal", "radius", "springs")
 """Distribution laws: ``material`` (Feng & Gao), ``equal`` (50/50: LAMMPS
@@ -96,6 +96,12 @@ def tangential_share(E1: ArrayLike, nu1: ArrayLike, E2: ArrayLike, nu2: ArrayLik
     g1 = 2.0 * (1.0 + np.asarray(nu1, dtype=np.float64)) / np.asarray(E1, dtype=np.float64)
     g2 = 2.0 * (1.0 + np.asarray(nu2, dtype=np.float64)) / np.asarray(E2, dtype=np.float64)
     return share_from_compliances(np.where(both_zero, g1, t1), np.where(both_zero, g2, t2))
+
+
+def twisting_share(E1: ArrayLike, nu1: ArrayLike, E2: ArrayLike, nu2: ArrayLike) -> np.ndarray:
+    """Fraction of a twisting spring's energy stored in body 1: (1/G1)/(1/G1 + 1/G2),
+    G = E/(2 (1 + nu)) (the torsional traction's rotation scales with 1/G)."""
+    return share_from_compliances(torsional_compliance(E1, nu1), torsional_compliance(E2, nu2))
 
 
 def radius_share(r1: ArrayLike, r2: ArrayLike) -> np.ndarray:

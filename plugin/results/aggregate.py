@@ -31,6 +31,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import DemsplitError
+from ..physics.modes import ADHESION_COLUMN, MODE_COLUMNS
 
 QUANTILES = {"p05": 0.05, "p25": 0.25, "p50": 0.50, "p75": 0.75, "p95": 0.95}
 TOP_FRACTIONS = {"top1_share": 0.01, "top10_share": 0.10}
@@ -176,15 +177,26 @@ def size_class(radius: np.ndarray, edges: np.ndarray) -> np.ndarray:
     return k
 
 
+def elastic_columns(table: pd.DataFrame) -> list[str]:
+    """The elastic mode columns ``table`` has (``u_n u_t``, and ``u_r u_tw`` where the laws have them),
+    in mode order: their sum is the elastic total."""
+    return [c for c in MODE_COLUMNS if c in table]
+
+
+def energy_columns(table: pd.DataFrame) -> list[str]:
+    """The elastic mode columns of ``table`` and, when present, the cohesion work ``u_adh``."""
+    return elastic_columns(table) + ([ADHESION_COLUMN] if ADHESION_COLUMN in table else [])
+
+
 def per_clump(particles: pd.DataFrame) -> pd.DataFrame:
-    """Energy of each rigid clump per frame (YADE): the sums of ``u``, ``u_n``,
-    ``u_t`` (J) and ``n_contacts`` over the clump's member spheres (``clump``
+    """Energy of each rigid clump per frame (YADE): the sums of ``u``, every mode
+    column (J) and ``n_contacts`` over the clump's member spheres (``clump``
     column, -1 for free particles, which are left out), with ``n_members``."""
     _require(particles, ["clump", "u", "u_n", "u_t", "n_contacts"], "particles")
     members = particles[particles["clump"] >= 0]
+    sums = {c: (c, "sum") for c in ["u", *energy_columns(particles)]}
     out = (members.groupby(["step", "clump"], sort=True)
-           .agg(n_members=("id", "size"), u=("u", "sum"), u_n=("u_n", "sum"), u_t=("u_t", "sum"),
-                n_contacts=("n_contacts", "sum"))
+           .agg(n_members=("id", "size"), **sums, n_contacts=("n_contacts", "sum"))
            .reset_index())
     return out
 
@@ -206,7 +218,7 @@ def per_size(particles: pd.DataFrame, bins=None, value: str = "u", *, by_frame: 
 
 def per_frame(particles: pd.DataFrame, walls: pd.DataFrame, frames: pd.DataFrame) -> pd.DataFrame:
     """One row per frame: the frame table, plus
-    ``u_contacts`` = u_n + u_t (J, sum over contacts),
+    ``u_contacts`` = the sum of the elastic modes (u_n + u_t [+ u_r + u_tw]) over contacts (J),
     ``u_particles`` = sum of particle ``u``, ``u_walls`` = sum of wall ``u`` (J;
     as the frames table has them when the pipeline recorded them, so that the
     balance of every frame needs only the frames table; else summed here),
@@ -215,7 +227,7 @@ def per_frame(particles: pd.DataFrame, walls: pd.DataFrame, frames: pd.DataFrame
     and the distribution statistics of particle ``u`` (``mean`` ... ``gini``;
     NaN for frames whose particles are not in ``particles``)."""
     out = frames.copy()
-    out["u_contacts"] = out["u_n"] + out["u_t"]
+    out["u_contacts"] = out[elastic_columns(out)].sum(axis=1)
     for col, table in (("u_particles", particles), ("u_walls", walls)):
         if col not in out:
             sums = table.groupby("step")["u"].sum() if len(table) else pd.Series(dtype=float)
@@ -232,13 +244,13 @@ def per_frame(particles: pd.DataFrame, walls: pd.DataFrame, frames: pd.DataFrame
 def wall_energy(walls: pd.DataFrame, walls_meta: list[dict], frames: pd.DataFrame | None = None) -> pd.DataFrame:
     """Energy per wall and frame (``walls`` table) with each wall's ``name``,
     ``kind`` and material ``type`` from ``walls_meta``, and ``share`` = wall u /
-    total contact energy of the frame (u_n + u_t over all contacts)."""
+    total elastic contact energy of the frame (every elastic mode over all contacts)."""
     meta = pd.DataFrame(walls_meta, columns=["wall", "name", "kind", "type"])
     if len(meta):
         meta["wall"] = meta["wall"].astype(np.int64)
     out = walls.merge(meta, on="wall", how="left")
     if frames is not None and len(frames):
-        total = (frames["u_n"] + frames["u_t"]).to_numpy()
+        total = frames[elastic_columns(frames)].sum(axis=1).to_numpy()
         with np.errstate(invalid="ignore", divide="ignore"):
             out["share"] = out["u"].to_numpy() / pd.Series(total, index=frames["step"]).reindex(out["step"]).to_numpy()
     return out.sort_values(["step", "wall"], kind="stable").reset_index(drop=True)

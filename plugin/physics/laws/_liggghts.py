@@ -1,50 +1,173 @@
-"""What LIGGGHTS' sphere models share: the ``tangential`` choice and the history spring.
+"""What LIGGGHTS' sphere models share: the sub-models a normal model is composed with.
 
-LIGGGHTS composes a contact from a normal model, which also sets the
-tangential stiffness kt, and a tangential model; ``tangential history`` keeps
-a spring displacement ``shear`` (m) per contact with F_t = -kt shear, so its
-energy is kt |shear|^2 / 2 (``tangential_model_history.h``);
-``no_history`` keeps none. Not a law itself: the normal-model laws derive
-from :class:`LiggghtsNormalModel`.
+LIGGGHTS composes a contact from a normal model, which sets the normal and
+tangential stiffnesses kn and kt of the contact (``sidata.kn``, ``sidata.kt``),
+and sub-models that use them (``contact_models.h``):
+
+- ``tangential history`` (and ``tan_luding``) keeps a spring displacement
+  ``shear`` (m) per contact with F_t = -kt shear (``tangential_model_history.h``):
+  u_t = kt |shear|^2 / 2; ``no_history`` keeps none (no spring, u_t = 0);
+- ``rolling_friction epsd|epsd2|epsd3`` keeps the spring's rolling torque M_r
+  (N m) per contact, M_r += kr w_t dt, capped at mu_r |F_n| R*: u_r = |M_r|^2/(2 kr)
+  with kr = 2.25 kn mu_r^2 R*^2 (``rolling_model_epsd.h``), kt R*^2
+  (``rolling_model_epsd2.h``) or coeffRollStiffness kn mu_r^2 R*^2
+  (``rolling_model_epsd3.h``); ``cdt`` is a constant torque without a spring;
+- ``cohesion sjkr`` adds F = -k A with A the lens area of the two spheres,
+  pi/4 (S^2 - d^2)(d^2 - D^2)/d^2 (S = r1 + r2, D = r1 - r2, d = S - delta), or
+  pi (r1^2 - (r1 - delta)^2) on a wall (``cohesion_model_sjkr.h``); ``sjkr2``
+  A = 4 pi R* delta (wall: 2 pi r1 delta, ``cohesion_model_sjkr2.h``). The normal
+  force is the normal model's plus this one, so the elastic energy is unchanged
+  and the cohesion work u_adh = -k int_0^delta A(s) ds (J, negative) is reported apart.
+
+A normal-model law derives from :class:`LiggghtsNormalModel` and gives its
+normal (and tangential) energy and its kn, kt; this base adds the rolling and
+cohesion modes. Not a law itself.
 """
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from ...errors import UnsupportedModelError
-from .base import ContactLaw, ContactRows
+from ..elastic import overlap
+from ..moduli import effective_radius
+from .base import ContactLaw, ContactRows, LawEnergy
 
 SHEAR = ("shearx", "sheary", "shearz")
 """Contact columns of the tangential spring history (m)."""
+ROLLING_TORQUE = ("rolling_torquex", "rolling_torquey", "rolling_torquez")
+"""Contact columns of the rolling spring history, the spring's torque M_r (N m)."""
 
-TANGENTIAL_MODELS = ("history", "no_history")
+TANGENTIAL_MODELS = {"history": True, "no_history": False}
+"""LIGGGHTS ``tangential`` model -> whether it keeps a spring (``shear`` history)."""
+ROLLING_MODELS = {"off": False, "cdt": False, "epsd": True, "epsd2": True, "epsd3": True}
+"""LIGGGHTS ``rolling_friction`` model -> whether it keeps a spring (rolling-torque history)."""
+COHESION_MODELS = ("off", "sjkr", "sjkr2")
+"""LIGGGHTS ``cohesion`` models whose work demsplit computes."""
+
+
+def _table(value: Any) -> Any:
+    """A per-type-pair table as nested tuples (hashable, so that two models compare equal)."""
+    if value is None or np.ndim(value) == 0:
+        return value
+    return tuple(tuple(float(v) for v in row) for row in np.asarray(value, dtype=np.float64))
+
+
+def rolling_spring_energy(torque: np.ndarray, kr: np.ndarray | float) -> np.ndarray:
+    """Energy of the rolling spring, |M_r|^2/(2 kr) (J): ``torque`` (n, 3) in N m, ``kr`` in N m/rad.
+    A contact with kr = 0 (no overlap) holds no spring: 0."""
+    m2 = np.einsum("ij,ij->i", torque, torque)
+    kr = np.broadcast_to(np.asarray(kr, dtype=np.float64), m2.shape)
+    return np.divide(m2, 2.0 * kr, out=np.zeros_like(m2), where=kr > 0)
+
+
+def sjkr_area_integral(delta: np.ndarray, r1: np.ndarray, r2: np.ndarray) -> np.ndarray:
+    """int_0^delta A(s) ds (m^3) of LIGGGHTS ``sjkr``'s contact area A.
+
+    Two spheres: A = pi/4 (S^2 - d^2)(d^2 - D^2)/d^2, d = S - s, whose integral is
+    (pi/4) delta^2 [(4 r1 r2 - S delta)/(S - delta) - delta/3] (no cancellation for
+    small delta); a wall (r2 = inf): A = pi (2 r1 s - s^2), integral pi (r1 delta^2 - delta^3/3).
+    """
+    d = overlap(delta)
+    wall = np.isinf(r2)
+    S = np.where(wall, 1.0, r1 + r2)
+    pair = (np.pi / 4.0) * d * d * ((4.0 * r1 * np.where(wall, 1.0, r2) - S * d) / (S - d) - d / 3.0)
+    plane = np.pi * (r1 * d * d - d**3 / 3.0)
+    return np.where(wall, plane, pair)
+
+
+def sjkr2_area_integral(delta: np.ndarray, r1: np.ndarray, r2: np.ndarray) -> np.ndarray:
+    """int_0^delta A(s) ds (m^3) of LIGGGHTS ``sjkr2``: A = 4 pi R* s, so 2 pi R* delta^2
+    (a wall: A = 2 pi r1 s, so pi r1 delta^2)."""
+    d = overlap(delta)
+    return np.where(np.isinf(r2), np.pi * r1 * d * d, 2.0 * np.pi * effective_radius(r1, r2) * d * d)
+
+
+_AREA_INTEGRAL = {"sjkr": sjkr_area_integral, "sjkr2": sjkr2_area_integral}
 
 
 class LiggghtsNormalModel(ContactLaw):
-    """A LIGGGHTS normal model with its ``tangential`` model as a parameter."""
+    """A LIGGGHTS normal model with its ``tangential``, ``rolling_friction`` and ``cohesion`` sub-models
+    as parameters (module docstring). A subclass gives :meth:`normal_and_tangential`, :meth:`kn`
+    and :meth:`kt`."""
 
     modes = ("u_n", "u_t")
-    mode_columns = {"u_t": SHEAR}
-    parameters = {"tangential": ("history", "LIGGGHTS tangential model: history or no_history")}
+    mode_columns = {"u_t": SHEAR, "u_r": ROLLING_TORQUE}
+    parameters = {
+        "tangential": ("history", "LIGGGHTS tangential model: history or no_history"),
+        "rolling": ("off", "LIGGGHTS rolling_friction model: off, cdt, epsd, epsd2 or epsd3"),
+        "cohesion": ("off", "LIGGGHTS cohesion model: off, sjkr or sjkr2"),
+        "rolling_friction": (None, "coefficientRollingFriction mu_r, per type pair (epsd, epsd3)"),
+        "rolling_stiffness": (None, "coeffRollStiffness, scalar (epsd3)"),
+        "cohesion_energy_density": (None, "cohesionEnergyDensity k (J/m^3), per type pair (sjkr, sjkr2)"),
+    }
 
     def check(self) -> None:
-        tangential = self.params["tangential"]
-        if tangential not in TANGENTIAL_MODELS:
-            raise UnsupportedModelError(f"{self.key}: tangential model {tangential!r} is not supported; "
-                                        f"it takes {', '.join(TANGENTIAL_MODELS)}.")
-        if tangential == "no_history":
-            self.modes = ("u_n",)
-            self.mode_columns = {}
+        p = self.params
+        for name, allowed in (("tangential", TANGENTIAL_MODELS), ("rolling", ROLLING_MODELS),
+                              ("cohesion", COHESION_MODELS)):
+            if p[name] not in allowed:
+                raise UnsupportedModelError(f"{self.key}: {name} model {p[name]!r} is not supported; "
+                                            f"it takes {', '.join(allowed)}.")
+        needed = {"rolling_friction": p["rolling"] in ("epsd", "epsd3"),
+                  "rolling_stiffness": p["rolling"] == "epsd3",
+                  "cohesion_energy_density": p["cohesion"] != "off"}
+        for name, need in needed.items():
+            if need and p[name] is None:
+                raise UnsupportedModelError(f"{self.key} with rolling_friction {p['rolling']} and cohesion "
+                                            f"{p['cohesion']} needs the parameter {name!r} "
+                                            f"({self.parameters[name][1]}).",
+                                            fix="define it in the script with fix property/global, as the run did.")
+        p["rolling_friction"] = _table(p["rolling_friction"])
+        p["cohesion_energy_density"] = _table(p["cohesion_energy_density"])
+        self.modes = tuple(m for m, has in (("u_n", True), ("u_t", TANGENTIAL_MODELS[p["tangential"]]),
+                                            ("u_r", ROLLING_MODELS[p["rolling"]]),
+                                            ("u_adh", p["cohesion"] != "off")) if has)
+        self.mode_columns = {m: cols for m, cols in LiggghtsNormalModel.mode_columns.items() if m in self.modes}
 
-    def shear_state(self, rows: ContactRows) -> tuple[bool, dict[str, str]]:
-        """Whether the tangential spring energy can be computed, and the ``skipped`` entry if not."""
-        if "u_t" not in self.modes:
-            return False, {}
-        why = self.missing_mode(rows, "u_t")
-        return (False, {"u_t": why}) if why else (True, {})
+    # -- what a normal model gives ------------------------------------------------------------
+
+    def normal_and_tangential(self, rows: ContactRows, with_shear: bool, compiled: bool) -> dict[str, np.ndarray]:
+        """``u_n`` and, with ``with_shear``, ``u_t`` of every row (J)."""
+        raise NotImplementedError
+
+    def kn(self, rows: ContactRows) -> np.ndarray:
+        """The normal stiffness LIGGGHTS sets for the sub-models, ``sidata.kn`` (N/m), per row."""
+        raise NotImplementedError
+
+    def kt(self, rows: ContactRows) -> np.ndarray:
+        """The tangential stiffness LIGGGHTS sets, ``sidata.kt`` (N/m), per row."""
+        raise NotImplementedError
+
+    # -- the composition ------------------------------------------------------------------------
+
+    def energies(self, rows: ContactRows, *, compiled: bool = True) -> LawEnergy:
+        skipped = {m: why for m in ("u_t", "u_r") if m in self.modes and (why := self.missing_mode(rows, m))}
+        modes = self.normal_and_tangential(rows, "u_t" in self.modes and "u_t" not in skipped, compiled)
+        if "u_r" in self.modes and "u_r" not in skipped:
+            modes["u_r"] = rolling_spring_energy(self.vectors(rows, ROLLING_TORQUE), self.kr(rows))
+        if "u_adh" in self.modes:
+            k = rows.type_pair(self.params["cohesion_energy_density"])
+            modes["u_adh"] = -k * _AREA_INTEGRAL[self.params["cohesion"]](rows.delta, rows.r1, rows.r2)
+        return LawEnergy(modes, skipped)
+
+    def kr(self, rows: ContactRows) -> np.ndarray:
+        """Rolling stiffness of the ``rolling_friction`` model (N m/rad), per row (module docstring)."""
+        R2 = effective_radius(rows.r1, rows.r2) ** 2
+        rolling = self.params["rolling"]
+        if rolling == "epsd2":
+            return self.kt(rows) * R2
+        mu = rows.type_pair(self.params["rolling_friction"])
+        factor = 2.25 if rolling == "epsd" else float(self.params["rolling_stiffness"])
+        return factor * self.kn(rows) * mu * mu * R2
 
     @staticmethod
-    def shear(rows: ContactRows) -> np.ndarray:
-        """The spring displacement of every row, shape (n, 3) (m)."""
-        return np.stack([rows.column(c) for c in SHEAR], axis=-1)
+    def vectors(rows: ContactRows, columns: tuple[str, str, str]) -> np.ndarray:
+        """Three contact columns of every row as one (n, 3) array."""
+        return np.stack([rows.column(c) for c in columns], axis=-1)
+
+    def shear(self, rows: ContactRows) -> np.ndarray:
+        """The tangential spring displacement of every row, shape (n, 3) (m)."""
+        return self.vectors(rows, SHEAR)

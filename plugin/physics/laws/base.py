@@ -49,6 +49,9 @@ class ContactRows(Protocol):
     def reduced_mass(self) -> np.ndarray:
         """m* = m1 m2/(m1 + m2) of every row (kg); a wall has infinite mass."""
 
+    def type_pair(self, table: Any) -> np.ndarray | float:
+        """A per-type-pair property ``table[t1 - 1][t2 - 1]`` of every row (a scalar if it holds one value)."""
+
 
 @dataclass
 class LawEnergy:
@@ -132,8 +135,8 @@ class ContactLaw(ABC):
         """Elastic normal force of the contacts ``rows`` (N): the derivative dU_n/d(delta)."""
 
     def describe(self) -> str:
-        """One line for ``info``/``check``: the key, its parameters and the summary."""
-        shown = ", ".join(f"{k}={v!r}" for k, v in sorted(self.params.items()))
+        """One line for ``info``/``check``: the key, its parameters (but those unset or ``off``) and the summary."""
+        shown = ", ".join(f"{k}={v!r}" for k, v in sorted(self.params.items()) if v is not None and v != "off")
         return f"{self.key}" + (f" ({shown})" if shown else "") + f": {self.summary}"
 
     def needs(self) -> tuple[str, ...]:

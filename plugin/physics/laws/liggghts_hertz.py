@@ -16,18 +16,17 @@ from ..formulas import hertz_kt_formula
 from ..moduli import curvature_error, effective_modulus, effective_radius, effective_shear_modulus
 from . import register
 from ._liggghts import SHEAR, LiggghtsNormalModel
-from .base import ContactRows, LawEnergy
+from .base import ContactRows
 
 
 @register
 class LiggghtsHertz(LiggghtsNormalModel):
     key = "liggghts:hertz"
     summary = ("Hertz u_n = (8/15) E* sqrt(R* delta) delta^2; tangential history u_t = kt |shear|^2/2 with "
-               "kt = 8 G* sqrt(R* delta)")
+               "kt = 8 G* sqrt(R* delta); rolling u_r = |M_r|^2/(2 kr); cohesion work u_adh apart")
     compiled = True
 
-    def energies(self, rows: ContactRows, *, compiled: bool = True) -> LawEnergy:
-        with_shear, skipped = self.shear_state(rows)
+    def normal_and_tangential(self, rows: ContactRows, with_shear: bool, compiled: bool) -> dict[str, np.ndarray]:
         if compiled:  # one pass over the contacts (demsplit.kernels)
             from ...kernels import hertz_history_energies
 
@@ -42,9 +41,18 @@ class LiggghtsHertz(LiggghtsNormalModel):
             R_eff = effective_radius(rows.r1, rows.r2)
             u_n = hertz_energy_from_moduli(rows.delta, R_eff, rows.per_pair(effective_modulus))
             if with_shear:
-                kt = hertz_kt_formula(overlap(rows.delta), R_eff, rows.per_pair(effective_shear_modulus))
-                u_t = history_spring_energy(rows.delta, self.shear(rows), kt)
-        return LawEnergy({"u_n": u_n, "u_t": u_t} if with_shear else {"u_n": u_n}, skipped)
+                u_t = history_spring_energy(rows.delta, self.shear(rows), self.kt(rows))
+        return {"u_n": u_n, "u_t": u_t} if with_shear else {"u_n": u_n}
+
+    def kn(self, rows: ContactRows) -> np.ndarray:
+        """kn = (4/3) E* sqrt(R* delta) (N/m), ``normal_model_hertz.h``."""
+        return (4.0 / 3.0) * rows.per_pair(effective_modulus) * np.sqrt(effective_radius(rows.r1, rows.r2)
+                                                                        * overlap(rows.delta))
+
+    def kt(self, rows: ContactRows) -> np.ndarray:
+        """kt = 8 G* sqrt(R* delta) (N/m), ``normal_model_hertz.h``."""
+        return hertz_kt_formula(overlap(rows.delta), effective_radius(rows.r1, rows.r2),
+                                rows.per_pair(effective_shear_modulus))
 
     def normal_force(self, rows: ContactRows) -> np.ndarray:
         return hertz_force_from_moduli(rows.delta, effective_radius(rows.r1, rows.r2),

@@ -19,7 +19,7 @@ from ..elastic import history_spring_energy, hooke_energy, overlap
 from ..moduli import effective_modulus, effective_radius, f64
 from . import register
 from ._liggghts import LiggghtsNormalModel
-from .base import ContactLaw, ContactRows, LawEnergy
+from .base import ContactLaw, ContactRows
 
 
 def liggghts_hooke_kn(R_eff: ArrayLike, E_eff: ArrayLike, m_eff: ArrayLike, v_char: float) -> np.ndarray:
@@ -34,7 +34,8 @@ def liggghts_hooke_kn(R_eff: ArrayLike, E_eff: ArrayLike, m_eff: ArrayLike, v_ch
 class LiggghtsHooke(LiggghtsNormalModel):
     key = "liggghts:hooke"
     summary = ("linear spring u_n = kn delta^2/2 with kn(E*, R*, m*, characteristicVelocity); tangential "
-               "history u_t = kt |shear|^2/2 with kt = kt_to_kn kn")
+               "history u_t = kt |shear|^2/2 with kt = kt_to_kn kn; rolling u_r = |M_r|^2/(2 kr); cohesion "
+               "work u_adh apart")
     particle_columns = ("mass",)
     parameters = {
         **LiggghtsNormalModel.parameters,
@@ -48,13 +49,16 @@ class LiggghtsHooke(LiggghtsNormalModel):
         return liggghts_hooke_kn(effective_radius(rows.r1, rows.r2), rows.per_pair(effective_modulus),
                                  rows.reduced_mass(), float(self.params["characteristic_velocity"]))
 
-    def energies(self, rows: ContactRows, *, compiled: bool = True) -> LawEnergy:
-        with_shear, skipped = self.shear_state(rows)
+    def normal_and_tangential(self, rows: ContactRows, with_shear: bool, compiled: bool) -> dict[str, np.ndarray]:
         kn = self.kn(rows)
         modes = {"u_n": hooke_energy(rows.delta, kn)}
         if with_shear:
             modes["u_t"] = history_spring_energy(rows.delta, self.shear(rows), self.params["kt_to_kn"] * kn)
-        return LawEnergy(modes, skipped)
+        return modes
+
+    def kt(self, rows: ContactRows) -> np.ndarray:
+        """kt = kt_to_kn kn (N/m)."""
+        return self.params["kt_to_kn"] * self.kn(rows)
 
     def normal_force(self, rows: ContactRows) -> np.ndarray:
         return self.kn(rows) * overlap(rows.delta)
