@@ -118,7 +118,7 @@ def _options(args: argparse.Namespace):
     from .pipeline import Options
 
     return Options(tangential_rule=args.tangential_rule, compare=not args.no_compare,
-                   contacts=not args.no_contacts)
+                   contacts=not args.no_contacts, allow_missing=tuple(args.allow_missing or ()))
 
 
 def cmd_run(args: argparse.Namespace) -> int:
@@ -243,6 +243,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="tangential split factor: Mindlin (2-nu)/G (default) or the paper's eq. 22 (1-2nu)/G")
     p.add_argument("--no-compare", action="store_true", help="skip the 50/50 and radius-weighted splits")
     p.add_argument("--no-contacts", action="store_true", help="do not store the per-contact table")
+    p.add_argument("--allow-missing", action="append", metavar="NAME",
+                   help="go on without a wall (by name) or an energy mode (u_t, u_r, ...) that the run has but "
+                   "its files do not hold; its values are then marked not computed, never 0 (repeatable; "
+                   "'all' for everything). Without it such a run is refused")
     p.add_argument("--compression", choices=("auto", "gzip", "lzf", "none"), default="auto",
                    help="HDF5 compression of the output: auto (default; gzip for the columns whose first chunk "
                    "compresses well, such as integers, shares and points, no filter for the others: docs/store.md), "

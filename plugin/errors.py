@@ -100,5 +100,10 @@ class ContactError(DemsplitError):
     an unknown particle id, a contact listed twice)."""
 
 
+class IncompleteRunError(DemsplitError):
+    """The run has a source of contact energy (a wall, a mode of the law) that its files do not
+    hold, though the simulator could have written it: analysed whole or refused."""
+
+
 class StoreError(DemsplitError):
     """A result file cannot be written, read or resumed."""

@@ -130,6 +130,8 @@ def check_run(input: str | Path, **reader_options) -> tuple[str, bool]:
                                               for t, m in sorted(scene.materials.items())))
         out.append(f"  walls:     {_walls(scene)}")
         problems += run.check_files(out)
+        problems += [f"wall {w.name!r} ({w.kind}): {w.missing}; 'demsplit run' refuses the run unless given "
+                     f"--allow-missing {w.name}" for w in scene.walls if w.missing]
         types: set[int] = set()
         first: Frame | None = None
         out.append("  frame  step        particles  contacts  wall contacts  overlap bound")
@@ -149,7 +151,9 @@ def check_run(input: str | Path, **reader_options) -> tuple[str, bool]:
             problems += _check_overlaps(run, frame)
         problems += _check_materials(scene, types)
         if first is not None:
-            out += _what_run_computes(run, first)
+            lines, missing = _what_run_computes(run, first)
+            out += lines
+            problems += missing
     finally:
         run.close()
     return _finish(out, problems)
@@ -197,9 +201,10 @@ def _check_materials(scene, types: set[int]) -> list[str]:
     return problems
 
 
-def _what_run_computes(run, frame: Frame) -> list[str]:
+def _what_run_computes(run, frame: Frame) -> tuple[list[str], list[str]]:
     """What ``demsplit run`` would compute from which columns (from the first readable frame):
-    each law's one-line description, and the modes the columns do not allow, with why."""
+    each law's one-line description, the modes a law does not have (0), and, as problems, the modes
+    the run has but whose columns were not dumped (``run`` refuses them without ``--allow-missing``)."""
     from .physics.partition import contact_energies
 
     scene = run.scene
@@ -208,13 +213,18 @@ def _what_run_computes(run, frame: Frame) -> list[str]:
     models = [scene.model]
     models += [w.model for w in scene.walls if w.model is not None and w.model not in models]
     lines += [f"  law:         {model.describe()}" for model in models]
+    problems = []
     try:  # the partition's own verdict on what the columns allow (one frame)
-        skipped = contact_energies(frame.contacts, scene, frame.particles).skipped
+        energies = contact_energies(frame.contacts, scene, frame.particles)
+        for what, why in energies.skipped.items():
+            lines.append(f"  {what} is 0:     {why}")
+        for what, why in energies.missing.items():
+            lines.append(f"  NOT COMPUTED: {what}: {why}")
+            problems.append(f"{what}: {why}; dump its columns, or let 'demsplit run' go on without it with "
+                            f"--allow-missing {what} (its values are then marked not computed).")
     except DemsplitError as exc:
-        skipped = {"energies": str(exc)}
-    for what, why in skipped.items():
-        lines.append(f"  not computed: {what}: {why}")
+        problems.append(str(exc))
     for note in run.notes + frame.notes:
         lines.append(f"  note: {note}")
     lines.append(f"  walls:       {len(scene.walls)} ({_walls(scene)})")
-    return lines
+    return lines, problems

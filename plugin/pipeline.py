@@ -19,16 +19,16 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import DemsplitError, InputFormatError
+from .errors import DemsplitError, IncompleteRunError, InputFormatError
 from .fingerprint import hash_in_background
 from .outputs import check_output_path
 from .validate import check_finite_energies, validated_frame
-from .frame import CONTACT_REQUIRED, PARTICLE_REQUIRED, Frame, ParticleIndex, require_columns
+from .frame import CONTACT_REQUIRED, PARTICLE_REQUIRED, Frame, ParticleIndex, Table, require_columns
 from .physics.bodies import ContactBodies
-from .physics.modes import ADHESION_COLUMN
-from .physics.partition import contact_energies, particle_energy, partition, per_particle
+from .physics.modes import ADHESION_COLUMN, NOT_COMPUTED_BITS
+from .physics.partition import ContactEnergy, contact_energies, particle_energy, partition, per_particle
 from .readers.base import Run
-from .scene import Scene
+from .scene import Scene, Wall
 
 Tables = dict[str, dict[str, np.ndarray]]
 
@@ -43,11 +43,20 @@ class Options:
         (``u_radius``) splits per particle, and YADE's series-spring split
         (``u_springs``) for its linear law.
     contacts : keep the per-contact table (the largest table by far).
+    allow_missing : what the run may go on without (``--allow-missing``): energy modes
+        (``u_t``, ``u_r``, ...) whose columns were not dumped, and walls (by name) whose contacts
+        were not dumped; their values are then marked "not computed" (never 0), else the run is
+        refused. ``all`` allows everything.
     """
 
     tangential_rule: str = "mindlin"
     compare: bool = True
     contacts: bool = True
+    allow_missing: tuple[str, ...] = ()
+
+    def allows(self, name: str) -> bool:
+        """True when the run may go on without ``name`` (a mode column or a wall name)."""
+        return name in self.allow_missing or "all" in self.allow_missing
 
 
 def comparison_splits(scene: Scene) -> tuple[str, ...]:
@@ -88,12 +97,27 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = Options()) -> Ta
                                                        index=index)
     except DemsplitError as exc:
         raise exc.located(file=source, step=frame.step) from None
+    refused = {mode: why for mode, why in main.missing.items() if not options.allows(mode)}
+    if refused:
+        mode, why = next(iter(refused.items()))
+        raise IncompleteRunError(
+            f"{why}. The run has this energy but its files do not hold it"
+            + (f" (also missing: {', '.join(list(refused)[1:])})" if len(refused) > 1 else "") + ".",
+            file=source, step=frame.step,
+            fix=f"dump the columns it needs (docs/liggghts-output.md lists them per model; 'demsplit check' "
+                f"names the lines), or go on without it with --allow-missing {mode}: its values are then "
+                "marked not computed.")
     for what, why in main.skipped.items():
-        note = f"{what} not computed: {why}"
+        note = f"{what} is 0: {why}"
+        if note not in frame.notes:
+            frame.notes.append(note)
+    for what, why in main.missing.items():
+        note = f"{what} NOT COMPUTED (--allow-missing {what}): {why}"
         if note not in frame.notes:
             frame.notes.append(note)
     n = len(contacts["delta"])
     step = np.int64(frame.step)
+    _mark_missing_walls(scene, main, ptable, wtable, n)
     tables: Tables = {"particles": {"step": np.full(len(ptable["id"]), step), **ptable},
                       "walls": {"step": np.full(len(wtable["wall"]), step), **wtable}}
     if options.contacts:
@@ -111,6 +135,8 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = Options()) -> Ta
         "n_particles": np.array([len(ptable["id"])], dtype=np.int64),
         "n_contacts": np.array([n], dtype=np.int64),
         "n_wall_contacts": np.array([int(np.count_nonzero(contacts["wall"] >= 0))], dtype=np.int64),
+        **({"n_not_computed": np.array([int(np.count_nonzero(main.not_computed))], dtype=np.int64)}
+           if main.not_computed is not None else {}),
         **{mode.column: np.array([main.u[k].sum()]) for k, mode in enumerate(main.modes)},
         **({ADHESION_COLUMN: np.array([main.u_adh.sum()])} if main.u_adh is not None else {}),
         "u_particles": np.array([ptable["u"].sum()]),
@@ -118,6 +144,41 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = Options()) -> Ta
         "overlap_max_rel_error": np.array([np.nan if err is None or len(err) == 0 else float(np.max(err))]),
     }
     return tables
+
+
+def missing_walls(scene: Scene) -> list[tuple[int, Wall]]:
+    """The walls whose contacts the run's files lack (``Wall.missing``), with their indices."""
+    return [(i, w) for i, w in enumerate(scene.walls) if w.missing]
+
+
+def refuse_missing_walls(scene: Scene, options: Options) -> None:
+    """Raise :class:`IncompleteRunError` for the first wall whose contacts the files lack and which
+    the user did not let go (``--allow-missing NAME``)."""
+    refused = [w for _, w in missing_walls(scene) if not options.allows(w.name)]
+    if refused:
+        w = refused[0]
+        others = f" (and {', '.join(x.name for x in refused[1:])})" if len(refused) > 1 else ""
+        raise IncompleteRunError(
+            f"the {w.kind} wall {w.name!r}{others} is part of this run, but {w.missing}",
+            file=scene.source or None,
+            fix=f"write its contacts as said above and rerun the simulation, or go on without them with "
+                f"--allow-missing {w.name}: the wall's energy is then marked not computed.")
+
+
+def _mark_missing_walls(scene: Scene, main: ContactEnergy, ptable: Table, wtable: Table, n: int) -> None:
+    """Give every table a ``not_computed`` column when a wall's contacts are missing, with every mode's
+    bit set on that wall (its contacts, and so its particles, are unknown)."""
+    walls = missing_walls(scene)
+    if not walls:
+        return
+    if main.not_computed is None:
+        main.not_computed = np.zeros(n, dtype=np.int32)
+        ptable["not_computed"] = np.zeros(len(ptable["id"]), dtype=np.int32)
+        wtable["not_computed"] = np.zeros(len(wtable["wall"]), dtype=np.int32)
+    every = sum(NOT_COMPUTED_BITS[m.column] for m in main.modes) + (
+        NOT_COMPUTED_BITS[ADHESION_COLUMN] if main.u_adh is not None else 0)
+    for i, _ in walls:
+        wtable["not_computed"][i] |= every
 
 
 # --- running over a whole run ---------------------------------------------------------------
@@ -266,6 +327,9 @@ def process_run(run: Run, options: Options = Options(), *, jobs: int = 1, dask: 
     if on_bad_frame not in ("stop", "skip"):
         raise ValueError(f"on_bad_frame must be 'stop' or 'skip', not {on_bad_frame!r}")
     report = report if report is not None else RunReport()
+    refuse_missing_walls(run.scene, options)
+    for _, wall in missing_walls(run.scene):
+        report.notes.insert(0, f"wall {wall.name!r} NOT COMPUTED (--allow-missing {wall.name}): {wall.missing}")
     for note in run.notes:  # what the reader found it could not provide
         if note not in report.notes:
             report.notes.append(note)

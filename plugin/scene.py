@@ -94,6 +94,10 @@ class Wall:
         order LIGGGHTS applies them (the order they appear on the fix line):
         ``("scale", (s,))``, ``("move", (dx, dy, dz))`` (m),
         ``("rotate", (ax, ay, az, angle_deg))``.
+    missing : why the run's files do not hold this wall's contacts though the
+        simulator could have written them, and how to write them (empty: they are
+        there). A run with such a wall is refused unless the user lets it go on
+        without it (``--allow-missing NAME``); its energy is then "not computed".
     """
 
     name: str
@@ -106,6 +110,7 @@ class Wall:
     model: ContactModel | None = None
     file: str | None = None
     transforms: tuple[tuple[str, tuple[float, ...]], ...] = ()
+    missing: str = ""
 
 
 @dataclass

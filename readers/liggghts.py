@@ -32,6 +32,7 @@ from __future__ import annotations
 import re
 import tempfile
 from collections.abc import Iterator
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -119,6 +120,22 @@ def scene_script(*, materials: dict[int, Material], contacts: Path, walls: Path 
     return "\n".join(lines) + "\n"
 
 
+PRIMITIVE_HISTORY_UNKNOWN = (
+    "the energies that depend on a contact's history (tangential and rolling springs, elasto-plastic normal "
+    "state) of primitive-wall contacts are NOT COMPUTED: LIGGGHTS never writes the history of primitive-wall "
+    "contacts (their rows carry not_computed bits). An equivalent mesh wall (fix mesh/surface of the same "
+    "plane or cylinder, with compute wall/gran/local) would give them.")
+"""The note of a run whose law reads a history and which has primitive walls."""
+
+MESH_WALL_NOT_DUMPED = (
+    "no dump holds its contacts (LIGGGHTS writes them only with 'compute ID all wall/gran/local' placed after "
+    "the wall's fix wall/gran and before the first run, and a 'dump local' of it; where the wall fix comes after "
+    "a run, split the script there with write_restart/read_restart). Add, e.g.: 'compute cwall all "
+    "wall/gran/local id pos force delta history' and 'dump dwall all local N wall.txt c_cwall[1] c_cwall[2] ...' "
+    "(docs/liggghts-output.md)")
+"""Why a mesh wall's contacts are missing when the run has no wall dump (:attr:`demsplit.scene.Wall.missing`)."""
+
+
 class LiggghtsRun(Run):
     """A LIGGGHTS run opened for reading (see the module docstring)."""
 
@@ -178,11 +195,10 @@ class LiggghtsRun(Run):
         self.walls = self._open_local(walls, "wall")
         self._pair_names = self._local_names(self.pairs, "pair")
         self._wall_names = self._local_names(self.walls, "wall")
-        mesh = [w for w in self.scene.walls if w.kind == "mesh"]
         self.notes: list[str] = list(self.script.warnings)
-        if mesh and self.walls is None:
-            self.notes.append(f"the run has {len(mesh)} mesh wall(s) but no wall/gran/local dump was found: "
-                              "contacts with mesh walls are missing from the energies")
+        if self.walls is None and any(w.kind == "mesh" for w in self.scene.walls):
+            self.scene = replace(self.scene, walls=[replace(w, missing=MESH_WALL_NOT_DUMPED) if w.kind == "mesh"
+                                                    else w for w in self.scene.walls])
         if script is None:
             self.notes.append("no input script: primitive walls (never dumped by LIGGGHTS) are unknown, "
                               "so contacts with them are not included")
@@ -403,6 +419,12 @@ class LiggghtsRun(Run):
         primitive = primitive_wall_contacts(particles, self.scene.walls, margin=np.sqrt(3.0) * h) \
             if has_primitive else {}
         notes = []
+        # the law reads a contact history, which LIGGGHTS never writes for primitive walls: every frame's
+        # contacts say which rows lack it (history_unknown), so that their modes are "not computed"
+        history = [c for c in self._law_columns() if c in parts[0]] if has_primitive else []
+        if history:
+            for part in parts:
+                part["history_unknown"] = np.zeros(len(part["delta"]), dtype=np.int8)
         if primitive:
             rows = index.rows(primitive["id1"])
             primitive["bound"] = position_error(h[rows], primitive["delta"])
@@ -411,13 +433,13 @@ class LiggghtsRun(Run):
                 np.stack([primitive[c] for c in ("x1", "y1", "z1")], -1),
                 np.stack([primitive[c] for c in ("nx", "ny", "nz")], -1),
                 primitive["r1"], primitive["delta"], 1.0).T
-            history = [c for c in self._law_columns() if c in parts[0]]
+            for c in history:  # columns every part must have; the flag below says they are unknown here
+                primitive[c] = np.zeros(len(primitive["delta"]))
             if history:
-                for c in history:
-                    primitive[c] = np.zeros(len(primitive["delta"]))
-                notes.append("tangential energy of primitive-wall contacts is not computed (0): "
-                              "LIGGGHTS does not dump their shear history")
+                primitive["history_unknown"] = np.ones(len(primitive["delta"]), dtype=np.int8)
             parts.append(primitive)
+        if history:
+            notes.append(PRIMITIVE_HISTORY_UNKNOWN)
         contacts = {c: np.concatenate([p[c] for p in parts]) if len(parts) > 1 else parts[0][c] for c in parts[0]}
         source, error = self._overlap_policy(contacts, contacts.pop("bound"), af, pf, step)
         time = None if self.script.timestep is None else step * self.script.timestep

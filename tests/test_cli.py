@@ -120,7 +120,7 @@ def test_check_ok(run_dir):
     assert "overlaps:    pairs: dumped delta" in proc.stdout
     assert "law:         liggghts:hertz (tangential='history'): Hertz u_n" in proc.stdout
     assert "not computed: u_t" not in proc.stdout
-    assert "primitive-wall contacts is not computed" in proc.stdout
+    assert "of primitive-wall contacts are NOT COMPUTED" in proc.stdout
 
 
 def test_check_ok_on_yade():

@@ -119,7 +119,7 @@ def test_rolling_mode_missing_history_is_said():
     for c in "xyz":
         del contacts[f"rolling_torque{c}"]
     e = contact_energies(contacts, scene(rolling="epsd2"), particles)
-    assert "u_r" in e.skipped and np.all(e.u_r == 0)
+    assert "u_r" in e.missing and np.all(e.u_r == 0) and np.all(e.not_computed == 4)
 
 
 def test_cohesion_work_is_signed_apart_and_conserved():

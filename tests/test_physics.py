@@ -333,7 +333,8 @@ def test_per_particle_by_hand():
     u = 8 / 15 / (c1 + c2) * np.sqrt(1e-3 * 2e-3 / 3e-3) * (2e-6) ** 2.5
     assert pt["u"][0] == pytest.approx(u * c1 / (c1 + c2), rel=1e-13)
     assert pt["u"][1] == pytest.approx(u * c2 / (c1 + c2), rel=1e-13)
-    assert "u_t" in e.skipped  # no shear history in this frame: said, not guessed
+    assert "u_t" in e.missing and "u_t" not in e.skipped  # no shear history in this frame: said, not guessed
+    assert np.all(e.not_computed == 2)  # every contact's u_t is unknown
 
 
 def test_single_material_skips_lookup_and_matches():

@@ -50,7 +50,7 @@ def test_frame_tables_totals_and_comparison_splits():
     r = frame.particles["radius"]
     assert p["u_radius"][0] == pytest.approx(r[0] / (r[0] + r[1]) * u[0] + u[2], rel=1e-14)
     # no tangential spring in this model: said, not guessed
-    assert any(note.startswith("u_t not computed") for note in frame.notes)
+    assert any(note.startswith("u_t is 0: the contact law") for note in frame.notes)
     assert np.all(t["particles"]["u_t"] == 0)
 
 

@@ -92,3 +92,15 @@ def scene_modes(columns: Iterable[str]) -> tuple[Mode, ...]:
     every other mode of :data:`MODES` some law has, in the order of :data:`MODES`."""
     columns = set(columns)
     return tuple(m for m in MODES if m in ALWAYS or m.column in columns)
+
+
+NOT_COMPUTED_BITS: dict[str, int] = {"u_n": 1, "u_t": 2, "u_r": 4, "u_tw": 8, ADHESION_COLUMN: 16}
+"""Bit of every mode in a ``not_computed`` column: the bits set name the modes whose value in that
+row is unknown (their columns hold 0 there, which is not a measurement). A contact's bits say which
+of its modes could not be computed; a particle's or a wall's, which modes of at least one of its
+contacts."""
+
+
+def not_computed_modes(bits: int) -> list[str]:
+    """The mode columns named by a ``not_computed`` value (``6`` -> ``["u_t", "u_r"]``)."""
+    return [mode for mode, bit in NOT_COMPUTED_BITS.items() if int(bits) & bit]

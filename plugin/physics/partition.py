@@ -26,7 +26,7 @@ from ..errors import ContactError
 from ..frame import ParticleIndex, Table, table_length
 from ..scene import ContactModel, Scene
 from .bodies import ContactBodies, LawRows
-from .modes import ADHESION_COLUMN, ADHESION_SHARE, ALWAYS, Mode, scene_modes
+from .modes import ADHESION_COLUMN, ADHESION_SHARE, ALWAYS, NOT_COMPUTED_BITS, Mode, scene_modes
 from .shares import SPLITS, radius_share, springs_share
 
 
@@ -51,12 +51,19 @@ class ContactLawEnergy(_ByMode):
     """Elastic energy of every mode of every contact under the run's own law(s) (J), shape (modes, n),
     row k the mode ``modes[k]`` (also as ``u_n``, ``u_t``, ...); ``u_adh``: the cohesion work of
     every contact (J, signed), or None when no law of the scene has cohesion; ``skipped``: the modes
-    that could not be computed, with why."""
+    a law does not have (0 is their true value), with why; ``missing``: the modes a law has but could
+    not compute from the data given (their columns were not dumped), with why; ``not_computed``: per
+    contact, the bits (:data:`~demsplit.physics.modes.NOT_COMPUTED_BITS`) of the modes whose value is
+    unknown (``missing`` modes, and history-dependent modes of contacts whose history the simulator
+    never wrote, flagged by the reader with the contact column ``history_unknown``), or None when
+    every value is known."""
 
     u: np.ndarray
     skipped: dict[str, str] = field(default_factory=dict)
     modes: tuple[Mode, ...] = ALWAYS
     u_adh: np.ndarray | None = None
+    missing: dict[str, str] = field(default_factory=dict)
+    not_computed: np.ndarray | None = None
 
 
 @dataclass
@@ -83,6 +90,8 @@ class ContactEnergy(_ByMode):
     skipped: dict[str, str] = field(default_factory=dict)
     modes: tuple[Mode, ...] = ALWAYS
     u_adh: np.ndarray | None = None
+    missing: dict[str, str] = field(default_factory=dict)
+    not_computed: np.ndarray | None = None
 
     def table(self) -> Table:
         """The per-contact columns as a table: every mode's energy and share, ``u_adh`` when the scene
@@ -93,6 +102,8 @@ class ContactEnergy(_ByMode):
         out.update({m.share_column: self.shares[k] for k, m in enumerate(self.modes)})
         out.update(u1=self.u1, u2=self.u2, depth1=self.depth1, cpx=self.cp[:, 0], cpy=self.cp[:, 1],
                    cpz=self.cp[:, 2])
+        if self.not_computed is not None:
+            out["not_computed"] = self.not_computed
         return out
 
 
@@ -137,21 +148,31 @@ def contact_energies(contacts: Table, scene: Scene, particles: Table | None = No
     with_adhesion = any(ADHESION_COLUMN in law.modes for law, _ in groups)
     u_adh = np.zeros(n) if with_adhesion else None
     skipped: dict[str, str] = {}
+    missing: dict[str, str] = {}
+    unknown = np.asarray(contacts["history_unknown"]) != 0 if "history_unknown" in contacts else None
+    not_computed = np.zeros(n, dtype=np.int32) if unknown is not None else None
     for law, rows in groups:
         result = law.energies(LawRows(contacts, rows, bodies, law.key, particles, index), compiled=compiled)
         for k, mode in enumerate(modes):
             if mode.column in result.modes:
                 u[k, rows] = result.modes[mode.column]
-            elif mode.column in result.skipped:
-                skipped[mode.column] = result.skipped[mode.column]
-            else:
+            elif mode.column not in result.skipped:
                 skipped.setdefault(mode.column, f"the contact law {law.key} has no {mode.name} energy (0)")
         if u_adh is not None:
             if ADHESION_COLUMN in result.modes:
                 u_adh[rows] = result.modes[ADHESION_COLUMN]
-            else:
+            elif ADHESION_COLUMN not in result.skipped:
                 skipped.setdefault(ADHESION_COLUMN, f"the contact law {law.key} has no cohesion (0)")
-    return ContactLawEnergy(u, skipped, modes, u_adh)
+        missing.update(result.skipped)  # modes the law has, whose columns the data lacks
+        bits = sum(NOT_COMPUTED_BITS[m] for m in result.skipped)
+        bits_without_history = sum(NOT_COMPUTED_BITS[m] for m in law.mode_columns if m not in result.skipped)
+        if bits or (unknown is not None and bits_without_history):
+            if not_computed is None:
+                not_computed = np.zeros(n, dtype=np.int32)
+            not_computed[rows] |= bits
+            if unknown is not None and bits_without_history:
+                not_computed[rows] |= np.where(unknown[rows], bits_without_history, 0).astype(np.int32)
+    return ContactLawEnergy(u, skipped, modes, u_adh, missing, not_computed)
 
 
 def _per_contact(x: ArrayLike) -> np.ndarray:
@@ -231,7 +252,7 @@ def partition(contacts: Table, scene: Scene, particles: Table | None = None, *,
         values, code, energies.u, delta,
         *(np.asarray(contacts[c], dtype=np.float64) for c in ("x1", "y1", "z1", "nx", "ny", "nz", "r1")))
     return ContactEnergy(energies.u, shares, u1, u2, depth1, cp.T, delta < 0, split, dict(energies.skipped),
-                         energies.modes, energies.u_adh)
+                         energies.modes, energies.u_adh, dict(energies.missing), energies.not_computed)
 
 
 def per_particle(contacts: Table, energy: ContactEnergy, particles: Table, n_walls: int = 0,
@@ -261,6 +282,15 @@ def per_particle(contacts: Table, energy: ContactEnergy, particles: Table, n_wal
     }
     wtable = {"wall": np.arange(n_walls, dtype=np.int64), "u": _total(wu), **dict(zip(columns, wu)),
               "n_contacts": w_contacts}
+    if energy.not_computed is not None:  # a body is incomplete in every mode one of its contacts is
+        pbits = np.zeros(table_length(particles), dtype=np.int32)
+        wbits = np.zeros(n_walls, dtype=np.int32)
+        np.bitwise_or.at(pbits, rows1, energy.not_computed)
+        pair = rows2 >= 0
+        np.bitwise_or.at(pbits, rows2[pair], energy.not_computed[pair])
+        np.bitwise_or.at(wbits, -1 - rows2[~pair], energy.not_computed[~pair])
+        ptable["not_computed"] = pbits
+        wtable["not_computed"] = wbits
     if energy.u_adh is not None:  # the interface's work, half to each body
         half = np.full((1, len(energy.u_adh)), ADHESION_SHARE)
         p_adh, _, w_adh, _ = body_sums(rows1, rows2, half, energy.u_adh[None, :], table_length(particles), n_walls)

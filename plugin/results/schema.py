@@ -30,13 +30,14 @@ _ENERGY = {c: "J" for c in ("u", "u_n", "u_t", "u_r", "u_tw", "u_adh", "u_equal"
 _LENGTH = {c: "m" for c in ("x", "y", "z", "radius", "delta", "depth1", "cpx", "cpy", "cpz", "cpx_sim", "cpy_sim",
                              "cpz_sim")}
 _COUNT = {c: "1" for c in ("step", "id", "clump", "n_members", "id1", "id2", "wall", "type", "n_contacts",
-                           "n_particles", "n_wall_contacts", "share_n1", "share_t1", "share_r1", "share_tw1",
-                           "overlap_max_rel_error")}
+                           "n_particles", "n_wall_contacts", "n_not_computed", "share_n1", "share_t1", "share_r1",
+                           "share_tw1", "not_computed", "overlap_max_rel_error")}
 UNITS: dict[str, str] = {**_ENERGY, **_LENGTH, **_COUNT, "time": "s"}
 """Unit of every known column; a column not listed here gets the unit ``""`` (unknown)."""
 
-_INT64 = ("step", "id", "clump", "n_members", "id1", "id2", "wall", "n_contacts", "n_particles", "n_wall_contacts")
-_INT32 = ("type",)
+_INT64 = ("step", "id", "clump", "n_members", "id1", "id2", "wall", "n_contacts", "n_particles", "n_wall_contacts",
+          "n_not_computed")
+_INT32 = ("type", "not_computed")
 
 
 def canonical_column(name: str, values: np.ndarray, *, table: str = "", step: int | None = None) -> np.ndarray:

@@ -141,6 +141,15 @@ class LiggghtsNormalModel(ContactLaw):
         """The tangential stiffness LIGGGHTS sets, ``sidata.kt`` (N/m), per row."""
         raise NotImplementedError
 
+    def describe(self) -> str:
+        """The normal model's line, then the rolling and cohesion sub-models the contact has."""
+        extra = []
+        if "u_r" in self.modes:
+            extra.append(f"rolling {self.params['rolling']} u_r = |M_r|^2/(2 kr)")
+        if "u_adh" in self.modes:
+            extra.append(f"cohesion {self.params['cohesion']} work u_adh = -k int A (apart from u)")
+        return super().describe() + "".join(f"; {e}" for e in extra)
+
     # -- the composition ------------------------------------------------------------------------
 
     def energies(self, rows: ContactRows, *, compiled: bool = True) -> LawEnergy:

@@ -23,7 +23,7 @@ from .base import ContactRows
 class LiggghtsHertz(LiggghtsNormalModel):
     key = "liggghts:hertz"
     summary = ("Hertz u_n = (8/15) E* sqrt(R* delta) delta^2; tangential history u_t = kt |shear|^2/2 with "
-               "kt = 8 G* sqrt(R* delta); rolling u_r = |M_r|^2/(2 kr); cohesion work u_adh apart")
+               "kt = 8 G* sqrt(R* delta)")
     compiled = True
 
     def normal_and_tangential(self, rows: ContactRows, with_shear: bool, compiled: bool) -> dict[str, np.ndarray]:

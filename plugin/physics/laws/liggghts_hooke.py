@@ -34,8 +34,7 @@ def liggghts_hooke_kn(R_eff: ArrayLike, E_eff: ArrayLike, m_eff: ArrayLike, v_ch
 class LiggghtsHooke(LiggghtsNormalModel):
     key = "liggghts:hooke"
     summary = ("linear spring u_n = kn delta^2/2 with kn(E*, R*, m*, characteristicVelocity); tangential "
-               "history u_t = kt |shear|^2/2 with kt = kt_to_kn kn; rolling u_r = |M_r|^2/(2 kr); cohesion "
-               "work u_adh apart")
+               "history u_t = kt |shear|^2/2 with kt = kt_to_kn kn")
     particle_columns = ("mass",)
     parameters = {
         **LiggghtsNormalModel.parameters,

@@ -1,0 +1,116 @@
+"""A run is analysed whole or refused (DESIGN.md, "Completeness").
+
+What the run has but its files lack (a mesh wall whose contacts were not dumped, a history the
+law needs cut from the dump's column list) stops ``run`` (exit 2) and is a problem in ``check``
+(exit 1), naming the wall or mode and the fix; ``--allow-missing NAME`` goes on and marks those
+values "not computed" (``not_computed`` bits, never a silent 0). What LIGGGHTS cannot write at
+all (the history of primitive-wall contacts) is marked per contact, per particle and per wall.
+"""
+
+from __future__ import annotations
+
+import gzip
+import re
+import shutil
+from pathlib import Path
+
+import demsplit
+import numpy as np
+import pytest
+from demsplit.cli import main
+from demsplit.physics.modes import NOT_COMPUTED_BITS, not_computed_modes
+
+PACKING = Path(__file__).resolve().parent.parent / "sample_dumps" / "liggghts" / "packing"
+U_N, U_T = NOT_COMPUTED_BITS["u_n"], NOT_COMPUTED_BITS["u_t"]
+
+
+@pytest.fixture
+def packing(tmp_path) -> Path:
+    for f in PACKING.iterdir():
+        if f.is_file():
+            shutil.copy(f, tmp_path / f.name)
+    return tmp_path / "in.packing"
+
+
+def test_a_deleted_wall_dump_is_refused_with_the_fix(packing, capsys):
+    for name in ("wall.txt", "wall_full.txt.gz"):
+        (packing.parent / name).unlink()
+    assert main(["run", str(packing), "-o", str(packing.parent / "out.h5"), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "mesh wall 'floor'" in err and "--allow-missing floor" in err and "wall/gran/local" in err
+    assert not (packing.parent / "out.h5").exists()
+    assert main(["check", str(packing)]) == 1
+    assert "wall 'floor' (mesh)" in capsys.readouterr().out
+
+
+def test_allow_missing_marks_the_wall_not_computed(packing):
+    for name in ("wall.txt", "wall_full.txt.gz"):
+        (packing.parent / name).unlink()
+    out = packing.parent / "out.h5"
+    assert main(["run", str(packing), "-o", str(out), "-q", "--allow-missing", "floor"]) == 0
+    res = demsplit.load_results(out)
+    floor = res.walls[res.walls["wall"] == 0]
+    assert len(floor) == len(res.steps) and np.all(floor["not_computed"] == U_N | U_T)
+    assert res.provenance["notes"][0].startswith("wall 'floor' NOT COMPUTED")
+    assert res.provenance["options"]["allow_missing"] == ["floor"]
+
+
+def test_primitive_wall_contacts_have_no_history(packing):
+    res = demsplit.analyze(packing)
+    c = res.contacts
+    walls = res.provenance["scene"]["walls"] if "scene" in res.provenance else None
+    primitive = c["wall"] >= 1  # wall 0 is the mesh floor, 1.. the primitive planes and post
+    if walls is not None:
+        assert [w["kind"] for w in walls][0] == "mesh"
+    assert primitive.any() and (c["wall"] == 0).any()
+    assert np.all(c.loc[primitive, "not_computed"] == U_T)  # u_n is known, u_t is not
+    assert np.all(c.loc[~primitive, "not_computed"] == 0)
+    assert not_computed_modes(U_T) == ["u_t"]
+    # a particle is incomplete exactly when one of its contacts is
+    p = res.particles
+    touching = set(zip(c.loc[primitive, "step"], c.loc[primitive, "id1"]))
+    flagged = set(zip(p.loc[p["not_computed"] != 0, "step"], p.loc[p["not_computed"] != 0, "id"]))
+    assert flagged == touching
+    w = res.walls
+    assert np.all(w.loc[w["wall"] >= 1, "not_computed"] == U_T) and np.all(w.loc[w["wall"] == 0, "not_computed"] == 0)
+    per_step = c.groupby("step")["not_computed"].apply(lambda s: int((s != 0).sum()))
+    assert res.frames["n_not_computed"].tolist() == per_step.loc[res.frames["step"]].tolist()
+
+
+def drop_history(script: Path) -> None:
+    """The pair dump without its history columns (c_cpgl[34..36]): the script's column list and the file."""
+    text = script.read_text()
+    cut = " c_cpgl[34] c_cpgl[35] c_cpgl[36]"
+    script.write_text(text.replace(cut, ""))
+    with gzip.open(script.parent / "pairs_full.txt.gz", "rt") as f:
+        lines = f.read().split("\n")
+    out, in_rows = [], False
+    for line in lines:
+        if line.startswith("ITEM: ENTRIES"):
+            in_rows = True
+            out.append(line.replace(cut, ""))
+            continue
+        if line.startswith("ITEM:"):
+            in_rows = False
+        if in_rows and line:
+            words = line.split(" ")
+            line = " ".join(words[:33] + words[36:])
+        out.append(line)
+    with gzip.open(script.parent / "pairs_full.txt.gz", "wt") as f:
+        f.write("\n".join(out))
+    assert re.search(r"c_cpgl\[33\] c_cpgl\[37\]", script.read_text())
+
+
+def test_a_cut_history_is_refused_then_not_computed(packing, capsys):
+    drop_history(packing)
+    out = packing.parent / "out.h5"
+    assert main(["run", str(packing), "-o", str(out), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "shearx sheary shearz" in err and "--allow-missing u_t" in err
+    assert main(["check", str(packing)]) == 1
+    assert "NOT COMPUTED: u_t" in capsys.readouterr().out
+    assert main(["run", str(packing), "-o", str(out), "-q", "--allow-missing", "u_t"]) == 0
+    res = demsplit.load_results(out)
+    pairs = res.contacts[res.contacts["wall"] < 0]
+    assert np.all(pairs["not_computed"] == U_T) and np.all(pairs["u_t"] == 0)
+    assert any(n.startswith("u_t NOT COMPUTED") for n in res.provenance["notes"])
