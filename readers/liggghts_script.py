@@ -47,11 +47,14 @@ names match the canonical ``contacts`` table of :mod:`demsplit.frame`.
 ``ms_id`` (multisphere) is refused: LIGGGHTS-PUBLIC has no multisphere and
 the Debian 3.8.0 binary crashes on it.
 
-History columns (measured on Debian's LIGGGHTS 3.8.0, pair rows): ``shearx
-sheary shearz`` with ``tangential history``; then ``rolling_torquex ..z`` with
-``rolling_friction epsd|epsd2|epsd3``; then 10 (pair) / 14 (wall) columns with
-``computeElasticPotential on`` (``elastic_potential`` then ``elastic_history2``
-...); nothing with ``tangential no_history`` (the default).
+History columns: the law's own history, in LIGGGHTS' order (normal model,
+e.g. ``delta_max`` for ``hooke/hysteresis``; ``shearx sheary shearz`` with
+``tangential history``; ``rolling_torquex ..z`` with ``rolling_friction
+epsd|epsd2|epsd3``: :meth:`~demsplit.physics.laws._liggghts.LiggghtsNormalModel.history_columns`),
+then 10 (pair) / 14 (wall) columns with ``computeElasticPotential on``
+(``elastic_potential`` then ``elastic_history2`` ..., measured on Debian's
+LIGGGHTS 3.8.0); nothing with ``tangential no_history`` and a normal model
+without history (the defaults).
 
 Precision
 ---------
@@ -76,7 +79,7 @@ import numpy as np
 
 from ..errors import DemsplitError, MaterialError, ScriptError, UnsupportedModelError
 from ..physics.laws import ContactLaw, law_class
-from ..physics.laws._liggghts import COHESION_MODELS, ROLLING_MODELS, ROLLING_TORQUE, TANGENTIAL_MODELS
+from ..physics.laws._liggghts import COHESION_MODELS, ROLLING_MODELS, TANGENTIAL_MODELS
 from ..physics.laws._liggghts import SHEAR as SHEAR_COLUMNS
 from ..scene import ContactModel, Material, Scene, Wall
 from .lammps_input import (Unevaluable, Variables, Where, excerpt, logical_lines, split_words,
@@ -129,17 +132,11 @@ _ELASTIC_POTENTIAL_HISTORY = {"pair": 10, "wall": 14}
 """History values ``computeElasticPotential on`` adds (pair measured; wall: 17 - 3)."""
 
 
-def history_columns(kind: str, *, tangential: str = "history", rolling: str = "off",
-                    elastic_potential: bool = False) -> list[str]:
-    """Names of the ``history`` block for a model: shear (tangential history),
-    then rolling-friction torque, then the ``computeElasticPotential`` values.
-
-    ``tangential`` is the LIGGGHTS ``tangential`` model (``history`` or
-    ``no_history``); ``rolling`` the LIGGGHTS ``rolling_friction`` model.
-    """
-    names = list(SHEAR_COLUMNS) if TANGENTIAL_MODELS[tangential] else []
-    if ROLLING_MODELS[rolling]:
-        names += list(ROLLING_TORQUE)
+def history_columns(law: ContactLaw, kind: str, *, elastic_potential: bool = False) -> list[str]:
+    """Names of the ``history`` block of a ``compute pair/gran/local`` (``kind='pair'``) or
+    ``wall/gran/local`` (``'wall'``) for the contact law ``law``: the law's own history, then the
+    ``computeElasticPotential`` values."""
+    names = list(law.history_columns())
     if elastic_potential:
         n = _ELASTIC_POTENTIAL_HISTORY[kind]
         names += ["elastic_potential"] + [f"elastic_history{k}" for k in range(2, n + 1)]
@@ -268,13 +265,19 @@ class LiggghtsScript:
 # Contact models
 # --------------------------------------------------------------------------
 
-NORMAL = {"hertz": "liggghts:hertz", "hooke": "liggghts:hooke"}
+NORMAL = {"hertz": "liggghts:hertz", "hooke": "liggghts:hooke", "hertz/stiffness": "liggghts:hertz/stiffness",
+          "hooke/stiffness": "liggghts:hooke/stiffness", "hooke/hysteresis": "liggghts:hooke/hysteresis",
+          "luding": "liggghts:luding"}
 """LIGGGHTS ``model`` word -> contact-law registry key (:mod:`demsplit.physics.laws`)."""
 TANGENTIAL = TANGENTIAL_MODELS
 """LIGGGHTS ``tangential`` words, passed to the law as its ``tangential`` parameter."""
 PROPERTY_PARAMETERS = {"characteristicVelocity": "characteristic_velocity",
-                       "coefficientRollingFriction": "rolling_friction", "coeffRollStiffness": "rolling_stiffness",
-                       "cohesionEnergyDensity": "cohesion_energy_density"}
+                       "coefficientRollingFriction": "rolling_friction", "rollingStiffness": "rolling_stiffness",
+                       "cohesionEnergyDensity": "cohesion_energy_density", "kn": "kn", "kt": "kt",
+                       "coefficientMaxElasticStiffness": "max_elastic_stiffness",
+                       "coefficientAdhesionStiffness": "adhesion_stiffness",
+                       "coefficientPlasticityDepth": "plasticity_depth", "LoadingStiffness": "loading_stiffness",
+                       "UnloadingStiffness": "unloading_stiffness", "pullOffForce": "pull_off_force"}
 """``fix property/global`` scalar -> the law parameter it gives, where the law declares that parameter."""
 _MODEL_KEYS = ("model", "tangential", "cohesion", "rolling_friction", "surface")
 
@@ -294,9 +297,6 @@ class _ModelSpec:
     def on(self, name: str) -> bool:
         return self.settings.get(name, "off") in ("on", "yes")
 
-    def history(self, kind: str) -> list[str]:
-        return history_columns(kind, tangential=self.tangential, rolling=self.rolling,
-                               elastic_potential=self.on("computeElasticPotential"))
 
 
 def _parse_model(words: list[str], stop: tuple[str, ...], where: Where,
@@ -725,8 +725,8 @@ class _Reader:
             value = self.properties.get(prop)
             if value is None:
                 if declared[name][0] is ContactLaw.REQUIRED:
-                    raise self.error(ScriptError, f"{spec.law} needs 'fix ID all property/global {prop} scalar V', "
-                                     "which the script does not define.", spec.where,
+                    raise self.error(ScriptError, f"{spec.law} needs 'fix ID all property/global {prop} ...' "
+                                     f"({declared[name][1]}), which the script does not define.", spec.where,
                                      f"add the {prop} the run used.")
                 continue
             params[name] = float(value[1]) if np.ndim(value[1]) == 0 else value[1]
@@ -772,7 +772,8 @@ class _Reader:
                 raise self.error(ScriptError, f"compute {cid} {kind}/gran/local needs "
                                  + ("a 'pair_style gran'." if kind == "pair" else "a mesh 'fix wall/gran'."),
                                  where, "define it before the compute, as LIGGGHTS requires.")
-            history = spec.history(kind)
+            history = history_columns(self.model(spec).contact_law, kind,
+                                      elastic_potential=spec.on("computeElasticPotential"))
             try:
                 columns = local_layout(kind, keywords, len(history), history=history)
             except DemsplitError as exc:

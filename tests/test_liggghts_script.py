@@ -135,7 +135,8 @@ def test_walls_primitive_and_mesh(tmp_path):
 
 
 @pytest.mark.parametrize("pair, cls, match", [
-    ("model hertz/stiffness tangential history", UnsupportedModelError, "hertz/stiffness"),
+    ("model thornton_ning tangential history", UnsupportedModelError, "thornton_ning"),
+    ("model hertz/stiffness tangential history", ScriptError, "property/global kn"),
     ("model hertz tangential history cohesion easo/capillary/viscous", UnsupportedModelError, "liquid content"),
     ("model hertz tangential history cohesion sjkr", UnsupportedModelError, "cohesion_energy_density"),
     ("model hertz tangential history rolling_friction epsd", UnsupportedModelError, "rolling_friction"),
@@ -162,6 +163,24 @@ def test_rolling_friction_is_a_mode_and_widens_history(tmp_path):
     cols = s.local_computes["cp"].columns
     assert cols[:6] == ["shearx", "sheary", "shearz", "rolling_torquex", "rolling_torquey", "rolling_torquez"]
     assert len(cols) == 3 + 3 + 10 and cols[6] == "elastic_potential"
+
+
+@pytest.mark.parametrize("model, props, law, history", [
+    ("hertz/stiffness", "kn peratomtypepair 2 1e9 2e9 2e9 3e9\nfix p2 all property/global kt peratomtypepair 2 "
+     "1e9 1e9 1e9 1e9", "liggghts:hertz/stiffness", ["shearx", "sheary", "shearz"]),
+    ("hooke/hysteresis", "coefficientMaxElasticStiffness peratomtypepair 2 2 2 2 2\nfix p2 all property/global "
+     "coefficientAdhesionStiffness peratomtypepair 2 0 0 0 0\nfix p3 all property/global "
+     "coefficientPlasticityDepth peratomtypepair 2 0.1 0.1 0.1 0.1", "liggghts:hooke/hysteresis",
+     ["delta_max", "shearx", "sheary", "shearz"]),
+])
+def test_more_normal_models_and_their_history(tmp_path, model, props, law, history):
+    s = script(tmp_path, f"""
+        fix p1 all property/global {props}
+        pair_style gran model {model} tangential history
+        compute cp all pair/gran/local id history
+    """)
+    assert s.scene.model.law == law
+    assert s.local_computes["cp"].columns == ["id1", "id2", "periodic"] + history
 
 
 def test_cohesion_sjkr_is_the_cohesion_mode(tmp_path):

@@ -12,7 +12,8 @@ import mpmath
 import numpy as np
 import pytest
 from demsplit.physics.laws import make
-from demsplit.physics.laws._liggghts import rolling_spring_energy, sjkr2_area_integral, sjkr_area_integral
+from demsplit.physics.laws._liggghts import (rolling_spring_energy, sjkr2_area_integral, sjkr_area,
+                                              sjkr_area_integral)
 from demsplit.physics.partition import contact_energies, partition, per_particle
 from demsplit.scene import ContactModel, Material, Scene, Wall
 
@@ -43,10 +44,12 @@ def test_sjkr_work_is_the_integral_of_liggghts_area(rj):
 
     quad = [float(mpmath.quad(area, [0, mpmath.mpf(d)])) for d in delta]
     np.testing.assert_allclose(sjkr_area_integral(delta, ri, rj), quad, rtol=1e-13)
-    # and its derivative is the area itself (the cohesion force is -k A)
+    # and its derivative is the area itself (the cohesion force is -k A), which sjkr_area gives exactly
     h = delta * 1e-6
     slope = (sjkr_area_integral(delta + h, ri, rj) - sjkr_area_integral(delta - h, ri, rj)) / (2 * h)
-    np.testing.assert_allclose(slope, liggghts_sjkr_area(delta, ri, rj), rtol=1e-6)
+    np.testing.assert_allclose(slope, sjkr_area(delta, ri, rj), rtol=1e-6)
+    exact = [float(area(mpmath.mpf(d))) for d in delta]
+    np.testing.assert_allclose(sjkr_area(delta, ri, rj), exact, rtol=1e-14)
 
 
 def test_sjkr2_work():

@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from ...errors import UnsupportedModelError
-from ..elastic import overlap
+from ..elastic import history_spring_energy, overlap
 from ..moduli import effective_radius
 from .base import ContactLaw, ContactRows, LawEnergy
 
@@ -85,7 +85,26 @@ def sjkr2_area_integral(delta: np.ndarray, r1: np.ndarray, r2: np.ndarray) -> np
     return np.where(np.isinf(r2), np.pi * r1 * d * d, 2.0 * np.pi * effective_radius(r1, r2) * d * d)
 
 
+def sjkr_area(delta: np.ndarray, r1: np.ndarray, r2: np.ndarray) -> np.ndarray:
+    """LIGGGHTS ``sjkr``'s contact area A (m^2): pi/4 (S^2 - d^2)(d^2 - D^2)/d^2 for two spheres, written
+    as pi/4 delta (2 S - delta)(4 r1 r2 - 2 S delta + delta^2)/(S - delta)^2 (no cancellation); a wall:
+    pi (2 r1 delta - delta^2)."""
+    d = overlap(delta)
+    wall = np.isinf(r2)
+    S = np.where(wall, 1.0, r1 + r2)
+    pair = (np.pi / 4.0) * d * (2.0 * S - d) * (4.0 * r1 * np.where(wall, 1.0, r2) - 2.0 * S * d + d * d) \
+        / (S - d) ** 2
+    return np.where(wall, np.pi * (2.0 * r1 * d - d * d), pair)
+
+
+def sjkr2_area(delta: np.ndarray, r1: np.ndarray, r2: np.ndarray) -> np.ndarray:
+    """LIGGGHTS ``sjkr2``'s area A = 4 pi R* delta (m^2); a wall: 2 pi r1 delta."""
+    d = overlap(delta)
+    return np.where(np.isinf(r2), 2.0 * np.pi * r1 * d, 4.0 * np.pi * effective_radius(r1, r2) * d)
+
+
 _AREA_INTEGRAL = {"sjkr": sjkr_area_integral, "sjkr2": sjkr2_area_integral}
+_AREA = {"sjkr": sjkr_area, "sjkr2": sjkr2_area}
 
 
 class LiggghtsNormalModel(ContactLaw):
@@ -120,17 +139,29 @@ class LiggghtsNormalModel(ContactLaw):
                                             f"{p['cohesion']} needs the parameter {name!r} "
                                             f"({self.parameters[name][1]}).",
                                             fix="define it in the script with fix property/global, as the run did.")
-        p["rolling_friction"] = _table(p["rolling_friction"])
-        p["cohesion_energy_density"] = _table(p["cohesion_energy_density"])
+        for name in ("rolling_friction", "cohesion_energy_density"):
+            if p[name] is not None:
+                p[name] = self.table(name)
         self.modes = tuple(m for m, has in (("u_n", True), ("u_t", TANGENTIAL_MODELS[p["tangential"]]),
                                             ("u_r", ROLLING_MODELS[p["rolling"]]),
                                             ("u_adh", p["cohesion"] != "off")) if has)
-        self.mode_columns = {m: cols for m, cols in LiggghtsNormalModel.mode_columns.items() if m in self.modes}
+        self.mode_columns = {m: cols for m, cols in type(self).mode_columns.items() if m in self.modes}
+
+    def table(self, name: str) -> Any:
+        """Parameter ``name`` as a per-type-pair table of nested tuples (or its scalar), checked finite and >= 0."""
+        value = _table(self.params[name])
+        if not np.all(np.isfinite(np.asarray(value, dtype=np.float64))) or np.any(np.asarray(value) < 0):
+            raise UnsupportedModelError(f"{self.key}: parameter {name!r} must be finite and >= 0, got {value!r}.",
+                                        fix="correct the fix property/global line of the script.")
+        return value
 
     # -- what a normal model gives ------------------------------------------------------------
 
-    def normal_and_tangential(self, rows: ContactRows, with_shear: bool, compiled: bool) -> dict[str, np.ndarray]:
-        """``u_n`` and, with ``with_shear``, ``u_t`` of every row (J)."""
+    normal_history: tuple[str, ...] = ()
+    """Contact columns of the normal model's own history values, in LIGGGHTS' order."""
+
+    def normal_energy(self, rows: ContactRows) -> np.ndarray:
+        """``u_n`` of every row (J)."""
         raise NotImplementedError
 
     def kn(self, rows: ContactRows) -> np.ndarray:
@@ -140,6 +171,21 @@ class LiggghtsNormalModel(ContactLaw):
     def kt(self, rows: ContactRows) -> np.ndarray:
         """The tangential stiffness LIGGGHTS sets, ``sidata.kt`` (N/m), per row."""
         raise NotImplementedError
+
+    def normal_and_tangential(self, rows: ContactRows, with_shear: bool, compiled: bool) -> dict[str, np.ndarray]:
+        """``u_n`` and, with ``with_shear``, ``u_t`` = kt |shear|^2/2 of every row (J); a law with a faster
+        joint evaluation overrides it."""
+        modes = {"u_n": self.normal_energy(rows)}
+        if with_shear:
+            modes["u_t"] = history_spring_energy(rows.delta, self.shear(rows), self.kt(rows))
+        return modes
+
+    def history_columns(self) -> list[str]:
+        """The contact history LIGGGHTS keeps for this model, as demsplit names its columns, in LIGGGHTS'
+        order (sub-model construction order, ``contact_models.h``): surface (none for ``default``), normal,
+        cohesion (none for sjkr, sjkr2), tangential, rolling."""
+        return [*self.normal_history, *(SHEAR if "u_t" in self.modes else ()),
+                *(ROLLING_TORQUE if "u_r" in self.modes else ())]
 
     def describe(self) -> str:
         """The normal model's line, then the rolling and cohesion sub-models the contact has."""
@@ -153,14 +199,25 @@ class LiggghtsNormalModel(ContactLaw):
     # -- the composition ------------------------------------------------------------------------
 
     def energies(self, rows: ContactRows, *, compiled: bool = True) -> LawEnergy:
-        skipped = {m: why for m in ("u_t", "u_r") if m in self.modes and (why := self.missing_mode(rows, m))}
-        modes = self.normal_and_tangential(rows, "u_t" in self.modes and "u_t" not in skipped, compiled)
+        skipped = {m: why for m in self.mode_columns if (why := self.missing_mode(rows, m))}
+        with_shear = "u_t" in self.modes and "u_t" not in skipped
+        if "u_n" in skipped:  # the normal model's history was not dumped
+            modes = {"u_t": history_spring_energy(rows.delta, self.shear(rows), self.kt(rows))} if with_shear else {}
+        else:
+            modes = self.normal_and_tangential(rows, with_shear, compiled)
         if "u_r" in self.modes and "u_r" not in skipped:
             modes["u_r"] = rolling_spring_energy(self.vectors(rows, ROLLING_TORQUE), self.kr(rows))
-        if "u_adh" in self.modes:
+        if self.params["cohesion"] != "off":
             k = rows.type_pair(self.params["cohesion_energy_density"])
             modes["u_adh"] = -k * _AREA_INTEGRAL[self.params["cohesion"]](rows.delta, rows.r1, rows.r2)
         return LawEnergy(modes, skipped)
+
+    def cohesion_force(self, rows: ContactRows) -> np.ndarray:
+        """The cohesion model's normal force -k A (N, negative: attractive), d(u_adh)/d(delta); 0 without one."""
+        if self.params["cohesion"] == "off":
+            return np.zeros_like(rows.delta)
+        k = rows.type_pair(self.params["cohesion_energy_density"])
+        return -k * _AREA[self.params["cohesion"]](rows.delta, rows.r1, rows.r2)
 
     def kr(self, rows: ContactRows) -> np.ndarray:
         """Rolling stiffness of the ``rolling_friction`` model (N m/rad), per row (module docstring)."""

@@ -38,11 +38,14 @@ class LiggghtsHertz(LiggghtsNormalModel):
             if bad >= 0:
                 raise curvature_error()
         else:
-            R_eff = effective_radius(rows.r1, rows.r2)
-            u_n = hertz_energy_from_moduli(rows.delta, R_eff, rows.per_pair(effective_modulus))
+            u_n = self.normal_energy(rows)
             if with_shear:
                 u_t = history_spring_energy(rows.delta, self.shear(rows), self.kt(rows))
         return {"u_n": u_n, "u_t": u_t} if with_shear else {"u_n": u_n}
+
+    def normal_energy(self, rows: ContactRows) -> np.ndarray:
+        return hertz_energy_from_moduli(rows.delta, effective_radius(rows.r1, rows.r2),
+                                        rows.per_pair(effective_modulus))
 
     def kn(self, rows: ContactRows) -> np.ndarray:
         """kn = (4/3) E* sqrt(R* delta) (N/m), ``normal_model_hertz.h``."""

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..elastic import history_spring_energy, hooke_energy, overlap
+from ..elastic import hooke_energy, overlap
 from ..moduli import effective_modulus, effective_radius, f64
 from . import register
 from ._liggghts import LiggghtsNormalModel
@@ -48,12 +48,8 @@ class LiggghtsHooke(LiggghtsNormalModel):
         return liggghts_hooke_kn(effective_radius(rows.r1, rows.r2), rows.per_pair(effective_modulus),
                                  rows.reduced_mass(), float(self.params["characteristic_velocity"]))
 
-    def normal_and_tangential(self, rows: ContactRows, with_shear: bool, compiled: bool) -> dict[str, np.ndarray]:
-        kn = self.kn(rows)
-        modes = {"u_n": hooke_energy(rows.delta, kn)}
-        if with_shear:
-            modes["u_t"] = history_spring_energy(rows.delta, self.shear(rows), self.params["kt_to_kn"] * kn)
-        return modes
+    def normal_energy(self, rows: ContactRows) -> np.ndarray:
+        return hooke_energy(rows.delta, self.kn(rows))
 
     def kt(self, rows: ContactRows) -> np.ndarray:
         """kt = kt_to_kn kn (N/m)."""

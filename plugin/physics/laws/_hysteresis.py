@@ -1,0 +1,45 @@
+"""The hysteretic linear spring LIGGGHTS' ``hooke/hysteresis`` and ``luding`` models share (Walton-Braun/Luding).
+
+Loading follows k1 delta; unloading and reloading follow a steeper line of
+slope k2 through the point of largest overlap delta_max, with k2 growing from
+k1 to k2Max as delta_max approaches delta_lim = k2Max/(k2Max - k1) phiF 2 R*
+(beyond it k2 = k2Max and the line passes through k1 delta_lim); the force
+never goes below the adhesive branch -kc delta (``normal_model_hooke_hysteresis.h``,
+``normal_model_luding.h``):
+
+    f = min(k1 delta, max(k2 (delta - delta_max) + k1 delta_max, -kc delta)).
+
+The elastic energy is what the contact gives back unloading along its current
+k2 line to zero force, u_n = f^2/(2 k2), whose derivative along that line is f
+itself. delta_max is the contact's history as LIGGGHTS wrote it (after its
+update at the output step), so the energy needs no trajectory.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..elastic import overlap
+
+DELTA_MAX = "delta_max"
+"""Contact column of the largest overlap so far (m), the normal model's first history value."""
+
+
+def hysteretic_force(delta: np.ndarray, delta_max: np.ndarray, k1: np.ndarray, k2max: np.ndarray,
+                     kc: np.ndarray, delta_lim: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Elastic normal force f (N) and unloading stiffness k2 (N/m) of the hysteretic spring
+    (module docstring); 0 force without overlap."""
+    d = overlap(delta)
+    dmax = np.maximum(delta_max, d)
+    big = dmax >= delta_lim
+    with np.errstate(invalid="ignore", divide="ignore"):
+        k2 = np.where(big, k2max, k1 + (k2max - k1) * dmax / delta_lim)
+    anchor = np.where(big, delta_lim, dmax)
+    line = k2 * (d - anchor) + k1 * anchor
+    f = np.where(big, np.maximum(line, -kc * d), np.minimum(k1 * d, np.maximum(line, -kc * d)))
+    return np.where(d > 0, f, 0.0), k2
+
+
+def unloading_energy(f: np.ndarray, k2: np.ndarray) -> np.ndarray:
+    """Energy released unloading along the k2 line to zero force, f^2/(2 k2) (J)."""
+    return np.divide(f * f, 2.0 * k2, out=np.zeros_like(f), where=k2 > 0)
