@@ -267,7 +267,7 @@ class LiggghtsScript:
 
 NORMAL = {"hertz": "liggghts:hertz", "hooke": "liggghts:hooke", "hertz/stiffness": "liggghts:hertz/stiffness",
           "hooke/stiffness": "liggghts:hooke/stiffness", "hooke/hysteresis": "liggghts:hooke/hysteresis",
-          "luding": "liggghts:luding"}
+          "luding": "liggghts:luding", "edinburgh": "liggghts:edinburgh"}
 """LIGGGHTS ``model`` word -> contact-law registry key (:mod:`demsplit.physics.laws`)."""
 TANGENTIAL = TANGENTIAL_MODELS
 """LIGGGHTS ``tangential`` words, passed to the law as its ``tangential`` parameter."""
@@ -277,7 +277,8 @@ PROPERTY_PARAMETERS = {"characteristicVelocity": "characteristic_velocity",
                        "coefficientMaxElasticStiffness": "max_elastic_stiffness",
                        "coefficientAdhesionStiffness": "adhesion_stiffness",
                        "coefficientPlasticityDepth": "plasticity_depth", "LoadingStiffness": "loading_stiffness",
-                       "UnloadingStiffness": "unloading_stiffness", "pullOffForce": "pull_off_force"}
+                       "UnloadingStiffness": "unloading_stiffness", "pullOffForce": "pull_off_force",
+                       "overlapExponent": "overlap_exponent", "surfaceEnergy": "surface_energy"}
 """``fix property/global`` scalar -> the law parameter it gives, where the law declares that parameter."""
 _MODEL_KEYS = ("model", "tangential", "cohesion", "rolling_friction", "surface")
 

@@ -58,6 +58,8 @@ def frame_of(key: str, seed: int = 0, delta: np.ndarray | None = None) -> tuple[
             contacts[column] = rng.uniform(1e5, 1e7, N)
         elif column.startswith("shear"):  # spring displacements (m)
             contacts[column] = rng.normal(scale=1e-5, size=N)
+        elif column == "delta_p_max":  # a plastic overlap (m), below the current one
+            contacts[column] = np.maximum(delta, 0) * rng.uniform(0.0, 0.99, N)
         elif column == "delta_max":  # the largest overlap so far (m): beyond the current one
             contacts[column] = np.maximum(delta, 0) * rng.uniform(1.01, 3.0, N)
         else:  # forces (N)
