@@ -115,6 +115,9 @@ def body_mesh(kind: str, R: float, h_c: float, grading: float, patch: float, h_m
         pts = np.array([[xi, yi] for xi in x for yi in x])
     else:
         raise ValueError(kind)
+    # exact axis (r = 0) and equator (s = C) coordinates: the boundary tests below compare with ==
+    pts[np.abs(pts[:, 0]) < 1e-9 * R, 0] = 0.0
+    pts[np.abs(pts[:, 1] - C) < 1e-9 * C, 1] = C
     tri = Delaunay(pts).simplices
     m = MeshTri(pts.T, tri.T)
     m = _snap(m.refined(), kind, R, C)
@@ -211,8 +214,8 @@ class Body:
     def ndofs(self) -> int:
         return self.basis.N
 
-    def residual(self, u):
-        """Internal force vector (N/rad: without 2 pi) and tangent stiffness at displacement u (m)."""
+    def residual(self, u, tangent: bool = True):
+        """Internal force vector (N/rad: without 2 pi) and tangent stiffness (None if not ``tangent``) at u (m)."""
         lam, mu, model = self.lam, self.mu, self.model
 
         if model == "small":
@@ -237,6 +240,8 @@ class Body:
             G = _grad3(w.prev, r)
             return np.einsum("ij...,ij...", _dstress(G, _grad3(du, r), model, lam, mu), _grad3(v, r)) * r
 
+        if not tangent:
+            return asm(f, self.basis, prev=prev), None
         return asm(f, self.basis, prev=prev), asm(k, self.basis, prev=prev).tocsr()
 
     def energy(self, u) -> float:
@@ -464,17 +469,27 @@ def solve(R1: float, R2: float, E1: float, nu1: float, E2: float, nu2: float, de
 
     bodies = [b for b in (b1, b2) if b is not None]
 
-    def assemble(U, model):
+    def assemble(U, model, tangent=True):
         fs, Ks = [], []
         for b in bodies:
             b.model = model
-            f, K = b.residual(U[b.offset:b.offset + b.ndofs])
+            f, K = b.residual(U[b.offset:b.offset + b.ndofs], tangent)
             fs.append(f)
             Ks.append(K)
         f = np.concatenate(fs)
-        K = sp.block_diag(Ks, format="csr") if len(Ks) > 1 else Ks[0]
         fc, Kc, Pi, Pz = contact(b1, b2, U, eps, rigid_plane=rigid)
+        if not tangent:
+            return f + fc, None, Pi, Pz, f
+        K = sp.block_diag(Ks, format="csr") if len(Ks) > 1 else Ks[0]
         return f + fc, (K + Kc).tocsr(), Pi, Pz, f
+
+    def slope(U, du, t, model):
+        """phi'(t) = R(U + t du) . du, phi the total potential along the Newton direction (nan: inverted)."""
+        Ut = U.copy()
+        Ut[free] += t * du
+        with np.errstate(invalid="ignore", divide="ignore"):
+            R = assemble(Ut, model, tangent=False)[0][free]
+        return float(R @ du) if np.all(np.isfinite(R)) else math.nan
 
     def newton(U, d, model):
         """Equilibrium at overlap d from the guess U; returns (U, converged, iterations, Pi, f_int)."""
@@ -496,17 +511,35 @@ def solve(R1: float, R2: float, E1: float, nu1: float, E2: float, nu2: float, de
             du = splu(K[free][:, free].tocsc()).solve(-R[free])
             if res < 1e-5 * Pref and np.max(np.abs(du)) < 1e-10 * d:
                 return U, True, it, Pi, fint, res / Pref  # at the round-off floor (stiff bodies: E ratio 1000)
-            step = 1.0
-            for _ in range(12):  # back off a step that inverts an element (neo-Hookean: ln J of J <= 0)
-                Ut = U.copy()
-                Ut[free] += step * du
-                with np.errstate(invalid="ignore", divide="ignore"):
-                    out = assemble(Ut, model)
-                if np.all(np.isfinite(out[0][free])):
-                    break
-                step *= 0.5
-            U = Ut
-            R, K, Pi, Pz, fint = out
+            # line search on the total potential (the contact's active set makes plain Newton cycle):
+            # accept t = 1 if the potential still decreases there, else the root of phi'(t) (Illinois)
+            s0 = float(R[free] @ du)
+            t1 = 1.0
+            s1 = slope(U, du, t1, model)
+            while not np.isfinite(s1) and t1 > 1e-3:  # an inverted element: shorter step
+                t1 *= 0.5
+                s1 = slope(U, du, t1, model)
+            t = t1
+            if s0 < 0 < s1:
+                t0_, sa, tb, sb, side = 0.0, s0, t1, s1, 0
+                for _ in range(8):
+                    t = (t0_ * sb - tb * sa) / (sb - sa)
+                    st = slope(U, du, t, model)
+                    if not np.isfinite(st) or abs(st) < 1e-3 * abs(s0):
+                        break
+                    if st > 0:
+                        tb, sb = t, st
+                        if side == -1:
+                            sa *= 0.5
+                        side = -1
+                    else:
+                        t0_, sa = t, st
+                        if side == 1:
+                            sb *= 0.5
+                        side = 1
+            U = U.copy()
+            U[free] += t * du
+            R, K, Pi, Pz, fint = assemble(U, model)
             res = np.linalg.norm(R[free])
         return U, False, maxit, Pi, fint, res / Pref
 

@@ -115,6 +115,12 @@ def features(acc, rows) -> np.ndarray:
     return (acc.body_terms(x1, f1 * y, nu1) - acc.body_terms(x2, (1 - f1) * y, nu2)).T
 
 
+def radius_share(r) -> float:
+    """demsplit's radius split r1/(r1 + r2) (1 against a plane, as plugin/physics/shares.radius_share)."""
+    x1, x2 = r["a_over_R1"], r["a_over_R2"]
+    return 1.0 if x2 == 0 else x2 / (x1 + x2)
+
+
 def share_from(f1, d):
     """Share of body 1 from the law's share f1 and the log-ratio correction d = k1 - k2."""
     return f1 / (f1 + (1 - f1) * np.exp(-d))
@@ -178,8 +184,7 @@ def main(argv=None):
             sfe = np.array([r["share_fe"] for r in sub])
             pred = share_from(f1, features(acc, sub) @ coef)
             entry[name] = {"model_error": stats(sfe - pred), "law_error": stats(sfe - f1),
-                           "radius_error": stats(sfe - np.array([r["a_over_R2"] / (r["a_over_R1"] + r["a_over_R2"])
-                                                                  for r in sub])),
+                           "radius_error": stats(sfe - np.array([radius_share(r) for r in sub])),
                            "equal_error": stats(sfe - 0.5)}
             if name == "held_out":
                 for r, p in zip(sub, pred):
