@@ -19,6 +19,7 @@ import argparse
 import signal
 import sys
 import traceback
+from pathlib import Path
 
 import numpy as np
 
@@ -199,6 +200,28 @@ def cmd_export(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_prepare(args: argparse.Namespace) -> int:
+    from .outputs import check_output_path
+    from .prepare import prepare_script
+
+    script = Path(args.input)
+    out = check_output_path(args.output or script.with_name(script.name + ".demsplit"), [script])
+    prepared = prepare_script(script)
+    if not args.quiet:
+        print("\n".join(prepared.notes))
+    if not prepared.added:
+        return 0
+    from .atomic import atomic_path
+
+    with atomic_path(out) as tmp:
+        Path(tmp).write_text(prepared.text)
+    if not args.quiet:
+        print(prepared.diff(script.read_text(), str(script)))
+        print(f"wrote {out}: run it with 'liggghts -in {out.name}' in {out.parent}, then "
+              f"'demsplit run {out} -o results.h5'")
+    return 0
+
+
 def cmd_convert(args: argparse.Namespace) -> int:
     from .readers.cache import convert_run
 
@@ -281,6 +304,11 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = add("yade-path", "print the directory to site.addsitedir() inside YADE so that 'import demsplit.yade' works")
     p.set_defaults(func=cmd_yade_path)
+
+    p = add("prepare", "write a copy of a LIGGGHTS input script with the dumps demsplit needs, and show the diff")
+    p.add_argument("input", help="the LIGGGHTS input script")
+    p.add_argument("-o", "--output", help="prepared script (default: INPUT.demsplit next to the input)")
+    p.set_defaults(func=cmd_prepare)
 
     p = add("convert", "write a run's dumps once to an HDF5 ingest cache read much faster later")
     _add_input(p)

@@ -135,6 +135,12 @@ MESH_WALL_NOT_DUMPED = (
     "(docs/liggghts-output.md)")
 """Why a mesh wall's contacts are missing when the run has no wall dump (:attr:`demsplit.scene.Wall.missing`)."""
 
+MESH_WALL_NOT_LAST = (
+    "LIGGGHTS' compute wall/gran/local writes the contacts of the last mesh 'fix wall/gran' of the script only, "
+    "and this wall belongs to an earlier one. Give all mesh walls to one fix wall/gran ('mesh n_meshes K meshes "
+    "m1 m2 ...') so that one wall dump holds them all")
+"""Why a mesh wall's contacts are missing when it is not in the last mesh ``fix wall/gran``."""
+
 
 class LiggghtsRun(Run):
     """A LIGGGHTS run opened for reading (see the module docstring)."""
@@ -196,9 +202,11 @@ class LiggghtsRun(Run):
         self._pair_names = self._local_names(self.pairs, "pair")
         self._wall_names = self._local_names(self.walls, "wall")
         self.notes: list[str] = list(self.script.warnings)
-        if self.walls is None and any(w.kind == "mesh" for w in self.scene.walls):
-            self.scene = replace(self.scene, walls=[replace(w, missing=MESH_WALL_NOT_DUMPED) if w.kind == "mesh"
-                                                    else w for w in self.scene.walls])
+        dumped = set(self.script.dumped_mesh_walls) if self.walls is not None else set()
+        self.scene = replace(self.scene, walls=[
+            w if w.kind != "mesh" or i in dumped else
+            replace(w, missing=MESH_WALL_NOT_DUMPED if self.walls is None else MESH_WALL_NOT_LAST)
+            for i, w in enumerate(self.scene.walls)])
         if script is None:
             self.notes.append("no input script: primitive walls (never dumped by LIGGGHTS) are unknown, "
                               "so contacts with them are not included")

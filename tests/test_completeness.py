@@ -114,3 +114,16 @@ def test_a_cut_history_is_refused_then_not_computed(packing, capsys):
     pairs = res.contacts[res.contacts["wall"] < 0]
     assert np.all(pairs["not_computed"] == U_T) and np.all(pairs["u_t"] == 0)
     assert any(n.startswith("u_t NOT COMPUTED") for n in res.provenance["notes"])
+
+
+def test_a_mesh_wall_outside_the_last_mesh_fix_is_refused(packing, capsys):
+    """LIGGGHTS' wall/gran/local compute holds the last mesh fix wall/gran only: an earlier one is missing."""
+    text = packing.read_text()
+    wall = "fix wfloor all wall/gran model hertz tangential history mesh n_meshes 1 meshes floor"
+    assert wall in text
+    packing.write_text(text.replace(wall, "fix floor2 all mesh/surface file floor.stl type 4 move 0 0 -0.01\n"
+                                    "fix wfloor2 all wall/gran model hertz tangential history mesh n_meshes 1 "
+                                    "meshes floor2\n" + wall))
+    assert main(["run", str(packing), "-o", str(packing.parent / "out.h5"), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "'floor2'" in err and "last mesh 'fix wall/gran'" in err and "--allow-missing floor2" in err
