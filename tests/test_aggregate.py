@@ -140,3 +140,12 @@ def test_contact_point_shift_by_hand(results):
                                        if k == "contacts" else t) for k, t in frame(10, 1.0).items()}])
     with pytest.raises(DemsplitError, match="no simulator contact point"):
         no_sim.contact_point_shift()
+
+
+def test_printed_half_unit_reads_the_dump_precision_from_the_values():
+    from demsplit.results.aggregate import printed_half_unit
+
+    g = np.array([0.0123457, -1.5, 2.5e-5, 0.0])  # as %g prints them: 6 significant digits at most
+    np.testing.assert_allclose(printed_half_unit(g), [5e-8, 5e-6, 5e-11, 0.0], rtol=1e-12)
+    full = np.array([0.1 + 0.2, 1 / 3])  # 17 digits: full precision, no print bound
+    assert np.all(printed_half_unit(full) == 0)

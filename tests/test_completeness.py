@@ -127,3 +127,15 @@ def test_a_mesh_wall_outside_the_last_mesh_fix_is_refused(packing, capsys):
     assert main(["run", str(packing), "-o", str(packing.parent / "out.h5"), "-q"]) == 2
     err = capsys.readouterr().err
     assert "'floor2'" in err and "last mesh 'fix wall/gran'" in err and "--allow-missing floor2" in err
+
+
+def test_the_summary_states_what_was_not_computed_first(packing, capsys):
+    for name in ("wall.txt", "wall_full.txt.gz"):
+        (packing.parent / name).unlink()
+    out = packing.parent / "out.h5"
+    assert main(["run", str(packing), "-o", str(out), "-q", "--allow-missing", "floor"]) == 0
+    capsys.readouterr()
+    assert main(["report", str(out)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[1].startswith("  NOT COMPUTED") and "wall 'floor'" in lines[2]
+    assert any("primitive-wall contacts are NOT COMPUTED" in line for line in lines[2:5])

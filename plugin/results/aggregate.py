@@ -288,7 +288,12 @@ def contact_point_shift(contacts: pd.DataFrame, *, by_frame: bool = True) -> pd.
 
     One row per [step and] kind (``pair`` or ``wall``): ``count`` (contacts with
     both points and delta > 0), ``n_missing`` (contacts without a simulator point:
-    cp_sim NaN), ``median``, ``p95``, ``max`` of d.
+    cp_sim NaN), ``median``, ``p95``, ``max`` of d, and ``print_bound_median``: the
+    median over contacts of the bound that printing puts on d, half a unit in the
+    last printed digit of each coordinate of cp_sim (counted from the values: a
+    coordinate that a ``%g`` dump printed rounds to itself at 6 significant digits),
+    over delta. Where it is not far below ``median``, the shift measures the dump's
+    precision, not the two contact points.
     """
     needed = ["cpx", "cpy", "cpz", "cpx_sim", "cpy_sim", "cpz_sim", "delta", "wall"]
     if not {"cpx_sim", "cpy_sim", "cpz_sim"} <= set(contacts.columns):
@@ -302,10 +307,16 @@ def contact_point_shift(contacts: pd.DataFrame, *, by_frame: bool = True) -> pd.
     sim = contacts[["cpx_sim", "cpy_sim", "cpz_sim"]].to_numpy()
     with np.errstate(invalid="ignore", divide="ignore"):
         d = np.linalg.norm(cp - sim, axis=1) / contacts["delta"].to_numpy()
+    bound = np.zeros(len(d))
+    pair = contacts["wall"].to_numpy() < 0
+    for rows in (pair, ~pair):  # pair and wall points may come from dumps of different precision
+        with np.errstate(invalid="ignore", divide="ignore"):
+            bound[rows] = np.linalg.norm(printed_half_unit(sim[rows]), axis=1) / contacts["delta"].to_numpy()[rows]
     df = pd.DataFrame({
         "step": contacts["step"].to_numpy(),
         "kind": np.where(contacts["wall"].to_numpy() < 0, "pair", "wall"),
         "d": d,
+        "bound": bound,
         "missing": np.isnan(sim).any(axis=1),
     })
     keys = ["step", "kind"] if by_frame else ["kind"]
@@ -315,11 +326,31 @@ def contact_point_shift(contacts: pd.DataFrame, *, by_frame: bool = True) -> pd.
         row = dict(zip(keys, key))
         row.update(count=len(ok), n_missing=int(sub["missing"].sum()))
         if len(ok):
-            row.update(median=float(np.median(ok)), p95=float(np.quantile(ok, 0.95)), max=float(ok.max()))
+            bounds = sub["bound"].to_numpy()[~sub["missing"].to_numpy() & np.isfinite(sub["d"].to_numpy())]
+            row.update(median=float(np.median(ok)), p95=float(np.quantile(ok, 0.95)), max=float(ok.max()),
+                       print_bound_median=float(np.median(bounds)))
         else:
-            row.update(median=math.nan, p95=math.nan, max=math.nan)
+            row.update(median=math.nan, p95=math.nan, max=math.nan, print_bound_median=math.nan)
         rows.append(row)
-    return pd.DataFrame(rows, columns=[*keys, "count", "n_missing", "median", "p95", "max"])
+    return pd.DataFrame(rows, columns=[*keys, "count", "n_missing", "median", "p95", "max", "print_bound_median"])
+
+
+def printed_half_unit(values: np.ndarray, sample: int = 2000) -> np.ndarray:
+    """Half a unit in the last printed digit of every value (m for coordinates): a dump prints all its
+    values with one format, so the significant digits d are the fewest (1..15) with which every value of
+    a sample of ``sample`` finite nonzero ones rounds to itself, and the bound is 0.5 10^(floor(log10 |v|)
+    - d + 1); 0 everywhere for values printed at full precision (more than 15 digits)."""
+    v = np.asarray(values, dtype=np.float64)
+    finite = v[np.isfinite(v) & (v != 0)]
+    if not len(finite):
+        return np.zeros(v.shape)
+    picked = finite[:: max(1, len(finite) // sample)]
+    digits = next((d for d in range(1, 16) if all(float(f"{x:.{d}g}") == x for x in picked)), None)
+    if digits is None:
+        return np.zeros(v.shape)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        exponent = np.floor(np.log10(np.abs(v)))
+    return np.where(np.isfinite(exponent), 0.5 * 10.0 ** (exponent - digits + 1), 0.0)
 
 
 def _require(df: pd.DataFrame, columns: Sequence[str], table: str) -> None:

@@ -22,7 +22,10 @@ import pandas as pd
 
 from ..atomic import atomic_path
 from ..errors import StoreError
+from .aggregate import elastic_columns
 from .tables import Results
+
+MODE_NAMES = {"u_n": "normal", "u_t": "tangential", "u_r": "rolling", "u_tw": "twisting"}
 
 SCATTER_MAX_POINTS = 100_000
 """Energy-radius scatter plots draw at most this many particles (a seeded
@@ -49,20 +52,31 @@ def text_summary(results: Results, step: int | None = None) -> str:
     step = _pick_step(results, step)
     one = results.frame(step)
     fr = one.frames.iloc[0]
-    u_total = fr["u_n"] + fr["u_t"]
+    modes = elastic_columns(one.frames)
+    u_total = sum(fr[m] for m in modes)
+    parts = ", ".join(f"{MODE_NAMES.get(m, m)} {fr[m]:.6g} J" for m in modes)
     lines = [
         f"demsplit results: {len(results.steps)} frame(s); frame at timestep {step}"
         + (f" (t = {fr['time']:.6g} s)" if np.isfinite(fr.get("time", np.nan)) else ""),
-        f"  {int(fr['n_particles'])} particles, {int(fr['n_contacts'])} contacts "
-        f"({int(fr['n_wall_contacts'])} with walls); contact energy {u_total:.6g} J "
-        f"(normal {fr['u_n']:.6g} J, tangential {fr['u_t']:.6g} J)",
     ]
+    not_computed = [n for n in results.provenance.get("notes", []) if "NOT COMPUTED" in n]
+    if not_computed or fr.get("n_not_computed", 0):
+        lines += ["  NOT COMPUTED (these values are unknown, not 0; they are left out of every total below):"]
+        lines += [f"    - {n}" for n in not_computed]
+        if fr.get("n_not_computed", 0):
+            lines.append(f"    - {int(fr['n_not_computed'])} contact(s) of this frame have modes not computed "
+                         "(column not_computed)")
+    lines.append(f"  {int(fr['n_particles'])} particles, {int(fr['n_contacts'])} contacts "
+                 f"({int(fr['n_wall_contacts'])} with walls); elastic contact energy {u_total:.6g} J ({parts})"
+                 + (f"; cohesion work {fr['u_adh']:.6g} J, apart" if "u_adh" in fr else ""))
     model = results.provenance.get("model")
     if model:
-        params = ", ".join(f"{k}={v!r}" for k, v in sorted(model.get("params", {}).items()))
+        params = ", ".join(f"{k}={v!r}" for k, v in sorted(model.get("params", {}).items())
+                           if v is not None and v != "off")
         lines.append(f"  contact law: {model.get('law')}" + (f" ({params})" if params else ""))
     if np.isfinite(fr.get("overlap_max_rel_error", np.nan)):
-        lines.append(f"  overlaps recomputed from positions: max relative error {fr['overlap_max_rel_error']:.3g}")
+        lines.append("  overlaps recomputed from printed positions (contacts without a dumped delta, e.g. primitive "
+                     f"walls): max relative error bound {fr['overlap_max_rel_error']:.3g}")
     cols = ["type", "count", "total", "share_of_total", "mean", "p50", "p95", "top10_share", "gini"]
     lines += ["", "Energy per particle type (J; material distribution law):",
               _fmt(one.per_type()[cols]).to_string(index=False)]
@@ -76,7 +90,8 @@ def text_summary(results: Results, step: int | None = None) -> str:
         lines += ["", "Walls (J):", _fmt(we[[c for c in ("wall", "name", "kind", "u", "u_n", "u_t", "n_contacts",
                                                          "share") if c in we]]).to_string(index=False)]
     if {"cpx_sim", "cpy_sim", "cpz_sim"} <= set(one.contacts.columns):
-        lines += ["", "Contact point: |cp - cp_simulator| / overlap:",
+        lines += ["", "Contact point: |cp - cp_simulator| / overlap (print_bound_median: what the dump's printed "
+                  "digits alone allow; a shift not far above it measures the print precision):",
                   _fmt(one.contact_point_shift()).to_string(index=False)]
     pf = results.per_frame()
     worst = pf["balance_rel_error"].max()
