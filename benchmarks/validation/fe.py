@@ -145,7 +145,7 @@ def _grad3(u, r):
     """3x3 displacement gradient of an axisymmetric field (components r, z, theta); u a DiscreteField."""
     g = u.grad
     z = np.zeros_like(g[0, 0])
-    return np.array([[g[0, 0], g[0, 1], z], [g[1, 0], g[1, 1], z], [z, z, u.value[0] / r]])
+    return np.array([[g[0, 0], g[0, 1], z], [g[1, 0], g[1, 1], z], [z, z, u[0] / r]])
 
 
 def _inv_det(F):

@@ -163,14 +163,14 @@ def main(argv=None):
     held_rows = []
     for model in models:
         rows = sorted([s for s in out if s["model"] == model], key=lambda s: s["i"])
+        failed = [r["i"] for r in rows if r.get("failed")]
+        rows = [r for r in rows if not r.get("failed")]
         keys = list(rows[0].keys())
         with open(RESULTS / f"sweep_{model}.csv", "w", newline="") as fh:
             w = csv.DictWriter(fh, fieldnames=keys + ["set"])
             w.writeheader()
             for r in rows:
                 w.writerow({**r, "set": "held-out" if r["i"] % 3 == 2 else "fit"})
-        failed = [r["i"] for r in rows if r.get("failed")]
-        rows = [r for r in rows if not r.get("failed")]
         good = [r for r in rows if r["converged"] and r["U2"] > 0]
         fitset = [r for r in good if r["i"] % 3 != 2]
         held = [r for r in good if r["i"] % 3 == 2]
