@@ -34,7 +34,7 @@ INTEGER_COLUMNS = {"id": np.int64, "type": np.int32, "clump": np.int64, "id1": n
                    "wall": np.int64, "type1": np.int64, "type2": np.int64, "history_unknown": np.int8}
 """Integer columns and their canonical dtypes; every other column is a real (float64)."""
 POSITIVE = ("radius", "r1", "r2")
-NOT_NEGATIVE = ("kn", "ks", "kno", "kso", "mass")
+NOT_NEGATIVE = ("kn", "ks", "kno", "kso", "kr", "ktw", "mb", "mtw", "mass")
 MAY_BE_INFINITE = ("r2",)  # a plane: R = inf
 UNIT_TOLERANCE = 1e-5
 

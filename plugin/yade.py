@@ -177,11 +177,14 @@ def _interaction_table(O, high_precision: bool) -> dict[str, np.ndarray]:
             *_vec(p.normalForce), *_vec(p.shearForce), float(p.kn), float(p.ks),
             float(getattr(p, "kno", nan)), float(getattr(p, "kso", nan)),
             *(int(c) for c in i.cellDist), i.iterMadeReal,
+            *_vec(getattr(p, "moment_bending", (nan,) * 3)), *_vec(getattr(p, "moment_twist", (nan,) * 3)),
+            float(getattr(p, "kr", nan)), float(getattr(p, "ktw", nan)),
         ))
         if high_precision:
             depth_text.append(str(d))
     cols = ("id1 id2 geom_class phys_class depth nx ny nz cpx cpy cpz refR1 refR2 "
-            "fnx fny fnz fsx fsy fsz kn ks kno kso cdx cdy cdz iter_made_real").split()
+            "fnx fny fnz fsx fsy fsz kn ks kno kso cdx cdy cdz iter_made_real "
+            "mbx mby mbz mtwx mtwy mtwz kr ktw").split()
     data = list(zip(*rows)) if rows else [()] * len(cols)
     dtypes = {"id1": np.int64, "id2": np.int64, "cdx": np.int64, "cdy": np.int64, "cdz": np.int64,
               "iter_made_real": np.int64, "geom_class": "S32", "phys_class": "S32"}

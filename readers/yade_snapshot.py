@@ -212,7 +212,8 @@ def particle_first(t: Table, sphere1: np.ndarray, wall1: np.ndarray, wall2: np.n
     of body 1 and ``xb yb zb`` of body 2 in the frame of the normal (body 2
     shifted by hSize.cellDist), and optionally ``type_a type_b``, ``fnx fny
     fnz`` (normalForce), ``fsx fsy fsz`` (shearForce), ``kn ks kno kso``,
-    ``cpx cpy cpz``. ``sphere1`` says whether YADE's body 1 is a sphere;
+    ``cpx cpy cpz``, ``mb mtw`` (magnitudes of CohFrictPhys' bending and twisting
+    moments, N m) with ``kr ktw`` (their stiffnesses, N m/rad). ``sphere1`` says whether YADE's body 1 is a sphere;
     ``wall1``/``wall2`` give the wall index of each body (-1 for a sphere).
 
     Where body 1 is a wall, facet or box (YADE's usual order), the particle
@@ -242,14 +243,15 @@ def particle_first(t: Table, sphere1: np.ndarray, wall1: np.ndarray, wall2: np.n
         out["fn"] = np.sqrt(t["fnx"] ** 2 + t["fny"] ** 2 + t["fnz"] ** 2)
     if "fsx" in t:
         out["ftx"], out["fty"], out["ftz"] = sign * t["fsx"], sign * t["fsy"], sign * t["fsz"]
-    for c in ("kn", "ks", "kno", "kso", "cpx", "cpy", "cpz"):
+    for c in ("kn", "ks", "kno", "kso", "cpx", "cpy", "cpz", "mb", "mtw", "kr", "ktw"):
         if c in t:
             out[c] = np.asarray(t[c], dtype=np.float64)
     return out
 
 
 def frame_from_snapshot(meta: dict, tables: dict[str, Table], scene_walls: dict[int, int], *,
-                        path: Path, plane_as_plane: bool = False) -> tuple[Frame, np.ndarray]:
+                        path: Path, plane_as_plane: bool = False,
+                        keep_separated: bool = False) -> tuple[Frame, np.ndarray]:
     """One Frame from one raw snapshot, and the rows of the interactions table
     that became contacts (to align per-interaction extras such as ``depth_text``)."""
     step = int(meta["iter"])
@@ -313,6 +315,14 @@ def frame_from_snapshot(meta: dict, tables: dict[str, Table], scene_walls: dict[
     }
     if np.isfinite(inter["kno"]).any():
         yade_order["kno"], yade_order["kso"] = inter["kno"], inter["kso"]
+    if "mbx" in inter and np.isfinite(inter["mbx"]).any():  # CohFrictPhys: bending and twisting springs
+        # an interaction whose phys has no moments (the exporter wrote NaN for the absent attributes; MindlinPhys
+        # has kr and ktw but no moment_bending) holds no such springs: 0, not a bad number
+        absent = np.isnan(inter["mbx"]) & np.isnan(inter["mtwx"])
+        for c in ("mbx", "mby", "mbz", "mtwx", "mtwy", "mtwz", "kr", "ktw"):
+            yade_order[c] = np.where(absent, 0.0, inter[c])
+        yade_order["mb"] = np.sqrt(yade_order["mbx"] ** 2 + yade_order["mby"] ** 2 + yade_order["mbz"] ** 2)
+        yade_order["mtw"] = np.sqrt(yade_order["mtwx"] ** 2 + yade_order["mtwy"] ** 2 + yade_order["mtwz"] ** 2)
     contacts = particle_first(yade_order, sa, wall_of_row[ra], wall_of_row[rb])
     pair = sa & sb
     if plane_as_plane:
@@ -323,7 +333,8 @@ def frame_from_snapshot(meta: dict, tables: dict[str, Table], scene_walls: dict[
     n_virtual = int(meta["n_interactions_potential"]) - int(meta["n_interactions_real"])
     if n_virtual:
         notes.append(f"{n_virtual} potential (non-real) interaction(s) not in the contacts table")
-    keep = ~(inter["depth"] < 0)  # a NaN depth is kept, for the validation to name it
+    # a NaN depth is kept, for the validation to name it; a cohesive bond holds energy in tension
+    keep = np.ones(len(inter["depth"]), bool) if keep_separated else ~(inter["depth"] < 0)
     if not keep.all():
         notes.append(f"{int((~keep).sum())} real interaction(s) with penetrationDepth < 0 (neverErase) "
                      "left out of the contacts table: they carry no elastic energy")
@@ -438,7 +449,8 @@ class YadeSnapshotRun(Run):
                 f"the walls/facets/boxes changed (body ids {self._wall_ids.tolist()} in the first snapshot, "
                 f"{ids.tolist()} here).", file=self.path, step=int(meta["iter"]),
                 fix="write snapshots of runs whose non-sphere bodies stay the same to one file each.")
-        return frame_from_snapshot(meta, tables, self._walls, path=self.path, plane_as_plane=self.plane_as_plane)
+        return frame_from_snapshot(meta, tables, self._walls, path=self.path, plane_as_plane=self.plane_as_plane,
+                                   keep_separated=self.scene.model.contact_law.normal_from_stored_force)
 
     def depth_text(self, k: int) -> np.ndarray | None:
         """penetrationDepth of the contacts of frame ``k`` as decimal strings at

@@ -24,9 +24,18 @@ class YadeScGeomLaw(ContactLaw):
     mode_columns = {"u_t": SHEAR_FORCE}
 
     def shear_energy(self, rows: ContactRows) -> tuple[dict[str, np.ndarray], dict[str, str]]:
-        """``({"u_t": energy}, {})``, or ``({}, {"u_t": why not})`` when the columns are absent."""
+        """``({"u_t": energy}, {})``, or ``({}, {"u_t": why not})`` when the columns are absent; the shear
+        stiffness is the last column of the law's ``u_t`` columns (``ks``, or ``kso`` for a law that keeps
+        its shear stiffness there)."""
         why = self.missing_mode(rows, "u_t")
         if why:
             return {}, {"u_t": why}
-        ft = np.stack([rows.column(c) for c in SHEAR_FORCE[:3]], axis=-1)
-        return {"u_t": stored_shear_energy(rows.delta, ft, rows.column("ks"))}, {}
+        columns = self.mode_columns["u_t"]
+        ft = np.stack([rows.column(c) for c in columns[:3]], axis=-1)
+        return {"u_t": stored_shear_energy(rows.delta, ft, rows.column(columns[3]))}, {}
+
+
+def stored_spring_energy(force: np.ndarray, k: np.ndarray) -> np.ndarray:
+    """|F|^2/(2 k) (J) of a spring whose force (or moment) magnitude and stiffness the simulator stored;
+    0 where k = 0 (a spring YADE has not set)."""
+    return np.divide(force * force, 2.0 * k, out=np.zeros_like(force), where=k > 0)

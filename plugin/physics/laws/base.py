@@ -90,7 +90,11 @@ class ContactLaw(ABC):
         name in the snapshot's ``law_energies`` -> method of the law functor
         (YADE's ``normElastEnergy``), and the modes whose sum it equals;
     ``example_params``
-        parameters of a typical run, for the registry-wide tests and the docs.
+        parameters of a typical run, for the registry-wide tests and the docs;
+    ``normal_from_stored_force``
+        the normal energy comes from a force the simulator stored (a cohesive bond
+        holds energy in tension, at delta < 0), not from delta: the properties "no
+        energy without overlap" and "dU_n/d(delta) is the normal force" do not apply.
     """
 
     REQUIRED: ClassVar[object] = object()
@@ -106,6 +110,7 @@ class ContactLaw(ABC):
     compiled: ClassVar[bool] = False
     simulator_energies: ClassVar[Mapping[str, tuple[str, tuple[str, ...]]]] = {}
     example_params: ClassVar[Mapping[str, Any]] = {}
+    normal_from_stored_force: ClassVar[bool] = False
 
     def __init__(self, params: Mapping[str, Any] | None = None) -> None:
         params = dict(params or {})

@@ -1,0 +1,91 @@
+"""The YADE laws of the registry against Debian's YADE itself (sample_dumps/yade/laws_box.py).
+
+For each law one small scene (two materials, spheres in a box of facets) is run
+by ``yade`` with demsplit's snapshot exporter. demsplit's totals per mode equal
+YADE's own energy functions where the law has them (CohFrict's normElastEnergy,
+shearElastEnergy, bendingElastEnergy, twistElastEnergy; ViscoFrict's
+elasticEnergy) to 1e-10 relative, and otherwise an independent recomputation
+from the raw interaction state in the snapshot (not through demsplit's reader or
+laws). Every mode is conserved by the split.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import require_program
+from demsplit.physics.partition import partition, per_particle
+from demsplit.readers.yade_snapshot import _open_store, open_yade_snapshot
+from test_yade_simulator import SAMPLE_SCRIPTS, run_yade
+
+LAWS = {"viscel": "yade:Law2_ScGeom_ViscElPhys_Basic",
+        "viscofrict": "yade:Law2_ScGeom_ViscoFrictPhys_CundallStrack",
+        "hertz_linear": "yade:Law2_ScGeom_MindlinPhys_HertzWithLinearShear",
+        "deresiewitz": "yade:Law2_ScGeom_MindlinPhys_MindlinDeresiewitz",
+        "cohfrict": "yade:Law2_ScGeom6D_CohFrictPhys_CohesionMoment"}
+
+pytestmark = pytest.mark.simulator
+
+
+@pytest.fixture(scope="module", params=sorted(LAWS))
+def law_run(request, tmp_path_factory):
+    yade = require_program("yade")
+    out = tmp_path_factory.mktemp(request.param)
+    run_yade(yade, SAMPLE_SCRIPTS / "laws_box.py", out, DEMSPLIT_LAW=request.param)
+    return request.param, out / f"laws_box_{request.param}.h5"
+
+
+def independent(law: str, t: dict) -> dict[str, float]:
+    """Energy per mode from the raw interaction table of a snapshot, as the law's documentation says."""
+    d = np.maximum(t["depth"], 0.0)
+    fs2 = t["fsx"] ** 2 + t["fsy"] ** 2 + t["fsz"] ** 2
+    if law == "viscel":
+        ks = t["ks"] > 0
+        return {"u_n": float(np.sum(0.5 * t["kn"] * d**2)), "u_t": float(np.sum(fs2[ks] / (2 * t["ks"][ks])))}
+    if law in ("hertz_linear", "deresiewitz"):
+        u = {"u_n": float(np.sum(0.4 * t["kno"] * d**2.5))}
+        if law == "hertz_linear":
+            u["u_t"] = float(np.sum(fs2 / (2 * t["kso"])))
+        return u
+    raise KeyError(law)
+
+
+def test_totals_per_mode_equal_yades_own_or_an_independent_sum(law_run):
+    law, path = law_run
+    run = open_yade_snapshot(path)
+    assert run.scene.model.law == LAWS[law]
+    store = _open_store(path)
+    assert len(run) == 2
+    for k, frame in enumerate(run):
+        e = partition(frame.contacts, run.scene, frame.particles)
+        assert not e.missing
+        ours = {m.column: float(e.u[i].sum()) for i, m in enumerate(e.modes)}
+        assert ours["u_n"] > 0
+        reference = run.meta(k)["law_energies"]
+        if reference:  # the law's own energy functions
+            for name, (_, modes) in run.scene.model.contact_law.simulator_energies.items():
+                assert sum(ours[m] for m in modes) == pytest.approx(reference[name], rel=1e-10), name
+        else:
+            _, raw = store.snapshot(k)
+            for mode, value in independent(law, raw["interactions"]).items():
+                assert ours[mode] == pytest.approx(value, rel=1e-12, abs=1e-300), mode
+        pt, wt = per_particle(frame.contacts, e, frame.particles, n_walls=len(run.scene.walls))
+        for mode, total in ours.items():
+            assert pt[mode].sum() + wt[mode].sum() == pytest.approx(total, rel=1e-12, abs=1e-300), mode
+
+
+def test_the_quirks_the_laws_rely_on(law_run):
+    """Deresiewitz in 2023.02a has no shear spring (kn = ks = 0, shearForce 0); HertzWithLinearShear keeps
+    its shear stiffness in kso (ks = 0); CohFrict bonds hold energy in tension (kept with delta < 0)."""
+    law, path = law_run
+    _, raw = _open_store(path).snapshot(1)
+    t = raw["interactions"]
+    if law == "deresiewitz":
+        assert np.all(t["kn"] == 0) and np.all(t["ks"] == 0) and np.all(t["fsx"] == 0)
+        assert open_yade_snapshot(path).scene.model.contact_law.modes == ("u_n",)
+    if law == "hertz_linear":
+        assert np.all(t["ks"] == 0) and np.all(t["kso"] > 0) and np.any(t["fsx"] != 0)
+    if law == "cohfrict":
+        frame = open_yade_snapshot(path).frame(1)
+        assert len(frame.contacts["delta"]) == len(t["depth"])  # separated bonds are contacts
+        assert np.all(frame.contacts["kr"] > 0) and np.any(frame.contacts["mtw"] > 0)
