@@ -119,7 +119,8 @@ def _options(args: argparse.Namespace):
     from .pipeline import Options
 
     return Options(tangential_rule=args.tangential_rule, compare=not args.no_compare,
-                   contacts=not args.no_contacts, allow_missing=tuple(args.allow_missing or ()))
+                   contacts=not args.no_contacts, allow_missing=tuple(args.allow_missing or ()),
+                   accuracy=not args.no_accuracy, split=args.split)
 
 
 def cmd_run(args: argparse.Namespace) -> int:
@@ -266,6 +267,11 @@ def build_parser() -> argparse.ArgumentParser:
                    help="tangential split factor: Mindlin (2-nu)/G (default) or the paper's eq. 22 (1-2nu)/G")
     p.add_argument("--no-compare", action="store_true", help="skip the 50/50 and radius-weighted splits")
     p.add_argument("--no-contacts", action="store_true", help="do not store the per-contact table")
+    p.add_argument("--no-accuracy", action="store_true",
+                   help="skip the expected error of the split (a/R per contact, share_n1_error, u_n_error)")
+    p.add_argument("--split", choices=("material", "corrected"), default="material",
+                   help="material: the distribution law (default); corrected: its normal split corrected for "
+                   "finite bodies by the fitted finite-element model (docs/accuracy.md)")
     p.add_argument("--allow-missing", action="append", metavar="NAME",
                    help="go on without a wall (by name) or an energy mode (u_t, u_r, ...) that the run has but "
                    "its files do not hold; its values are then marked not computed, never 0 (repeatable; "

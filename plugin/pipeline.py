@@ -24,6 +24,7 @@ from .fingerprint import hash_in_background
 from .outputs import check_output_path
 from .validate import check_finite_energies, validated_frame
 from .frame import CONTACT_REQUIRED, PARTICLE_REQUIRED, Frame, ParticleIndex, Table, require_columns
+from .physics.accuracy import contact_radius_ratios, corrected_share, expected_share_error
 from .physics.bodies import ContactBodies
 from .physics.modes import ADHESION_COLUMN, NOT_COMPUTED_BITS
 from .physics.partition import ContactEnergy, contact_energies, particle_energy, partition, per_particle
@@ -47,12 +48,19 @@ class Options:
         (``u_t``, ``u_r``, ...) whose columns were not dumped, and walls (by name) whose contacts
         were not dumped; their values are then marked "not computed" (never 0), else the run is
         refused. ``all`` allows everything.
+    accuracy : add the expected error of the split (``a_over_r1 a_over_r2 share_n1_error`` per
+        contact, ``u_n_error`` per particle) from the finite-element error model (docs/accuracy.md).
+    split : ``"material"`` (the law, default) or ``"corrected"``: the normal energy split by the
+        law corrected for finite bodies (:func:`demsplit.physics.accuracy.corrected_share`), an option
+        until the evidence makes it the default (docs/accuracy.md).
     """
 
     tangential_rule: str = "mindlin"
     compare: bool = True
     contacts: bool = True
     allow_missing: tuple[str, ...] = ()
+    accuracy: bool = True
+    split: str = "material"
 
     def allows(self, name: str) -> bool:
         """True when the run may go on without ``name`` (a mode column or a wall name)."""
@@ -86,8 +94,13 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = Options()) -> Ta
         energies = contact_energies(contacts, scene, particles, bodies, index)
         check_finite_energies(energies.u, contacts, file=frame.source[-1] if frame.source else None,
                               step=frame.step)
+        corrected = None
+        if options.split == "corrected":
+            x1, x2 = contact_radius_ratios(contacts["delta"], contacts["r1"], contacts["r2"])
+            corrected = np.broadcast_to(corrected_share(x1, x2, bodies.nu1, bodies.nu2, bodies.E1, bodies.E2),
+                                        x1.shape)
         main = partition(contacts, scene, particles, split="material", tangential_rule=options.tangential_rule,
-                         energies=energies, bodies=bodies, index=index)
+                         energies=energies, bodies=bodies, index=index, normal_shares=corrected)
         ptable, wtable = per_particle(contacts, main, particles, n_walls=len(scene.walls), index=index)
         if "clump" in particles:  # YADE clump membership, for per-clump sums
             ptable["clump"] = np.asarray(particles["clump"], dtype=np.int64)
@@ -118,13 +131,15 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = Options()) -> Ta
     n = len(contacts["delta"])
     step = np.int64(frame.step)
     _mark_missing_walls(scene, main, ptable, wtable, n)
+    accuracy = _accuracy(contacts, bodies, main, ptable, index) if options.accuracy else {}
     tables: Tables = {"particles": {"step": np.full(len(ptable["id"]), step), **ptable},
                       "walls": {"step": np.full(len(wtable["wall"]), step), **wtable}}
     if options.contacts:
         if frame.box is not None and frame.box.any_periodic:
             main.cp = frame.box.wrap(main.cp)  # contact points of contacts across a boundary, back in the box
         ctable = {"step": np.full(n, step), "id1": contacts["id1"], "id2": contacts["id2"],
-                  "wall": contacts["wall"], "delta": contacts["delta"], **main.table()}
+                  "wall": contacts["wall"], "delta": contacts["delta"], **main.table(),
+                  **accuracy}
         if "cpx" in contacts:
             ctable.update(cpx_sim=contacts["cpx"], cpy_sim=contacts["cpy"], cpz_sim=contacts["cpz"])
         tables["contacts"] = ctable
@@ -144,6 +159,23 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = Options()) -> Ta
         "overlap_max_rel_error": np.array([np.nan if err is None or len(err) == 0 else float(np.max(err))]),
     }
     return tables
+
+
+def _accuracy(contacts: Table, bodies: ContactBodies, main: ContactEnergy, ptable: Table,
+              index: ParticleIndex) -> Table:
+    """How far the split can be trusted, from the fitted finite-element error model
+    (:mod:`demsplit.physics.accuracy`, docs/accuracy.md): per contact ``a_over_r1 a_over_r2`` (the Hertz
+    contact radius over each radius) and ``share_n1_error`` (expected FE share minus the law's share of
+    body 1's normal energy), returned; per particle ``u_n_error`` (J), the expected error of its normal
+    energy, the sum over its contacts of +-share_n1_error u_n, added to ``ptable``."""
+    x1, x2 = contact_radius_ratios(contacts["delta"], contacts["r1"], contacts["r2"])
+    err = np.broadcast_to(expected_share_error(x1, x2, bodies.nu1, bodies.nu2, bodies.E1, bodies.E2), x1.shape)
+    du = err * main.u[0]
+    rows1, rows2 = index.contact_rows(contacts["id1"], contacts["id2"], contacts["wall"])
+    pair = rows2 >= 0
+    m = len(ptable["id"])
+    ptable["u_n_error"] = np.bincount(rows1, du, minlength=m) - np.bincount(rows2[pair], du[pair], minlength=m)
+    return {"a_over_r1": x1, "a_over_r2": x2, "share_n1_error": np.array(err)}
 
 
 def missing_walls(scene: Scene) -> list[tuple[int, Wall]]:

@@ -83,3 +83,17 @@ def expected_share_error(a_over_R1: ArrayLike, a_over_R2: ArrayLike, nu1: ArrayL
     """
     x1, x2, nu1, nu2, c1, c2, f1, y = _parts(a_over_R1, a_over_R2, nu1, nu2, E1, E2)
     return corrected_share(x1, x2, nu1, nu2, E1, E2, reference) - f1
+
+
+def contact_radius_ratios(delta: ArrayLike, r1: ArrayLike, r2: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    """a/R1 and a/R2 of every contact (-), a = sqrt(R* delta) the Hertz contact radius, 1/R* = 1/R1 + 1/R2;
+    a/R2 = 0 against a plane (R2 = inf) and both 0 without overlap."""
+    r1, r2 = np.asarray(r1, dtype=np.float64), np.asarray(r2, dtype=np.float64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        R = 1.0 / (1.0 / r1 + 1.0 / r2)
+        a = np.sqrt(R * np.maximum(np.asarray(delta, dtype=np.float64), 0.0))
+        return a / r1, np.where(np.isinf(r2), 0.0, a / r2)
+
+
+HERTZ_VALIDITY = 0.1
+"""a/R beyond which a contact leaves the range where the half-space (Hertz) assumptions are usually trusted."""

@@ -218,14 +218,17 @@ def _material_shares(bodies: ContactBodies, n: int, tangential_rule: str,
 def partition(contacts: Table, scene: Scene, particles: Table | None = None, *,
               split: str = "material", tangential_rule: str = "mindlin",
               energies: ContactLawEnergy | None = None, bodies: ContactBodies | None = None,
-              index: ParticleIndex | None = None) -> ContactEnergy:
+              index: ParticleIndex | None = None, normal_shares: np.ndarray | None = None) -> ContactEnergy:
     """Split every contact's elastic energy between its two bodies and place the contact point.
 
     u1 = sum_m s_m u_m,  u2 = sum_m (1 - s_m) u_m,  depth1 = s_n delta,  x_c = x1 + (r1 - depth1) n,
 
     with s_m the share of body 1 of mode m under ``split`` (the material law:
     each mode's own rule; the comparison splits: one share for every mode).
-    ``energies`` and ``bodies`` may be passed in to reuse them across splits.
+    ``energies`` and ``bodies`` may be passed in to reuse them across splits. ``normal_shares`` (material
+    split only): body 1's share of the normal mode per contact, replacing the law's c1/(c1 + c2) (the
+    finite-body correction, :func:`~demsplit.physics.accuracy.corrected_share`); it also places the
+    contact point.
     """
     if index is None and particles is not None and not scene.single_material:
         index = ParticleIndex(particles["id"])
@@ -245,6 +248,13 @@ def partition(contacts: Table, scene: Scene, particles: Table | None = None, *,
 
     if split == "material":
         values, code = _material_shares(bodies, n, tangential_rule, energies.modes)
+        if normal_shares is not None:  # one share per contact and mode: gather the coded or constant ones
+            full = values[:, code] if len(code) else np.repeat(values, n, axis=1) if values.shape[1] == 1 \
+                else values
+            full = np.array(np.repeat(full, len(energies.modes), axis=0) if len(full) == 1 else full,
+                            dtype=np.float64)
+            full[0] = normal_shares
+            values, code = full, NO_CODE
     else:
         values, code = comparison_shares(contacts, bodies, split), NO_CODE
     delta = np.asarray(contacts["delta"], dtype=np.float64)

@@ -93,6 +93,8 @@ def text_summary(results: Results, step: int | None = None) -> str:
         lines += ["", "Contact point: |cp - cp_simulator| / overlap (print_bound_median: what the dump's printed "
                   "digits alone allow; a shift not far above it measures the print precision):",
                   _fmt(one.contact_point_shift()).to_string(index=False)]
+    if "share_n1_error" in one.contacts:
+        lines += ["", accuracy_line(one.contacts, results.provenance.get("options", {}).get("split", "material"))]
     pf = results.per_frame()
     worst = pf["balance_rel_error"].max()
     lines += ["", f"Energy balance over {len(pf)} frame(s): max |sum particles + sum walls - sum contacts| "
@@ -101,6 +103,25 @@ def text_summary(results: Results, step: int | None = None) -> str:
     if skipped:
         lines += ["", "Not computed:"] + [f"  {k}: {v}" for k, v in dict(skipped).items()]
     return "\n".join(lines) + "\n"
+
+
+def accuracy_line(contacts: pd.DataFrame, split: str) -> str:
+    """How far this frame's split can be trusted (finite-element error model, docs/accuracy.md): the
+    share of the normal energy in contacts whose expected share error exceeds 1 %, and the contacts
+    beyond the Hertz range a/R > 0.1."""
+    from ..physics.accuracy import HERTZ_VALIDITY
+
+    u = contacts["u_n"].to_numpy()
+    err = np.abs(contacts["share_n1_error"].to_numpy())
+    big = err > 0.01
+    beyond = (contacts[["a_over_r1", "a_over_r2"]].to_numpy() > HERTZ_VALIDITY).any(axis=1)
+    total = u.sum()
+    frac = u[big].sum() / total if total > 0 else 0.0
+    weighted = (err * u).sum() / total if total > 0 else 0.0
+    return (f"Accuracy of the split ({split}; finite-element error model, docs/accuracy.md): expected share "
+            f"error {weighted:.2%} energy-weighted, max {err.max() if len(err) else 0:.2%}; {frac:.1%} of the "
+            f"normal energy in contacts beyond 1 % expected error; {int(beyond.sum())} contact(s) beyond the Hertz "
+            f"range a/R > {HERTZ_VALIDITY}")
 
 
 def _png(fig) -> str:

@@ -1,0 +1,67 @@
+"""The split's expected error in the results (issue "[7 of 7]"): per contact a/R1, a/R2 and the fitted
+finite-element model's expected share error, per particle the expected error of its normal energy,
+``--split corrected``, and the summary's accuracy line."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import SAMPLES
+from demsplit import analyze
+from demsplit.cli import main
+from demsplit.physics.accuracy import corrected_share, expected_share_error
+from demsplit.pipeline import Options
+
+PACKING = SAMPLES / "liggghts" / "packing" / "in.packing"
+
+
+@pytest.fixture(scope="module")
+def material():
+    return analyze(PACKING)
+
+
+def test_contact_radius_ratios_and_expected_error(material):
+    c = material.contacts  # (ids and delta; the radii come from the particles table)
+    p = material.particles.set_index(["step", "id"])
+    r1 = p.loc[list(zip(c["step"], c["id1"])), "radius"].to_numpy()
+    pair = c["wall"].to_numpy() < 0
+    rb = np.full(len(c), np.inf)
+    rb[pair] = p.loc[list(zip(c["step"][pair], c["id2"][pair])), "radius"].to_numpy()
+    a = np.sqrt(np.maximum(c["delta"], 0) / (1 / r1 + 1 / rb))
+    np.testing.assert_allclose(c["a_over_r1"], a / r1, rtol=1e-13)
+    np.testing.assert_allclose(c["a_over_r2"], np.where(pair, a / rb, 0.0), rtol=1e-13, atol=0)
+    assert (c["share_n1_error"] != 0).any() and np.all(np.abs(c["share_n1_error"]) < 0.05)
+
+
+def test_equal_bodies_have_no_expected_error():
+    x = np.array([0.05, 0.1])
+    assert np.all(expected_share_error(x, x, 0.3, 0.3, 1e9, 1e9) == 0)
+    assert np.all(corrected_share(x, x, 0.3, 0.3, 1e9, 1e9) == 0.5)
+
+
+def test_particle_errors_add_up_to_the_wall_side(material):
+    c, pt = material.contacts, material.particles
+    wall = c["wall"] >= 0
+    for step in material.steps:
+        on_walls = (c["share_n1_error"] * c["u_n"])[wall & (c["step"] == step)].sum()
+        assert pt.loc[pt["step"] == step, "u_n_error"].sum() == pytest.approx(on_walls, rel=1e-9, abs=1e-25)
+
+
+def test_corrected_split_moves_exactly_the_expected_error(material):
+    corrected = analyze(PACKING, options=Options(split="corrected"))
+    np.testing.assert_allclose(corrected.particles["u"], material.particles["u"] + material.particles["u_n_error"],
+                               rtol=1e-12, atol=1e-24)
+    np.testing.assert_array_equal(corrected.contacts["u_n"], material.contacts["u_n"])  # energies unchanged
+    assert corrected.provenance["options"]["split"] == "corrected"
+    f = corrected.frames
+    total = f["u_n"] + f["u_t"]
+    assert np.all(np.abs(f["u_particles"] + f["u_walls"] - total) <= 1e-12 * total)
+
+
+def test_summary_says_how_far_the_split_can_be_trusted(tmp_path, capsys):
+    out = tmp_path / "r.h5"
+    assert main(["run", str(PACKING), "-o", str(out), "-q"]) == 0
+    assert main(["report", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "Accuracy of the split (material" in text and "beyond the Hertz range a/R > 0.1" in text
+    assert main(["run", str(PACKING), "-o", str(tmp_path / "n.h5"), "-q", "--no-accuracy"]) == 0
