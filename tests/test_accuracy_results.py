@@ -65,3 +65,11 @@ def test_summary_says_how_far_the_split_can_be_trusted(tmp_path, capsys):
     text = capsys.readouterr().out
     assert "Accuracy of the split (material" in text and "beyond the Hertz range a/R > 0.1" in text
     assert main(["run", str(PACKING), "-o", str(tmp_path / "n.h5"), "-q", "--no-accuracy"]) == 0
+
+
+def test_per_type_expected_error_is_energy_weighted(material):
+    t = material.per_type()
+    p = material.particles
+    for _, row in t.iterrows():
+        sub = p[(p["step"] == row["step"]) & (p["type"] == row["type"])]
+        assert row["expected_error"] == pytest.approx(sub["u_n_error"].sum() / sub["u"].sum(), rel=1e-12)

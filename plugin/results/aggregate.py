@@ -108,11 +108,18 @@ def grouped_stats(df: pd.DataFrame, keys: Sequence[str], value: str) -> pd.DataF
 
 def per_type(particles: pd.DataFrame, value: str = "u", *, by_frame: bool = True) -> pd.DataFrame:
     """Statistics of ``value`` (J) per particle type, plus ``share_of_total``:
-    the type's total over the total of all types (of that frame if by_frame)."""
+    the type's total over the total of all types (of that frame if by_frame), and, when the particles
+    carry ``u_n_error``, ``expected_error``: the type's expected normal-energy error over its total
+    (the energy-weighted expected error of the split, from the finite-element model, docs/accuracy.md)."""
     keys = ["step", "type"] if by_frame else ["type"]
     out = grouped_stats(particles, keys, value)
     whole = out.groupby("step")["total"].transform("sum") if by_frame else out["total"].sum()
     out["share_of_total"] = out["total"] / whole
+    if "u_n_error" in particles and value == "u":
+        err = particles.groupby(keys, sort=True)["u_n_error"].sum().rename("err").reset_index()
+        err = out[keys].merge(err, on=keys, how="left")["err"].to_numpy()
+        with np.errstate(invalid="ignore", divide="ignore"):
+            out["expected_error"] = err / out["total"].to_numpy()
     return out
 
 

@@ -78,8 +78,10 @@ def text_summary(results: Results, step: int | None = None) -> str:
         lines.append("  overlaps recomputed from printed positions (contacts without a dumped delta, e.g. primitive "
                      f"walls): max relative error bound {fr['overlap_max_rel_error']:.3g}")
     cols = ["type", "count", "total", "share_of_total", "mean", "p50", "p95", "top10_share", "gini"]
-    lines += ["", "Energy per particle type (J; material distribution law):",
-              _fmt(one.per_type()[cols]).to_string(index=False)]
+    table = one.per_type()
+    cols += ["expected_error"] if "expected_error" in table else []
+    lines += ["", "Energy per particle type (J; material distribution law; expected_error: the split's expected "
+              "relative error, finite-element model):", _fmt(table[cols]).to_string(index=False)]
     if {"u_equal", "u_radius"} <= set(one.particles.columns):
         sc = one.split_comparison()
         sc = sc[["type"] + [c for c in sc.columns if c.startswith(("total_", "misattribution_"))]]
