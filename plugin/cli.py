@@ -70,6 +70,9 @@ def _reader_options(args: argparse.Namespace) -> dict:
         opts["plane_as_plane"] = True
     if getattr(args, "law", None):
         opts["law"] = args.law
+    for name in ("yade", "state_cache"):
+        if getattr(args, name, None):
+            opts[name] = getattr(args, name)
     if getattr(args, "input", None) is None:  # no script: the scene comes from these options
         scene = {k: getattr(args, k) for k in ("columns", "wall_columns", "wall_type", "model", "tangential",
                                                 "characteristic_velocity", "boundary")
@@ -113,6 +116,11 @@ def _add_input(p: argparse.ArgumentParser) -> None:
                    help="treat YADE walls/facets/boxes as planes (R = inf) instead of YADE's refR")
     y.add_argument("--law", choices=[k for k in laws.supported() if k.startswith("yade:")],
                    help="the run's contact law, for YADE VTKExporter files (which do not hold it)")
+    y.add_argument("--yade", metavar="EXE",
+                   help="the YADE build that saved the states (yade, yade-mpfr150, yade-float128; default: the "
+                   "first that loads them)")
+    y.add_argument("--state-cache", metavar="DIR",
+                   help="where converted YADE saved states are kept (default $XDG_CACHE_HOME/demsplit/yade-states)")
 
 
 def _options(args: argparse.Namespace):

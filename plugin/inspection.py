@@ -39,8 +39,11 @@ def describe_file(path: str | Path) -> str:
     from .readers import read_head, reader_for
     from .readers.lammps_dump import describe_dump, looks_like_dump
     from .readers.yade_export import describe_vtk, is_vtk_part
+    from .readers.yade_state import YadeStateRun, state_files
 
     path = Path(path)
+    if state_files(path):  # YADE saved states, which are compressed like dumps can be
+        return YadeStateRun.describe_file(path)
     head = read_head(path)
     if not head:
         raise InputFormatError("the file is empty.", file=path, fix="check that the program that writes it ran.")

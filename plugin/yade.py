@@ -194,13 +194,15 @@ def _interaction_table(O, high_precision: bool) -> dict[str, np.ndarray]:
     return table
 
 
-def collect(O=None) -> tuple[dict, dict[str, dict[str, np.ndarray]]]:
+def collect(O=None, *, law_energies: bool = True) -> tuple[dict, dict[str, dict[str, np.ndarray]]]:
     """The current state of YADE's ``O`` as ``(meta, tables)``.
 
     ``tables`` has ``bodies`` and ``interactions`` (column name -> array);
     ``meta`` is JSON-able: iteration, time, dt, cell, materials, engines,
-    functors with their attributes, ``O.energy``, the laws' elastic energies,
-    interaction counts and the build's precision.
+    functors with their attributes, ``O.energy``, the laws' elastic energies
+    (``law_energies=False`` leaves them out: a state just loaded with ``O.load``
+    has functors without their scene until the next step, and YADE 2023.02a
+    crashes calling their energy functions), interaction counts and the build's precision.
     """
     import yade
     import yade.config
@@ -229,7 +231,7 @@ def collect(O=None) -> tuple[dict, dict[str, dict[str, np.ndarray]]]:
         "functors": functors,
         "energy": {k: float(v) for k, v in O.energy.items()},
         "track_energy": bool(O.trackEnergy),
-        "law_energies": _law_energies(O),
+        "law_energies": _law_energies(O) if law_energies else {},
         "n_interactions_potential": n_potential,
         "n_interactions_real": n_real,
     }
@@ -274,7 +276,7 @@ def sniff_format(path: str | Path) -> str | None:
         file=path, fix="give the file written by demsplit.yade.snapshot().")
 
 
-def snapshot(path: str | Path, *, format: str = "auto", O=None) -> int:
+def snapshot(path: str | Path, *, format: str = "auto", O=None, law_energies: bool = True) -> int:
     """Append a snapshot of the running simulation to ``path``; return its
     index (0 for the first).
 
@@ -282,8 +284,10 @@ def snapshot(path: str | Path, *, format: str = "auto", O=None) -> int:
         ``"auto"`` (default): continue the existing file in its own format;
         for a new file, HDF5 when h5py is importable, else the npy stream.
         ``"hdf5"`` or ``"npy"`` force a format (an existing file must match).
+    law_energies
+        record the laws' own energy functions (see :func:`collect`).
     """
-    meta, tables = collect(O)
+    meta, tables = collect(O, law_energies=law_energies)
     return write_snapshot(path, meta, tables, format=format)
 
 

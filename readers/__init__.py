@@ -20,7 +20,7 @@ from pathlib import Path
 from ..errors import InputFormatError
 from .base import REGISTRY, Run
 
-READER_MODULES = ("cache", "yade_snapshot", "yade_export", "liggghts")
+READER_MODULES = ("cache", "yade_snapshot", "yade_state", "yade_export", "liggghts")
 """Modules of this package that define readers (each registers its classes when imported)."""
 
 HEAD_BYTES = 4096
@@ -37,11 +37,8 @@ def readers() -> list[type[Run]]:
 def read_head(path: Path, size: int = HEAD_BYTES) -> bytes:
     """The first ``size`` bytes of ``path``, for sniffing its kind; a missing file is an error, and a
     directory is answered with the files in it that a reader takes."""
-    if path.is_dir():
-        found = sorted(p.name for p in path.iterdir() if p.is_file() and _looks_like_a_run(p))
-        raise InputFormatError("this is a directory, not a run.", file=path,
-                               fix=("give one of the runs it holds: " + ", ".join(found[:10])) if found
-                               else "give the run's input script or snapshot file.")
+    if path.is_dir() or (not path.exists() and any(c in str(path) for c in "*?[")):
+        return b""  # a directory or a glob: only a reader of several files (YADE saved states) takes it
     if not path.is_file():
         raise InputFormatError("no such file.", file=path, fix="check the path.")
     with open(path, "rb") as f:
@@ -62,6 +59,14 @@ def reader_for(path: str | Path | None) -> type[Run]:
     for cls in readers():
         if cls.detect(path, head):
             return cls
+    if path is not None and path.is_dir():
+        found = sorted(p.name for p in path.iterdir() if p.is_file() and _looks_like_a_run(p))
+        raise InputFormatError("this is a directory, not a run.", file=path,
+                               fix=("give one of the runs it holds: " + ", ".join(found[:10])) if found
+                               else "give the run's input script or snapshot file.")
+    if path is not None and not path.exists():
+        raise InputFormatError("no such file (and no file matches it as a pattern).", file=path,
+                               fix="check the path.")
     if b"ITEM: TIMESTEP" in head:
         raise InputFormatError(
             "this is a dump file, not a run: demsplit needs the run's input script for the materials, "

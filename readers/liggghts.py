@@ -152,7 +152,7 @@ class LiggghtsRun(Run):
 
     @classmethod
     def detect(cls, path: Path | None, head: bytes) -> bool:
-        return path is None or (b"\0" not in head and b"ITEM: TIMESTEP" not in head)
+        return path is None or (path.is_file() and b"\0" not in head and b"ITEM: TIMESTEP" not in head)
 
     @classmethod
     def describe_file(cls, path: Path) -> str:

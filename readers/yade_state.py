@@ -1,0 +1,234 @@
+"""YADE saved states (``O.save``): a finished run analysed post hoc, with no demsplit in its script.
+
+YADE writes its state with ``O.save(name)`` as a boost serialization archive,
+binary (``.yade``) or XML (``.xml``), plain or compressed (``.gz``, ``.bz2``),
+and only a YADE of the same build reads it back. :class:`YadeStateRun` runs
+Debian's ``yade`` headless (``yade -n -j1 -x``) on a small converter script
+that loads each state (``O.load``) and writes demsplit's full-precision
+snapshot of it (:func:`demsplit.yade.collect`); the snapshot reader then reads
+those (:mod:`demsplit.readers.yade_snapshot`).
+
+YADE does not save an interaction's ``penetrationDepth`` (it reads back as
+NaN), and a loaded law functor has no scene until the next step (its energy
+functions crash YADE 2023.02a). The converter therefore keeps only the engines
+that make contacts and forces (``ForceResetter``, the collider, the
+``InteractionLoop``: no integrator, none of the user's ``PyRunner``), sets
+``O.dt = 1e-300`` (0 gives NaN shear forces: Mindlin divides by dt) and makes
+one step: geometry and forces are recomputed from the saved positions,
+incremental springs grow by velocity x 1e-300, which rounds away, and nothing
+moves; the snapshot keeps the saved iteration, time step and engine list. A
+state saved where a PyRunner between the InteractionLoop and the integrator
+would export (the positions the forces were computed from) gives exactly the
+in-run snapshot; a state saved after a full step (``O.run(); O.save()``) gives
+the forces of the saved positions, which differ from the saved forces by one
+step's motion (sliding contacts re-capped to the new normal force). The laws' own energy functions are then
+recorded for validation as in a run.
+
+Converted states are cached (``state_cache``, default ``$XDG_CACHE_HOME/demsplit/yade-states``),
+keyed by the state file's sha256 and the snapshot format, so a second run does
+not start YADE. A state saved by ``yade-mpfr150`` or ``yade-float128`` is
+converted by the YADE that reads it: ``yade`` is tried first, then the
+high-precision builds (``yade=`` names one). Frames are ordered by iteration.
+"""
+
+from __future__ import annotations
+
+import bz2
+import gzip
+import hashlib
+import json
+import os
+import shutil
+import subprocess
+import sys
+import sysconfig
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputFormatError, ScriptError
+from ..frame import Frame
+from ..yade import FORMAT_VERSION
+from .base import Run
+from .yade_snapshot import YadeSnapshotRun
+
+SIGNATURES = (b"serialization::archive", b"<!DOCTYPE boost_serialization>")
+"""What a boost archive (binary, then XML) holds in its first bytes, once decompressed."""
+BUILDS = ("yade", "yade-mpfr150", "yade-float128")
+"""YADE executables of Debian's ``yade`` package, in the order they are tried."""
+SUFFIXES = (".yade", ".xml")
+
+CONVERTER = r'''
+import json, os, site, sys, traceback
+site.addsitedir(os.environ["DEMSPLIT_SITE"])
+try:
+    import demsplit.yade
+    KEEP = ("ForceResetter", "InteractionLoop")
+    DT = 1e-300  # not 0: some laws divide by dt (Mindlin's shear gives NaN); velocity x 1e-300 adds nothing
+    for src, dst in json.loads(os.environ["DEMSPLIT_STATES"]):
+        O.load(src)
+        saved, engines, dt = O.iter, list(O.engines), O.dt
+        # recompute penetrationDepth and forces at the saved positions: only the engines that make
+        # contacts and forces run (no integrator, no PyRunner of the user's), with dt = 0
+        O.engines = [e for e in engines if type(e).__name__ in KEEP or type(e).__name__.endswith("Collider")]
+        O.dt = DT
+        O.step()
+        O.engines, O.dt = engines, dt
+        meta, tables = demsplit.yade.collect()
+        meta["iter"] = saved
+        demsplit.yade.write_snapshot(dst, meta, tables, format="npy")
+        sys.stderr.write("DEMSPLIT-CONVERTED %s %d\n" % (src, saved))
+        sys.stderr.flush()
+except BaseException:
+    sys.stderr.write("DEMSPLIT-FAILED\n")
+    traceback.print_exc()
+    sys.stderr.flush()
+    os._exit(1)
+os._exit(0)
+'''
+
+
+def _decompressed_head(path: Path, size: int = 256) -> bytes:
+    opener = gzip.open if path.name.endswith(".gz") else bz2.open if path.name.endswith(".bz2") else open
+    try:
+        with opener(path, "rb") as f:
+            return f.read(size)
+    except (OSError, EOFError, ValueError):
+        return b""
+
+
+def is_state(path: Path) -> bool:
+    """Whether ``path`` is a file YADE's ``O.save`` wrote (a boost archive, possibly compressed)."""
+    return path.is_file() and any(s in _decompressed_head(path) for s in SIGNATURES)
+
+
+def state_files(path: Path) -> list[Path]:
+    """The state files a path names: the file itself, the states in a directory, or a glob's matches."""
+    if path.is_dir():
+        return sorted(p for p in path.iterdir() if is_state(p))
+    if any(c in str(path) for c in "*?[") and not path.exists():
+        return sorted(p for p in path.parent.glob(path.name) if is_state(p))
+    return [path] if is_state(path) else []
+
+
+def default_cache() -> Path:
+    """``$XDG_CACHE_HOME/demsplit/yade-states`` (``~/.cache`` without XDG_CACHE_HOME)."""
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "demsplit" / "yade-states"
+
+
+def _sha256(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+class YadeStateRun(Run):
+    """Frames of YADE saved states, converted by YADE itself (module docstring)."""
+
+    format_name = "yade-state"
+    formats = ("a YADE saved state (O.save: .yade, .xml, .gz, .bz2), a directory or a glob of them",)
+    priority = 5
+
+    @classmethod
+    def detect(cls, path: Path | None, head: bytes) -> bool:
+        return path is not None and bool(state_files(path))
+
+    def __init__(self, path: Path, yade: str | None = None, state_cache: str | Path | None = None,
+                 plane_as_plane: bool = False) -> None:
+        states = state_files(path)
+        if not states:
+            raise InputFormatError("no YADE saved state here.", file=path,
+                                   fix="give a file written by O.save, a directory or a glob of them.")
+        cache = Path(state_cache) if state_cache is not None else default_cache()
+        cache.mkdir(parents=True, exist_ok=True)
+        targets = [cache / f"{_sha256(s)}-v{FORMAT_VERSION}.npys" for s in states]
+        todo = [(s, t) for s, t in zip(states, targets) if not t.is_file()]
+        if todo:
+            _convert(todo, yade)
+        runs = [YadeSnapshotRun(t, plane_as_plane=plane_as_plane) for t in targets]
+        order = np.argsort([int(r.steps[0]) if len(r.steps) else -1 for r in runs], kind="stable")
+        self._runs = [runs[i] for i in order]
+        self._states = [states[i] for i in order]
+        first = self._runs[0].scene
+        for state, run in zip(self._states, self._runs):
+            if run.scene.model != first.model or run.scene.materials != first.materials:
+                raise InputFormatError("this state's contact law or materials differ from those of "
+                                       f"{self._states[0].name}.", file=state,
+                                       fix="analyse the states of one simulation together.")
+        self.scene = first
+        self.steps = np.array([int(r.steps[0]) for r in self._runs], dtype=np.int64)
+        self.sources = list(self._states)
+        self.notes = [f"YADE saved states converted by YADE (cached in {cache}); penetration depths recomputed "
+                      "with one step of dt = 0 (YADE does not save them)"]
+
+    def __len__(self) -> int:
+        return len(self._runs)
+
+    def frame(self, k: int) -> Frame:
+        frame = self._runs[k].frame(0)
+        frame.source = (str(self._states[k]),)
+        return frame
+
+    def describe(self) -> dict:
+        return {"kind": self.format_name, "states": [str(s) for s in self._states], "steps": self.steps.tolist()}
+
+    @classmethod
+    def describe_file(cls, path: Path) -> str:
+        with cls.open(path) as run:
+            frame = run.frame(len(run) - 1)
+            meta = run._runs[-1].meta(0)
+            walls = {}
+            for w in run.scene.walls:
+                walls[w.kind] = walls.get(w.kind, 0) + 1
+            lines = [f"{path}: YADE saved state(s), {len(run)} ({', '.join(s.name for s in run._states)})",
+                     f"  iterations: {run.steps.tolist()}",
+                     f"  bodies:     {len(frame.particles['id'])} spheres, walls "
+                     + (", ".join(f"{n} {k}" for k, n in sorted(walls.items())) or "none"),
+                     f"  interactions (last state): {meta['n_interactions_real']} real, "
+                     f"{len(frame.contacts['delta'])} read as contacts",
+                     f"  law:        {run.scene.model.describe()}",
+                     "  materials:  " + ", ".join(f"{t}: E={m.E:g} Pa nu={m.nu:g}"
+                                                  for t, m in sorted(run.scene.materials.items())),
+                     f"  YADE:       {meta.get('yade_version', '?')} {meta.get('precision_name', '?')}"]
+        return "\n".join(lines)
+
+    def close(self) -> None:
+        for run in self._runs:
+            run.close()
+
+
+def _convert(todo: list[tuple[Path, Path]], yade: str | None) -> None:
+    """Convert the states with the first YADE build that loads them (one process for all)."""
+    builds = [yade] if yade else [b for b in BUILDS if shutil.which(b)]
+    if not builds or not shutil.which(builds[0]):
+        raise InputFormatError(f"reading a YADE saved state needs YADE, and {yade or 'yade'} is not installed.",
+                               file=todo[0][0], fix="install Debian's yade (apt-get install yade), or give the "
+                               "executable that saved the state with --yade.")
+    errors = []
+    with tempfile.TemporaryDirectory(prefix="demsplit-yade-") as tmp:
+        script = Path(tmp) / "convert.py"
+        script.write_text(CONVERTER)
+        pairs = [(str(s.resolve()), str(Path(tmp) / f"{k}.npys")) for k, (s, _) in enumerate(todo)]
+        # YADE's own Python imports demsplit from this Python's site-packages (appended: its numpy stays first)
+        env = {**os.environ, "DEMSPLIT_SITE": sysconfig.get_paths()["purelib"], "DEMSPLIT_STATES": json.dumps(pairs)}
+        for build in builds:
+            if sys.stderr.isatty():
+                sys.stderr.write(f"demsplit: converting {len(todo)} YADE state(s) with {build} ...\n")
+            proc = subprocess.run([build, "-n", "-j1", "-x", str(script)], cwd=tmp, env=env, capture_output=True,
+                                  text=True, timeout=3600)
+            done = proc.stderr.count("DEMSPLIT-CONVERTED")
+            if proc.returncode == 0 and done == len(todo):
+                for (_, target), (_, made) in zip(todo, pairs):
+                    shutil.move(made, target)  # complete files only: a conversion that failed leaves none
+                return
+            last = [line for line in (proc.stderr + proc.stdout).splitlines() if line.strip()][-1:]
+            errors.append(f"{build}: {last[0] if last else 'exit ' + str(proc.returncode)}")
+            for made in pairs:
+                Path(made[1]).unlink(missing_ok=True)
+    raise ScriptError(f"YADE could not load the saved state(s) ({'; '.join(errors)}).", file=todo[0][0],
+                      fix="check that the file is complete (a state cut short does not load) and give the YADE "
+                          "build that saved it with --yade (yade, yade-mpfr150 or yade-float128).")
+
