@@ -105,3 +105,16 @@ class TestSavedStates(ReaderContract):
     def run_path(self, states, tmp_path_factory) -> Path:
         self.options = {"state_cache": str(tmp_path_factory.mktemp("contract-cache"))}
         return states
+
+
+def test_a_state_saved_by_yade_mpfr150_is_read_by_that_build(tmp_path):
+    """yade cannot load it; demsplit falls back to the high-precision build that can."""
+    mpfr = require_program("yade-mpfr150")
+    run_yade(mpfr, SAMPLE_SCRIPTS / "saved_states.py", tmp_path, DEMSPLIT_ITER="2000", DEMSPLIT_EVERY="2000",
+             DEMSPLIT_SITE="")
+    state = tmp_path / "state-002000.yade.gz"
+    assert main(["run", str(state), "-o", str(tmp_path / "r.h5"), "-q", "--state-cache", str(tmp_path / "c")]) == 0
+    res = demsplit.load_results(tmp_path / "r.h5")
+    assert res.steps.tolist() == [2000] and res.frames["u_n"].iloc[0] > 0
+    info = cli("info", str(state))
+    assert "PrecisionBoostBinFloat150" in info.stdout
