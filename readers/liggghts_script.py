@@ -352,6 +352,9 @@ def _parse_model(words: list[str], stop: tuple[str, ...], where: Where,
 _INTERPRETED = {"units", "boundary", "create_box", "variable", "include", "fix", "pair_style",
                 "compute", "dump", "dump_modify", "timestep", "run", "create_atoms", "unfix"}
 _CONTROL_FLOW = {"jump", "if", "next", "label", "clear"}
+_COMMAND_NAME = re.compile(r"[a-z][a-z0-9_/]*")
+"""What a LIGGGHTS command name looks like (input.cpp's commands and styles): a line of another kind of
+text file (``root:x:0:0``, ``KEY=value``) is not one."""
 _BENIGN_FIXES = {"nve/sphere", "nve", "nve/limit", "property/atom", "particledistribution/discrete",
                  "insert/pack", "insert/stream", "insert/rate/region", "print", "ave/time", "ave/atom",
                  "ave/histo", "ave/spatial", "ave/euler", "check/timestep/gran", "viscous", "freeze",
@@ -425,6 +428,13 @@ class _Reader:
         words0 = stripped.split()
         if not words0:
             return
+        if not words0[0].startswith("$") and not _COMMAND_NAME.fullmatch(words0[0]):
+            raise ScriptError(
+                "this line does not start with a LIGGGHTS command name (lower-case letters, digits, _ and /; "
+                "LIGGGHTS stops on it: 'Unknown command'; the line is not quoted: it may not be a script's)"
+                + (f"; this file was included from {self.include_stack[-2]}" if len(self.include_stack) > 1 else "")
+                + ": this is not an input script of a run.", file=where.file, line=where.line,
+                fix="give the run's input script, and check its include lines.")
         try:
             words = split_words(substitute(stripped, self.vars, where), where)
         except Unevaluable as exc:

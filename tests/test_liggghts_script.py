@@ -475,3 +475,18 @@ def test_wall_layout_matches_the_real_program(liggghts, tmp_path, wall_options, 
     np.testing.assert_allclose(c["wall_cpx"], c["x1"], atol=1e-15)
     assert set(c["mesh_index"]) == {0} and set(c["tri_id"]) <= {0, 1}
     assert sorted(c["id1"]) == [1, 2]
+
+
+def test_an_included_foreign_text_file_is_refused_with_a_bounded_excerpt(tmp_path):
+    (tmp_path / "shadow").write_text("root:$6$" + "x" * 200 + ":19000:0:99999:7:::\nuser:*:19000\n")
+    with pytest.raises(ScriptError, match="not start with a LIGGGHTS command name") as err:
+        script(tmp_path, "include shadow\n")
+    message = str(err.value)
+    assert str(err.value.file) == str(tmp_path / "shadow") and err.value.line == 1
+    assert "included from" in message and "$6$" not in message  # named, not quoted
+
+
+@pytest.mark.parametrize("line", ["PRETTY_NAME=\"Debian\"", "Root:x", "# only a comment\n9lives 1"])
+def test_words_that_are_no_command_name_are_refused(tmp_path, line):
+    with pytest.raises(ScriptError, match="not start with a LIGGGHTS command name"):
+        script(tmp_path, line + "\n")
