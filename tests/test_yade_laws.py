@@ -22,7 +22,8 @@ LAWS = {"viscel": "yade:Law2_ScGeom_ViscElPhys_Basic",
         "viscofrict": "yade:Law2_ScGeom_ViscoFrictPhys_CundallStrack",
         "hertz_linear": "yade:Law2_ScGeom_MindlinPhys_HertzWithLinearShear",
         "deresiewitz": "yade:Law2_ScGeom_MindlinPhys_MindlinDeresiewitz",
-        "cohfrict": "yade:Law2_ScGeom6D_CohFrictPhys_CohesionMoment"}
+        "cohfrict": "yade:Law2_ScGeom6D_CohFrictPhys_CohesionMoment",
+        "jcfpm": "yade:Law2_ScGeom_JCFpmPhys_JointedCohesiveFrictionalPM"}
 
 pytestmark = pytest.mark.simulator
 
@@ -42,6 +43,9 @@ def independent(law: str, t: dict) -> dict[str, float]:
     if law == "viscel":
         ks = t["ks"] > 0
         return {"u_n": float(np.sum(0.5 * t["kn"] * d**2)), "u_t": float(np.sum(fs2[ks] / (2 * t["ks"][ks])))}
+    if law == "jcfpm":  # stored springs, bonds in tension included (no depth mask)
+        fn2 = t["fnx"] ** 2 + t["fny"] ** 2 + t["fnz"] ** 2
+        return {"u_n": float(np.sum(fn2 / (2 * t["kn"]))), "u_t": float(np.sum(fs2 / (2 * t["ks"])))}
     if law in ("hertz_linear", "deresiewitz"):
         u = {"u_n": float(np.sum(0.4 * t["kno"] * d**2.5))}
         if law == "hertz_linear":
@@ -85,7 +89,10 @@ def test_the_quirks_the_laws_rely_on(law_run):
         assert open_yade_snapshot(path).scene.model.contact_law.modes == ("u_n",)
     if law == "hertz_linear":
         assert np.all(t["ks"] == 0) and np.all(t["kso"] > 0) and np.any(t["fsx"] != 0)
-    if law == "cohfrict":
+    if law in ("cohfrict", "jcfpm"):
         frame = open_yade_snapshot(path).frame(1)
         assert len(frame.contacts["delta"]) == len(t["depth"])  # separated bonds are contacts
-        assert np.all(frame.contacts["kr"] > 0) and np.any(frame.contacts["mtw"] > 0)
+        if law == "cohfrict":
+            assert np.all(frame.contacts["kr"] > 0) and np.any(frame.contacts["mtw"] > 0)
+        else:
+            assert np.any(frame.contacts["delta"] < 0)  # bonds in tension hold energy

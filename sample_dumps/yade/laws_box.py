@@ -4,6 +4,7 @@
 #   hertz_linear      Law2_ScGeom_MindlinPhys_HertzWithLinearShear
 #   deresiewitz       Law2_ScGeom_MindlinPhys_MindlinDeresiewitz
 #   cohfrict          Law2_ScGeom6D_CohFrictPhys_CohesionMoment (cohesive bonds, bending and twisting moments)
+#   jcfpm             Law2_ScGeom_JCFpmPhys_JointedCohesiveFrictionalPM (bonds made at 1.2 x the contact distance)
 # Two materials, spheres settled under gravity in a box of facets. Run headless:
 #   DEMSPLIT_SITE=<site-packages with demsplit> DEMSPLIT_OUT=<dir> DEMSPLIT_LAW=viscel yade -n -j1 -x laws_box.py
 # Writes DEMSPLIT_OUT/laws_box_<law>.h5 (demsplit.yade snapshots, with the laws' own energy functions).
@@ -35,6 +36,11 @@ elif law == "cohfrict":
     ip2 = Ip2_CohFrictMat_CohFrictMat_CohFrictPhys(setCohesionNow=False, setCohesionOnNewContacts=True)
     law2, ig2 = Law2_ScGeom6D_CohFrictPhys_CohesionMoment(useIncrementalForm=True, always_use_moment_law=True,
                                                           label="law"), "ScGeom6D"
+elif law == "jcfpm":
+    mats = [JCFpmMat(young=2e7, poisson=0.3, density=2500, frictionAngle=0.4, tensileStrength=1e5, cohesion=1e5),
+            JCFpmMat(young=1e8, poisson=0.2, density=2500, frictionAngle=0.4, tensileStrength=1e5, cohesion=1e5)]
+    ip2 = Ip2_JCFpmMat_JCFpmMat_JCFpmPhys(cohesiveTresholdIteration=1)
+    law2, ig2 = Law2_ScGeom_JCFpmPhys_JointedCohesiveFrictionalPM(label="law"), "ScGeom-bonds"
 else:
     mats = [FrictMat(young=2e7, poisson=0.3, density=2500, frictionAngle=0.4),
             FrictMat(young=1e8, poisson=0.2, density=2500, frictionAngle=0.4)]
@@ -63,13 +69,14 @@ def export_state():
     demsplit.yade.snapshot(snapshot)
 
 
+bonds = 1.2 if ig2 == "ScGeom-bonds" else 1.0  # JCFpm bonds spheres within 1.2 x their contact distance
 if ig2 == "ScGeom6D":
     geoms = [Ig2_Sphere_Sphere_ScGeom6D(), Ig2_Facet_Sphere_ScGeom6D()]
 else:
-    geoms = [Ig2_Sphere_Sphere_ScGeom(), Ig2_Facet_Sphere_ScGeom()]
+    geoms = [Ig2_Sphere_Sphere_ScGeom(interactionDetectionFactor=bonds), Ig2_Facet_Sphere_ScGeom()]
 O.engines = [
     ForceResetter(),
-    InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Facet_Aabb()]),
+    InsertionSortCollider([Bo1_Sphere_Aabb(aabbEnlargeFactor=bonds), Bo1_Facet_Aabb()]),
     InteractionLoop(geoms, [ip2], [law2]),
     # Between InteractionLoop and NewtonIntegrator: geometry, forces and positions of the same instant.
     PyRunner(command="export_state()", iterPeriod=EVERY, initRun=False),

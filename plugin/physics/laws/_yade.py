@@ -39,3 +39,25 @@ def stored_spring_energy(force: np.ndarray, k: np.ndarray) -> np.ndarray:
     """|F|^2/(2 k) (J) of a spring whose force (or moment) magnitude and stiffness the simulator stored;
     0 where k = 0 (a spring YADE has not set)."""
     return np.divide(force * force, 2.0 * k, out=np.zeros_like(force), where=k > 0)
+
+
+class YadeStoredSprings(YadeScGeomLaw):
+    """A YADE law whose normal and shear springs' forces and stiffnesses are stored and may hold energy
+    without overlap (bonds in tension): u_n = |F_n|^2/(2 kn), u_t = |F_s|^2/(2 ks), kept where delta < 0."""
+
+    contact_columns = ("fn", "kn")
+    normal_from_stored_force = True
+
+    def spring_energies(self, rows: ContactRows) -> tuple[dict[str, np.ndarray], dict[str, str]]:
+        """``u_n`` and, when its columns are there, ``u_t`` (else the ``skipped`` entry)."""
+        modes, skipped = {"u_n": stored_spring_energy(rows.column("fn"), rows.column("kn"))}, {}
+        why = self.missing_mode(rows, "u_t")
+        if why:
+            skipped["u_t"] = why
+        else:
+            ft = np.sqrt(sum(rows.column(c) ** 2 for c in SHEAR_FORCE[:3]))
+            modes["u_t"] = stored_spring_energy(ft, rows.column("ks"))
+        return modes, skipped
+
+    def normal_force(self, rows: ContactRows) -> np.ndarray:
+        return rows.column("fn")

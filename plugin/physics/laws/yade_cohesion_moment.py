@@ -13,10 +13,9 @@ kn delta), so dU_n/d(delta) is not defined from the columns alone.
 
 from __future__ import annotations
 
-import numpy as np
 
 from . import register
-from ._yade import YadeScGeomLaw, stored_spring_energy
+from ._yade import YadeScGeomLaw, YadeStoredSprings, stored_spring_energy
 from .base import ContactRows, LawEnergy
 
 MOMENTS = {"u_r": ("mb", "kr"), "u_tw": ("mtw", "ktw")}
@@ -24,27 +23,19 @@ MOMENTS = {"u_r": ("mb", "kr"), "u_tw": ("mtw", "ktw")}
 
 
 @register
-class YadeCohesionMoment(YadeScGeomLaw):
+class YadeCohesionMoment(YadeStoredSprings):
     key = "yade:Law2_ScGeom6D_CohFrictPhys_CohesionMoment"
     summary = ("cohesive-frictional springs: u_n = |F_n|^2/(2 kn), u_t = |F_s|^2/(2 ks), bending u_r = |M_b|^2/(2 kr), "
                "twisting u_tw = |M_tw|^2/(2 ktw), YADE's stored forces, moments and stiffnesses")
     modes = ("u_n", "u_t", "u_r", "u_tw")
-    contact_columns = ("fn", "kn")
     mode_columns = {**YadeScGeomLaw.mode_columns, **MOMENTS}
-    normal_from_stored_force = True
     simulator_energies = {"cohfrict_normElastEnergy": ("normElastEnergy", ("u_n",)),
                           "cohfrict_shearElastEnergy": ("shearElastEnergy", ("u_t",)),
                           "cohfrict_bendingElastEnergy": ("bendingElastEnergy", ("u_r",)),
                           "cohfrict_twistElastEnergy": ("twistElastEnergy", ("u_tw",))}
 
     def energies(self, rows: ContactRows, *, compiled: bool = True) -> LawEnergy:
-        modes, skipped = {"u_n": stored_spring_energy(rows.column("fn"), rows.column("kn"))}, {}
-        why = self.missing_mode(rows, "u_t")
-        if why:
-            skipped["u_t"] = why
-        else:  # a bond in tension (delta < 0) keeps its shear spring too
-            ft = np.sqrt(sum(rows.column(c) ** 2 for c in ("ftx", "fty", "ftz")))
-            modes["u_t"] = stored_spring_energy(ft, rows.column("ks"))
+        modes, skipped = self.spring_energies(rows)
         for mode, (moment, k) in MOMENTS.items():
             why = self.missing_mode(rows, mode)
             if why:
@@ -52,6 +43,3 @@ class YadeCohesionMoment(YadeScGeomLaw):
             else:
                 modes[mode] = stored_spring_energy(rows.column(moment), rows.column(k))
         return LawEnergy(modes, skipped)
-
-    def normal_force(self, rows: ContactRows) -> np.ndarray:
-        return rows.column("fn")
