@@ -118,7 +118,8 @@ def _law_energies(O) -> dict:
             key = YADE_PREFIX + type(f).__name__
             if key in laws.supported():
                 for name, (method, _) in laws.law_class(key).simulator_energies.items():
-                    out[name] = float(getattr(f, method)())
+                    if hasattr(f, method):
+                        out[name] = float(getattr(f, method)())
     return out
 
 
@@ -179,12 +180,14 @@ def _interaction_table(O, high_precision: bool) -> dict[str, np.ndarray]:
             *(int(c) for c in i.cellDist), i.iterMadeReal,
             *_vec(getattr(p, "moment_bending", (nan,) * 3)), *_vec(getattr(p, "moment_twist", (nan,) * 3)),
             float(getattr(p, "kr", nan)), float(getattr(p, "ktw", nan)),
+            float(getattr(p, "adhesionForce", nan)),
+            float(sum(float(x) ** 2 for x in p.fCap) ** 0.5) if hasattr(p, "fCap") else nan,  # |capillary force|
         ))
         if high_precision:
             depth_text.append(str(d))
     cols = ("id1 id2 geom_class phys_class depth nx ny nz cpx cpy cpz refR1 refR2 "
             "fnx fny fnz fsx fsy fsz kn ks kno kso cdx cdy cdz iter_made_real "
-            "mbx mby mbz mtwx mtwy mtwz kr ktw").split()
+            "mbx mby mbz mtwx mtwy mtwz kr ktw adhesion fcap").split()
     data = list(zip(*rows)) if rows else [()] * len(cols)
     dtypes = {"id1": np.int64, "id2": np.int64, "cdx": np.int64, "cdy": np.int64, "cdz": np.int64,
               "iter_made_real": np.int64, "geom_class": "S32", "phys_class": "S32"}

@@ -62,7 +62,8 @@ def reader_for(path: str | Path | None) -> type[Run]:
     if path is not None and path.is_dir():
         found = sorted(p.name for p in path.iterdir() if p.is_file() and _looks_like_a_run(p))
         raise InputFormatError("this is a directory, not a run.", file=path,
-                               fix=("give one of the runs it holds: " + ", ".join(found[:10])) if found
+                               fix=("give one of the runs it holds: " + ", ".join(found[:30])
+                                    + (f" (and {len(found) - 30} more)" if len(found) > 30 else "")) if found
                                else "give the run's input script or snapshot file.")
     if path is not None and not path.exists():
         raise InputFormatError("no such file (and no file matches it as a pattern).", file=path,

@@ -176,6 +176,10 @@ def scene_from_snapshot(meta: dict, bodies: Table, *, path: Path, step: int | No
         walls.append(Wall(name=f"body {int(bodies['id'][row])} ({kind})", kind=kind,
                           type=int(bodies["material"][row]), axis=axis, position=float(pos)))
     model = LAW_MODELS[known[0]]
+    attrs = meta["functors"]["law"][0].get("attrs", {})
+    given = {name: attrs[attr] for attr, name in model.contact_law.simulator_parameters.items() if attr in attrs}
+    if given:  # the functor's own settings (Mindlin's includeAdhesion, ...)
+        model = ContactModel(model.law, {**model.params, **given})
     if plane_as_plane and "normal_stiffness" in model.contact_law.parameters:
         model = ContactModel(model.law, {**model.params, "normal_stiffness": "materials"})
     return Scene(materials=materials, model=model, walls=walls,
@@ -189,6 +193,27 @@ def _cell_box(meta: dict) -> Box | None:
     h = np.asarray(meta["hSize"], dtype=np.float64).reshape(3, 3)
     return Box(lo=np.zeros(3), hi=np.diag(h).copy(), periodic=(True, True, True),
                tilt=np.array([h[0, 1], h[0, 2], h[1, 2]]))
+
+
+CAPILLARY_ENGINE = "Law2_ScGeom_CapillaryPhys_Capillarity"
+
+
+def _capillary_note(meta: dict, inter: Table, path: Path, step: int) -> str | None:
+    """What the capillary law adds: nothing to say without it; a note when every capillary force is 0
+    (YADE found no capillary tables M(r=1)...M(r=10) in its working directory, and Debian ships none);
+    an error when there are capillary forces, whose work (an integral over the meniscus tables) the
+    snapshot does not hold."""
+    if CAPILLARY_ENGINE not in [e["class"] for e in meta["engines"]]:
+        return None
+    fcap = inter["fcap"] if "fcap" in inter else np.zeros(0)
+    if np.any(np.abs(np.nan_to_num(fcap)) > 0):
+        raise UnsupportedModelError(
+            f"the run has {CAPILLARY_ENGINE} with nonzero capillary forces; their work (the cohesion energy "
+            "u_adh) needs YADE's meniscus tables, which demsplit does not read.", file=path, step=step,
+            fix="leave the capillary bridges out of this analysis, or analyse a run without them.")
+    return (f"{CAPILLARY_ENGINE} is in the engines but every capillary force is 0: YADE found no capillary "
+            "tables (M(r=1) ... M(r=10)) in its working directory (Debian ships none), so the bridges add no "
+            "force and no energy")
 
 
 def _timing_note(meta: dict) -> str | None:
@@ -243,7 +268,7 @@ def particle_first(t: Table, sphere1: np.ndarray, wall1: np.ndarray, wall2: np.n
         out["fn"] = np.sqrt(t["fnx"] ** 2 + t["fny"] ** 2 + t["fnz"] ** 2)
     if "fsx" in t:
         out["ftx"], out["fty"], out["ftz"] = sign * t["fsx"], sign * t["fsy"], sign * t["fsz"]
-    for c in ("kn", "ks", "kno", "kso", "cpx", "cpy", "cpz", "mb", "mtw", "kr", "ktw"):
+    for c in ("kn", "ks", "kno", "kso", "cpx", "cpy", "cpz", "mb", "mtw", "kr", "ktw", "adhesion_force"):
         if c in t:
             out[c] = np.asarray(t[c], dtype=np.float64)
     return out
@@ -315,6 +340,8 @@ def frame_from_snapshot(meta: dict, tables: dict[str, Table], scene_walls: dict[
     }
     if np.isfinite(inter["kno"]).any():
         yade_order["kno"], yade_order["kso"] = inter["kno"], inter["kso"]
+    if "adhesion" in inter and np.isfinite(inter["adhesion"]).any():  # MindlinPhys' DMT adhesion force
+        yade_order["adhesion_force"] = inter["adhesion"]
     if "mbx" in inter and np.isfinite(inter["mbx"]).any():  # CohFrictPhys: bending and twisting springs
         # an interaction whose phys has no moments (the exporter wrote NaN for the absent attributes; MindlinPhys
         # has kr and ktw but no moment_bending) holds no such springs: 0, not a bad number
@@ -342,6 +369,9 @@ def frame_from_snapshot(meta: dict, tables: dict[str, Table], scene_walls: dict[
     timing = _timing_note(meta)
     if timing:
         notes.append(timing)
+    capillary = _capillary_note(meta, inter, path, step)
+    if capillary:
+        notes.append(capillary)
     frame = Frame(step=step, particles=particles, contacts=contacts, box=_cell_box(meta),
                   time=float(meta["time"]), source=(str(path),),
                   overlap_source="YADE penetrationDepth (double)", overlap_error=None, notes=notes)

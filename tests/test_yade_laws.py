@@ -15,7 +15,9 @@ import numpy as np
 import pytest
 from conftest import require_program
 from demsplit.physics.partition import partition, per_particle
+from demsplit.errors import UnsupportedModelError
 from demsplit.readers.yade_snapshot import _open_store, open_yade_snapshot
+from demsplit.yade import write_snapshot
 from test_yade_simulator import SAMPLE_SCRIPTS, run_yade
 
 LAWS = {"viscel": "yade:Law2_ScGeom_ViscElPhys_Basic",
@@ -23,7 +25,9 @@ LAWS = {"viscel": "yade:Law2_ScGeom_ViscElPhys_Basic",
         "hertz_linear": "yade:Law2_ScGeom_MindlinPhys_HertzWithLinearShear",
         "deresiewitz": "yade:Law2_ScGeom_MindlinPhys_MindlinDeresiewitz",
         "cohfrict": "yade:Law2_ScGeom6D_CohFrictPhys_CohesionMoment",
-        "jcfpm": "yade:Law2_ScGeom_JCFpmPhys_JointedCohesiveFrictionalPM"}
+        "jcfpm": "yade:Law2_ScGeom_JCFpmPhys_JointedCohesiveFrictionalPM",
+        "adhesion": "yade:Law2_ScGeom_MindlinPhys_Mindlin",
+        "capillary": "yade:Law2_ScGeom_FrictPhys_CundallStrack"}
 
 pytestmark = pytest.mark.simulator
 
@@ -64,6 +68,9 @@ def test_totals_per_mode_equal_yades_own_or_an_independent_sum(law_run):
         e = partition(frame.contacts, run.scene, frame.particles)
         assert not e.missing
         ours = {m.column: float(e.u[i].sum()) for i, m in enumerate(e.modes)}
+        if e.u_adh is not None:
+            ours["u_adh"] = float(e.u_adh.sum())
+            assert ours["u_adh"] < 0
         assert ours["u_n"] > 0
         reference = run.meta(k)["law_energies"]
         if reference:  # the law's own energy functions
@@ -84,6 +91,21 @@ def test_the_quirks_the_laws_rely_on(law_run):
     law, path = law_run
     _, raw = _open_store(path).snapshot(1)
     t = raw["interactions"]
+    if law == "adhesion":  # the DMT force is 4 pi R* gamma; its work is apart from the elastic energy
+        run = open_yade_snapshot(path)
+        assert run.scene.model.params["include_adhesion"] is True
+        c = run.frame(1).contacts
+        np.testing.assert_allclose(c["adhesion_force"][c["wall"] < 0],
+                                   4 * np.pi * 0.5 / (1 / c["r1"] + 1 / c["r2"])[c["wall"] < 0], rtol=1e-12)
+    if law == "capillary":  # without Debian-shipped tables every capillary force is 0: said, not assumed
+        frame = open_yade_snapshot(path).frame(1)
+        assert np.all(t["fcap"] == 0) and any("every capillary force is 0" in n for n in frame.notes)
+        meta, tables = _open_store(path).snapshot(1)
+        tables["interactions"]["fcap"] = np.full(len(t["fcap"]), 1e-3)  # bridges with forces: work unknown
+        with_forces = path.with_name("with_forces.npys")
+        write_snapshot(with_forces, meta, tables, format="npy")
+        with pytest.raises(UnsupportedModelError, match="nonzero capillary forces"):
+            open_yade_snapshot(with_forces).frame(0)
     if law == "deresiewitz":
         assert np.all(t["kn"] == 0) and np.all(t["ks"] == 0) and np.all(t["fsx"] == 0)
         assert open_yade_snapshot(path).scene.model.contact_law.modes == ("u_n",)

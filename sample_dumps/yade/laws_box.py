@@ -3,6 +3,8 @@
 #   viscofrict        Law2_ScGeom_ViscoFrictPhys_CundallStrack (FrictMat, shearCreep)
 #   hertz_linear      Law2_ScGeom_MindlinPhys_HertzWithLinearShear
 #   deresiewitz       Law2_ScGeom_MindlinPhys_MindlinDeresiewitz
+#   adhesion          Law2_ScGeom_MindlinPhys_Mindlin with includeAdhesion (DMT, surface energy gamma 0.5 J/m^2)
+#   capillary         CundallStrack with Law2_ScGeom_CapillaryPhys_Capillarity (no capillary tables: no force)
 #   cohfrict          Law2_ScGeom6D_CohFrictPhys_CohesionMoment (cohesive bonds, bending and twisting moments)
 #   jcfpm             Law2_ScGeom_JCFpmPhys_JointedCohesiveFrictionalPM (bonds made at 1.2 x the contact distance)
 # Two materials, spheres settled under gravity in a box of facets. Run headless:
@@ -49,6 +51,11 @@ else:
         law2 = Law2_ScGeom_ViscoFrictPhys_CundallStrack(shearCreep=True, viscosity=1e3, label="law")
     elif law == "hertz_linear":
         ip2, law2 = Ip2_FrictMat_FrictMat_MindlinPhys(), Law2_ScGeom_MindlinPhys_HertzWithLinearShear(label="law")
+    elif law == "capillary":
+        ip2, law2 = Ip2_FrictMat_FrictMat_CapillaryPhys(), Law2_ScGeom_FrictPhys_CundallStrack(label="law")
+    elif law == "adhesion":
+        ip2 = Ip2_FrictMat_FrictMat_MindlinPhys(gamma=0.5)
+        law2 = Law2_ScGeom_MindlinPhys_Mindlin(includeAdhesion=True, label="law")
     elif law == "deresiewitz":
         ip2, law2 = Ip2_FrictMat_FrictMat_MindlinPhys(), Law2_ScGeom_MindlinPhys_MindlinDeresiewitz(label="law")
     else:
@@ -78,6 +85,7 @@ O.engines = [
     ForceResetter(),
     InsertionSortCollider([Bo1_Sphere_Aabb(aabbEnlargeFactor=bonds), Bo1_Facet_Aabb()]),
     InteractionLoop(geoms, [ip2], [law2]),
+    *([Law2_ScGeom_CapillaryPhys_Capillarity(capillaryPressure=1e3)] if law == "capillary" else []),
     # Between InteractionLoop and NewtonIntegrator: geometry, forces and positions of the same instant.
     PyRunner(command="export_state()", iterPeriod=EVERY, initRun=False),
     NewtonIntegrator(gravity=(0, 0, -50.0), damping=0.4),

@@ -13,6 +13,6 @@ rm -f ./*.h5 ./*.npys ./*.vtk ./*.txt
 for scene in mindlin_box cundall_periodic; do
     yade -n -j1 -x "$scene.py" 2>&1 | grep "^$scene:" | tee "$scene.log"
 done
-for law in viscel viscofrict hertz_linear deresiewitz cohfrict jcfpm; do
+for law in viscel viscofrict hertz_linear deresiewitz cohfrict jcfpm adhesion capillary; do
     DEMSPLIT_LAW=$law yade -n -j1 -x laws_box.py 2>&1 | grep "^laws_box_$law:" | tee "laws_box_$law.log"
 done

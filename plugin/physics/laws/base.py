@@ -91,6 +91,8 @@ class ContactLaw(ABC):
         (YADE's ``normElastEnergy``), and the modes whose sum it equals;
     ``example_params``
         parameters of a typical run, for the registry-wide tests and the docs;
+    ``simulator_parameters``
+        attribute of the simulator's law object (YADE's Law2 functor) -> the parameter it gives;
     ``normal_from_stored_force``
         the normal energy comes from a force the simulator stored (a cohesive bond
         holds energy in tension, at delta < 0), not from delta: the properties "no
@@ -111,6 +113,7 @@ class ContactLaw(ABC):
     simulator_energies: ClassVar[Mapping[str, tuple[str, tuple[str, ...]]]] = {}
     example_params: ClassVar[Mapping[str, Any]] = {}
     normal_from_stored_force: ClassVar[bool] = False
+    simulator_parameters: ClassVar[Mapping[str, str]] = {}
 
     def __init__(self, params: Mapping[str, Any] | None = None) -> None:
         params = dict(params or {})

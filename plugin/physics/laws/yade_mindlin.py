@@ -6,6 +6,9 @@ refR conventions for walls and facets. With ``normal_stiffness="materials"``
 (the reader's ``plane_as_plane``) E* and R* are rebuilt from the materials and
 the radii the reader gives instead: u_n = (8/15) E* sqrt(R* delta) delta^2.
 The shear spring is the stored incremental one: u_t = |F_t|^2 / (2 ks).
+With ``includeAdhesion`` the DMT adhesion force F_adh = 4 pi R* gamma that YADE
+stores per interaction pulls the bodies together: its work u_adh = -F_adh delta
+(J, apart from the elastic total); YADE's ``normElastEnergy()`` is then u_n + u_adh.
 """
 
 from __future__ import annotations
@@ -37,27 +40,37 @@ class YadeMindlin(YadeScGeomLaw):
                "from the stored shear force and stiffness")
     contact_columns = ("kno",)
     parameters = {"normal_stiffness": ("stored", "kno as YADE stored it ('stored'), or rebuilt from the "
-                                                 "materials and the radii the reader gives ('materials')")}
+                                                 "materials and the radii the reader gives ('materials')"),
+                  "include_adhesion": (False, "includeAdhesion: the DMT adhesion force F_adh = 4 pi R* gamma "
+                                              "(stored per interaction) pulls the bodies together")}
+    simulator_parameters = {"includeAdhesion": "include_adhesion"}
     simulator_energies = {"mindlin_normElastEnergy": ("normElastEnergy", ("u_n",))}
 
     def check(self) -> None:
+        self.params["include_adhesion"] = bool(self.params["include_adhesion"])
+        if self.params["include_adhesion"]:  # YADE's normElastEnergy() then includes -F_adh delta
+            self.modes = ("u_n", "u_t", "u_adh")
+            self.contact_columns = (*self.contact_columns, "adhesion_force")
+            self.simulator_energies = {"mindlin_normElastEnergy": ("normElastEnergy", ("u_n", "u_adh"))}
         if self.params["normal_stiffness"] not in STIFFNESS_SOURCES:
             raise UnsupportedModelError(f"{self.key}: normal_stiffness must be one of {STIFFNESS_SOURCES}, "
                                         f"got {self.params['normal_stiffness']!r}.")
         if self.params["normal_stiffness"] == "materials":
-            self.contact_columns = ()
+            self.contact_columns = tuple(c for c in self.contact_columns if c != "kno")
 
     def energies(self, rows: ContactRows, *, compiled: bool = True) -> LawEnergy:
         modes, skipped = self.shear_energy(rows)
-        if self.contact_columns:
+        if "kno" in self.contact_columns:
             u_n = hertz_energy_from_kno(rows.delta, rows.column("kno"))
         else:
             u_n = hertz_energy_from_moduli(rows.delta, effective_radius(rows.r1, rows.r2),
                                            rows.per_pair(effective_modulus))
+        if self.params["include_adhesion"]:  # the work of the constant DMT force since first touch
+            modes["u_adh"] = -rows.column("adhesion_force") * overlap(rows.delta)
         return LawEnergy({"u_n": u_n, **modes}, skipped)
 
     def normal_force(self, rows: ContactRows) -> np.ndarray:
-        if not self.contact_columns:
+        if "kno" not in self.contact_columns:
             return hertz_force_from_moduli(rows.delta, effective_radius(rows.r1, rows.r2),
                                            rows.per_pair(effective_modulus))
         d = overlap(rows.delta)
