@@ -84,10 +84,11 @@ def _reader_options(args: argparse.Namespace) -> dict:
 
 
 def _add_input(p: argparse.ArgumentParser) -> None:
-    p.add_argument("input", nargs="?", default=None,
-                   help="LIGGGHTS input script, a demsplit.yade snapshot file, an ingest cache or a YADE "
-                   "VTKExporter spheres file (omit it to describe a LIGGGHTS scene with --atoms, --contacts, "
-                   "--material and --columns)")
+    p.add_argument("input", nargs="*", default=None,
+                   help="LIGGGHTS input script, a demsplit.yade snapshot file, an ingest cache, a YADE "
+                   "VTKExporter spheres file, or YADE saved states (O.save files, a directory or a glob of them; "
+                   "several files are one run); omit it to describe a LIGGGHTS scene with --atoms, --contacts, "
+                   "--material and --columns")
     g = p.add_argument_group("LIGGGHTS inputs (default: the files the script's dump lines write)")
     g.add_argument("--atoms", help="atom dump (dump custom, text, .bin, or compressed)")
     g.add_argument("--contacts", help="pair contact dump (dump local of compute pair/gran/local)")
@@ -334,6 +335,8 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    if isinstance(getattr(args, "input", None), list):  # none, one path, or several files of one run
+        args.input = None if not args.input else args.input[0] if len(args.input) == 1 else args.input
     previous = signal.signal(signal.SIGTERM, _raise_terminated)
     try:
         with np.errstate(all="ignore"):  # every number is checked explicitly (demsplit.validate): no warnings

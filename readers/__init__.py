@@ -79,12 +79,21 @@ def reader_for(path: str | Path | None) -> type[Run]:
                            fix=f"pass one of: {accepted}.")
 
 
-def open_run(path: str | Path | None, **options) -> Run:
-    """Open a run (see the module docstring). ``options`` go to the reader.
+def open_run(path: str | Path | list | None, **options) -> Run:
+    """Open a run (see the module docstring). ``options`` go to the reader. A list of paths is a run
+    of several files (YADE saved states).
 
     The returned run remembers ``(path, options)`` as ``run.spec`` so that
     worker processes can open the same run again.
     """
+    if isinstance(path, (list, tuple)) and len(path) == 1:
+        path = path[0]
+    if isinstance(path, (list, tuple)):  # several files: YADE saved states are the one run made of many files
+        from .yade_state import YadeStateRun
+
+        run = YadeStateRun.open([Path(p) for p in path], **options)
+        run.spec = {"path": [str(p) for p in path], **options}
+        return run
     run = reader_for(path).open(None if path is None else Path(path), **options)
     run.spec = {"path": None if path is None else str(path), **options}
     return run

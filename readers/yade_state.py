@@ -70,7 +70,7 @@ try:
         O.load(src)
         saved, engines, dt = O.iter, list(O.engines), O.dt
         # recompute penetrationDepth and forces at the saved positions: only the engines that make
-        # contacts and forces run (no integrator, no PyRunner of the user's), with dt = 0
+        # contacts and forces run (no integrator, no PyRunner of the user's), with a time step of 1e-300
         O.engines = [e for e in engines if type(e).__name__ in KEEP or type(e).__name__.endswith("Collider")]
         O.dt = DT
         O.step()
@@ -136,12 +136,15 @@ class YadeStateRun(Run):
     def detect(cls, path: Path | None, head: bytes) -> bool:
         return path is not None and bool(state_files(path))
 
-    def __init__(self, path: Path, yade: str | None = None, state_cache: str | Path | None = None,
+    def __init__(self, path: Path | list[Path], yade: str | None = None, state_cache: str | Path | None = None,
                  plane_as_plane: bool = False) -> None:
-        states = state_files(path)
-        if not states:
-            raise InputFormatError("no YADE saved state here.", file=path,
-                                   fix="give a file written by O.save, a directory or a glob of them.")
+        states = []
+        for p in (path if isinstance(path, list) else [path]):
+            found = state_files(p)
+            if not found:
+                raise InputFormatError("no YADE saved state here.", file=p,
+                                       fix="give files written by O.save, a directory or a glob of them.")
+            states += [s for s in found if s not in states]
         cache = Path(state_cache) if state_cache is not None else default_cache()
         cache.mkdir(parents=True, exist_ok=True)
         targets = [cache / f"{_sha256(s)}-v{FORMAT_VERSION}.npys" for s in states]
@@ -162,7 +165,7 @@ class YadeStateRun(Run):
         self.steps = np.array([int(r.steps[0]) for r in self._runs], dtype=np.int64)
         self.sources = list(self._states)
         self.notes = [f"YADE saved states converted by YADE (cached in {cache}); penetration depths recomputed "
-                      "with one step of dt = 0 (YADE does not save them)"]
+                      "with one step of dt = 1e-300 over the contact engines (YADE does not save them)"]
 
     def __len__(self) -> int:
         return len(self._runs)
@@ -215,20 +218,33 @@ def _convert(todo: list[tuple[Path, Path]], yade: str | None) -> None:
         # YADE's own Python imports demsplit from this Python's site-packages (appended: its numpy stays first)
         env = {**os.environ, "DEMSPLIT_SITE": sysconfig.get_paths()["purelib"], "DEMSPLIT_STATES": json.dumps(pairs)}
         for build in builds:
-            if sys.stderr.isatty():
-                sys.stderr.write(f"demsplit: converting {len(todo)} YADE state(s) with {build} ...\n")
-            proc = subprocess.run([build, "-n", "-j1", "-x", str(script)], cwd=tmp, env=env, capture_output=True,
-                                  text=True, timeout=3600)
-            done = proc.stderr.count("DEMSPLIT-CONVERTED")
-            if proc.returncode == 0 and done == len(todo):
+            returncode, err = _run_converter(build, script, tmp, env, len(todo))
+            done = err.count("DEMSPLIT-CONVERTED")
+            if returncode == 0 and done == len(todo):
                 for (_, target), (_, made) in zip(todo, pairs):
                     shutil.move(made, target)  # complete files only: a conversion that failed leaves none
                 return
-            last = [line for line in (proc.stderr + proc.stdout).splitlines() if line.strip()][-1:]
-            errors.append(f"{build}: {last[0] if last else 'exit ' + str(proc.returncode)}")
+            last = [line for line in err.splitlines() if line.strip() and "DEMSPLIT-" not in line][-1:]
+            errors.append(f"{build}: {last[0] if last else 'exit ' + str(returncode)}")
             for made in pairs:
                 Path(made[1]).unlink(missing_ok=True)
     raise ScriptError(f"YADE could not load the saved state(s) ({'; '.join(errors)}).", file=todo[0][0],
                       fix="check that the file is complete (a state cut short does not load) and give the YADE "
                           "build that saved it with --yade (yade, yade-mpfr150 or yade-float128).")
 
+
+
+def _run_converter(build: str, script: Path, cwd: str, env: dict, total: int) -> tuple[int, str]:
+    """Run the converter with one YADE build; show progress per state on a terminal; return the exit
+    code and YADE's error output."""
+    show = sys.stderr.isatty()
+    lines = []
+    with subprocess.Popen([build, "-n", "-j1", "-x", str(script)], cwd=cwd, env=env, stdout=subprocess.DEVNULL,
+                          stderr=subprocess.PIPE, text=True) as proc:
+        assert proc.stderr is not None
+        for line in proc.stderr:
+            lines.append(line)
+            if show and line.startswith("DEMSPLIT-CONVERTED"):
+                k = sum(x.startswith("DEMSPLIT-CONVERTED") for x in lines)
+                sys.stderr.write(f"demsplit: {build} converted state {k}/{total}: {line.split()[1]}\n")
+    return proc.returncode, "".join(lines)

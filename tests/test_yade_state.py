@@ -54,6 +54,9 @@ def test_one_state_by_name_and_by_glob(states, tmp_path):
     assert main(["run", str(states / "state-*"), "-o", str(tmp_path / "glob.h5"), "-q",
                  "--state-cache", str(cache)]) == 0
     assert demsplit.load_results(tmp_path / "glob.h5").steps.tolist() == [10000, 20000]
+    listed = [str(states / "state-020000.xml.bz2"), str(states / "state-010000.yade.gz")]  # any order
+    assert main(["run", *listed, "-o", str(tmp_path / "list.h5"), "-q", "--state-cache", str(cache)]) == 0
+    assert demsplit.load_results(tmp_path / "list.h5").steps.tolist() == [10000, 20000]
 
 
 def cli(*args: str, path: str | None = None) -> subprocess.CompletedProcess:
