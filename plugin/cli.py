@@ -121,7 +121,8 @@ def _add_input(p: argparse.ArgumentParser) -> None:
                    help="the YADE build that saved the states (yade, yade-mpfr150, yade-float128; default: the "
                    "first that loads them)")
     y.add_argument("--state-cache", metavar="DIR",
-                   help="where converted YADE saved states are kept (default $XDG_CACHE_HOME/demsplit/yade-states)")
+                   help="where converted YADE saved states are kept (default for run: OUTPUT.states next to the "
+                   "output; for info and check: $XDG_CACHE_HOME/demsplit/yade-states)")
 
 
 def _options(args: argparse.Namespace):
@@ -135,10 +136,14 @@ def _options(args: argparse.Namespace):
 def cmd_run(args: argparse.Namespace) -> int:
     from .pipeline import run_to_store
 
+    options = _reader_options(args)
+    if args.input is not None and "state_cache" not in options and _yade_states(args.input):
+        # converted YADE states are kept next to the output, where a rerun of this analysis finds them
+        options["state_cache"] = str(Path(args.output).with_name(Path(args.output).name + ".states"))
     report, _ = run_to_store(args.input, args.output, options=_options(args), jobs=args.jobs, dask=args.dask,
                              resume=args.resume, on_bad_frame=args.on_bad_frame,
                              compression=None if args.compression == "none" else args.compression,
-                             progress=False if args.quiet else None, **_reader_options(args))
+                             progress=False if args.quiet else None, **options)
     if not args.quiet:
         from .results.report import text_summary
         from .results.store import read_last_frame
@@ -208,6 +213,13 @@ def cmd_export(args: argparse.Namespace) -> int:
         for path in written:
             print(f"wrote {path}")
     return 0
+
+
+def _yade_states(inputs: str | list[str]) -> bool:
+    """Whether the run's input is YADE saved states (which are converted, and cached)."""
+    from .readers.yade_state import state_files
+
+    return all(state_files(Path(p)) for p in (inputs if isinstance(inputs, list) else [inputs]))
 
 
 def cmd_prepare(args: argparse.Namespace) -> int:

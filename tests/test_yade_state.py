@@ -46,6 +46,11 @@ def test_saved_states_give_the_in_run_snapshot(states, tmp_path):
                 np.testing.assert_allclose(b[c], a[c], rtol=1e-12, atol=1e-12 * scale, err_msg=f"{table}.{c}")
 
 
+def test_run_keeps_converted_states_next_to_the_output(states, tmp_path):
+    assert main(["run", str(states / "state-010000.yade.gz"), "-o", str(tmp_path / "r.h5"), "-q"]) == 0
+    assert len(list((tmp_path / "r.h5.states").glob("*.npys"))) == 1
+
+
 def test_one_state_by_name_and_by_glob(states, tmp_path):
     cache = tmp_path / "cache"
     assert main(["run", str(states / "state-010000.yade.gz"), "-o", str(tmp_path / "one.h5"), "-q",
