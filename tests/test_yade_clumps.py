@@ -124,3 +124,15 @@ def test_clump_scene_normal_energy_matches_normElastEnergy(clump_run):
         assert reference > 0
         u_n = res.contacts.loc[res.contacts["step"] == meta["iter"], "u_n"].sum()
         assert u_n == pytest.approx(reference, rel=1e-10)
+
+
+@pytest.mark.simulator
+def test_the_clump_table_is_exported_next_to_the_spheres(clump_run, tmp_path):
+    import pandas as pd
+    from demsplit.results.store import export_tables
+
+    res = demsplit.analyze(clump_run[0])
+    written = export_tables(res, tmp_path / "csv", fmt="csv")
+    assert tmp_path / "csv" / "clumps.csv" in written
+    clumps = pd.read_csv(tmp_path / "csv" / "clumps.csv")
+    pd.testing.assert_frame_equal(clumps, res.per_clump(), check_dtype=False)

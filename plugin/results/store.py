@@ -730,8 +730,8 @@ def read_last_frame(path: str | Path) -> Results:
 
 def export_tables(results: Results, directory: str | Path, fmt: str = "parquet",
                   inputs: Iterable[str | Path] = ()) -> list[Path]:
-    """Write each table to ``directory/<table>.parquet`` (or ``.csv``) and the
-    provenance to ``provenance.json``, each file atomically. Parquet files carry
+    """Write each table to ``directory/<table>.parquet`` (or ``.csv``; with YADE clumps also
+    ``clumps``, the per-clump sums) and the provenance to ``provenance.json``, each file atomically. Parquet files carry
     the units (field metadata ``unit``) and the provenance (schema metadata).
     CSV numbers are written with 17 significant digits (round-trip exact).
     No file is written over one of ``inputs`` (:func:`demsplit.outputs.check_output_path`)."""
@@ -741,12 +741,16 @@ def export_tables(results: Results, directory: str | Path, fmt: str = "parquet",
     if directory.exists() and not directory.is_dir():
         raise StoreError("the export directory is a file.", file=directory, fix="give a directory name.")
     directory.mkdir(parents=True, exist_ok=True)
-    for name in (*(f"{t}.{fmt}" for t in TABLES), "provenance.json"):
+    frames = {name: getattr(results, name) for name in TABLES}
+    if "clump" in results.particles and (results.particles["clump"] >= 0).any():
+        frames["clumps"] = results.per_clump()  # YADE clumps: the members' sums, next to the spheres
+        frames["clumps"].attrs["units"] = {c: results.particles.attrs.get("units", {}).get(c, "")
+                                           for c in frames["clumps"].columns}
+    for name in (*(f"{t}.{fmt}" for t in frames), "provenance.json"):
         check_output_path(directory / name, inputs)
     prov = _to_json({"provenance": results.provenance, "walls_meta": results.walls_meta}, "provenance")
     written = []
-    for name in TABLES:
-        df = getattr(results, name)
+    for name, df in frames.items():
         out = directory / f"{name}.{fmt}"
         if fmt == "parquet":
             import pyarrow as pa
