@@ -14,14 +14,12 @@ functions crash YADE 2023.02a). The converter therefore keeps only the engines
 that make contacts and forces (``ForceResetter``, the collider, the
 ``InteractionLoop``: no integrator, none of the user's ``PyRunner``), sets
 ``O.dt = 1e-300`` (0 gives NaN shear forces: Mindlin divides by dt) and makes
-one step: geometry and forces are recomputed from the saved positions,
-incremental springs grow by velocity x 1e-300, which rounds away, and nothing
-moves; the snapshot keeps the saved iteration, time step and engine list. A
-state saved where a PyRunner between the InteractionLoop and the integrator
-would export (the positions the forces were computed from) gives exactly the
-in-run snapshot; a state saved after a full step (``O.run(); O.save()``) gives
-the forces of the saved positions, which differ from the saved forces by one
-step's motion (sliding contacts re-capped to the new normal force). The laws' own energy functions are then
+one step: geometry and normal forces are recomputed from the saved positions
+and nothing moves; the incremental springs (shear force, bending and twisting
+moments) are then put back as saved. The snapshot keeps the saved iteration,
+time step and engine list. A state saved where a PyRunner between the
+InteractionLoop and the integrator would export gives the in-run snapshot bit
+for bit. The laws' own energy functions are then
 recorded for validation as in a run.
 
 Converted states are cached (``state_cache``, default ``$XDG_CACHE_HOME/demsplit/yade-states``),
@@ -65,6 +63,7 @@ site.addsitedir(os.environ["DEMSPLIT_SITE"])
 try:
     import demsplit.yade
     KEEP = ("ForceResetter", "InteractionLoop")
+    SPRINGS = ("shearForce", "moment_bending", "moment_twist")
     DT = 1e-300  # not 0: some laws divide by dt (Mindlin's shear gives NaN); velocity x 1e-300 adds nothing
     for src, dst in json.loads(os.environ["DEMSPLIT_STATES"]):
         O.load(src)
@@ -72,8 +71,17 @@ try:
         # recompute penetrationDepth and forces at the saved positions: only the engines that make
         # contacts and forces run (no integrator, no PyRunner of the user's), with a time step of 1e-300
         O.engines = [e for e in engines if type(e).__name__ in KEEP or type(e).__name__.endswith("Collider")]
+        # the incremental springs are state YADE saved: keep them as saved (the step would re-project them
+        # onto the contact plane, which changes their last bits)
+        kept = {}
+        for i in O.interactions:
+            if i.isReal:
+                kept[(i.id1, i.id2)] = {a: Vector3(getattr(i.phys, a)) for a in SPRINGS if hasattr(i.phys, a)}
         O.dt = DT
         O.step()
+        for i in O.interactions:
+            for a, v in kept.get((i.id1, i.id2), {}).items():
+                setattr(i.phys, a, v)
         O.engines, O.dt = engines, dt
         meta, tables = demsplit.yade.collect()
         meta["iter"] = saved
