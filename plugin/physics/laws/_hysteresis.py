@@ -20,6 +20,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..elastic import overlap
+from ..moduli import effective_radius
+from .base import ContactRows
 
 DELTA_MAX = "delta_max"
 """Contact column of the largest overlap so far (m), the normal model's first history value."""
@@ -43,3 +45,15 @@ def hysteretic_force(delta: np.ndarray, delta_max: np.ndarray, k1: np.ndarray, k
 def unloading_energy(f: np.ndarray, k2: np.ndarray) -> np.ndarray:
     """Energy released unloading along the k2 line to zero force, f^2/(2 k2) (J)."""
     return np.divide(f * f, 2.0 * k2, out=np.zeros_like(f), where=k2 > 0)
+
+
+def hysteresis_of(rows: ContactRows, k1: np.ndarray, k2max_over_k1, kc_over_k1, plasticity_depth
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Force f (N) and unloading stiffness k2 (N/m) of every row, from the loading stiffness ``k1`` and the
+    per-type-pair ratios k2Max/k1, kc/k1 and the plasticity depth phiF (module docstring):
+    delta_lim = k2Max/(k2Max - k1) phiF 2 R*."""
+    k2max = k1 * rows.type_pair(k2max_over_k1)
+    kc = k1 * rows.type_pair(kc_over_k1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        lim = k2max / (k2max - k1) * rows.type_pair(plasticity_depth) * 2.0 * effective_radius(rows.r1, rows.r2)
+    return hysteretic_force(rows.delta, rows.column(DELTA_MAX), k1, k2max, kc, lim)

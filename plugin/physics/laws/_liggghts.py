@@ -26,6 +26,7 @@ cohesion modes. Not a law itself.
 
 from __future__ import annotations
 
+from abc import abstractmethod
 from typing import Any
 
 import numpy as np
@@ -160,17 +161,17 @@ class LiggghtsNormalModel(ContactLaw):
     normal_history: tuple[str, ...] = ()
     """Contact columns of the normal model's own history values, in LIGGGHTS' order."""
 
+    @abstractmethod
     def normal_energy(self, rows: ContactRows) -> np.ndarray:
         """``u_n`` of every row (J)."""
-        raise NotImplementedError
 
+    @abstractmethod
     def kn(self, rows: ContactRows) -> np.ndarray:
         """The normal stiffness LIGGGHTS sets for the sub-models, ``sidata.kn`` (N/m), per row."""
-        raise NotImplementedError
 
+    @abstractmethod
     def kt(self, rows: ContactRows) -> np.ndarray:
         """The tangential stiffness LIGGGHTS sets, ``sidata.kt`` (N/m), per row."""
-        raise NotImplementedError
 
     def normal_and_tangential(self, rows: ContactRows, with_shear: bool, compiled: bool) -> dict[str, np.ndarray]:
         """``u_n`` and, with ``with_shear``, ``u_t`` = kt |shear|^2/2 of every row (J); a law with a faster

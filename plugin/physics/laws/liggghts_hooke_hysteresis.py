@@ -14,7 +14,7 @@ import numpy as np
 
 from ..moduli import effective_modulus, effective_radius
 from . import register
-from ._hysteresis import DELTA_MAX, hysteretic_force, unloading_energy
+from ._hysteresis import DELTA_MAX, hysteresis_of, unloading_energy
 from ._liggghts import LiggghtsNormalModel
 from .base import ContactLaw, ContactRows
 from .liggghts_hooke import liggghts_hooke_kn
@@ -52,13 +52,9 @@ class LiggghtsHookeHysteresis(LiggghtsNormalModel):
         return self.kn(rows)
 
     def force_and_k2(self, rows: ContactRows) -> tuple[np.ndarray, np.ndarray]:
-        kn = self.kn(rows)
-        k2max = kn * rows.type_pair(self.params["max_elastic_stiffness"])
-        kc = kn * rows.type_pair(self.params["adhesion_stiffness"])
-        with np.errstate(divide="ignore", invalid="ignore"):
-            lim = k2max / (k2max - kn) * rows.type_pair(self.params["plasticity_depth"]) * 2.0 \
-                * effective_radius(rows.r1, rows.r2)
-        return hysteretic_force(rows.delta, rows.column(DELTA_MAX), kn, k2max, kc, lim)
+        p = self.params
+        return hysteresis_of(rows, self.kn(rows), p["max_elastic_stiffness"], p["adhesion_stiffness"],
+                             p["plasticity_depth"])
 
     def normal_energy(self, rows: ContactRows) -> np.ndarray:
         return unloading_energy(*self.force_and_k2(rows))

@@ -16,9 +16,8 @@ import numpy as np
 
 from ...errors import UnsupportedModelError
 from ..elastic import overlap
-from ..moduli import effective_radius
 from . import register
-from ._hysteresis import DELTA_MAX, hysteretic_force, unloading_energy
+from ._hysteresis import DELTA_MAX, hysteresis_of, unloading_energy
 from ._liggghts import LiggghtsNormalModel
 from .base import ContactLaw, ContactRows, LawEnergy
 
@@ -60,13 +59,9 @@ class LiggghtsLuding(LiggghtsNormalModel):
         return self.kn(rows)
 
     def force_and_k2(self, rows: ContactRows) -> tuple[np.ndarray, np.ndarray]:
-        k1 = self.kn(rows)
-        k2max = k1 * rows.type_pair(self.params["unloading_stiffness"])
-        kc = k1 * rows.type_pair(self.params["adhesion_stiffness"])
-        with np.errstate(divide="ignore", invalid="ignore"):
-            lim = k2max / (k2max - k1) * rows.type_pair(self.params["plasticity_depth"]) * 2.0 \
-                * effective_radius(rows.r1, rows.r2)
-        return hysteretic_force(rows.delta, rows.column(DELTA_MAX), k1, k2max, kc, lim)
+        p = self.params
+        return hysteresis_of(rows, self.kn(rows), p["unloading_stiffness"], p["adhesion_stiffness"],
+                             p["plasticity_depth"])
 
     def normal_energy(self, rows: ContactRows) -> np.ndarray:
         return unloading_energy(*self.force_and_k2(rows))
