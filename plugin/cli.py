@@ -182,13 +182,26 @@ def cmd_report(args: argparse.Namespace) -> int:
     if args.output:
         check_output_path(args.output, [args.results])
     results = load_results(args.results)
+    names = dict(args.type_name or ())
     if args.output:
-        write_html(results, args.output)
+        write_html(results, args.output, step=args.step, names=names)
         if not args.quiet:
             print(f"wrote {args.output}")
     else:
-        print(text_summary(results))
+        text = text_summary(results, step=args.step, names=names)
+        if not args.quiet:
+            print(text)
     return 0
+
+
+def _type_name(text: str) -> tuple[int, str]:
+    t, sep, name = text.partition("=")
+    try:
+        if not sep or not name.strip():
+            raise ValueError
+        return int(t), name.strip()
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected TYPE=NAME (e.g. 1=glass), got {text!r}") from None
 
 
 def cmd_export(args: argparse.Namespace) -> int:
@@ -313,8 +326,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_check)
 
     p = add("report", "summary of a result file: text, or a self-contained HTML page with -o")
-    p.add_argument("results")
-    p.add_argument("-o", "--output", help="HTML file to write")
+    p.add_argument("results", help="a store written by demsplit run")
+    p.add_argument("-o", "--output", help="HTML file to write (default: the text summary on the terminal)")
+    p.add_argument("--step", type=int, metavar="N", help="the timestep of the detailed frame (default: the last)")
+    p.add_argument("--type-name", action="append", type=_type_name, metavar="T=NAME",
+                   help="name material type T NAME in the tables and figures (repeatable; YADE material labels "
+                   "are named already)")
     p.set_defaults(func=cmd_report)
 
     p = add("export", "export a result file's tables to Parquet or CSV, or as a VTK series for ParaView")

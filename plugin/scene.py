@@ -22,10 +22,13 @@ class Material:
 
     E : Young's modulus (Pa); ``math.inf`` makes the body rigid.
     nu : Poisson's ratio, -1 < nu <= 0.5.
+    name : the simulator's name of the material (YADE's material label), shown by the report; not
+        part of the comparison.
     """
 
     E: float
     nu: float
+    name: str = field(default="", compare=False)
 
     def __post_init__(self) -> None:
         if not (self.E > 0):  # also rejects NaN
@@ -175,10 +178,11 @@ class Scene:
 
 
 def scene_to_dict(scene: Scene) -> dict:
-    """The scene as plain JSON-ready data: ``materials`` (type -> E, nu),
+    """The scene as plain JSON-ready data: ``materials`` (type -> E, nu, and name when it has one),
     ``model``, ``walls`` (every field), ``units``, ``source``."""
     return {
-        "materials": {str(t): asdict(m) for t, m in sorted(scene.materials.items())},
+        "materials": {str(t): {k: v for k, v in asdict(m).items() if k != "name" or v}
+                      for t, m in sorted(scene.materials.items())},
         "model": asdict(scene.model),
         "walls": [asdict(w) for w in scene.walls],
         "units": scene.units,

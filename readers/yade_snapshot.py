@@ -161,7 +161,8 @@ def scene_from_snapshot(meta: dict, bodies: Table, *, path: Path, step: int | No
         if "young" not in m or "poisson" not in m:
             continue
         try:
-            materials[int(m["id"])] = Material(E=float(m["young"]), nu=float(m["poisson"]))
+            materials[int(m["id"])] = Material(E=float(m["young"]), nu=float(m["poisson"]),
+                                               name=str(m.get("label") or ""))
         except MaterialError as err:
             raise MaterialError(
                 f"YADE material {m['id']} ({m.get('label', '')!r}): {err.message}", file=path, step=step,

@@ -1,12 +1,21 @@
 """What a user reads: a terminal summary and a self-contained HTML report.
 
-:func:`text_summary` prints the per-type table of one frame (the last by
+:func:`text_summary` prints what was not computed, the per-type table of one frame (the last by
 default), the split comparison, the walls and the per-frame energy balance.
-:func:`write_html` writes one HTML file with the same tables and figures
-embedded as base64 PNG (matplotlib, Agg backend): energy histogram per type,
-energy against radius, per-frame totals, the split comparison, and, when the
-simulator's contact point is known, the contact-point shift. No file outside
-the page is referenced.
+:func:`write_html` writes one HTML page of one frame and the per-frame series, every figure embedded
+as a base64 PNG (matplotlib, Agg backend), no file outside the page referenced. From the top: what was
+not computed (the store's provenance: ``not_computed``, ``skipped``, the NOT COMPUTED notes, walls
+marked missing, the frame's contacts with not-computed modes), the energy per mode, per material type
+(histogram), the normalised distribution P(u/<u>) and its CCDF, where the energy sits (against height,
+a slice and a projection coloured by u), per size class (bars over the real class bounds), the split
+comparison with the per-particle misattribution of the 50/50 and radius splits, the per-frame series on
+a log axis, the walls, the contact point, and the provenance folded away.
+
+Energy columns are found generically (:func:`energy_modes`: every ``u_*`` column that is an energy
+mode), so a mode added later (rolling ``u_r``, twisting ``u_tw``, the signed cohesion work ``u_adh``,
+kept apart from the elastic total) shows up without a change here. Material names: YADE's material
+labels (``provenance["scene"]["materials"][T]["name"]``), ``provenance["type_names"]``, then the
+``type_names`` argument (``demsplit report --type-name T=NAME``), later ones winning.
 """
 
 from __future__ import annotations
@@ -15,6 +24,7 @@ import base64
 import html
 import io
 import json
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
@@ -25,11 +35,56 @@ from ..errors import StoreError
 from .aggregate import elastic_columns
 from .tables import Results
 
-MODE_NAMES = {"u_n": "normal", "u_t": "tangential", "u_r": "rolling", "u_tw": "twisting"}
+MODE_NAMES = {"u_n": "normal", "u_t": "tangential", "u_r": "rolling", "u_tw": "twisting",
+              "u_adh": "cohesion work (signed, apart from the elastic total)"}
+
+NOT_MODES = frozenset({"u_equal", "u_radius", "u_springs", "u_particles", "u_walls", "u_contacts"})
+"""``u_*`` columns that are not energy modes: the other splits' per-particle totals and the frame sums."""
 
 SCATTER_MAX_POINTS = 100_000
-"""Energy-radius scatter plots draw at most this many particles (a seeded
+"""Scatter plots and projections draw at most this many particles (a seeded
 random subset, stated in the caption)."""
+
+HEIGHT_BINS = 20
+"""Slabs of the energy-against-height profile."""
+
+
+def energy_modes(df: pd.DataFrame) -> list[str]:
+    """The energy mode columns of ``df``: every ``u_*`` column but the other splits, the frame sums
+    and the ``*_error`` columns; the known modes (normal, tangential, rolling, twisting, cohesion) first."""
+    cols = [c for c in df.columns if c.startswith("u_") and c not in NOT_MODES and not c.endswith("_error")]
+    order = list(MODE_NAMES)
+    return sorted(cols, key=lambda c: (order.index(c) if c in order else len(order), c))
+
+
+def mode_label(column: str) -> str:
+    return f"{MODE_NAMES.get(column, column)} ({column})"
+
+
+def type_names(results: Results, names: Mapping[int, str] | None = None) -> dict[int, str]:
+    """Material name of each particle/wall type that has one (see the module docstring)."""
+    prov = results.provenance or {}
+    out: dict[int, str] = {}
+    for t, m in (prov.get("scene", {}) or {}).get("materials", {}).items():
+        if isinstance(m, Mapping) and m.get("name"):
+            out[int(t)] = str(m["name"])
+    out.update({int(t): str(n) for t, n in (prov.get("type_names") or {}).items()})
+    out.update({int(t): str(n) for t, n in (names or {}).items()})
+    return out
+
+
+def _type_label(t, names: Mapping[int, str]) -> str:
+    return f"{names[int(t)]} (type {t})" if int(t) in names else f"type {t}"
+
+
+def _with_names(df: pd.DataFrame, names: Mapping[int, str], column: str = "type") -> pd.DataFrame:
+    """``df`` with a ``material`` column after ``column`` when any type is named."""
+    if not names or column not in df:
+        return df
+    out = df.copy()
+    out.insert(list(out.columns).index(column) + 1, "material",
+               [names.get(int(t), "") if pd.notna(t) else "" for t in out[column]])
+    return out
 
 
 def _pick_step(results: Results, step: int | None) -> int:
@@ -47,11 +102,34 @@ def _fmt(df: pd.DataFrame) -> pd.DataFrame:
     return df.map(lambda v: f"{v:.4g}" if isinstance(v, float) else v)
 
 
-def text_summary(results: Results, step: int | None = None) -> str:
-    """The per-type summary of frame ``step`` (default: the last), as plain text."""
+def not_computed(results: Results, frame: pd.Series | None = None) -> list[str]:
+    """What the results do not hold, one sentence each: ``provenance["not_computed"]`` (name -> reason),
+    the NOT COMPUTED notes, ``provenance["skipped"]`` (mode -> why a law has no such energy), walls the
+    scene marks missing, and the count of this frame's contacts with not-computed modes."""
+    prov = results.provenance or {}
+    items = []
+    for name, reason in dict(prov.get("not_computed") or {}).items():
+        why = reason if isinstance(reason, str) else json.dumps(reason, sort_keys=True, default=str)
+        items.append(f"{name}: {why}")
+    items += [n for n in prov.get("notes", []) if "NOT COMPUTED" in n]
+    items += [f"{k} (not computed by the law): {v}" for k, v in dict(prov.get("skipped") or {}).items()]
+    told = " ".join(items)
+    for w in (prov.get("scene", {}) or {}).get("walls", []):
+        if isinstance(w, Mapping) and w.get("missing") and f"'{w.get('name')}'" not in told:
+            items.append(f"wall '{w.get('name')}': {w['missing']}")
+    if frame is not None and frame.get("n_not_computed", 0):
+        items.append(f"{int(frame['n_not_computed'])} contact(s) of this frame have modes not computed "
+                     "(column not_computed)")
+    return items
+
+
+def text_summary(results: Results, step: int | None = None, names: Mapping[int, str] | None = None) -> str:
+    """The per-type summary of frame ``step`` (default: the last), as plain text; ``names``: material
+    names of types (added to the provenance's, see :func:`type_names`)."""
     step = _pick_step(results, step)
     one = results.frame(step)
     fr = one.frames.iloc[0]
+    names = type_names(results, names)
     modes = elastic_columns(one.frames)
     u_total = sum(fr[m] for m in modes)
     parts = ", ".join(f"{MODE_NAMES.get(m, m)} {fr[m]:.6g} J" for m in modes)
@@ -59,13 +137,10 @@ def text_summary(results: Results, step: int | None = None) -> str:
         f"demsplit results: {len(results.steps)} frame(s); frame at timestep {step}"
         + (f" (t = {fr['time']:.6g} s)" if np.isfinite(fr.get("time", np.nan)) else ""),
     ]
-    not_computed = [n for n in results.provenance.get("notes", []) if "NOT COMPUTED" in n]
-    if not_computed or fr.get("n_not_computed", 0):
+    missing = not_computed(results, fr)
+    if missing:
         lines += ["  NOT COMPUTED (these values are unknown, not 0; they are left out of every total below):"]
-        lines += [f"    - {n}" for n in not_computed]
-        if fr.get("n_not_computed", 0):
-            lines.append(f"    - {int(fr['n_not_computed'])} contact(s) of this frame have modes not computed "
-                         "(column not_computed)")
+        lines += [f"    - {n}" for n in missing]
     lines.append(f"  {int(fr['n_particles'])} particles, {int(fr['n_contacts'])} contacts "
                  f"({int(fr['n_wall_contacts'])} with walls); elastic contact energy {u_total:.6g} J ({parts})"
                  + (f"; cohesion work {fr['u_adh']:.6g} J, apart" if "u_adh" in fr else ""))
@@ -80,8 +155,11 @@ def text_summary(results: Results, step: int | None = None) -> str:
     cols = ["type", "count", "total", "share_of_total", "mean", "p50", "p95", "top10_share", "gini"]
     table = one.per_type()
     cols += ["expected_error"] if "expected_error" in table else []
+    table = table[cols]
+    if names:
+        table = table.assign(material=[names.get(int(t), "") for t in table["type"]])
     lines += ["", "Energy per particle type (J; material distribution law; expected_error: the split's expected "
-              "relative error, finite-element model):", _fmt(table[cols]).to_string(index=False)]
+              "relative error, finite-element model):", _fmt(table).to_string(index=False)]
     if {"u_equal", "u_radius"} <= set(one.particles.columns):
         sc = one.split_comparison()
         sc = sc[["type"] + [c for c in sc.columns if c.startswith(("total_", "misattribution_"))]]
@@ -89,8 +167,8 @@ def text_summary(results: Results, step: int | None = None) -> str:
                   _fmt(sc).to_string(index=False)]
     if len(one.walls):
         we = one.wall_energy()
-        lines += ["", "Walls (J):", _fmt(we[[c for c in ("wall", "name", "kind", "u", "u_n", "u_t", "n_contacts",
-                                                         "share") if c in we]]).to_string(index=False)]
+        lines += ["", "Walls (J):", _fmt(we[[c for c in ("wall", "name", "kind", "u", *energy_modes(we),
+                                                         "n_contacts", "share") if c in we]]).to_string(index=False)]
     if {"cpx_sim", "cpy_sim", "cpz_sim"} <= set(one.contacts.columns):
         lines += ["", "Contact point: |cp - cp_simulator| / overlap (print_bound_median: what the dump's printed "
                   "digits alone allow; a shift not far above it measures the print precision):",
@@ -101,9 +179,6 @@ def text_summary(results: Results, step: int | None = None) -> str:
     worst = pf["balance_rel_error"].max()
     lines += ["", f"Energy balance over {len(pf)} frame(s): max |sum particles + sum walls - sum contacts| "
               f"/ sum contacts = {worst:.3g}"]
-    skipped = results.provenance.get("skipped")
-    if skipped:
-        lines += ["", "Not computed:"] + [f"  {k}: {v}" for k, v in dict(skipped).items()]
     return "\n".join(lines) + "\n"
 
 
@@ -126,7 +201,9 @@ def accuracy_line(contacts: pd.DataFrame, split: str) -> str:
             f"range a/R > {HERTZ_VALIDITY}")
 
 
-def _png(fig) -> str:
+# --------------------------------------------------------------------------- figures
+
+def _png(fig, alt: str) -> str:
     """The figure as an <img> tag with a base64 PNG data URI (closes the figure)."""
     import matplotlib.pyplot as plt
 
@@ -134,10 +211,21 @@ def _png(fig) -> str:
     fig.savefig(buf, format="png", dpi=100, bbox_inches="tight")
     plt.close(fig)
     data = base64.b64encode(buf.getvalue()).decode("ascii")
-    return f'<img alt="figure" src="data:image/png;base64,{data}">'
+    return f'<img alt="{html.escape(alt)}" src="data:image/png;base64,{data}">'
 
 
-def _fig_histogram(particles: pd.DataFrame, step: int):
+def _figure(fig, caption: str, alt: str) -> str:
+    return f"<figure>{_png(fig, alt)}<figcaption>{caption}</figcaption></figure>"
+
+
+def _subset(particles: pd.DataFrame) -> tuple[pd.DataFrame, str]:
+    if len(particles) > SCATTER_MAX_POINTS:
+        return (particles.sample(SCATTER_MAX_POINTS, random_state=0),
+                f" (a random subset of {SCATTER_MAX_POINTS} of the {len(particles)} particles)")
+    return particles, ""
+
+
+def _fig_histogram(particles: pd.DataFrame, step: int, names: Mapping[int, str]):
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(7, 4))
@@ -145,7 +233,8 @@ def _fig_histogram(particles: pd.DataFrame, step: int):
     if len(positive):
         edges = np.geomspace(positive["u"].min(), positive["u"].max() * (1 + 1e-12), 41)
         for t, sub in positive.groupby("type"):
-            ax.hist(sub["u"], bins=edges, histtype="step", linewidth=1.5, label=f"type {t} (n = {len(sub)})")
+            ax.hist(sub["u"], bins=edges, histtype="step", linewidth=1.5,
+                    label=f"{_type_label(t, names)} (n = {len(sub)})")
         ax.set_xscale("log")
         ax.legend()
     ax.set_xlabel("particle elastic energy u (J)")
@@ -154,17 +243,54 @@ def _fig_histogram(particles: pd.DataFrame, step: int):
     return fig
 
 
-def _fig_radius(particles: pd.DataFrame, step: int) -> tuple[object, str]:
+def _fig_distribution(particles: pd.DataFrame, step: int, names: Mapping[int, str]):
+    """P(u/<u>) (density over log-spaced bins) and the CCDF P(u/<u> > x), all particles and per type."""
+    import matplotlib.pyplot as plt
+
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4))
+    groups = [("all particles", particles)]
+    if particles["type"].nunique() > 1:
+        groups += [(_type_label(t, names), sub) for t, sub in particles.groupby("type")]
+    drawn = False
+    for label, sub in groups:
+        u = sub["u"].to_numpy()
+        mean = u.mean() if len(u) else 0.0
+        if not mean > 0:
+            continue
+        x = u / mean
+        pos = np.sort(x[x > 0])
+        if len(pos) < 2:
+            continue
+        drawn = True
+        edges = np.geomspace(pos[0], pos[-1] * (1 + 1e-12), 31)
+        counts, _ = np.histogram(pos, bins=edges)
+        density = counts / (len(x) * np.diff(edges))  # zeros count in the normalisation
+        mid = np.sqrt(edges[:-1] * edges[1:])
+        keep = counts > 0
+        ax1.plot(mid[keep], density[keep], "o-", ms=3, label=f"{label} (n = {len(x)})")
+        ccdf = 1.0 - np.arange(len(pos)) / len(x) - (len(x) - len(pos)) / len(x)
+        ax2.step(pos, ccdf, where="post", label=label)
+    if drawn:
+        for ax in (ax1, ax2):
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            ax.legend(fontsize=8)
+    ax1.set_xlabel("u / <u>")
+    ax1.set_ylabel("P(u/<u>)")
+    ax1.set_title(f"Normalised distribution, timestep {step}")
+    ax2.set_xlabel("x = u / <u>")
+    ax2.set_ylabel("P(u/<u> >= x)")
+    ax2.set_title("Complementary cumulative distribution")
+    return fig
+
+
+def _fig_radius(particles: pd.DataFrame, step: int, names: Mapping[int, str]) -> tuple[object, str]:
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(7, 4))
-    df = particles[particles["u"] > 0]
-    note = ""
-    if len(df) > SCATTER_MAX_POINTS:
-        df = df.sample(SCATTER_MAX_POINTS, random_state=0)
-        note = f" (random subset of {SCATTER_MAX_POINTS} particles)"
+    df, note = _subset(particles[particles["u"] > 0])
     for t, sub in df.groupby("type"):
-        ax.scatter(sub["radius"], sub["u"], s=6, alpha=0.6, label=f"type {t}")
+        ax.scatter(sub["radius"], sub["u"], s=6, alpha=0.6, label=_type_label(t, names))
     if len(df):
         ax.set_yscale("log")
         ax.legend()
@@ -174,29 +300,175 @@ def _fig_radius(particles: pd.DataFrame, step: int) -> tuple[object, str]:
     return fig, note
 
 
-def _fig_frames(pf: pd.DataFrame):
+def _fig_height(particles: pd.DataFrame, step: int, names: Mapping[int, str]):
+    """Mean energy per particle and share of the total in horizontal slabs of z."""
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(7, 4))
-    use_time = "time" in pf and len(pf) > 0 and pf["time"].notna().all()
-    x = pf["time"] if use_time else pf["step"]
-    style = "o-" if len(pf) < 50 else "-"
-    ax.plot(x, pf["u_contacts"], style, label="total (contacts)")
-    ax.plot(x, pf["u_n"], style, label="normal")
-    ax.plot(x, pf["u_t"], style, label="tangential")
-    ax.plot(x, pf["u_walls"], style, label="held by walls")
-    ax.set_xlabel("time (s)" if use_time else "timestep")
-    ax.set_ylabel("elastic energy (J)")
-    ax.set_title("Elastic contact energy per frame")
-    ax.legend()
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.5), sharey=True)
+    z = particles["z"].to_numpy()
+    lo, hi = (z.min(), z.max()) if len(z) else (0.0, 1.0)
+    edges = np.linspace(lo, hi if hi > lo else lo + 1.0, HEIGHT_BINS + 1)
+    mid = 0.5 * (edges[:-1] + edges[1:])
+    total = particles["u"].sum()
+    groups = [("all particles", particles)]
+    if particles["type"].nunique() > 1:
+        groups += [(_type_label(t, names), sub) for t, sub in particles.groupby("type")]
+    for label, sub in groups:
+        k = np.clip(np.searchsorted(edges, sub["z"].to_numpy(), side="right") - 1, 0, HEIGHT_BINS - 1)
+        n = np.bincount(k, minlength=HEIGHT_BINS)
+        s = np.bincount(k, sub["u"].to_numpy(), minlength=HEIGHT_BINS)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            mean = np.where(n > 0, s / n, np.nan)
+        style = "k-o" if label == "all particles" else "-o"
+        ax1.plot(mean, mid, style, ms=3, label=label)
+        if total > 0:
+            ax2.plot(s / total, mid, style, ms=3, label=label)
+    if np.nanmax(np.r_[particles["u"].to_numpy(), 0.0]) > 0:
+        ax1.set_xscale("log")
+    ax1.set_xlabel("mean u per particle in the slab (J)")
+    ax1.set_ylabel("height z (m)")
+    ax1.set_title(f"Energy against height, timestep {step}")
+    ax1.legend(fontsize=8)
+    ax2.set_xlabel("share of the frame's particle energy in the slab")
+    ax2.set_title(f"{HEIGHT_BINS} slabs of equal thickness")
     return fig
 
 
-def _fig_split(sc: pd.DataFrame, step: int):
+def _fig_views(particles: pd.DataFrame, step: int) -> tuple[object, str]:
+    """A slice (particles whose sphere crosses the plane y = median y) drawn as their circles, and the
+    x-z projection of every particle (high energies on top), coloured by u on a log scale."""
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import EllipseCollection
+    from matplotlib.colors import LogNorm
+
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 5))
+    u = particles["u"].to_numpy()
+    pos = u[u > 0]
+    norm = LogNorm(vmin=pos.min(), vmax=pos.max()) if len(pos) and pos.max() > pos.min() else None
+    cmap = plt.get_cmap("viridis").with_extremes(bad="lightgrey")
+    y0 = float(np.median(particles["y"])) if len(particles) else 0.0
+    r = particles["radius"].to_numpy()
+    cut = np.abs(particles["y"].to_numpy() - y0) < r
+    sl = particles[cut]
+    rc = np.sqrt(np.maximum(sl["radius"].to_numpy() ** 2 - (sl["y"].to_numpy() - y0) ** 2, 0.0))
+    coll = EllipseCollection(2 * rc, 2 * rc, np.zeros(len(sl)), units="xy", offsets=sl[["x", "z"]].to_numpy(),
+                             offset_transform=ax1.transData, cmap=cmap, norm=norm, edgecolors="k", linewidths=0.2)
+    coll.set_array(np.where(sl["u"].to_numpy() > 0, sl["u"].to_numpy(), np.nan))
+    ax1.add_collection(coll)
+    if len(particles):
+        pad = r.max()
+        ax1.set_xlim(particles["x"].min() - pad, particles["x"].max() + pad)
+        ax1.set_ylim(particles["z"].min() - pad, particles["z"].max() + pad)
+    ax1.set_aspect("equal")
+    ax1.set_xlabel("x (m)")
+    ax1.set_ylabel("z (m)")
+    ax1.set_title(f"Slice y = {y0:.4g} m ({len(sl)} particles), timestep {step}", fontsize=10)
+    sub, note = _subset(particles)
+    sub = sub.sort_values("u", kind="stable")
+    su = sub["u"].to_numpy()
+    ax2.scatter(sub["x"], sub["z"], c=np.where(su > 0, su, np.nan), cmap=cmap, norm=norm, s=8, linewidths=0)
+    ax2.set_aspect("equal")
+    ax2.set_xlabel("x (m)")
+    ax2.set_title("Projection on x-z (highest energies drawn on top)", fontsize=10)
+    if norm is not None:
+        fig.colorbar(plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=[ax1, ax2], label="u (J)", shrink=0.8)
+    return fig, note
+
+
+def _fig_size(per_size: pd.DataFrame, step: int):
+    """Total and mean energy per radius class, each bar spanning its class [r_lo, r_hi]."""
+    import matplotlib.pyplot as plt
+    from matplotlib.ticker import MaxNLocator
+
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4))
+    lo, hi = per_size["r_lo"].to_numpy(), per_size["r_hi"].to_numpy()
+    width = np.where(hi > lo, hi - lo, np.maximum(hi, 1e-300) * 0.02)  # one size: a thin bar at it
+    for ax, col, label in ((ax1, "total", "total u in the class (J)"), (ax2, "mean", "mean u per particle (J)")):
+        ax.bar(lo, per_size[col].to_numpy(), width=width, align="edge", edgecolor="k", linewidth=0.5)
+        ax.set_xlabel("radius class (m)")
+        ax.set_ylabel(label)
+        if (per_size[col] > 0).any():
+            ax.set_yscale("log")
+    for ax in (ax1, ax2):
+        if len(lo) and lo.min() > 0 and hi.max() / lo.min() > 3:
+            ax.set_xscale("log")
+        else:
+            ax.xaxis.set_major_locator(MaxNLocator(4))
+    ax1.set_title(f"Energy per size class, timestep {step}")
+    ax2.set_title("Mean energy per particle of the class")
+    return fig
+
+
+def _fig_misattribution(particles: pd.DataFrame, step: int):
+    """Distribution over particles of (u_split - u)/u for the 50/50 and radius splits."""
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(7, 4))
-    types = sc["type"].astype(str).to_numpy()
+    p = particles[particles["u"] > 0]
+    errs = {label: ((p[col] - p["u"]) / p["u"]).to_numpy() for col, label in
+            (("u_equal", "50/50 split"), ("u_radius", "radius-weighted split"), ("u_springs", "series springs"))
+            if col in p}
+    values = np.concatenate(list(errs.values())) if errs else np.empty(0)
+    values = values[np.isfinite(values)]
+    if len(values):
+        lo, hi = min(values.min(), -1e-3), max(np.quantile(values, 0.995), 1e-3)
+        edges = np.linspace(lo, hi, 61)
+        for label, e in errs.items():
+            ax.hist(np.clip(e[np.isfinite(e)], lo, hi), bins=edges, histtype="step", linewidth=1.5, label=label)
+        ax.set_yscale("log")
+        ax.legend()
+    ax.axvline(0.0, color="k", linewidth=0.5)
+    ax.set_xlabel("(u_split - u) / u per particle")
+    ax.set_ylabel("particles")
+    ax.set_title(f"Misattribution of the simpler splits, timestep {step}")
+    return fig
+
+
+def misattribution_table(particles: pd.DataFrame) -> pd.DataFrame:
+    """Per rule: quantiles of the per-particle (u_split - u)/u over particles with u > 0, and the share of
+    particles whose energy the rule misplaces by more than 10 %."""
+    p = particles[particles["u"] > 0]
+    rows = []
+    for col, label in (("u_equal", "50/50"), ("u_radius", "radius"), ("u_springs", "springs")):
+        if col not in p or not len(p):
+            continue
+        e = ((p[col] - p["u"]) / p["u"]).to_numpy()
+        q = np.quantile(e, [0.05, 0.5, 0.95])
+        rows.append({"split": label, "particles": len(e), "p05": q[0], "median": q[1], "p95": q[2],
+                     "max_abs": float(np.abs(e).max()), "beyond_10pct": float((np.abs(e) > 0.1).mean())})
+    return pd.DataFrame(rows)
+
+
+def _fig_frames(pf: pd.DataFrame):
+    """Every energy column of the frames on a log axis (|u_adh| dashed: it is signed)."""
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    use_time = "time" in pf and len(pf) > 0 and pf["time"].notna().all()
+    x = pf["time"] if use_time else pf["step"]
+    marker = "o" if len(pf) < 50 else None
+    ax.plot(x, pf["u_contacts"], "k-", marker=marker, linewidth=2, label="elastic total (contacts)")
+    for col in energy_modes(pf):
+        y = pf[col].to_numpy(dtype=np.float64)
+        if col == "u_adh":
+            ax.plot(x, np.abs(y), "--", marker=marker, label="|cohesion work u_adh| (signed: see table)")
+        else:
+            ax.plot(x, y, "-", marker=marker, label=mode_label(col))
+    if "u_walls" in pf:
+        ax.plot(x, pf["u_walls"], ":", marker=marker, label="held by walls")
+    ax.set_yscale("log")
+    ax.set_xlabel("time (s)" if use_time else "timestep")
+    ax.set_ylabel("energy (J)")
+    ax.set_title("Energy per frame (log axis; zero values are not drawn)")
+    ax.legend(fontsize=8)
+    return fig
+
+
+def _fig_split(sc: pd.DataFrame, step: int, names: Mapping[int, str]):
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4))
+    types = sc["type"].to_numpy()
     x = np.arange(len(types))
     labels = {"material": "material law (Feng & Gao)", "equal": "50/50", "radius": "radius-weighted",
               "springs": "series springs (YADE linear law)"}
@@ -204,7 +476,7 @@ def _fig_split(sc: pd.DataFrame, step: int):
     width = 0.8 / len(rules)
     for k, rule in enumerate(rules):
         ax.bar(x + (k - (len(rules) - 1) / 2) * width, sc[f"total_{rule}"], width=width, label=labels[rule])
-    ax.set_xticks(x, [f"type {t}" for t in types])
+    ax.set_xticks(x, [_type_label(t, names) for t in types])
     ax.set_ylabel("energy held by the type (J)")
     ax.set_title(f"Energy per type under {len(rules)} splits, timestep {step}")
     ax.legend()
@@ -230,54 +502,139 @@ def _fig_cp(contacts: pd.DataFrame, step: int):
     return fig
 
 
-_CSS = """body{font-family:sans-serif;max-width:1100px;margin:2em auto;color:#222}
+# --------------------------------------------------------------------------- page
+
+_CSS = """body{font-family:sans-serif;max-width:1150px;margin:2em auto;color:#222}
 table{border-collapse:collapse;font-size:0.85em;margin:0.5em 0 1.5em}
 td,th{border:1px solid #bbb;padding:2px 6px;text-align:right}
-th{background:#eee}figure{margin:1em 0}figcaption{font-size:0.85em;color:#555}
-pre{background:#f6f6f6;padding:0.5em;font-size:0.8em;overflow-x:auto}"""
+th{background:#eee}figure{margin:1em 0}figcaption{font-size:0.85em;color:#555}img{max-width:100%}
+pre{background:#f6f6f6;padding:0.5em;font-size:0.8em;overflow-x:auto}
+.missing{border:2px solid #c60;background:#fff4e8;padding:0.5em 1em}.ok{color:#060}
+details{margin:1em 0}summary{cursor:pointer;font-weight:bold}"""
 
 
 def _table(df: pd.DataFrame) -> str:
     return _fmt(df).to_html(index=False, border=0, escape=True)
 
 
-def write_html(results: Results, path: str | Path, step: int | None = None) -> Path:
-    """Write the HTML report of frame ``step`` (default: the last) and the
-    per-frame series to ``path`` (atomically: ``path.tmp``, then renamed)."""
+def _mode_table(one: Results) -> pd.DataFrame:
+    """Frame totals of every energy mode over contacts, particles and walls."""
+    rows = []
+    found = dict.fromkeys([*one.frames.columns, *one.contacts.columns, *one.particles.columns])
+    for col in energy_modes(pd.DataFrame(columns=list(found))):
+        table = one.frames if col in one.frames else one.contacts if col in one.contacts else None
+        total = table[col].sum() if table is not None else np.nan
+        rows.append({"mode": MODE_NAMES.get(col, col), "column": col, "contacts": float(total),
+                     "particles": float(one.particles[col].sum()) if col in one.particles else np.nan,
+                     "walls": float(one.walls[col].sum()) if col in one.walls else np.nan})
+    return pd.DataFrame(rows, columns=["mode", "column", "contacts", "particles", "walls"])
+
+
+def write_html(results: Results, path: str | Path, step: int | None = None,
+               names: Mapping[int, str] | None = None) -> Path:
+    """Write the HTML report of frame ``step`` (default: the last) and the per-frame series to ``path``
+    (atomically: ``path.tmp``, then renamed); ``names``: material names of types (:func:`type_names`)."""
     import matplotlib
 
     matplotlib.use("Agg")
     step = _pick_step(results, step)
     one = results.frame(step)
+    fr = one.frames.iloc[0]
+    names = type_names(results, names)
     pf = results.per_frame()
+    prov = results.provenance or {}
+    esc = html.escape
+    time = f" (t = {fr['time']:.6g} s)" if np.isfinite(fr.get("time", np.nan)) else ""
+    steps = results.steps
+    head = [f"<h1>demsplit report</h1><p>{len(steps)} frame(s), timesteps {int(steps.min())} to {int(steps.max())}; "
+            f"detailed frame: <b>timestep {step}</b>{esc(time)} (another: <code>demsplit report FILE --step N</code>)."]
+    source = (prov.get("scene") or {}).get("source")
+    model = prov.get("model") or {}
+    if source or model:
+        head.append(f"<br>Run: {esc(str(source or '?'))}; contact law {esc(str(model.get('law', '?')))}.")
+    head.append(f"<br>{int(fr['n_particles'])} particles, {int(fr['n_contacts'])} contacts "
+                f"({int(fr['n_wall_contacts'])} with walls).</p>")
+    missing = not_computed(results, fr)
+    if missing:
+        head += ["<div class='missing' id='not-computed'><h2>Not computed</h2><p>These values are unknown, not 0; "
+                 "they are left out of every total below.</p><ul>",
+                 *(f"<li>{esc(m)}</li>" for m in missing), "</ul></div>"]
+    else:
+        head.append("<p class='ok' id='not-computed'>Not computed: nothing (the store records no mode, wall or "
+                    "contact left out).</p>")
+    other = [n for n in prov.get("notes", []) if "NOT COMPUTED" not in n]
+    if other:
+        head += ["<details><summary>Notes of the run</summary><ul>", *(f"<li>{esc(n)}</li>" for n in other),
+                 "</ul></details>"]
+    body = [*head, "<h2>Energy per mode</h2>",
+            "<p>Totals of this frame (J). The elastic modes sum to the elastic total; the cohesion work "
+            "<code>u_adh</code>, where present, is signed and kept apart.</p>", _table(_mode_table(one))]
+    if "share_n1_error" in one.contacts:
+        body.append(f"<p>{esc(accuracy_line(one.contacts, prov.get('options', {}).get('split', 'material')))}</p>")
     cols = ["type", "count", "total", "share_of_total", "mean", "std", "p05", "p50", "p95", "top1_share",
             "top10_share", "gini"]
-    body = [f"<h1>demsplit report</h1><p>{len(results.steps)} frame(s); detailed frame: timestep {step}.</p>",
-            "<h2>Energy per particle type</h2>", _table(one.per_type()[cols]),
-            "<figure>", _png(_fig_histogram(one.particles, step)),
-            "<figcaption>Histogram of per-particle elastic energy (material distribution law).</figcaption></figure>"]
-    fig, note = _fig_radius(one.particles, step)
-    body += ["<figure>", _png(fig), f"<figcaption>Particle energy against radius{html.escape(note)}.</figcaption>"
-             "</figure>", "<h2>Energy per size class</h2>", _table(one.per_size())]
-    body += ["<h2>Frames</h2>", "<figure>", _png(_fig_frames(pf)),
-             "<figcaption>Total, normal, tangential and wall-held elastic energy per frame.</figcaption></figure>",
-             _table(pf[[c for c in ("step", "time", "n_particles", "n_contacts", "n_wall_contacts", "u_contacts",
-                                    "u_walls", "balance_rel_error", "gini") if c in pf]])]
+    per_type = one.per_type()
+    cols += ["expected_error"] if "expected_error" in per_type else []
+    body += ["<h2>Energy per particle type</h2>", _table(_with_names(per_type[cols], names)),
+             _figure(_fig_histogram(one.particles, step, names),
+                     "Histogram of per-particle elastic energy (material distribution law).",
+                     "Energy histogram per type")]
+    body += ["<h2>Distribution</h2>", _figure(
+        _fig_distribution(one.particles, step, names),
+        "Left: probability density of u/&lt;u&gt; over log-spaced bins, &lt;u&gt; the mean over every particle of "
+        "the group (particles with u = 0 count in the normalisation, not in the curve). Right: the complementary "
+        "cumulative distribution P(u/&lt;u&gt; &ge; x). Log axes: a power-law tail is a straight line.",
+        "Normalised distribution and CCDF")]
+    fig, note = _fig_radius(one.particles, step, names)
+    body.append(_figure(fig, f"Particle energy against radius{esc(note)}.", "Energy against radius"))
+    if {"x", "y", "z"} <= set(one.particles.columns):
+        body += ["<h2>Where the energy sits</h2>",
+                 _figure(_fig_height(one.particles, step, names),
+                         f"Mean energy per particle (left) and share of the frame's particle energy (right) in "
+                         f"{HEIGHT_BINS} horizontal slabs of z (particles by their centre).", "Energy against height")]
+        fig, note = _fig_views(one.particles, step)
+        body.append(_figure(fig, "Left: the particles cut by the plane y = median y, drawn as their cross-sections "
+                            "and coloured by u (log scale; grey: u = 0). Right: every particle's centre projected on "
+                            f"the x-z plane{esc(note)}, the highest energies drawn last.", "Slice and projection"))
+    per_size = one.per_size()
+    body += ["<h2>Energy per size class</h2>",
+             _figure(_fig_size(per_size, step), "Each bar spans its radius class [r_lo, r_hi] (log-spaced classes "
+                     "between the smallest and the largest radius of the run); log energy axes.",
+                     "Energy per size class"),
+             _table(per_size)]
     if {"u_equal", "u_radius"} <= set(one.particles.columns):
         sc = one.split_comparison()
-        body += ["<h2>Split comparison</h2>", "<figure>", _png(_fig_split(sc, step)),
-                 "<figcaption>Energy held per type under the material law, the 50/50 split and the "
-                 "radius-weighted split; misattribution = (split total - material total)/material total.</figcaption>"
-                 "</figure>", _table(sc[["step", "type", "count"] + [c for c in sc.columns if c.startswith(
-                     ("total_", "misattribution_", "gini_"))]])]
+        body += ["<h2>Split comparison</h2>", _figure(
+            _fig_split(sc, step, names),
+            "Energy held per type under the material law, the 50/50 split and the radius-weighted split; "
+            "misattribution = (split total - material total)/material total.", "Energy per type under each split"),
+            _table(_with_names(sc[["step", "type", "count"] + [c for c in sc.columns if c.startswith(
+                ("total_", "misattribution_", "gini_"))]], names)),
+            _figure(_fig_misattribution(one.particles, step),
+                    "Per-particle misattribution (u_split - u)/u of the simpler splits, over the particles with "
+                    "u &gt; 0 (values beyond the 99.5th percentile are gathered in the last bin). -1: the split "
+                    "gives the particle nothing; +1: twice its energy.", "Per-particle misattribution"),
+            _table(misattribution_table(one.particles))]
+    frame_cols = ["step", "time", "n_particles", "n_contacts", "n_wall_contacts", "u_contacts", *energy_modes(pf),
+                  "u_walls", "balance_rel_error", "gini"]
+    body += ["<h2>Frames</h2>", _figure(_fig_frames(pf), "Elastic total, every energy mode and the energy held by "
+                                        "walls per frame, on a log axis so that small terms are visible.",
+                                        "Energy per frame"),
+             _table(pf[[c for c in dict.fromkeys(frame_cols) if c in pf]])]
     if len(one.walls):
-        body += ["<h2>Walls</h2>", _table(one.wall_energy())]
+        body += ["<h2>Walls</h2>", _table(_with_names(one.wall_energy(), names))]
     if {"cpx_sim", "cpy_sim", "cpz_sim"} <= set(one.contacts.columns):
-        body += ["<h2>Contact point</h2>", "<figure>", _png(_fig_cp(one.contacts, step)),
-                 "<figcaption>Distance between the material-weighted contact point and the simulator's own, "
-                 "in units of the overlap.</figcaption></figure>", _table(one.contact_point_shift())]
-    body += ["<h2>Provenance</h2>",
-             f"<pre>{html.escape(json.dumps(results.provenance, indent=2, sort_keys=True, default=str))}</pre>"]
+        body += ["<h2>Contact point</h2>", _figure(
+            _fig_cp(one.contacts, step), "Distance between the material-weighted contact point and the simulator's "
+            "own, in units of the overlap.", "Contact point shift"), _table(one.contact_point_shift())]
+    materials = (prov.get("scene") or {}).get("materials") or {}
+    if materials or names:
+        rows = {int(t): {k: v for k, v in (m or {}).items() if k != "name"} for t, m in materials.items()}
+        body += ["<h2>Materials</h2>", _table(pd.DataFrame(
+            [{"type": t, "material": names.get(t, ""), **rows.get(t, {})} for t in sorted({*rows, *names})]))]
+    body += ["<details id='provenance'><summary>Provenance (inputs with sha256, options, scene, demsplit version)"
+             "</summary>",
+             f"<pre>{esc(json.dumps(prov, indent=2, sort_keys=True, default=str))}</pre></details>"]
     page = ("<!DOCTYPE html><html><head><meta charset='utf-8'><title>demsplit report</title>"
             f"<style>{_CSS}</style></head><body>{''.join(body)}</body></html>")
     path = Path(path)
