@@ -163,7 +163,9 @@ def cmd_run(args: argparse.Namespace) -> int:
 def cmd_info(args: argparse.Namespace) -> int:
     from .inspection import describe_file
 
-    print(describe_file(args.file))
+    text = describe_file(args.file)
+    if not args.quiet:
+        print(text)
     return 0
 
 
@@ -171,7 +173,8 @@ def cmd_check(args: argparse.Namespace) -> int:
     from .inspection import check_run
 
     text, ok = check_run(args.input, **_reader_options(args))
-    print(text)
+    if not args.quiet:  # the exit status says whether a problem was found
+        print(text)
     return 0 if ok else 1
 
 
@@ -271,14 +274,19 @@ def cmd_yade_path(args: argparse.Namespace) -> int:
 
     # site-packages of the Python demsplit is installed in (a regular or an editable
     # install): site.addsitedir() it inside YADE (docs/yade.md)
-    print(sysconfig.get_paths()["purelib"])
+    if not args.quiet:
+        print(sysconfig.get_paths()["purelib"])
     return 0
 
 
 def build_parser() -> argparse.ArgumentParser:
     from . import __version__
 
-    parser = argparse.ArgumentParser(prog="demsplit", description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(
+        prog="demsplit", description="Per-particle elastic contact energy of LIGGGHTS and YADE runs, split between "
+        "the two bodies by the Feng & Gao material law.",
+        epilog="Errors print one message naming the file, timestep and line and how to fix it, and exit 2; --debug "
+        "shows the traceback. 'demsplit COMMAND -h' describes a command.")
     parser.add_argument("--version", action="version", version=f"demsplit {__version__}")
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("--debug", action="store_true", help="show the traceback of an error")
@@ -286,7 +294,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
 
     def add(name: str, help: str) -> argparse.ArgumentParser:  # every subcommand takes --debug/--quiet
-        return sub.add_parser(name, help=help, parents=[common])
+        return sub.add_parser(name, help=help, description=help[0].upper() + help[1:] + ".", parents=[common])
 
     p = add("run", "per-particle energies of every frame, written to an HDF5 store")
     _add_input(p)
@@ -318,7 +326,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_run)
 
     p = add("info", "describe a dump or snapshot file: kind, frames, columns, precision")
-    p.add_argument("file")
+    p.add_argument("file", help="a LIGGGHTS dump, input script, YADE snapshot or saved state, ingest cache or "
+                   "result store")
     p.set_defaults(func=cmd_info)
 
     p = add("check", "validate a run without computing energies")
