@@ -122,6 +122,44 @@ class Results:
         }
         return cls.from_tables(tables, provenance, walls_meta)
 
+    def _summary(self) -> tuple[str, list[tuple[str, int, list[str]]], list[str]]:
+        """Head line, (table, rows, "column (unit)" list) per table, and the wall names."""
+        steps = self.steps
+        head = f"{len(steps)} frame(s)" + (f", timesteps {describe_steps(steps)}" if len(steps) else "")
+        law = (self.provenance or {}).get("model", {}).get("law")
+        head += f"; law {law}" if law else ""
+        tables = []
+        for name in TABLES:
+            df = getattr(self, name)
+            units = df.attrs.get("units", {})
+            cols = [f"{c} ({units[c]})" if units.get(c) not in (None, "", "1") else c for c in df.columns]
+            tables.append((name, len(df), cols))
+        walls = [str(w.get("name", w.get("wall"))) for w in self.walls_meta]
+        return head, tables, walls
+
+    def __repr__(self) -> str:
+        """A few lines: frames, rows and columns of each table (with units), wall names."""
+        head, tables, walls = self._summary()
+        lines = [f"<demsplit Results: {head}"]
+        for name, rows, cols in tables:
+            shown = ", ".join(cols[:8]) + (f", ... ({len(cols)} columns)" if len(cols) > 8 else "")
+            lines.append(f"  {name:<9} {rows:>9} rows: {shown}")
+        if walls:
+            more = f", ... ({len(walls)})" if len(walls) > 10 else ""
+            lines.append(f"  wall names: {', '.join(walls[:10])}{more}")
+        return "\n".join(lines) + ">"
+
+    def _repr_html_(self) -> str:
+        """The summary of :meth:`__repr__` as an HTML table, for notebooks."""
+        import html
+
+        head, tables, walls = self._summary()
+        rows = "".join(f"<tr><td><code>{name}</code></td><td>{n}</td><td>{html.escape(', '.join(cols))}</td></tr>"
+                       for name, n, cols in tables)
+        wall_line = f"<p>wall names: {html.escape(', '.join(walls))}</p>" if walls else ""
+        return (f"<div><b>demsplit Results</b>: {html.escape(head)}<table><tr><th>table</th><th>rows</th>"
+                f"<th>columns (unit)</th></tr>{rows}</table>{wall_line}</div>")
+
     @property
     def steps(self) -> np.ndarray:
         """Timesteps of the frames, in stored order."""
