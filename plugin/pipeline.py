@@ -321,7 +321,11 @@ def _processes(run: Run, indices: list[int], options: Options, jobs: int) -> Ite
 
 
 def _dask(run: Run, indices: list[int], options: Options, address: str) -> Iterator[tuple]:
-    from distributed import Client, LocalCluster
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:
+        raise DemsplitError("--dask needs dask.distributed, which is not installed.",
+                            fix="pip install 'demsplit[dask]', or use --jobs N (local cores).") from None
 
     spec = run.spec
     key = _spec_key(spec)
