@@ -504,7 +504,7 @@ def _fig_cp(contacts: pd.DataFrame, step: int):
 
 # --------------------------------------------------------------------------- page
 
-_CSS = """body{font-family:sans-serif;max-width:1150px;margin:2em auto;color:#222}
+_CSS = """body{font-family:sans-serif;max-width:1150px;margin:2em auto;padding:0 1em;color:#222}
 table{border-collapse:collapse;font-size:0.85em;margin:0.5em 0 1.5em}
 td,th{border:1px solid #bbb;padding:2px 6px;text-align:right}
 th{background:#eee}figure{margin:1em 0}figcaption{font-size:0.85em;color:#555}img{max-width:100%}
