@@ -213,3 +213,18 @@ def test_run_summary_reads_one_frame_and_equals_the_full_summary(tmp_path):
     pf = full.per_frame()  # the recorded sums are the particles' and walls' own
     per_step = full.particles.groupby("step")["u"].sum().to_numpy()
     assert (pf["u_particles"] - per_step).abs().max() <= 1e-15 * pf["u_contacts"].max()
+
+
+def test_a_run_without_contacts_or_comparison_is_reported(tmp_path):
+    """run --no-contacts --no-compare: no contacts table, no u_equal/u_radius; the report leaves out what
+    needs them."""
+    frames = []
+    for s in (0, 100):
+        f = {k: v for k, v in frame(s).items() if k != "contacts"}
+        f["particles"] = {k: v for k, v in f["particles"].items() if k not in ("u_equal", "u_radius")}
+        frames.append(f)
+    res = Results.from_frames(frames, PROVENANCE, WALLS_META)
+    assert res.contacts.columns.empty
+    page = write_html(res, tmp_path / "r.html", step=0).read_text()
+    assert len(re.findall(r"<img", page)) == 7 and "<h2>Split comparison</h2>" not in page
+    assert "frame at timestep 0" in text_summary(res, step=0)

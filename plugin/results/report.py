@@ -599,7 +599,7 @@ def write_html(results: Results, path: str | Path, step: int | None = None,
     per_size = one.per_size()
     body += ["<h2>Energy per size class</h2>",
              _figure(_fig_size(per_size, step), "Each bar spans its radius class [r_lo, r_hi] (log-spaced classes "
-                     "between the smallest and the largest radius of the run); log energy axes.",
+                     "between the smallest and the largest radius of this frame); log energy axes.",
                      "Energy per size class"),
              _table(per_size)]
     if {"u_equal", "u_radius"} <= set(one.particles.columns):

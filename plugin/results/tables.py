@@ -173,7 +173,8 @@ class Results:
                              fix="pick one of the stored timesteps.")
         pick = {name: getattr(self, name) for name in TABLES}
         return Results(
-            **{name: _with_units(df[df["step"] == step].reset_index(drop=True), df) for name, df in pick.items()},
+            **{name: _with_units((df[df["step"] == step] if "step" in df else df).reset_index(drop=True), df)
+               for name, df in pick.items()},  # a table not stored (run --no-contacts) has no columns
             provenance=self.provenance,
             walls_meta=self.walls_meta,
         )
