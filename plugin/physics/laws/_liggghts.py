@@ -143,10 +143,20 @@ class LiggghtsNormalModel(ContactLaw):
         for name in ("rolling_friction", "cohesion_energy_density"):
             if p[name] is not None:
                 p[name] = self.table(name)
+        if "pull_off_force" in p:  # a normal model with a constant pull-off force f0 (luding, edinburgh)
+            f0 = np.asarray(p["pull_off_force"], dtype=np.float64)
+            if not np.all(np.isfinite(f0)):
+                raise UnsupportedModelError(f"{self.key}: pullOffForce must be finite, got {f0.tolist()!r}.",
+                                            fix="correct the fix property/global line of the script.")
+            p["pull_off_force"] = f0.item() if f0.ndim == 0 else tuple(map(tuple, f0.tolist()))
         self.modes = tuple(m for m, has in (("u_n", True), ("u_t", TANGENTIAL_MODELS[p["tangential"]]),
                                             ("u_r", ROLLING_MODELS[p["rolling"]]),
-                                            ("u_adh", p["cohesion"] != "off")) if has)
+                                            ("u_adh", p["cohesion"] != "off" or self.has_pull_off())) if has)
         self.mode_columns = {m: cols for m, cols in type(self).mode_columns.items() if m in self.modes}
+
+    def has_pull_off(self) -> bool:
+        """Whether the normal model pulls the bodies with a nonzero constant force f0 (``pull_off_force``)."""
+        return "pull_off_force" in self.params and bool(np.any(np.asarray(self.params["pull_off_force"]) != 0))
 
     def table(self, name: str) -> Any:
         """Parameter ``name`` as a per-type-pair table of nested tuples (or its scalar), checked finite and >= 0."""
@@ -211,6 +221,9 @@ class LiggghtsNormalModel(ContactLaw):
         if self.params["cohesion"] != "off":
             k = rows.type_pair(self.params["cohesion_energy_density"])
             modes["u_adh"] = -k * _AREA_INTEGRAL[self.params["cohesion"]](rows.delta, rows.r1, rows.r2)
+        if self.has_pull_off():  # the constant pull-off force's work f0 delta, also cohesion work
+            work = rows.type_pair(self.params["pull_off_force"]) * overlap(rows.delta)
+            modes["u_adh"] = modes.get("u_adh", 0.0) + work
         return LawEnergy(modes, skipped)
 
     def cohesion_force(self, rows: ContactRows) -> np.ndarray:

@@ -28,7 +28,7 @@ from ..formulas import hertz_kt_formula
 from ..moduli import effective_modulus, effective_radius, effective_shear_modulus
 from . import register
 from ._liggghts import LiggghtsNormalModel
-from .base import ContactLaw, ContactRows, LawEnergy
+from .base import ContactLaw, ContactRows
 
 DELTA_P = "delta_p_max"
 """Contact column of the largest plastic overlap delta_p (m), the model's first history value."""
@@ -54,7 +54,6 @@ class LiggghtsEdinburgh(LiggghtsNormalModel):
         super().check()
         for name in ("unloading_stiffness", "surface_energy"):
             self.params[name] = self.table(name)
-        self.params["pull_off_force"] = self.table_signed("pull_off_force")
         if np.any(np.asarray(self.params["surface_energy"]) != 0):
             raise UnsupportedModelError(
                 f"{self.key} with surfaceEnergy > 0 is not supported: LIGGGHTS then derives an adhesive branch "
@@ -66,14 +65,6 @@ class LiggghtsEdinburgh(LiggghtsNormalModel):
         self.params["overlap_exponent"] = float(self.params["overlap_exponent"])
         if not self.params["overlap_exponent"] > 0:
             raise UnsupportedModelError(f"{self.key}: overlapExponent must be > 0.")
-        if np.any(np.asarray(self.params["pull_off_force"]) != 0) and "u_adh" not in self.modes:
-            self.modes = (*self.modes, "u_adh")
-
-    def table_signed(self, name: str):
-        value = np.asarray(self.params[name], dtype=np.float64)
-        if not np.all(np.isfinite(value)):
-            raise UnsupportedModelError(f"{self.key}: parameter {name!r} must be finite.")
-        return value.item() if value.ndim == 0 else tuple(map(tuple, value.tolist()))
 
     def k1(self, rows: ContactRows) -> np.ndarray:
         """Loading stiffness (N/m^n): (4/3) E* sqrt(R*), or 2 E* R* for n = 1."""
@@ -104,10 +95,3 @@ class LiggghtsEdinburgh(LiggghtsNormalModel):
     def normal_force(self, rows: ContactRows) -> np.ndarray:
         d, dp, k2, n = self.curve(rows)
         return k2 * (d**n - dp**n)
-
-    def energies(self, rows: ContactRows, *, compiled: bool = True) -> LawEnergy:
-        result = super().energies(rows, compiled=compiled)
-        if "u_adh" in self.modes:
-            work = rows.type_pair(self.params["pull_off_force"]) * overlap(rows.delta)
-            result.modes["u_adh"] = result.modes.get("u_adh", 0.0) + work
-        return result

@@ -14,12 +14,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...errors import UnsupportedModelError
-from ..elastic import overlap
 from . import register
 from ._hysteresis import DELTA_MAX, hysteresis_of, unloading_energy
 from ._liggghts import LiggghtsNormalModel
-from .base import ContactLaw, ContactRows, LawEnergy
+from .base import ContactLaw, ContactRows
 
 
 @register
@@ -44,13 +42,6 @@ class LiggghtsLuding(LiggghtsNormalModel):
         super().check()
         for name in ("loading_stiffness", "unloading_stiffness", "adhesion_stiffness", "plasticity_depth"):
             self.params[name] = self.table(name)
-        f0 = np.asarray(self.params["pull_off_force"], dtype=np.float64)
-        if not np.all(np.isfinite(f0)):
-            raise UnsupportedModelError(f"{self.key}: pullOffForce must be finite, got {f0.tolist()!r}.",
-                                        fix="correct the fix property/global line of the script.")
-        self.params["pull_off_force"] = f0.item() if f0.ndim == 0 else tuple(map(tuple, f0.tolist()))
-        if np.any(f0 != 0) and "u_adh" not in self.modes:
-            self.modes = (*self.modes, "u_adh")
 
     def kn(self, rows: ContactRows) -> np.ndarray:
         return np.broadcast_to(rows.type_pair(self.params["loading_stiffness"]), rows.delta.shape)
@@ -65,14 +56,6 @@ class LiggghtsLuding(LiggghtsNormalModel):
 
     def normal_energy(self, rows: ContactRows) -> np.ndarray:
         return unloading_energy(*self.force_and_k2(rows))
-
-    def energies(self, rows: ContactRows, *, compiled: bool = True) -> LawEnergy:
-        result = super().energies(rows, compiled=compiled)
-        f0 = np.asarray(self.params["pull_off_force"], dtype=np.float64)
-        if np.any(f0 != 0):
-            work = rows.type_pair(self.params["pull_off_force"]) * overlap(rows.delta)
-            result.modes["u_adh"] = result.modes.get("u_adh", 0.0) + work
-        return result
 
     def normal_force(self, rows: ContactRows) -> np.ndarray:
         return self.force_and_k2(rows)[0]
