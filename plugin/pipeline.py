@@ -94,9 +94,11 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = Options()) -> Ta
         energies = contact_energies(contacts, scene, particles, bodies, index)
         check_finite_energies(energies.u, contacts, file=frame.source[-1] if frame.source else None,
                               step=frame.step)
+        ratios = contact_radius_ratios(contacts["delta"], contacts["r1"], contacts["r2"]) \
+            if options.accuracy or options.split == "corrected" else None  # a/R1, a/R2, once for both
         corrected = None
         if options.split == "corrected":
-            x1, x2 = contact_radius_ratios(contacts["delta"], contacts["r1"], contacts["r2"])
+            x1, x2 = ratios
             corrected = np.broadcast_to(corrected_share(x1, x2, bodies.nu1, bodies.nu2, bodies.E1, bodies.E2),
                                         x1.shape)
         main = partition(contacts, scene, particles, split="material", tangential_rule=options.tangential_rule,
@@ -131,7 +133,7 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = Options()) -> Ta
     n = len(contacts["delta"])
     step = np.int64(frame.step)
     _mark_missing_walls(scene, main, ptable, wtable, n)
-    accuracy = _accuracy(contacts, bodies, main, ptable, index) if options.accuracy else {}
+    accuracy = _accuracy(contacts, ratios, bodies, main, ptable, index) if options.accuracy else {}
     tables: Tables = {"particles": {"step": np.full(len(ptable["id"]), step), **ptable},
                       "walls": {"step": np.full(len(wtable["wall"]), step), **wtable}}
     if options.contacts:
@@ -161,14 +163,15 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = Options()) -> Ta
     return tables
 
 
-def _accuracy(contacts: Table, bodies: ContactBodies, main: ContactEnergy, ptable: Table,
-              index: ParticleIndex) -> Table:
+def _accuracy(contacts: Table, ratios: tuple[np.ndarray, np.ndarray], bodies: ContactBodies,
+              main: ContactEnergy, ptable: Table, index: ParticleIndex) -> Table:
     """How far the split can be trusted, from the fitted finite-element error model
     (:mod:`demsplit.physics.accuracy`, docs/accuracy.md): per contact ``a_over_r1 a_over_r2`` (the Hertz
     contact radius over each radius) and ``share_n1_error`` (expected FE share minus the law's share of
     body 1's normal energy), returned; per particle ``u_n_error`` (J), the expected error of its normal
-    energy, the sum over its contacts of +-share_n1_error u_n, added to ``ptable``."""
-    x1, x2 = contact_radius_ratios(contacts["delta"], contacts["r1"], contacts["r2"])
+    energy, the sum over its contacts of +-share_n1_error u_n, added to ``ptable``. ``ratios``: a/R1, a/R2
+    (:func:`~demsplit.physics.accuracy.contact_radius_ratios`)."""
+    x1, x2 = ratios
     err = np.broadcast_to(expected_share_error(x1, x2, bodies.nu1, bodies.nu2, bodies.E1, bodies.E2), x1.shape)
     du = err * main.u[0]
     rows1, rows2 = index.contact_rows(contacts["id1"], contacts["id2"], contacts["wall"])
