@@ -143,7 +143,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     report, _ = run_to_store(args.input, args.output, options=_options(args), jobs=args.jobs, dask=args.dask,
                              resume=args.resume, on_bad_frame=args.on_bad_frame,
                              compression=None if args.compression == "none" else args.compression,
-                             progress=False if args.quiet else None, **options)
+                             progress=False if args.quiet else None,
+                             type_names=dict(args.type_name or ()), **options)
     if not args.quiet:
         from .results.report import text_summary
         from .results.store import read_last_frame
@@ -323,6 +324,9 @@ def build_parser() -> argparse.ArgumentParser:
                    "compresses well, such as integers, shares and points, no filter for the others: docs/store.md), "
                    "gzip (every column; smallest, slowest), lzf (h5py only), none (fastest, largest); "
                    "any HDF5 tool reads auto, gzip and none")
+    p.add_argument("--type-name", action="append", type=_type_name, metavar="T=NAME",
+                   help="name material type T NAME, stored with the results and used by report and export "
+                   "(repeatable; YADE material labels are stored already)")
     p.set_defaults(func=cmd_run)
 
     p = add("info", "describe a dump or snapshot file: kind, frames, columns, precision")
@@ -339,8 +343,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", help="HTML file to write (default: the text summary on the terminal)")
     p.add_argument("--step", type=int, metavar="N", help="the timestep of the detailed frame (default: the last)")
     p.add_argument("--type-name", action="append", type=_type_name, metavar="T=NAME",
-                   help="name material type T NAME in the tables and figures (repeatable; YADE material labels "
-                   "are named already)")
+                   help="name material type T NAME in the tables and figures (repeatable; overrides the names "
+                   "stored by run --type-name and YADE's material labels)")
     p.set_defaults(func=cmd_report)
 
     p = add("export", "export a result file's tables to Parquet or CSV, or as a VTK series for ParaView")

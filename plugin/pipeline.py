@@ -13,7 +13,7 @@ from __future__ import annotations
 import os
 import sys
 from collections import deque
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -416,11 +416,13 @@ def run_steps(run: Run) -> list[int | None]:
 
 
 def analyze(path: str | Path, *, options: Options = Options(), jobs: int = 1, dask: str | None = None,
-            on_bad_frame: str = "stop", progress: bool | None = False, **reader_options):
+            on_bad_frame: str = "stop", progress: bool | None = False,
+            type_names: Mapping[int, str] | None = None, **reader_options):
     """Analyse a run in memory and return :class:`~demsplit.results.Results`.
 
     ``path``: a LIGGGHTS input script or a ``demsplit.yade`` snapshot file;
-    ``reader_options`` go to :func:`demsplit.readers.open_run` (e.g.
+    ``type_names``: material names of particle types, kept in the provenance (``type_names``) for
+    reports and exports; ``reader_options`` go to :func:`demsplit.readers.open_run` (e.g.
     ``atoms=``, ``contacts=``, ``walls=``, ``overlap_tolerance=``).
     """
     from .readers import open_run
@@ -433,11 +435,16 @@ def analyze(path: str | Path, *, options: Options = Options(), jobs: int = 1, da
         hash_in_background(run.sources)  # the provenance's sha256, while frames are computed
         frames = list(process_run(run, options, jobs=jobs, dask=dask, on_bad_frame=on_bad_frame,
                                   progress=progress, report=report))
-        provenance = build_provenance(run.sources, scene=run.scene,
-                                      options=asdict(options), **_report_provenance(run, report))
+        provenance = build_provenance(run.sources, scene=run.scene, options=asdict(options),
+                                      type_names=_type_names(type_names), **_report_provenance(run, report))
         return Results.from_frames(frames, provenance, walls_meta_from_scene(run.scene))
     finally:
         run.close()
+
+
+def _type_names(names: Mapping[int, str] | None) -> dict[str, str]:
+    """``names`` as the provenance keeps them (JSON: string keys)."""
+    return {str(int(t)): str(n) for t, n in (names or {}).items()}
 
 
 def _report_provenance(run: Run, report: RunReport) -> dict:
@@ -447,7 +454,7 @@ def _report_provenance(run: Run, report: RunReport) -> dict:
 def run_to_store(path: str | Path, out: str | Path, *, options: Options = Options(), jobs: int = 1,
                  dask: str | None = None, resume: bool = False, on_bad_frame: str = "stop",
                  progress: bool | None = None, compression: str | None = "auto",
-                 **reader_options) -> tuple[RunReport, Scene]:
+                 type_names: Mapping[int, str] | None = None, **reader_options) -> tuple[RunReport, Scene]:
     """Analyse a run and stream the results into the HDF5 store ``out``
     (written to a temporary name and renamed when complete; ``resume``
     continues an interrupted run from its last complete frame).
@@ -456,6 +463,7 @@ def run_to_store(path: str | Path, out: str | Path, *, options: Options = Option
         readable by every HDF5 tool), ``"gzip"`` (every column; smallest,
         slowest), ``"lzf"`` (h5py only) or ``"none"``/``None`` (fastest,
         largest); see ``docs/performance.md``, "The result store", for the measured cost of each.
+    type_names : material names of particle types, as for :func:`analyze`.
     """
     from .readers import open_run
     from .results import walls_meta_from_scene
@@ -476,7 +484,8 @@ def run_to_store(path: str | Path, out: str | Path, *, options: Options = Option
 
         frames = None if resume else frames_after(set())
         first = None if frames is None else next(frames, None)
-        provenance = build_provenance(sources, scene=run.scene, options=asdict(options), run=run.describe())
+        provenance = build_provenance(sources, scene=run.scene, options=asdict(options), run=run.describe(),
+                                      type_names=_type_names(type_names))
         with ResultWriter(out, provenance, resume=resume, walls_meta=walls_meta_from_scene(run.scene),
                           compression=compression) as writer:
             if frames is None:

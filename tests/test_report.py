@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from conftest import SAMPLES, require_program
 from demsplit.errors import StoreError
-from demsplit.results import Results
+from demsplit.results import Results, load_results
 from demsplit.results.report import text_summary, write_html
 from result_frames import PROVENANCE, WALLS_META, synthetic_frame
 
@@ -152,6 +152,19 @@ def test_report_command_options(tmp_path, capsys):
     with pytest.raises(SystemExit):
         cli.main(["report", str(out), "--type-name", "steel"])
     assert "expected TYPE=NAME" in capsys.readouterr().err
+
+
+def test_run_type_names_travel_to_the_report(tmp_path, capsys):
+    """Names given to LIGGGHTS types at run time are stored and named by every later report."""
+    from demsplit import cli
+
+    out = tmp_path / "o.h5"
+    assert cli.main(["run", str(SAMPLES / "liggghts" / "packing" / "in.packing"), "-o", str(out), "-q",
+                     "--type-name", "1=glass", "--type-name", "2=steel"]) == 0
+    assert load_results(out).type_names() == {1: "glass", 2: "steel"}
+    assert cli.main(["report", str(out), "--type-name", "2=brass"]) == 0  # the report's option wins
+    text = capsys.readouterr().out
+    assert re.search(r"\n\s*1\s+\d+ .* glass\n", text) and re.search(r"\n\s*2\s+\d+ .* brass\n", text)
 
 
 def browser_check(page: Path, tmp_path: Path) -> tuple[int, int, list[str]]:

@@ -48,6 +48,22 @@ def test_vtk_series_holds_the_stores_particles_and_contacts(run, tmp_path):
                 np.testing.assert_array_equal(arrays[column], frame[column].to_numpy(), err_msg=column)
 
 
+def test_vtk_files_carry_the_material_names(tmp_path):
+    """YADE's material labels (and names from run --type-name) are in every file's field data."""
+    store = tmp_path / "out.h5"
+    assert main(["run", str(SAMPLES / "yade" / "mindlin_box.h5"), "-o", str(store), "-q", "--type-name", "7=rock"]) == 0
+    assert main(["export", str(store), "--vtk", str(tmp_path / "vtk"), "-q"]) == 0
+    expected = load_results(store).type_names()
+    assert expected[7] == "rock" and len(expected) >= 2
+    reader = vtkXMLUnstructuredGridReader()
+    reader.SetFileName(str(sorted((tmp_path / "vtk").glob("particles_*.vtu"))[-1]))
+    reader.Update()
+    fields = reader.GetOutput().GetFieldData()
+    ids = vtk_numpy.vtk_to_numpy(fields.GetArray("type_id")).tolist()
+    labels = fields.GetAbstractArray("material")
+    assert dict(zip(ids, (labels.GetValue(k) for k in range(labels.GetNumberOfValues())))) == expected
+
+
 def test_the_export_never_writes_over_its_store(tmp_path, capsys):
     store = tmp_path / "out.h5"
     assert main(["run", str(SAMPLES / "yade" / "mindlin_box.h5"), "-o", str(store), "-q"]) == 0

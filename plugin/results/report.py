@@ -13,9 +13,8 @@ a log axis, the walls, the contact point, and the provenance folded away.
 
 Energy columns are found generically (:func:`energy_modes`: every ``u_*`` column that is an energy
 mode), so a mode added later (rolling ``u_r``, twisting ``u_tw``, the signed cohesion work ``u_adh``,
-kept apart from the elastic total) shows up without a change here. Material names: YADE's material
-labels (``provenance["scene"]["materials"][T]["name"]``), ``provenance["type_names"]``, then the
-``type_names`` argument (``demsplit report --type-name T=NAME``), later ones winning.
+kept apart from the elastic total) shows up without a change here. Material names:
+:meth:`Results.type_names`, then ``demsplit report --type-name T=NAME``.
 """
 
 from __future__ import annotations
@@ -59,18 +58,6 @@ def energy_modes(df: pd.DataFrame) -> list[str]:
 
 def mode_label(column: str) -> str:
     return f"{MODE_NAMES.get(column, column)} ({column})"
-
-
-def type_names(results: Results, names: Mapping[int, str] | None = None) -> dict[int, str]:
-    """Material name of each particle/wall type that has one (see the module docstring)."""
-    prov = results.provenance or {}
-    out: dict[int, str] = {}
-    for t, m in (prov.get("scene", {}) or {}).get("materials", {}).items():
-        if isinstance(m, Mapping) and m.get("name"):
-            out[int(t)] = str(m["name"])
-    out.update({int(t): str(n) for t, n in (prov.get("type_names") or {}).items()})
-    out.update({int(t): str(n) for t, n in (names or {}).items()})
-    return out
 
 
 def _type_label(t, names: Mapping[int, str]) -> str:
@@ -125,11 +112,11 @@ def not_computed(results: Results, frame: pd.Series | None = None) -> list[str]:
 
 def text_summary(results: Results, step: int | None = None, names: Mapping[int, str] | None = None) -> str:
     """The per-type summary of frame ``step`` (default: the last), as plain text; ``names``: material
-    names of types (added to the provenance's, see :func:`type_names`)."""
+    names of types (added to the provenance's, see :meth:`Results.type_names`)."""
     step = _pick_step(results, step)
     one = results.frame(step)
     fr = one.frames.iloc[0]
-    names = type_names(results, names)
+    names = results.type_names(names)
     modes = elastic_columns(one.frames)
     u_total = sum(fr[m] for m in modes)
     parts = ", ".join(f"{MODE_NAMES.get(m, m)} {fr[m]:.6g} J" for m in modes)
@@ -533,14 +520,14 @@ def _mode_table(one: Results) -> pd.DataFrame:
 def write_html(results: Results, path: str | Path, step: int | None = None,
                names: Mapping[int, str] | None = None) -> Path:
     """Write the HTML report of frame ``step`` (default: the last) and the per-frame series to ``path``
-    (atomically: ``path.tmp``, then renamed); ``names``: material names of types (:func:`type_names`)."""
+    (atomically: ``path.tmp``, then renamed); ``names``: material names of types (:meth:`Results.type_names`)."""
     import matplotlib
 
     matplotlib.use("Agg")
     step = _pick_step(results, step)
     one = results.frame(step)
     fr = one.frames.iloc[0]
-    names = type_names(results, names)
+    names = results.type_names(names)
     pf = results.per_frame()
     prov = results.provenance or {}
     esc = html.escape

@@ -160,6 +160,19 @@ class Results:
         return (f"<div><b>demsplit Results</b>: {html.escape(head)}<table><tr><th>table</th><th>rows</th>"
                 f"<th>columns (unit)</th></tr>{rows}</table>{wall_line}</div>")
 
+    def type_names(self, names: Mapping[int, str] | None = None) -> dict[int, str]:
+        """Material name of each particle/wall type that has one: YADE's material labels
+        (``provenance["scene"]["materials"][T]["name"]``), then the names stored by
+        ``demsplit run --type-name`` (``provenance["type_names"]``), then ``names``; later ones win."""
+        prov = self.provenance or {}
+        out: dict[int, str] = {}
+        for t, m in (prov.get("scene", {}) or {}).get("materials", {}).items():
+            if isinstance(m, Mapping) and m.get("name"):
+                out[int(t)] = str(m["name"])
+        out.update({int(t): str(n) for t, n in (prov.get("type_names") or {}).items()})
+        out.update({int(t): str(n) for t, n in (names or {}).items()})
+        return out
+
     @property
     def steps(self) -> np.ndarray:
         """Timesteps of the frames, in stored order."""

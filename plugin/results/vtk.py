@@ -7,7 +7,9 @@ id, type, radius, the energy of every mode, ``u``, the comparison splits,
 as points at the material-weighted contact point (``contacts_<step>.vtu``:
 ids, wall, overlap, the energies, shares, ``u1 u2 depth1``), plus
 ``particles.pvd`` and ``contacts.pvd``: ParaView opens a ``.pvd`` as one time
-series. Units are SI (m, J). The files are VTK XML unstructured grids of
+series. Units are SI (m, J). Where types have material names (YADE's material
+labels, ``demsplit run --type-name``), every file's field data carries them as two
+parallel arrays, ``type_id`` (integers) and ``material`` (strings). The files are VTK XML unstructured grids of
 vertex cells, written by meshio: pure Python and a small fraction of VTK's
 size (the two writers measured: ``python benchmarks/vtk_writers.py``, figures
 in docs/performance.md).
@@ -49,6 +51,7 @@ def export_vtk(results: Results, directory: str | Path, inputs: Iterable[str | P
     for name, files in plan.items():  # every path checked before anything is written
         for _, path in [*files, (None, directory / f"{name}.pvd")]:
             check_output_path(path, inputs)
+    field_data = _material_field_data(results.type_names())
     written = []
     for name, df in tables.items():
         position = POSITIONS[name]
@@ -60,6 +63,9 @@ def export_vtk(results: Results, directory: str | Path, inputs: Iterable[str | P
             mesh = meshio.Mesh(points, [("vertex", np.arange(len(points)).reshape(-1, 1))], point_data=data)
             with atomic_path(path) as tmp:
                 meshio.write(tmp, mesh, file_format="vtu", binary=True, compression=None)
+                if field_data:
+                    grid = b"<UnstructuredGrid>"
+                    tmp.write_bytes(tmp.read_bytes().replace(grid, grid + field_data, 1))
             written.append(path)
         rows = "\n".join(f'    <DataSet timestep="{step}" part="0" file={quoteattr(path.name)}/>'
                          for step, path in plan[name])
@@ -69,3 +75,18 @@ def export_vtk(results: Results, directory: str | Path, inputs: Iterable[str | P
                            f"{rows}\n  </Collection>\n</VTKFile>\n")
         written.append(pvd)
     return written
+
+
+def _material_field_data(names: dict[int, str]) -> bytes:
+    """VTK XML ``<FieldData>`` with the arrays ``type_id`` and ``material`` (ASCII format: a string
+    array is its characters' codes, each string ended by 0, as VTK's own XML writer writes it);
+    empty when no type has a name."""
+    if not names:
+        return b""
+    types = sorted(names)
+    codes = " ".join(" ".join(str(b) for b in names[t].encode("utf-8")) + " 0" for t in types)
+    return ("<FieldData>"
+            f'<DataArray type="Int32" Name="type_id" NumberOfTuples="{len(types)}" format="ascii">'
+            f'{" ".join(str(t) for t in types)}</DataArray>'
+            f'<Array type="String" Name="material" NumberOfTuples="{len(types)}" format="ascii">{codes}</Array>'
+            "</FieldData>").encode("ascii")
