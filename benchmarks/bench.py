@@ -31,8 +31,8 @@ of each measurement kept (the machine is shared). Measurements:
     default ``auto`` compression: gzip on the columns whose first chunk
     compresses, none on the others; ``--no-contacts`` leaves out the
     per-contact table, by far the largest).
-``demsplit compute``
-    the same pipeline without the store: every frame's tables computed
+``pipeline (no store)``
+    not a command: the pipeline of ``demsplit run`` without the store: every frame's tables computed
     (``demsplit.pipeline.process_run``) and dropped.
 ``demsplit read``
     the reader alone: every Frame of the run (atoms + contacts joined).
@@ -76,7 +76,7 @@ from pathlib import Path
 
 CHILDREN = ("warm-up", "imports", "demsplit-run", "demsplit-run-gzip", "demsplit-run-lzf", "demsplit-run-nocompress",
             "demsplit-run-nocompare",
-            "demsplit-run-nocontacts", "demsplit-compute",
+            "demsplit-run-nocontacts", "pipeline-nostore",
             "demsplit-read", "demsplit-atoms", "polars",
             "pandas-c", "ovito", "mdanalysis", "convert", "cache-read", "kernel")
 KERNEL_REPEAT = 7  # timings of each in-memory kernel measurement, the best kept
@@ -119,7 +119,7 @@ def child(name: str, d: Path, work: Path, index_file: str) -> dict:
         rc = main(["run", str(script), "-o", str(out), "-q", *extra])
         out.unlink(missing_ok=True)
         return {"rc": rc}
-    if name == "demsplit-compute":
+    if name == "pipeline-nostore":
         from demsplit.pipeline import process_run
         from demsplit.readers import open_run
 
@@ -396,10 +396,10 @@ def report(m: dict, d: Path, load0, load1, repeat: int) -> None:
     ratio("demsplit run --compression none vs polars bare parse", "demsplit-run-nocompress", "polars")
     ratio("demsplit run --no-compare vs polars bare parse", "demsplit-run-nocompare", "polars")
     ratio("demsplit run --no-contacts vs polars bare parse", "demsplit-run-nocontacts", "polars")
-    ratio("demsplit compute (no store) vs polars bare parse", "demsplit-compute", "polars")
+    ratio("pipeline (no store) vs polars bare parse", "pipeline-nostore", "polars")
     ratio("demsplit reader (every Frame) vs polars bare parse", "demsplit-read", "polars")
     ratio("demsplit run vs pandas C engine bare parse", "demsplit-run", "pandas-c")
-    ratio("demsplit compute (no store) vs OVITO", "demsplit-compute", "ovito")
+    ratio("pipeline (no store) vs OVITO", "pipeline-nostore", "ovito")
     ratio("demsplit reader on the atom dump vs MDAnalysis (like for like)", "demsplit-atoms", "mdanalysis")
     ratio("cache read vs text read (every Frame)", "cache-read", "demsplit-read")
     if k and "frame_bytes" in k and "imports" in m and "error" not in m["imports"]:
@@ -408,7 +408,7 @@ def report(m: dict, d: Path, load0, load1, repeat: int) -> None:
         print(f"\npeak memory above imports ({base:.0f} MB), in units of one frame's arrays "
               f"({fb:.0f} MiB: particles + contacts tables)")
         for n in ("demsplit-run", "demsplit-run-gzip", "demsplit-run-lzf", "demsplit-run-nocompress",
-                  "demsplit-run-nocompare", "demsplit-run-nocontacts", "demsplit-compute",
+                  "demsplit-run-nocompare", "demsplit-run-nocontacts", "pipeline-nostore",
                   "demsplit-read", "cache-read", "convert"):
             if n in m and "error" not in m[n]:
                 print(f"  {n:28s} {(m[n]['peak_rss_mb'] - base) / fb:6.2f}x")
