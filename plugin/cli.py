@@ -244,20 +244,36 @@ def cmd_prepare(args: argparse.Namespace) -> int:
     from .prepare import prepare_script
 
     script = Path(args.input)
-    out = check_output_path(args.output or script.with_name(script.name + ".demsplit"), [script])
+    out = Path(args.output or script.with_name(script.name + ".demsplit"))
     prepared = prepare_script(script)
+    parts = [prepared]
+    while parts[-1].part2 is not None:
+        parts.append(parts[-1].part2)
+    paths = [out] + [out.with_name(f"{out.name}.part{k}") for k in range(2, len(parts) + 1)]
+    for path in paths:  # every path checked before anything is written
+        check_output_path(path, [script])
     if not args.quiet:
-        print("\n".join(prepared.notes))
+        print("\n".join(note for part in parts for note in part.notes))
     if not prepared.added:
         return 0
     from .atomic import atomic_path
 
-    with atomic_path(out) as tmp:
-        Path(tmp).write_text(prepared.text)
+    written = []
+    try:
+        for part, path in zip(parts, paths):
+            with atomic_path(path) as tmp:
+                Path(tmp).write_text(part.text)
+            written.append(path)
+    except BaseException:  # all parts or none
+        for path in written:
+            path.unlink(missing_ok=True)
+        raise
     if not args.quiet:
         print(prepared.diff(script.read_text(), str(script)))
-        print(f"wrote {out}: run it with 'liggghts -in {out.name}' in {out.parent}, then "
-              f"'demsplit run {out} -o results.h5'")
+        where = f"in {out.parent}" if len(paths) == 1 else f"one after the other in {out.parent}"
+        print(f"wrote {', '.join(map(str, paths))}: run {'it' if len(paths) == 1 else 'them'} with "
+              f"{'; '.join(f'liggghts -in {p.name}' for p in paths)} {where}, then "
+              + "; ".join(f"'demsplit run {p} -o results{'' if k == 0 else k + 1}.h5'" for k, p in enumerate(paths)))
     return 0
 
 
@@ -364,7 +380,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = add("prepare", "write a copy of a LIGGGHTS input script with the dumps demsplit needs, and show the diff")
     p.add_argument("input", help="the LIGGGHTS input script")
-    p.add_argument("-o", "--output", help="prepared script (default: INPUT.demsplit next to the input)")
+    p.add_argument("-o", "--output", help="prepared script (default: INPUT.demsplit next to the input; a script "
+                   "split at a mesh wall fix after a run also gets OUTPUT.part2, ...)")
     p.set_defaults(func=cmd_prepare)
 
     p = add("convert", "write a run's dumps once to an HDF5 ingest cache read much faster later")

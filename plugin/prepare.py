@@ -15,9 +15,21 @@ requires of the contact computes):
   walls (LIGGGHTS stops on it with primitive walls only);
 - a full-precision atom dump, unless the script already writes one.
 
-A mesh wall fix placed after the first ``run`` cannot get its contact compute
-(LIGGGHTS needs it before the first run): that is an error naming the line and
-the way out (split the script there with ``write_restart``/``read_restart``).
+A mesh wall fix placed after a ``run`` cannot get its contact compute in the
+same LIGGGHTS session (LIGGGHTS accepts ``wall/gran/local`` only before the
+first run). prepare then splits the script there, which keeps the physics:
+part 1 is the script up to that fix, ending with ``write_restart``; part 2
+starts with the settings LIGGGHTS does not keep in a restart file (the
+script's commands before the fix, less those that create or move atoms, run,
+or write once), then ``read_restart`` and the rest of the script. Fixes keep
+their IDs, so the restart restores their state (contact histories, insertion
+counters). Each part gets its own demsplit dumps; the script's own dumps are
+declared again in part 2 writing to ``NAME.part2.EXT`` (a ``*`` file name is
+kept), so part 1's files are not overwritten. Checked in Debian's LIGGGHTS:
+the split run's trajectory is bit for bit the unsplit one
+(``tests/test_prepare.py``). Scripts whose commands before the split include
+other files or loop (``include``, ``jump``, ``if``...) are refused with the
+steps to split them by hand.
 """
 
 from __future__ import annotations
@@ -35,6 +47,19 @@ KEYWORDS = ["pos", "vel", "id", "force", "force_normal", "force_tangential", "to
 """Keywords of the contact computes prepare adds (``history`` dropped when the law keeps none)."""
 ATOM_COLUMNS = "id type x y z vx vy vz fx fy fz omegax omegay omegaz radius mass"
 DEFAULT_EVERY = 1000
+RESTART = "ds_split{k}.restart"
+"""The restart file between part k and part k + 1 of a split script."""
+BEFORE_READ_RESTART = frozenset({"units", "atom_style", "atom_modify", "boundary", "newton", "communicate",
+                                 "comm_modify", "processors", "dimension"})
+"""Commands that must precede ``read_restart`` (they define how the box and atoms are read)."""
+NOT_REPEATED = frozenset({"create_box", "create_atoms", "read_data", "read_dump", "read_restart", "set", "velocity",
+                          "delete_atoms", "displace_atoms", "change_box", "replicate", "reset_timestep", "run",
+                          "rerun", "minimize", "write_restart", "write_data", "write_dump", "print", "shell", "log",
+                          "clear"})
+"""Commands of part 1 not repeated in part 2: they create, move or change atoms (the restart holds the
+result), run, or write once (they would overwrite part 1's files)."""
+NOT_SPLITTABLE = frozenset({"include", "jump", "label", "next", "if", "python"})
+"""Commands before a split point that prepare cannot carry into part 2 by itself."""
 
 
 @dataclass
@@ -44,11 +69,18 @@ class Prepared:
     text: str
     added: list[str]
     notes: list[str]
+    part2: Prepared | None = None
+    """When the script was split at a mesh wall fix after a run, the rest of it (this is then part 1)."""
 
     def diff(self, original: str, name: str) -> str:
-        """A unified diff from the original script to the prepared one."""
-        return "".join(difflib.unified_diff(original.splitlines(True), self.text.splitlines(True),
-                                            fromfile=name, tofile=f"{name} (prepared by demsplit)"))
+        """A unified diff from the original script to the prepared one (to each part in turn when split)."""
+        out, part, k = [], self, 1
+        while part is not None:
+            label = f"{name} (prepared by demsplit" + (f", part {k})" if self.part2 is not None else ")")
+            out += difflib.unified_diff(original.splitlines(True), part.text.splitlines(True), fromfile=name,
+                                        tofile=label)
+            part, k = part.part2, k + 1
+        return "".join(out)
 
 
 def _commands(path: Path) -> list[tuple[int, list[str]]]:
@@ -61,84 +93,178 @@ def _commands(path: Path) -> list[tuple[int, list[str]]]:
     return out
 
 
-def _has_full_atom_dump(script: LiggghtsScript) -> int | None:
-    """The ``every`` of a full-precision atom dump with what demsplit reads, or None."""
+def _has_full_atom_dump(script: LiggghtsScript, declared: set[str]) -> int | None:
+    """The ``every`` of a full-precision atom dump (among the dump ids ``declared``) with what demsplit
+    reads, or None."""
     for d in script.dumps:
-        if d.style == "custom" and d.full_precision and {"id", "type", "x", "y", "z", "radius"} <= set(d.keywords):
+        if d.id in declared and d.style == "custom" and d.full_precision and \
+                {"id", "type", "x", "y", "z", "radius"} <= set(d.keywords):
             return d.every
     return None
 
 
-def _has_local_dump(script: LiggghtsScript, kind: str, needed: set[str]) -> bool:
-    """A full-precision ``dump local`` of a ``kind`` compute holding the ``needed`` columns."""
-    return any(d.layout is not None and d.layout.kind == kind and d.full_precision and needed <= set(d.layout.columns)
-               for d in script.dumps)
+def _has_local_dump(script: LiggghtsScript, declared: set[str], kind: str, needed: set[str]) -> bool:
+    """A full-precision ``dump local`` (among the dump ids ``declared``) of a ``kind`` compute holding the
+    ``needed`` columns."""
+    return any(d.id in declared and d.layout is not None and d.layout.kind == kind and d.full_precision
+               and needed <= set(d.layout.columns) for d in script.dumps)
+
+
+def _is_mesh_wall_fix(words: list[str]) -> bool:
+    return words[0] == "fix" and len(words) > 3 and words[3] == "wall/gran" and "mesh" in words
+
+
+def _mesh_names(words: list[str]) -> list[str]:
+    """The meshes a ``fix wall/gran ... mesh n_meshes N meshes A B ...`` command names."""
+    if "meshes" not in words or "n_meshes" not in words:
+        return [words[1]]
+    try:
+        n = int(words[words.index("n_meshes") + 1])
+    except ValueError:
+        return [words[1]]
+    at = words.index("meshes") + 1
+    return words[at:at + n]
+
+
+def split_points(commands: list[tuple[int, list[str]]]) -> list[int]:
+    """Lines of the mesh wall fixes where the script must be split: each one that follows a ``run``
+    of the part it would otherwise belong to (module docstring)."""
+    points, ran = [], False
+    for line, words in commands:
+        if words[0] == "run":
+            ran = True
+        elif ran and _is_mesh_wall_fix(words):
+            points.append(line)
+            ran = False
+    return points
 
 
 def prepare_script(path: str | Path) -> Prepared:
-    """The script at ``path`` with the computes and dumps demsplit needs (module docstring)."""
+    """The script at ``path`` with the computes and dumps demsplit needs, split where a mesh wall fix
+    follows a run (module docstring)."""
     path = Path(path)
     script = read_script(path)
-    scene = script.scene
-    law = scene.model.contact_law
+    law = script.scene.model.contact_law
     history = law.history_columns()  # a LIGGGHTS law (the script reader maps only LIGGGHTS models)
-    keywords = [k for k in KEYWORDS if k != "history" or history]
-    needed = {"id1", "id2", "delta", *law.needs()}
-    mesh = [w for w in scene.walls if w.kind == "mesh"]
     commands = _commands(path)
-    runs = [line for line, words in commands if words[0] == "run"]
-    if not runs:
+    if not any(words[0] == "run" for _, words in commands):
         raise ScriptError("the script has no 'run' command: there is nothing to dump.", file=path,
                           fix="pass the script that runs the simulation.")
-    first_run = runs[0]
-    wall_fixes = [line for line, words in commands
-                  if words[0] == "fix" and len(words) > 3 and words[3] == "wall/gran" and "mesh" in words]
-    late = [line for line in wall_fixes if line > first_run]
-    if late:
-        raise ScriptError(
-            f"the mesh wall fix on line {late[0]} comes after the first 'run' (line {first_run}); LIGGGHTS accepts "
-            "'compute wall/gran/local' only after the wall's fix and before the first run, so this run cannot dump "
-            "its mesh-wall contacts as written.", file=path, line=late[0],
-            fix="split the script at that fix: end the first part with 'write_restart part1.restart'; start the "
-                "second with 'read_restart part1.restart', the same settings (pair_style, property/global fixes, "
-                "mesh and wall fixes), then the wall fix and 'demsplit prepare' the second part.")
+    lines = path.read_text().split("\n")
+    points = split_points(commands)
+    if points:
+        _check_splittable(path, commands, points)
+    bounds = [1, *points, len(lines) + 1]
+    parts = []
+    for k in range(len(bounds) - 1):
+        start, end = bounds[k], bounds[k + 1]
+        last = k == len(bounds) - 2
+        header = _replayed(commands, start, k + 1)
+        footer = [] if last else ["", f"write_restart {RESTART.format(k=k + 1)}"]
+        parts.append(_prepare_part(path, script, history, commands, lines, start, end, k + 1 if points else 0,
+                                   header, footer))
+    for part, after in zip(parts, parts[1:]):
+        part.part2 = after
+    if points:
+        parts[0].notes.insert(0, f"split: the mesh wall fix{'es' if len(points) > 1 else ''} on line"
+                              f"{'s' if len(points) > 1 else ''} {', '.join(map(str, points))} come"
+                              f"{'' if len(points) > 1 else 's'} after a 'run', where LIGGGHTS cannot dump "
+                              f"{'their' if len(points) > 1 else 'its'} contacts; the script is split there into "
+                              f"{len(parts)} parts joined by write_restart/read_restart (the same physics), run "
+                              "one after the other in the same directory.")
+    return parts[0]
+
+
+def _check_splittable(path: Path, commands: list[tuple[int, list[str]]], points: list[int]) -> None:
+    """Refuse a split whose part 1 holds commands prepare cannot carry into part 2."""
+    for line, words in commands:
+        if line < points[-1] and words[0] in NOT_SPLITTABLE:
+            raise ScriptError(
+                f"the mesh wall fix on line {points[0]} comes after a 'run', so the script must be split there "
+                f"(LIGGGHTS dumps a mesh wall's contacts only when its compute comes before the first run), but "
+                f"line {line} ('{words[0]}') includes another file or branches, which prepare cannot carry into "
+                "the second part.", file=path, line=line,
+                fix="split it by hand: end the first part with 'write_restart part1.restart'; start the second "
+                    "with the settings (units, atom_style, boundary...), 'read_restart part1.restart', the fixes, "
+                    "pair_style and computes again (same IDs), then the wall fix; run 'demsplit prepare' on each.")
+
+
+def _replayed(commands: list[tuple[int, list[str]]], start: int, k: int) -> list[str]:
+    """The head of part ``k`` (> 1): the commands before line ``start`` that a restart file does not keep,
+    around ``read_restart`` (module docstring); the script's own dumps write to ``.part{k}`` files."""
+    if k == 1:
+        return []
+    before = [words for line, words in commands if line < start and words[0] not in NOT_REPEATED]
+    head = [" ".join(w) for w in before if w[0] in BEFORE_READ_RESTART]
+    rest = [" ".join(_renamed_dump(w, k)) for w in before if w[0] not in BEFORE_READ_RESTART]
+    return [f"# --- part {k} of the script split by 'demsplit prepare': the settings a restart file does not "
+            "keep, then the state of the previous part ---", *head, f"read_restart {RESTART.format(k=k - 1)}",
+            *rest, "# --- the script continues ---"]
+
+
+def _renamed_dump(words: list[str], k: int) -> list[str]:
+    """A ``dump`` command of an earlier part, writing to ``NAME.part{k}.EXT`` (a ``*`` name is kept: its
+    files are per timestep)."""
+    if words[0] != "dump" or len(words) < 6 or "*" in words[5]:
+        return words
+    stem, dot, ext = words[5].rpartition(".")
+    renamed = f"{stem}.part{k}.{ext}" if dot and "/" not in ext else f"{words[5]}.part{k}"
+    return [*words[:5], renamed, *words[6:]]
+
+
+def _prepare_part(path: Path, script: LiggghtsScript, history: list[str], commands: list[tuple[int, list[str]]],
+                  lines: list[str], start: int, end: int, k: int, header: list[str], footer: list[str]) -> Prepared:
+    """Lines ``start``..``end - 1`` of the script (part ``k``; 0 when not split) with ``header`` and
+    ``footer`` and, before the part's first run, the computes and dumps it lacks."""
+    suffix = f".part{k}" if k > 1 else ""
+    label = f"part {k}: " if k else ""
+    law = script.scene.model.contact_law
+    keywords = [w for w in KEYWORDS if w != "history" or history]
+    needed = {"id1", "id2", "delta", *law.needs()}
+    declared = {words[1] for line, words in commands if line < end and words[0] == "dump" and len(words) > 1}
+    mesh = [name for line, words in commands if line < end and _is_mesh_wall_fix(words) for name in _mesh_names(words)]
+    runs = [line for line, words in commands if start <= line < end and words[0] == "run"]
+    body = lines[start - 1:end - 1]
     notes, block = [], []
-    every = _has_full_atom_dump(script)
+    every = _has_full_atom_dump(script, declared)
     if every is None:
         every = DEFAULT_EVERY
-        block += [f"dump dsAtoms all custom {every} ds_atoms.txt {ATOM_COLUMNS}",
+        block += [f"dump dsAtoms all custom {every} ds_atoms{suffix}.txt {ATOM_COLUMNS}",
                   'dump_modify dsAtoms format "%d %d' + " %.17g" * (len(ATOM_COLUMNS.split()) - 2) + '" sort id']
-        notes.append(f"atoms: a full-precision atom dump every {every} steps (ds_atoms.txt); change the interval "
-                     "to the output you want.")
+        notes.append(f"{label}atoms: a full-precision atom dump every {every} steps (ds_atoms{suffix}.txt); change "
+                     "the interval to the output you want.")
     else:
-        notes.append(f"atoms: the script's full-precision atom dump (every {every} steps) is used.")
-    if _has_local_dump(script, "pair", needed):
-        notes.append("pairs: the script's full-precision pair dump holds every column the law needs.")
+        notes.append(f"{label}atoms: the script's full-precision atom dump (every {every} steps) is used.")
+    if _has_local_dump(script, declared, "pair", needed):
+        notes.append(f"{label}pairs: the script's full-precision pair dump holds every column the law needs.")
     else:
-        block += _local("pair", "dsPair", keywords, history, every)
+        block += _local("pair", "dsPair", keywords, history, every, suffix)
         width = len(local_layout("pair", keywords, len(history), history=history))
-        notes.append(f"pairs: compute dsPair and a full-precision dump of its {width} columns (ds_pairs.txt).")
-    if mesh and not _has_local_dump(script, "wall", needed - {"id2"}):
-        block += _local("wall", "dsWall", keywords, history, every)
-        notes.append(f"mesh walls ({', '.join(w.name for w in mesh)}): compute dsWall and its full-precision dump "
-                     "(ds_walls.txt).")
+        notes.append(f"{label}pairs: compute dsPair and a full-precision dump of its {width} columns "
+                     f"(ds_pairs{suffix}.txt).")
+    if mesh and not _has_local_dump(script, declared, "wall", needed - {"id2"}):
+        block += _local("wall", "dsWall", keywords, history, every, suffix)
+        notes.append(f"{label}mesh walls ({', '.join(mesh)}): compute dsWall and its full-precision dump "
+                     f"(ds_walls{suffix}.txt).")
     elif not mesh:
-        notes.append("walls: no mesh wall, so no wall/gran/local compute (LIGGGHTS refuses it with primitive walls "
-                     "only); primitive-wall contacts are rebuilt from positions.")
-    if not block:
+        notes.append(f"{label}walls: no mesh wall, so no wall/gran/local compute (LIGGGHTS refuses it with "
+                     "primitive walls only); primitive-wall contacts are rebuilt from positions.")
+    if not runs:
+        block = []
+        notes.append(f"{label}no 'run': nothing to dump.")
+    if not block and not header and not footer:
         return Prepared(path.read_text(), [], notes + ["nothing to add: the script writes everything demsplit needs."])
-    lines = path.read_text().split("\n")
-    end = first_run - 1  # just before the first run: after every fix the run has so far
+    at = runs[0] - start if block else len(body)  # just before the part's first run: after every fix so far
     added = ["", "# --- added by 'demsplit prepare': the contact output demsplit reads (docs/liggghts-output.md) ---",
-             *block, "# --- end of the lines added by demsplit ---", ""]
-    text = "\n".join(lines[:end] + added + lines[end:])
-    return Prepared(text, block, notes)
+             *block, "# --- end of the lines added by demsplit ---", ""] if block else []
+    text = "\n".join(header + body[:at] + added + body[at:] + footer)
+    return Prepared(text if text.endswith("\n") else text + "\n", header + block + footer, notes)
 
 
-def _local(kind: str, cid: str, keywords: list[str], history: list[str], every: int) -> list[str]:
+def _local(kind: str, cid: str, keywords: list[str], history: list[str], every: int, suffix: str = "") -> list[str]:
     """A granular local compute and the full-precision ``dump local`` of all its columns."""
     width = len(local_layout(kind, keywords, len(history), history=history))
-    name = "ds_pairs.txt" if kind == "pair" else "ds_walls.txt"
+    name = f"ds_pairs{suffix}.txt" if kind == "pair" else f"ds_walls{suffix}.txt"
     columns = " ".join(f"c_{cid}[{k}]" for k in range(1, width + 1))
     return [f"compute {cid} all {kind}/gran/local {' '.join(keywords)}",
             f"dump d{cid} all local {every} {name} {columns}",

@@ -90,15 +90,68 @@ def test_rolling_and_cohesion(tmp_path, words, prop, mode):
         assert (res.contacts[mode] < 0).any()
 
 
-def test_a_wall_fix_after_the_first_run_is_explained(tmp_path, capsys):
-    def late(s: str) -> str:
-        wall = "fix wfloor all wall/gran model hertz tangential history mesh n_meshes 1 meshes floor\n"
-        s = s.replace(wall, "")
-        return s.replace("run 2000", wall + "run 2000")
-    script = user_script(tmp_path, late)
+WALL = "fix wfloor all wall/gran model hertz tangential history mesh n_meshes 1 meshes floor\n"
+USER_DUMP = ('dump mine all custom 500 mine.txt id type x y z vx vy vz fx fy fz omegax omegay omegaz\n'
+             'dump_modify mine format "%d %d' + " %.17g" * 12 + '" sort id\n')
+
+
+def late_wall(s: str) -> str:
+    """The floor's wall fix moved after the first run (3000 steps of fall before it exists), and a dump of
+    the user's own declared before that run."""
+    s = s.replace(WALL, "").replace("run             100000", USER_DUMP + "run 3000")
+    return s.replace("run 2000", WALL + "run 2000")
+
+
+def dump_frames(path: Path) -> dict[int, str]:
+    """Text of each frame of a text dump, by timestep."""
+    frames = {}
+    for block in path.read_text().split("ITEM: TIMESTEP\n")[1:]:
+        step, _, rest = block.partition("\n")
+        frames[int(step)] = rest
+    return frames
+
+
+@pytest.mark.simulator
+def test_a_wall_fix_after_a_run_splits_the_script_with_the_same_physics(tmp_path, capsys):
+    """prepare splits the script at the late wall fix (write_restart / read_restart); both parts run in
+    LIGGGHTS, the user's own dump continues bit for bit as in the unsplit run, and demsplit analyses the
+    second part, whose mesh-wall contacts are now dumped, with no edit."""
+    from conftest import require_program
+
+    liggghts = require_program("liggghts")
+    original = tmp_path / "original"
+    original.mkdir()
+    script = user_script(original, late_wall)
+    proc = subprocess.run([liggghts, "-in", script.name], cwd=original, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stdout[-2000:]
+    split = tmp_path / "split"
+    split.mkdir()
+    script = user_script(split, late_wall)
+    assert main(["prepare", str(script)]) == 0
+    out = capsys.readouterr().out
+    assert "split: the mesh wall fix on line" in out and "write_restart" in out
+    parts = [split / "in.user.demsplit", split / "in.user.demsplit.part2"]
+    assert "write_restart ds_split1.restart" in parts[0].read_text()
+    assert "read_restart ds_split1.restart" in parts[1].read_text()
+    for part in parts:
+        proc = subprocess.run([liggghts, "-in", part.name], cwd=split, capture_output=True, text=True, timeout=600)
+        assert proc.returncode == 0, [line for line in proc.stdout.splitlines() if "ERROR" in line]
+    unsplit = dump_frames(original / "mine.txt")
+    joined = {**dump_frames(split / "mine.part2.txt"), **dump_frames(split / "mine.txt")}
+    assert sorted(joined) == sorted(unsplit) and max(unsplit) == 5000
+    assert all(joined[step] == unsplit[step] for step in unsplit)  # bit for bit: the same physics
+    for k, part in enumerate(parts):
+        assert main(["run", str(part), "-o", str(tmp_path / f"r{k}.h5"), "-q"]) == 0
+    res = demsplit.load_results(tmp_path / "r1.h5")
+    assert (res.contacts["wall"] == 0).any() and "not_computed" not in res.walls  # the late floor is dumped
+
+
+def test_a_split_that_prepare_cannot_carry_is_refused_with_the_steps(tmp_path, capsys):
+    script = user_script(tmp_path, lambda s: late_wall(s).replace("timestep", "include nothing.in\ntimestep", 1))
+    (tmp_path / "nothing.in").write_text("# empty\n")
     assert main(["prepare", str(script)]) == 2
     err = capsys.readouterr().err
-    assert "after the first 'run'" in err and "write_restart" in err
+    assert "include" in err and "write_restart" in err and "read_restart" in err
     assert not script.with_name(script.name + ".demsplit").exists()
 
 
