@@ -129,10 +129,10 @@ PRIMITIVE_HISTORY_UNKNOWN = (
 
 MESH_WALL_NOT_DUMPED = (
     "no dump holds its contacts (LIGGGHTS writes them only with 'compute ID all wall/gran/local' placed after "
-    "the wall's fix wall/gran and before the first run, and a 'dump local' of it; where the wall fix comes after "
-    "a run, split the script there with write_restart/read_restart). Add, e.g.: 'compute cwall all "
-    "wall/gran/local id pos force delta history' and 'dump dwall all local N wall.txt c_cwall[1] c_cwall[2] ...' "
-    "(docs/liggghts-output.md)")
+    "the wall's fix wall/gran and before the first run, and a 'dump local' of it). 'demsplit prepare SCRIPT' "
+    "writes a copy of the script with these lines, split with write_restart/read_restart where the wall fix comes "
+    "after a run; or add, e.g.: 'compute cwall all wall/gran/local id pos force delta history' and 'dump dwall "
+    "all local N wall.txt c_cwall[1] c_cwall[2] ...' (docs/liggghts-output.md)")
 """Why a mesh wall's contacts are missing when the run has no wall dump (:attr:`demsplit.scene.Wall.missing`)."""
 
 MESH_WALL_NOT_LAST = (

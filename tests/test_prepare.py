@@ -167,3 +167,40 @@ def test_prepare_never_writes_over_its_input(tmp_path, capsys):
     script = user_script(tmp_path)
     assert main(["prepare", str(script), "-o", str(script)]) == 2
     assert "input" in capsys.readouterr().err
+
+
+@pytest.mark.simulator
+def test_a_moving_mesh_wall_created_after_a_run_is_refused_then_prepared(tmp_path, capsys):
+    """The moving-mesh tutorial's shape: a mesh moved by fix move/mesh, its wall fix created after the first
+    run, the contact dumps a user copies (atoms, pairs) but no wall compute (LIGGGHTS refuses it there).
+    demsplit run refuses the run naming the wall and prepare; check says so; the prepared split is analysed."""
+    from conftest import require_program
+
+    from demsplit.prepare import prepare_script
+
+    liggghts = require_program("liggghts")
+
+    def moving(s: str) -> str:
+        return late_wall(s).replace(WALL, "fix move all move/mesh mesh floor linear 0. 0. 0.01\n" + WALL)
+
+    script = user_script(tmp_path, moving)
+    copied = [line for line in prepare_script(script).added if line.startswith(("dump dsAtoms", "dump_modify dsAtoms",
+                                                                                "compute dsPair", "dump ddsPair",
+                                                                                "dump_modify ddsPair"))]
+    assert len(copied) == 5
+    script.write_text(script.read_text().replace("run 3000", "\n".join(copied) + "\nrun 3000", 1))
+    proc = subprocess.run([liggghts, "-in", script.name], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stdout[-2000:]
+    assert main(["run", str(script), "-o", str(tmp_path / "r.h5"), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "mesh wall 'floor'" in err and "demsplit prepare" in err and "--allow-missing floor" in err
+    assert not (tmp_path / "r.h5").exists()
+    assert main(["check", str(script)]) == 1
+    assert "wall 'floor' (mesh): no dump holds its contacts" in capsys.readouterr().out
+    assert main(["prepare", str(script), "-q"]) == 0
+    for part in ("in.user.demsplit", "in.user.demsplit.part2"):
+        proc = subprocess.run([liggghts, "-in", part], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+        assert proc.returncode == 0, [line for line in proc.stdout.splitlines() if "ERROR" in line]
+    assert main(["run", str(tmp_path / "in.user.demsplit.part2"), "-o", str(tmp_path / "r2.h5"), "-q"]) == 0
+    res = demsplit.load_results(tmp_path / "r2.h5")
+    assert (res.contacts["wall"] == 0).any() and "not_computed" not in res.walls
