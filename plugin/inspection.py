@@ -38,6 +38,7 @@ def describe_file(path: str | Path) -> str:
     (``Run.describe_file``)."""
     from .readers import read_head, reader_for
     from .readers.lammps_dump import describe_dump, looks_like_dump
+    from .readers.liggghts_vtk import describe_vtk_dump, is_liggghts_vtk
     from .readers.yade_export import describe_vtk, is_vtk_part
     from .readers.yade_state import YadeStateRun, state_files
 
@@ -48,7 +49,7 @@ def describe_file(path: str | Path) -> str:
     if not head:
         raise InputFormatError("the file is empty.", file=path, fix="check that the program that writes it ran.")
     for looks_like, describe in ((_is_store, _describe_store), (looks_like_dump, describe_dump),
-                                 (is_vtk_part, describe_vtk)):
+                                 (is_liggghts_vtk, describe_vtk_dump), (is_vtk_part, describe_vtk)):
         if looks_like(path, head):
             return describe(path)
     return reader_for(path).describe_file(path)

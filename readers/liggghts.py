@@ -44,6 +44,7 @@ from ..scene import Material, Scene
 from .base import Run
 from .lammps_dump import HEADER_LINES, DumpFile, DumpFrame, open_dump
 from .liggghts_script import read_script
+from .liggghts_vtk import vtk_dump_note
 from .liggghts_walls import primitive_wall_contacts
 from .precision import position_error, printed_step, relative_rounding
 
@@ -241,9 +242,10 @@ class LiggghtsRun(Run):
             if path is not None:
                 return open_dump(path, columns=spec.keywords)
         raise InputFormatError(
-            "no atom dump found: the script has no 'dump ... custom' with id type x y z radius whose file exists.",
-            file=self.script.path,
-            fix="add 'dump D all custom N atoms.txt id type x y z radius mass' to the script, or pass --atoms FILE.")
+            "no atom dump found: the script has no 'dump ... custom' with id type x y z radius whose file exists."
+            + vtk_dump_note(self.script.dumps), file=self.script.path,
+            fix="'demsplit prepare SCRIPT' writes a copy of the script with the dumps demsplit reads; or add "
+                "'dump D all custom N atoms.txt id type x y z radius mass' to the script, or pass --atoms FILE.")
 
     def _open_local(self, given, kind: str) -> DumpFile | None:
         if given is not None:
@@ -264,8 +266,9 @@ class LiggghtsRun(Run):
         if kind == "pair":
             raise InputFormatError(
                 "no pair contact dump found: the script has no 'dump ... local' of a compute pair/gran/local "
-                "whose file exists.", file=self.script.path,
-                fix="add 'compute cpgl all pair/gran/local id pos delta history' and "
+                "whose file exists." + vtk_dump_note(self.script.dumps), file=self.script.path,
+                fix="'demsplit prepare SCRIPT' writes a copy of the script with the dumps demsplit reads; or add "
+                    "'compute cpgl all pair/gran/local id pos delta history' and "
                     "'dump dc all local N pairs.txt c_cpgl[1] ...' to the script, or pass --contacts FILE.")
         return None
 

@@ -9,6 +9,7 @@ import pytest
 import test_cache
 import test_liggghts_run
 import test_yade_readers
+import test_yade_state
 from demsplit.errors import InputFormatError
 from demsplit.readers import REGISTRY, open_run, reader_for, readers
 from demsplit.readers.base import Run
@@ -19,7 +20,7 @@ SAMPLES = Path(__file__).resolve().parent.parent / "sample_dumps"
 
 def test_every_registered_reader_keeps_the_contract():
     tested = {cls.reader for cls in ReaderContract.__subclasses__()}
-    assert test_cache and test_liggghts_run and test_yade_readers  # the modules that inherit the contract
+    assert test_cache and test_liggghts_run and test_yade_readers and test_yade_state  # they inherit the contract
     assert set(readers()) == tested
 
 
