@@ -209,6 +209,7 @@ class Body:
     surf_X: np.ndarray  # (3, 2, nf) their reference positions
     offset: int = 0
     K_small: object = field(default=None, repr=False)
+    base_r_dofs: np.ndarray | None = field(default=None, repr=False)  # u_r of the base (fixed if clamped)
 
     @property
     def ndofs(self) -> int:
@@ -294,7 +295,8 @@ def make_body(which: int, kind: str, R: float, E: float, nu: float, model: str, 
     Xa, Xb = m.p[:, ends[0]], m.p[:, ends[1]]
     surf_X = np.array([Xa, Xb, 0.5 * (Xa + Xb)])
     lam, mu = lame(E, nu)
-    return Body(m, basis, model, lam, mu, axis, base, surf, surf_X)
+    base_r = basis.get_dofs(lambda x: x[1] == base_z).all("u^1")
+    return Body(m, basis, model, lam, mu, axis, base, surf, surf_X, base_r_dofs=base_r)
 
 
 # ----------------------------------------------------------------------------------------------- contact
@@ -314,17 +316,24 @@ GAUSS_XI = 0.5 * (GAUSS_XI + 1.0)
 GAUSS_W = 0.5 * GAUSS_W
 
 
-def contact(b1: Body, b2: Body, U: np.ndarray, eps: float, rigid_plane: bool = False):
+def contact(b1: Body, b2: Body, U: np.ndarray, eps: float, rigid_plane: bool = False, gap: str = "current"):
     """Penalty contact of body 1's surface Gauss points against body 2's current P2 surface.
 
     Returns (force vector f_c (N/rad), tangent K_c, penalty energy Pi_c (J), contact force P_c (N)), where
     Pi_c = 2 pi * sum_q eps/2 <-g_q>^2 r_q |dX/dxi| w_q, g the signed normal gap (m, < 0 is penetration),
     and f_c = dPi_c/dU / (2 pi). With ``rigid_plane`` body 2 is the rigid plane z = 0.
     K_c omits the curvature terms (of order eps * g), which leaves the solution exact.
+    ``gap`` 'current': the gap along body 2's normal in the current positions (the default); 'reference':
+    the linearized (classical small-deformation) gap g = (Z1 + u1z) - (Z2 + u2z) between the two surfaces at
+    the same reference radius, vertical; radial displacements do not enter it.
     """
     n = len(U)
     s_dofs = b1.surf + b1.offset  # (3, 2, nf)
     xs_nodes = b1.surf_X + U[s_dofs]  # (3, 2, nf)
+    if gap == "reference":
+        xs_nodes[:, 0] = b1.surf_X[:, 0]
+    elif gap != "current":
+        raise ValueError(gap)
     Ns = _N(GAUSS_XI)  # (3, nq)
     xs = np.einsum("kcf,kq->cfq", xs_nodes, Ns)  # (2, nf, nq)
     Xs = np.einsum("kcf,kq->cfq", b1.surf_X, Ns)
@@ -344,12 +353,14 @@ def contact(b1: Body, b2: Body, U: np.ndarray, eps: float, rigid_plane: bool = F
     else:
         m_dofs = b2.surf + b2.offset
         xm_nodes = b2.surf_X + U[m_dofs]  # (3, 2, nm)
+        if gap == "reference":
+            xm_nodes[:, 0] = b2.surf_X[:, 0]
         ra = xm_nodes[0, 0]
         rb = xm_nodes[1, 0]
         j = np.clip(np.searchsorted(rb, xs[0]), 0, len(rb) - 1)
         xi = np.clip((xs[0] - ra[j]) / (rb[j] - ra[j]), 0.0, 1.0)
         d2 = np.array([4.0, 4.0, -8.0])
-        for sweep in range(3):
+        for sweep in range(3 if gap == "current" else 0):
             for _ in range(4):  # closest point on the quadratic facet j (Newton on (x_m - x_s) . x_m' = 0)
                 N, dN = _N(xi), _dN(xi)
                 xm = np.einsum("kcq,kq->cq", xm_nodes[:, :, j], N)
@@ -370,6 +381,8 @@ def contact(b1: Body, b2: Body, U: np.ndarray, eps: float, rigid_plane: bool = F
         t = np.einsum("kcq,kq->cq", xm_nodes[:, :, j], dN)
         t = t / np.linalg.norm(t, axis=0)
         nvec = np.array([-t[1], t[0]])  # outward normal of body 2's upper surface (points up)
+        if gap == "reference":  # reference facets are straight: xi is exact; the gap is vertical
+            nvec = np.array([[0.0], [1.0]]) * np.ones((1, xs.shape[1]))
         g = ((xs - xm) * nvec).sum(0)
         mdof = m_dofs[:, :, j]  # (3, 2, nq)
         mN = N
@@ -424,7 +437,8 @@ class Result:
 
 def solve(R1: float, R2: float, E1: float, nu1: float, E2: float, nu2: float, delta: float, model: str = "small",
           refine: float = 1.0, steps: int = 8, kappa: float = 100.0, block: float | None = None,
-          tol: float = 1e-8, maxit: int = 40, C1: float | None = None, C2: float | None = None) -> Result:
+          tol: float = 1e-8, maxit: int = 40, C1: float | None = None, C2: float | None = None,
+          gap: str = "current", base: str = "slide") -> Result:
     """Load two bodies to overlap ``delta`` (m) in ``steps`` steps uniform in sqrt(delta).
 
     C1, C2 (m): vertical semi-axes of spheroids whose horizontal semi-axes are R1, R2 (None: spheres); Hertz
@@ -436,6 +450,11 @@ def solve(R1: float, R2: float, E1: float, nu1: float, E2: float, nu2: float, de
     out-of-balance force is below ``tol`` times the Hertz force (or, below 1e-5 times it, when the Newton
     correction is below 1e-10 delta: the round-off floor of stiff bodies). ``model`` 'neohooke' first follows
     the small-strain path and starts each step from it.
+
+    ``gap`` 'current' (default) or 'reference' (the linearized gap of classical small-deformation contact: see
+    ``contact``); with ``model`` 'small' and ``gap`` 'reference' the problem is geometrically linear.
+    ``base`` 'slide' (default): the bases (each sphere's equator, the block's bottom) are symmetry planes,
+    u_r free; 'clamped': u_r = 0 there too.
     """
     t0 = time.perf_counter()
     rho1 = R1 if C1 is None else R1**2 / C1
@@ -464,6 +483,10 @@ def solve(R1: float, R2: float, E1: float, nu1: float, E2: float, nu2: float, de
     fixed = [b1.axis_dofs, top]
     if b2 is not None:
         fixed += [b2.axis_dofs + b2.offset, b2.base_dofs + b2.offset]
+    if base == "clamped":  # the bases' u_r fixed too (not a symmetry plane)
+        fixed += [b.base_r_dofs + b.offset for b in (b1, b2) if b is not None]
+    elif base != "slide":
+        raise ValueError(base)
     fixed = np.unique(np.concatenate(fixed))
     free = np.setdiff1d(np.arange(nd), fixed)
 
@@ -477,7 +500,7 @@ def solve(R1: float, R2: float, E1: float, nu1: float, E2: float, nu2: float, de
             fs.append(f)
             Ks.append(K)
         f = np.concatenate(fs)
-        fc, Kc, Pi, Pz = contact(b1, b2, U, eps, rigid_plane=rigid)
+        fc, Kc, Pi, Pz = contact(b1, b2, U, eps, rigid_plane=rigid, gap=gap)
         if not tangent:
             return f + fc, None, Pi, Pz, f
         K = sp.block_diag(Ks, format="csr") if len(Ks) > 1 else Ks[0]
@@ -596,7 +619,7 @@ def solve(R1: float, R2: float, E1: float, nu1: float, E2: float, nu2: float, de
     return Result(deltas, np.abs(arr["P"]), arr["U1"], arr["U2"], arr["Pi"], work, converged, its, worst,
                   time.perf_counter() - t0, nd, nel,
                   dict(R1=rho1, R2=rho2, E1=E1, nu1=nu1, E2=E2, nu2=nu2, delta=delta, model=model, refine=refine,
-                       steps=steps, kappa=kappa, C1=C1, C2=C2))
+                       steps=steps, kappa=kappa, C1=C1, C2=C2, gap=gap, base=base))
 
 
 def summary(res: Result) -> dict:
