@@ -49,8 +49,9 @@ the Debian 3.8.0 binary crashes on it.
 
 History columns: the law's own history, in LIGGGHTS' order (normal model,
 e.g. ``delta_max`` for ``hooke/hysteresis``; ``shearx sheary shearz`` with
-``tangential history``; ``rolling_torquex ..z`` with ``rolling_friction
-epsd|epsd2|epsd3``: :meth:`~demsplit.physics.laws._liggghts.LiggghtsNormalModel.history_columns`),
+``tangential history`` or ``tan_luding``; ``rolling_torquex ..z`` with ``rolling_friction
+epsd|epsd2|epsd3``, then ``torsion_torquex ..z`` with ``luding``:
+:meth:`~demsplit.physics.laws._liggghts.LiggghtsNormalModel.history_columns`),
 then 10 (pair) / 14 (wall) columns with ``computeElasticPotential on``
 (``elastic_potential`` then ``elastic_history2`` ..., measured on Debian's
 LIGGGHTS 3.8.0); nothing with ``tangential no_history`` and a normal model
@@ -267,7 +268,8 @@ class LiggghtsScript:
 
 NORMAL = {"hertz": "liggghts:hertz", "hooke": "liggghts:hooke", "hertz/stiffness": "liggghts:hertz/stiffness",
           "hooke/stiffness": "liggghts:hooke/stiffness", "hooke/hysteresis": "liggghts:hooke/hysteresis",
-          "luding": "liggghts:luding", "edinburgh": "liggghts:edinburgh"}
+          "luding": "liggghts:luding", "edinburgh": "liggghts:edinburgh",
+          "edinburgh/stiffness": "liggghts:edinburgh/stiffness", "thornton_ning": "liggghts:thornton_ning"}
 """LIGGGHTS ``model`` word -> contact-law registry key (:mod:`demsplit.physics.laws`)."""
 TANGENTIAL = TANGENTIAL_MODELS
 """LIGGGHTS ``tangential`` words, passed to the law as its ``tangential`` parameter."""
@@ -278,7 +280,9 @@ PROPERTY_PARAMETERS = {"characteristicVelocity": "characteristic_velocity",
                        "coefficientAdhesionStiffness": "adhesion_stiffness",
                        "coefficientPlasticityDepth": "plasticity_depth", "LoadingStiffness": "loading_stiffness",
                        "UnloadingStiffness": "unloading_stiffness", "pullOffForce": "pull_off_force",
-                       "overlapExponent": "overlap_exponent", "surfaceEnergy": "surface_energy"}
+                       "overlapExponent": "overlap_exponent", "surfaceEnergy": "surface_energy",
+                       "coeffFrictionStiffness": "friction_stiffness",
+                       "coeffRollingStiffness": "rolling_stiffness_ratio"}
 """``fix property/global`` scalar -> the law parameter it gives, where the law declares that parameter."""
 _MODEL_KEYS = ("model", "tangential", "cohesion", "rolling_friction", "surface")
 
@@ -743,6 +747,8 @@ class _Reader:
             params[name] = float(value[1]) if np.ndim(value[1]) == 0 else value[1]
         if "kt_to_kn" in declared:
             params["kt_to_kn"] = 2.0 / 7.0 if spec.on("ktToKnUser") else 1.0
+        if "torsion" in declared:
+            params["torsion"] = "on" if spec.on("torsion") else "off"
         try:
             return ContactModel(spec.law, params)
         except DemsplitError as exc:  # a parameter the model's words need, missing from the script

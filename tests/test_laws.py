@@ -62,6 +62,8 @@ def frame_of(key: str, seed: int = 0, delta: np.ndarray | None = None) -> tuple[
             contacts[column] = np.maximum(delta, 0) * rng.uniform(0.0, 0.99, N)
         elif column == "delta_max":  # the largest overlap so far (m): beyond the current one
             contacts[column] = np.maximum(delta, 0) * rng.uniform(1.01, 3.0, N)
+        elif column == "tn_delta_old":  # the overlap at the last evaluation (m): the current one
+            contacts[column] = delta
         else:  # forces (N)
             contacts[column] = rng.normal(scale=1.0, size=N)
     return particles, contacts
@@ -84,7 +86,7 @@ def test_registry_lists_every_law_file():
 
 def test_unknown_law_lists_the_supported_ones():
     with pytest.raises(UnsupportedModelError) as err:
-        ds.ContactModel("liggghts:thornton_ning")
+        ds.ContactModel("liggghts:no_such_model")
     assert all(k in str(err.value) for k in KEYS)
 
 

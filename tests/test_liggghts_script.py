@@ -103,7 +103,8 @@ def test_materials_model_coefficients_gravity(tmp_path):
     assert s.scene.model.law == "liggghts:hooke"
     assert s.scene.model.params == {"tangential": "history", "characteristic_velocity": 2.5, "kt_to_kn": 2 / 7,
                                     "rolling": "off", "cohesion": "off", "rolling_friction": None,
-                                    "rolling_stiffness": None, "cohesion_energy_density": None}
+                                    "rolling_stiffness": None, "cohesion_energy_density": None,
+                                    "friction_stiffness": None, "rolling_stiffness_ratio": None, "torsion": "off"}
     np.testing.assert_array_equal(s.coefficients["coefficientFriction"], [[0.5, 0.6], [0.6, 0.7]])
     assert s.coefficients["characteristicVelocity"] == 2.5
     np.testing.assert_allclose(s.gravity, [0, 9.81 * 0.6, -9.81 * 0.8])
@@ -135,7 +136,9 @@ def test_walls_primitive_and_mesh(tmp_path):
 
 
 @pytest.mark.parametrize("pair, cls, match", [
-    ("model thornton_ning tangential history", UnsupportedModelError, "thornton_ning"),
+    ("model thornton_ning tangential history rolling_friction epsd", UnsupportedModelError, "no normal stiffness"),
+    ("model hertz tangential history rolling_friction luding torsion on", UnsupportedModelError, "torsion on"),
+    ("model hertz tangential tan_luding", UnsupportedModelError, "friction_stiffness"),
     ("model hertz/stiffness tangential history", ScriptError, "property/global kn"),
     ("model hertz tangential history cohesion easo/capillary/viscous", UnsupportedModelError, "liquid content"),
     ("model hertz tangential history cohesion sjkr", UnsupportedModelError, "cohesion_energy_density"),
@@ -181,6 +184,50 @@ def test_more_normal_models_and_their_history(tmp_path, model, props, law, histo
     """)
     assert s.scene.model.law == law
     assert s.local_computes["cp"].columns == ["id1", "id2", "periodic"] + history
+
+
+LUDING = ("LoadingStiffness peratomtypepair 2 2e3 2e3 2e3 2e3\nfix p2 all property/global UnloadingStiffness "
+          "peratomtypepair 2 2 2 2 2\nfix p3 all property/global coefficientAdhesionStiffness peratomtypepair 2 0 0 0 "
+          "0\nfix p4 all property/global coefficientPlasticityDepth peratomtypepair 2 0.1 0.1 0.1 0.1\nfix p5 all "
+          "property/global pullOffForce peratomtypepair 2 0 0 0 0")
+
+
+@pytest.mark.parametrize("words, props, law, params, history", [
+    ("thornton_ning tangential history", "surfaceEnergy peratomtypepair 2 0 0 0 0", "liggghts:thornton_ning", {},
+     ["tn_virgin_flag", "tn_delta_old", "tn_delta_max", "tn_force_old", "tn_force_max", "tn_adhesion_flag",
+      "tn_detaching_delta", "tn_detaching_flag", "tn_detaching_force", "tn_yielding_flag", "tn_kc", "tn_fo",
+      "shearx", "sheary", "shearz"]),
+    ("edinburgh/stiffness tangential history", LUDING + "\nfix p6 all property/global overlapExponent scalar 1",
+     "liggghts:edinburgh/stiffness", {"loading_stiffness": ((2e3, 2e3), (2e3, 2e3))},
+     ["delta_p_max", "edinburgh_old_delta", "edinburgh_kc", "edinburgh_fo", "shearx", "sheary", "shearz"]),
+    ("luding tangential tan_luding rolling_friction luding torsion off", LUDING + "\nfix p6 all property/global "
+     "coeffFrictionStiffness peratomtypepair 2 0.5 0.5 0.5 0.5\nfix p7 all property/global coeffRollingStiffness "
+     "peratomtypepair 2 0.3 0.3 0.3 0.4", "liggghts:luding",
+     {"friction_stiffness": ((0.5, 0.5), (0.5, 0.5)), "rolling_stiffness_ratio": ((0.3, 0.3), (0.3, 0.4)),
+      "torsion": "off"},
+     ["delta_max", "luding_kc", "luding_fo", "shearx", "sheary", "shearz", "rolling_torquex", "rolling_torquey",
+      "rolling_torquez", "torsion_torquex", "torsion_torquey", "torsion_torquez"]),
+])
+def test_models_from_the_liggghts_source_and_their_history(tmp_path, words, props, law, params, history):
+    """thornton_ning, edinburgh/stiffness, tan_luding and rolling_friction luding: the law, the parameters from
+    the properties and the history block (widths measured in tests/test_liggghts_laws_vs_liggghts.py)."""
+    s = script(tmp_path, f"""
+        fix p1 all property/global {props}
+        pair_style gran model {words}
+        compute cp all pair/gran/local id history
+    """)
+    assert s.scene.model.law == law
+    assert {k: s.scene.model.params[k] for k in params} == params
+    assert s.local_computes["cp"].columns == ["id1", "id2", "periodic"] + history
+
+
+def test_thornton_ning_surface_energy_is_refused(tmp_path):
+    with pytest.raises(UnsupportedModelError, match="surfaceEnergy > 0") as err:
+        script(tmp_path, """
+            fix p1 all property/global surfaceEnergy peratomtypepair 2 0 0.1 0.1 0
+            pair_style gran model thornton_ning tangential history
+        """)
+    assert err.value.fix
 
 
 def test_cohesion_sjkr_is_the_cohesion_mode(tmp_path):

@@ -1,4 +1,5 @@
-"""LIGGGHTS sub-models composed with a normal model: rolling springs (u_r) and cohesion work (u_adh).
+"""LIGGGHTS sub-models composed with a normal model: rolling springs (u_r), cohesion work (u_adh), the tan_luding
+spring; and the normal models thornton_ning (its unloading branch at 40 digits) and edinburgh/stiffness.
 
 The cohesion work is checked against LIGGGHTS' own contact area (``cohesion_model_sjkr.h``: the
 lens area of two spheres, pi (r^2 - d^2) on a wall) by quadrature and by its derivative, the
@@ -11,6 +12,8 @@ from __future__ import annotations
 import mpmath
 import numpy as np
 import pytest
+from demsplit.frame import ParticleIndex
+from demsplit.physics.bodies import ContactBodies, LawRows
 from demsplit.physics.laws import make
 from demsplit.physics.laws._liggghts import (rolling_spring_energy, sjkr2_area_integral, sjkr_area,
                                               sjkr_area_integral)
@@ -145,3 +148,113 @@ def test_sub_model_words_are_checked():
         make("liggghts:hertz", {"rolling": "wobble"})
     with pytest.raises(Exception, match="rolling_stiffness"):
         make("liggghts:hertz", {"rolling": "epsd3", "rolling_friction": 0.1})
+
+
+def hertz_kt_and_R(particles: dict, contacts: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """kt = 8 G* sqrt(R* delta) of LIGGGHTS' hertz for the scene of :func:`scene`, R*, and the two types."""
+    t1 = particles["type"][contacts["id1"] - 1]
+    t2 = np.where(contacts["id2"] > 0, particles["type"][np.maximum(contacts["id2"], 1) - 1], 2)
+    E, nu = np.array([5e6, 7e7]), np.array([0.45, 0.3])
+    G = 1 / (2 * (2 - nu[t1 - 1]) * (1 + nu[t1 - 1]) / E[t1 - 1] + 2 * (2 - nu[t2 - 1]) * (1 + nu[t2 - 1]) / E[t2 - 1])
+    R = 1 / (1 / contacts["r1"] + 1 / contacts["r2"])
+    return 8 * G * np.sqrt(R * np.maximum(contacts["delta"], 0)), R, t1, t2
+
+
+def test_tan_luding_spring_is_kT2kcMax_kt():
+    """tangential tan_luding: the spring is coeffFrictionStiffness kt (tangential_model_luding_tn.h)."""
+    particles, contacts = frame()
+    ratio = ((0.5, 0.25), (0.25, 2.0))
+    e = contact_energies(contacts, scene(tangential="tan_luding", friction_stiffness=ratio), particles)
+    kt, _, t1, t2 = hertz_kt_and_R(particles, contacts)
+    s2 = sum(contacts[f"shear{c}"] ** 2 for c in "xyz")
+    np.testing.assert_allclose(e.u_t, 0.5 * np.asarray(ratio)[t1 - 1, t2 - 1] * kt * s2, rtol=1e-12)
+    assert np.any(e.u_t > 0)
+
+
+def test_rolling_luding_stiffness_and_history():
+    """rolling_friction luding: kr = coeffRollingStiffness kt R*^2 (rolling_model_luding.h); its history is the
+    rolling torque, then the torsion torque; torsion on is refused (both share the rolling torque's values)."""
+    particles, contacts = frame()
+    ratio = ((0.3, 0.6), (0.6, 1.2))
+    sc = scene(rolling="luding", rolling_stiffness_ratio=ratio)
+    e = contact_energies(contacts, sc, particles)
+    kt, R, t1, t2 = hertz_kt_and_R(particles, contacts)
+    kr = np.asarray(ratio)[t1 - 1, t2 - 1] * kt * R**2
+    m2 = sum(contacts[f"rolling_torque{c}"] ** 2 for c in "xyz")
+    np.testing.assert_allclose(e.u_r, np.where(kr > 0, m2 / (2 * np.where(kr > 0, kr, 1)), 0), rtol=1e-12)
+    assert sc.model.contact_law.history_columns()[3:] == ["rolling_torquex", "rolling_torquey", "rolling_torquez",
+                                                          "torsion_torquex", "torsion_torquey", "torsion_torquez"]
+    with pytest.raises(Exception, match="torsion on"):
+        make("liggghts:hertz", {"rolling": "luding", "rolling_stiffness_ratio": 0.5, "torsion": "on"})
+
+
+def thornton_ning(delta: np.ndarray, delta_h: np.ndarray, f_h: np.ndarray, **params) -> tuple[np.ndarray, ...]:
+    """u_n and the normal force of liggghts:thornton_ning for pair contacts of radii 1 mm and 2 mm, types 1 and 2."""
+    particles = {"id": np.array([1, 2]), "type": np.array([1, 2]), "radius": np.array([1e-3, 2e-3]),
+                 "x": np.zeros(2), "y": np.zeros(2), "z": np.array([0.0, 3e-3])}
+    n = len(delta)
+    contacts = {"id1": np.ones(n, dtype=np.int64), "id2": np.full(n, 2), "wall": np.full(n, -1), "delta": delta,
+                "r1": np.full(n, 1e-3), "r2": np.full(n, 2e-3), "nx": np.zeros(n), "ny": np.zeros(n),
+                "nz": np.ones(n), "x1": np.zeros(n), "y1": np.zeros(n), "z1": np.zeros(n),
+                "tn_delta_old": delta_h, "tn_force_old": f_h, **{f"shear{c}": np.zeros(n) for c in "xyz"}}
+    sc = Scene(materials={1: Material(5e6, 0.45), 2: Material(7e7, 0.3)},
+               model=ContactModel("liggghts:thornton_ning", params))
+    e = contact_energies(contacts, sc, particles)
+    index = ParticleIndex(particles["id"])
+    rows = LawRows(contacts, slice(None), ContactBodies.build(contacts, sc, particles, index),
+                   sc.model.law, particles, index)
+    return e.u_n, sc.model.contact_law.normal_force(rows)
+
+
+def test_thornton_ning_energy_is_the_integral_of_its_unloading_branch():
+    """u_n = int_s0^delta (f_h + k (s^1.5 - delta_h^1.5)) ds (LIGGGHTS' Hertzian slope 2 E* sqrt(R* s) on
+    unloading), at 40 digits, from a force at the Hertz curve (f = k delta^1.5), above it (the first step's
+    overshoot: the branch reaches delta = 0 with a force), below it (yielded, nearly unloaded) and 0 (detached)."""
+    R = 1e-3 * 2e-3 / 3e-3
+    Y = 1 / ((1 - 0.45**2) / 5e6 + (1 - 0.3**2) / 7e7)
+    k = 4 / 3 * Y * np.sqrt(R)
+    d = np.array([2e-5, 2e-5, 3e-5, 3e-5, 4e-5, 4e-5])
+    f = k * d**1.5 * np.array([1.0, 1.2, 0.3, 1e-6, 0.0, 0.7])
+    u, force = thornton_ning(d, d, f)
+    mpmath.mp.dps = 40
+    for i in range(len(d)):
+        kk, dh, fh = mpmath.mpf(k), mpmath.mpf(d[i]), mpmath.mpf(f[i])
+        s0 = max(dh**1.5 - fh / kk, 0) ** (mpmath.mpf(2) / 3)
+        exact = mpmath.quad(lambda s, kk=kk, dh=dh, fh=fh: fh + kk * (s**1.5 - dh**1.5), [s0, dh])
+        assert u[i] == pytest.approx(float(exact), rel=1e-13, abs=1e-30), i
+    assert u[4] == 0.0 and np.all(u[:4] > 0)
+    np.testing.assert_array_equal(force, f)  # at the stored point the branch's force is the stored one
+    # the derivative along the branch (delta_h, f_h fixed) is the branch's force (not across its zero-force
+    # point, which lies within the step of the nearly unloaded and the detached contact: 3 and 4)
+    h = 1e-6 * d
+    up, f_up = thornton_ning(d + h, d, f)
+    down, _ = thornton_ning(d - h, d, f)
+    smooth = [0, 1, 2, 5]
+    np.testing.assert_allclose(((up - down) / (2 * h))[smooth], f[smooth], rtol=1e-6)
+    assert np.all(f_up[:4] > f[:4])  # loading along the branch raises the force with the Hertzian slope
+
+
+def test_thornton_ning_refuses_what_it_cannot_rebuild():
+    with pytest.raises(Exception, match="surfaceEnergy > 0"):
+        make("liggghts:thornton_ning", {"surface_energy": 0.05})
+    with pytest.raises(Exception, match="sets no normal stiffness"):
+        make("liggghts:thornton_ning", {"rolling": "epsd3", "rolling_friction": 0.1, "rolling_stiffness": 1.0})
+    assert make("liggghts:thornton_ning", {"rolling": "epsd2"}).modes == ("u_n", "u_t", "u_r")
+
+
+def test_edinburgh_stiffness_uses_the_given_stiffness():
+    """edinburgh/stiffness: k1 = LoadingStiffness, k2 = k1 UnloadingStiffness, kt = k1
+    (normal_model_edinburgh_stiffness.h)."""
+    law = make("liggghts:edinburgh/stiffness", {"overlap_exponent": 1.0, "unloading_stiffness": 4.0,
+                                                "loading_stiffness": 3e3})
+    assert law.history_columns() == ["delta_p_max", "edinburgh_old_delta", "edinburgh_kc", "edinburgh_fo", "shearx",
+                                     "sheary", "shearz"]
+    particles, contacts = frame()
+    contacts["delta_p_max"] = np.maximum(contacts["delta"], 0) * 0.4
+    sc = Scene(materials={1: Material(5e6, 0.45), 2: Material(7e7, 0.3)},
+               model=ContactModel(law.key, law.params), walls=[Wall("floor", "plane", 2)])
+    e = contact_energies(contacts, sc, particles)
+    d = np.maximum(contacts["delta"], 0)
+    np.testing.assert_allclose(e.u_n, 0.5 * 4 * 3e3 * (d - 0.4 * d) ** 2, rtol=1e-12, atol=1e-30)
+    s2 = sum(contacts[f"shear{c}"] ** 2 for c in "xyz")
+    np.testing.assert_allclose(e.u_t, np.where(d > 0, 0.5 * 3e3 * s2, 0), rtol=1e-12)

@@ -4,14 +4,19 @@ LIGGGHTS composes a contact from a normal model, which sets the normal and
 tangential stiffnesses kn and kt of the contact (``sidata.kn``, ``sidata.kt``),
 and sub-models that use them (``contact_models.h``):
 
-- ``tangential history`` (and ``tan_luding``) keeps a spring displacement
-  ``shear`` (m) per contact with F_t = -kt shear (``tangential_model_history.h``):
-  u_t = kt |shear|^2 / 2; ``no_history`` keeps none (no spring, u_t = 0);
-- ``rolling_friction epsd|epsd2|epsd3`` keeps the spring's rolling torque M_r
+- ``tangential history`` keeps a spring displacement ``shear`` (m) per contact
+  with F_t = -kt shear (``tangential_model_history.h``): u_t = kt |shear|^2 / 2;
+  ``tan_luding`` keeps the same history with the spring kT2kcMax kt
+  (coeffFrictionStiffness, ``tangential_model_luding_tn.h``): u_t = kT2kcMax kt |shear|^2 / 2;
+  ``no_history`` keeps none (no spring, u_t = 0);
+- ``rolling_friction epsd|epsd2|epsd3|luding`` keeps the spring's rolling torque M_r
   (N m) per contact, M_r += kr w_t dt, capped at mu_r |F_n| R*: u_r = |M_r|^2/(2 kr)
   with kr = 2.25 kn mu_r^2 R*^2 (``rolling_model_epsd.h``), kt R*^2
-  (``rolling_model_epsd2.h``) or coeffRollStiffness kn mu_r^2 R*^2
-  (``rolling_model_epsd3.h``); ``cdt`` is a constant torque without a spring;
+  (``rolling_model_epsd2.h``), coeffRollStiffness kn mu_r^2 R*^2
+  (``rolling_model_epsd3.h``) or kR2kcMax kt R*^2 (coeffRollingStiffness,
+  ``rolling_model_luding.h``, whose cap is mu_r |F_n + kc delta - f0| R* and whose
+  history holds 3 more values, the torsion torque, 0 without ``torsion on``);
+  ``cdt`` is a constant torque without a spring;
 - ``cohesion sjkr`` adds F = -k A with A the lens area of the two spheres,
   pi/4 (S^2 - d^2)(d^2 - D^2)/d^2 (S = r1 + r2, D = r1 - r2, d = S - delta), or
   pi (r1^2 - (r1 - delta)^2) on a wall (``cohesion_model_sjkr.h``); ``sjkr2``
@@ -40,10 +45,12 @@ SHEAR = ("shearx", "sheary", "shearz")
 """Contact columns of the tangential spring history (m)."""
 ROLLING_TORQUE = ("rolling_torquex", "rolling_torquey", "rolling_torquez")
 """Contact columns of the rolling spring history, the spring's torque M_r (N m)."""
+TORSION_TORQUE = ("torsion_torquex", "torsion_torquey", "torsion_torquez")
+"""Contact columns of ``rolling_friction luding``'s torsion-torque history (N m), after its rolling torque."""
 
-TANGENTIAL_MODELS = {"history": True, "no_history": False}
+TANGENTIAL_MODELS = {"history": True, "no_history": False, "tan_luding": True}
 """LIGGGHTS ``tangential`` model -> whether it keeps a spring (``shear`` history)."""
-ROLLING_MODELS = {"off": False, "cdt": False, "epsd": True, "epsd2": True, "epsd3": True}
+ROLLING_MODELS = {"off": False, "cdt": False, "epsd": True, "epsd2": True, "epsd3": True, "luding": True}
 """LIGGGHTS ``rolling_friction`` model -> whether it keeps a spring (rolling-torque history)."""
 COHESION_MODELS = ("off", "sjkr", "sjkr2")
 """LIGGGHTS ``cohesion`` models whose work demsplit computes."""
@@ -116,12 +123,16 @@ class LiggghtsNormalModel(ContactLaw):
     modes = ("u_n", "u_t")
     mode_columns = {"u_t": SHEAR, "u_r": ROLLING_TORQUE}
     parameters = {
-        "tangential": ("history", "LIGGGHTS tangential model: history or no_history"),
-        "rolling": ("off", "LIGGGHTS rolling_friction model: off, cdt, epsd, epsd2 or epsd3"),
+        "tangential": ("history", "LIGGGHTS tangential model: history, no_history or tan_luding"),
+        "rolling": ("off", "LIGGGHTS rolling_friction model: off, cdt, epsd, epsd2, epsd3 or luding"),
         "cohesion": ("off", "LIGGGHTS cohesion model: off, sjkr or sjkr2"),
         "rolling_friction": (None, "coefficientRollingFriction mu_r, per type pair (epsd, epsd3)"),
         "rolling_stiffness": (None, "coeffRollStiffness, scalar (epsd3)"),
         "cohesion_energy_density": (None, "cohesionEnergyDensity k (J/m^3), per type pair (sjkr, sjkr2)"),
+        "friction_stiffness": (None, "coeffFrictionStiffness kT2kcMax, the tangential spring over kt, per type "
+                                     "pair (tan_luding)"),
+        "rolling_stiffness_ratio": (None, "coeffRollingStiffness kR2kcMax, kr/(kt R*^2), per type pair (luding)"),
+        "torsion": ("off", "the torsion setting of rolling_friction luding; only off is supported"),
     }
 
     def check(self) -> None:
@@ -131,16 +142,23 @@ class LiggghtsNormalModel(ContactLaw):
             if p[name] not in allowed:
                 raise UnsupportedModelError(f"{self.key}: {name} model {p[name]!r} is not supported; "
                                             f"it takes {', '.join(allowed)}.")
+        if p["torsion"] != "off":
+            raise UnsupportedModelError(
+                f"{self.key}: rolling_friction luding with torsion on is not supported: LIGGGHTS 3.8 writes the "
+                "torsion torque into the rolling torque's history values (rolling_model_luding.h, calcTorTorque), "
+                "so the dump holds neither spring's state.", fix="analyse a run with torsion off, or leave it out.")
         needed = {"rolling_friction": p["rolling"] in ("epsd", "epsd3"),
                   "rolling_stiffness": p["rolling"] == "epsd3",
+                  "rolling_stiffness_ratio": p["rolling"] == "luding",
+                  "friction_stiffness": p["tangential"] == "tan_luding",
                   "cohesion_energy_density": p["cohesion"] != "off"}
         for name, need in needed.items():
             if need and p[name] is None:
-                raise UnsupportedModelError(f"{self.key} with rolling_friction {p['rolling']} and cohesion "
-                                            f"{p['cohesion']} needs the parameter {name!r} "
-                                            f"({self.parameters[name][1]}).",
+                raise UnsupportedModelError(f"{self.key} with tangential {p['tangential']}, rolling_friction "
+                                            f"{p['rolling']} and cohesion {p['cohesion']} needs the parameter "
+                                            f"{name!r} ({self.parameters[name][1]}).",
                                             fix="define it in the script with fix property/global, as the run did.")
-        for name in ("rolling_friction", "cohesion_energy_density"):
+        for name in ("rolling_friction", "cohesion_energy_density", "friction_stiffness", "rolling_stiffness_ratio"):
             if p[name] is not None:
                 p[name] = self.table(name)
         if "pull_off_force" in p:  # a normal model with a constant pull-off force f0 (luding, edinburgh)
@@ -194,9 +212,10 @@ class LiggghtsNormalModel(ContactLaw):
     def history_columns(self) -> list[str]:
         """The contact history LIGGGHTS keeps for this model, as demsplit names its columns, in LIGGGHTS'
         order (sub-model construction order, ``contact_models.h``): surface (none for ``default``), normal,
-        cohesion (none for sjkr, sjkr2), tangential, rolling."""
+        cohesion (none for sjkr, sjkr2), tangential, rolling (``luding``: the rolling, then the torsion torque)."""
+        rolling = (*ROLLING_TORQUE, *(TORSION_TORQUE if self.params["rolling"] == "luding" else ()))
         return [*self.normal_history, *(SHEAR if "u_t" in self.modes else ()),
-                *(ROLLING_TORQUE if "u_r" in self.modes else ())]
+                *(rolling if "u_r" in self.modes else ())]
 
     def describe(self) -> str:
         """The normal model's line, then the rolling and cohesion sub-models the contact has."""
@@ -216,6 +235,8 @@ class LiggghtsNormalModel(ContactLaw):
             modes = {"u_t": history_spring_energy(rows.delta, self.shear(rows), self.kt(rows))} if with_shear else {}
         else:
             modes = self.normal_and_tangential(rows, with_shear, compiled)
+        if with_shear and self.params["tangential"] == "tan_luding":  # its spring is kT2kcMax kt: u_t scales
+            modes["u_t"] = rows.type_pair(self.params["friction_stiffness"]) * modes["u_t"]
         if "u_r" in self.modes and "u_r" not in skipped:
             modes["u_r"] = rolling_spring_energy(self.vectors(rows, ROLLING_TORQUE), self.kr(rows))
         if self.params["cohesion"] != "off":
@@ -239,6 +260,8 @@ class LiggghtsNormalModel(ContactLaw):
         rolling = self.params["rolling"]
         if rolling == "epsd2":
             return self.kt(rows) * R2
+        if rolling == "luding":
+            return rows.type_pair(self.params["rolling_stiffness_ratio"]) * self.kt(rows) * R2
         mu = rows.type_pair(self.params["rolling_friction"])
         factor = 2.25 if rolling == "epsd" else float(self.params["rolling_stiffness"])
         return factor * self.kn(rows) * mu * mu * R2
