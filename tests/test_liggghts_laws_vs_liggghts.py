@@ -266,7 +266,7 @@ def reference_energies(name: str, run, x: dict) -> dict[str, np.ndarray]:
     R = 1 / (1 / x["r1"] + 1 / x["r2"])
     F, d = x["F"], x["delta"]
     ft2 = np.einsum("ij,ij->i", x["ft"], x["ft"])
-    if name == "thornton_ning":  # F(s) = F + k (s^1.5 - delta^1.5) from s0, where it is 0 (or from 0), to delta
+    if name.startswith("thornton_ning"):  # F(s) = F + k (s^1.5 - delta^1.5) from s0, where it is 0 (or 0), to delta
         k = (4 / 3 * Y * np.sqrt(R)).astype(np.longdouble)
         F, d = F.astype(np.longdouble), d.astype(np.longdouble)
         C = F - k * d**1.5
@@ -286,7 +286,7 @@ def reference_energies(name: str, run, x: dict) -> dict[str, np.ndarray]:
     return {"u_n": u_n, "u_t": ft2 / (2 * k1), "u_r": np.einsum("ij,ij->i", m, m) / (2 * kr)}
 
 
-REFERENCE_MODELS = ("thornton_ning", "edinburgh_stiffness", "tan_luding", "rolling_luding")
+REFERENCE_MODELS = ("thornton_ning", "thornton_ning_mixed", "edinburgh_stiffness", "tan_luding", "rolling_luding")
 
 
 def test_totals_equal_an_independent_recomputation(model_run):

@@ -63,7 +63,10 @@ MODELS: dict[str, tuple[str, list[str], int]] = {
                        [f"cohesionEnergyDensity peratomtypepair 4 {_table('2e4')}"], 41),
     "thornton_ning": ("model thornton_ning tangential history",
                       [f"surfaceEnergy peratomtypepair 4 {_table('0')}",
-                       "coefficientYieldRatio peratomtype 0.02 0.02 0.02 0.02"], 53),
+                       "coefficientYieldRatio peratomtype 0.02 0.02 0.02 0.02"], 53),  # nearly all yielded
+    "thornton_ning_mixed": ("model thornton_ning tangential history",
+                            [f"surfaceEnergy peratomtypepair 4 {_table('0')}",
+                             "coefficientYieldRatio peratomtype 0.1 0.1 0.1 0.1"], 53),  # most elastic
     "edinburgh_stiffness": ("model edinburgh/stiffness tangential history",
                             ["overlapExponent scalar 1.0", "adhesionExponent scalar 1.0",
                              f"LoadingStiffness peratomtypepair 4 {_table('2e3')}",
