@@ -46,3 +46,40 @@ def kernel(fn: F) -> F:
     if numba is None:
         return fn
     return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
+
+
+def _word_intrinsics():
+    """``load_word(a, i)``: the 8 bytes ``a[i:i+8]`` of a uint8 array as one little-endian uint64
+    (an unaligned load; the caller keeps ``i + 8 <= a.size``), and ``trailing_zeros(x)`` of a nonzero
+    uint64: the word-at-a-time primitives of the dump parser. Compiled as LLVM intrinsics; plain
+    Python where numba is absent."""
+    if numba is None:
+        def load_word(a, i):
+            return int.from_bytes(bytes(a[i:i + 8]), "little")
+
+        def trailing_zeros(x):
+            return (int(x) & -int(x)).bit_length() - 1
+
+        return load_word, trailing_zeros
+    from llvmlite import ir
+    from numba import types
+    from numba.extending import intrinsic
+
+    @intrinsic
+    def load_word(typingctx, arr, idx):
+        def codegen(context, builder, signature, args):
+            data = context.make_array(signature.args[0])(context, builder, args[0]).data
+            pointer = builder.bitcast(builder.gep(data, [args[1]]), ir.IntType(64).as_pointer())
+            return builder.load(pointer, align=1)
+        return types.uint64(arr, types.int64), codegen
+
+    @intrinsic
+    def trailing_zeros(typingctx, x):
+        def codegen(context, builder, signature, args):
+            return builder.cttz(args[0], ir.Constant(ir.IntType(1), 0))
+        return types.uint64(types.uint64), codegen
+
+    return load_word, trailing_zeros
+
+
+load_word, trailing_zeros = _word_intrinsics()

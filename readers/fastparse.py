@@ -34,7 +34,7 @@ produces a different number.
 from __future__ import annotations
 
 import numpy as np
-from demsplit.jit import kernel
+from demsplit.jit import kernel, load_word, trailing_zeros
 
 __all__ = ["scan_chunk", "count_newlines", "next_newline", "parse_rows", "OK", "SHAPE", "FALLBACK"]
 
@@ -52,6 +52,15 @@ _POW10 = np.array([10.0 ** k for k in range(23)])   # 1e0 .. 1e22, each an exact
 _MAX_EXACT = 1 << 53                                # largest mantissa that is an exact double
 _SEP = 32                                           # bytes <= 32 separate fields (LAMMPS writes ' ' and '\n')
 _BLOCK = 64                                         # bytes counted per step of the scan
+
+# Word-at-a-time constants (8 bytes in a uint64, the first byte of the text the lowest)
+_U = np.uint64
+_EACH_21, _EACH_30, _EACH_06 = _U(0x2121212121212121), _U(0x3030303030303030), _U(0x0606060606060606)
+_EACH_0F, _EACH_F0 = _U(0x0F0F0F0F0F0F0F0F), _U(0xF0F0F0F0F0F0F0F0)
+_EACH_7F, _EACH_80 = _U(0x7F7F7F7F7F7F7F7F), _U(0x8080808080808080)
+_POW10_INT = np.array([10 ** k for k in range(20)], dtype=np.uint64)   # 10**0 .. 10**19, exact
+_MAX_EXACT_U = _U(1 << 53)
+_WORD_TOKEN = 24    # a real is read word-wise when this many bytes follow its start (else byte by byte)
 
 
 @kernel
@@ -115,8 +124,103 @@ def _marker_at(a: np.ndarray, j: int, m: int) -> bool:
 
 
 @kernel
+def _digit_run(x: np.uint64) -> int:
+    """How many of the word's bytes, from its first, are ASCII digits (0-8). A byte b is a digit when
+    its high nibble is 3 and that of b + 6 too; a carry out of a byte (b >= 0xFA, not a digit) only
+    disturbs the bytes after it."""
+    m = ((x & _EACH_F0) ^ _EACH_30) | (((x + _EACH_06) & _EACH_F0) ^ _EACH_30)   # 0 for a digit byte
+    nonzero = (((m & _EACH_7F) + _EACH_7F) | m) & _EACH_80                     # exact: no carry between bytes
+    if nonzero == 0:
+        return 8
+    return np.int64(trailing_zeros(nonzero) >> _U(3))
+
+
+@kernel
+def _digits_value(x: np.uint64, n: int) -> np.uint64:
+    """Value of the first ``n`` (1-8) bytes of the word, ASCII digits, the first the most significant:
+    the digits are moved to the top of the word (the bytes below read as leading zeros) and combined
+    pairwise in three multiplications."""
+    v = (x - _EACH_30) << _U(8 * (8 - n))
+    v = ((v & _EACH_0F) * _U(2561)) >> _U(8)                                  # pairs of digits
+    v = ((v & _U(0x00FF00FF00FF00FF)) * _U(6553601)) >> _U(16)               # groups of four
+    return ((v & _U(0x0000FFFF0000FFFF)) * _U(42949672960001)) >> _U(32)     # all eight
+
+
+@kernel
 def _real(a: np.ndarray, p: int, end: int) -> tuple[int, float, int]:
-    """The decimal literal ``[+-]digits[.digits][(e|E)[+-]digits]`` at ``a[p]``.
+    """The decimal literal ``[+-]digits[.digits][(e|E)[+-]digits]`` at ``a[p]``, as
+    :func:`_real_bytewise` returns it, reading the digits 8 bytes at a time: the mantissa m (every
+    digit; at most 19, which fit a uint64) is exact, and m has more than 18 significant digits
+    exactly when m >= 10**18 > 2**53, so the fast-path test is the same. A literal with 8 or more
+    integer digits, more than 19 digits or fewer than ``_WORD_TOKEN`` bytes before ``end`` is read
+    by :func:`_real_bytewise`."""
+    start = p
+    neg = False
+    if p < end and (a[p] == 45 or a[p] == 43):
+        neg = a[p] == 45
+        p += 1
+    if p + _WORD_TOKEN > end:
+        return _real_bytewise(a, start, end)
+    x = load_word(a, p)
+    n = _digit_run(x)
+    if n == 8:
+        return _real_bytewise(a, start, end)
+    m = _digits_value(x, n) if n > 0 else _U(0)
+    p += n
+    total = n
+    e10 = 0
+    if a[p] == 46:
+        p += 1
+        while True:
+            x = load_word(a, p)
+            k = _digit_run(x)
+            if k > 0:
+                if total + k > 19:
+                    return _real_bytewise(a, start, end)
+                m = m * _POW10_INT[k] + _digits_value(x, k)
+                total += k
+                e10 -= k
+                p += k
+            if k < 8:
+                break
+            if p + 8 > end:
+                return _real_bytewise(a, start, end)
+    if total == 0:
+        return _NOT_DECIMAL, 0.0, p
+    if p < end and (a[p] == 101 or a[p] == 69):
+        p, ok, ex = _exponent(a, p + 1, end)
+        if not ok:
+            return _NOT_DECIMAL, 0.0, p
+        e10 += ex
+    if m == 0:
+        return _FAST, (-0.0 if neg else 0.0), p
+    if m > _MAX_EXACT_U or e10 > 22 or e10 < -22:
+        return _SLOW, 0.0, p
+    v = float(m) * _POW10[e10] if e10 >= 0 else float(m) / _POW10[-e10]
+    return _FAST, (-v if neg else v), p
+
+
+@kernel
+def _exponent(a: np.ndarray, p: int, end: int) -> tuple[int, bool, int]:
+    """The exponent ``[+-]digits`` after an ``e``/``E`` at ``a[p]``: (offset after it, any digit,
+    value), the value saturating beyond 100000 (past +-22 only a zero mantissa is fast anyway)."""
+    neg = False
+    if p < end and (a[p] == 45 or a[p] == 43):
+        neg = a[p] == 45
+        p += 1
+    ex = 0
+    digits = 0
+    while p < end and 48 <= a[p] <= 57:
+        if ex < 100000:
+            ex = ex * 10 + (int(a[p]) - 48)
+        digits += 1
+        p += 1
+    return p, digits > 0, (-ex if neg else ex)
+
+
+@kernel
+def _real_bytewise(a: np.ndarray, p: int, end: int) -> tuple[int, float, int]:
+    """The decimal literal ``[+-]digits[.digits][(e|E)[+-]digits]`` at ``a[p]``, byte by byte.
 
     Returns (status, value, q), ``q`` the offset after the literal's grammar:
     status ``_FAST`` with its value by Clinger's fast path (module docstring),
@@ -151,21 +255,10 @@ def _real(a: np.ndarray, p: int, end: int) -> tuple[int, float, int]:
     if not seen:
         return _NOT_DECIMAL, 0.0, p
     if p < end and (a[p] == 101 or a[p] == 69):
-        p += 1
-        eneg = False
-        if p < end and (a[p] == 45 or a[p] == 43):
-            eneg = a[p] == 45
-            p += 1
-        ex = 0
-        edigits = 0
-        while p < end and 48 <= a[p] <= 57:
-            if ex < 100000:     # saturate: beyond +-22 only m == 0 is fast, whatever the exponent
-                ex = ex * 10 + (int(a[p]) - 48)
-            edigits += 1
-            p += 1
-        if edigits == 0:
+        p, ok, ex = _exponent(a, p + 1, end)
+        if not ok:
             return _NOT_DECIMAL, 0.0, p
-        e10 += -ex if eneg else ex
+        e10 += ex
     if m == 0:
         return _FAST, (-0.0 if neg else 0.0), p
     if digits > 18 or m > _MAX_EXACT or e10 > 22 or e10 < -22:
@@ -195,14 +288,19 @@ def _integer(a: np.ndarray, p: int, end: int) -> tuple[bool, int, int]:
 
 @kernel
 def _field_end(a: np.ndarray, q: int, end: int) -> int:
-    """Offset of the first separator (byte <= 32) at or after ``a[q]``, or ``end``.
-    Unsigned offsets spare the negative-index check on every byte (a third
-    faster: this loop runs over every byte of the columns not read)."""
-    i = np.uint64(q)
-    stop = np.uint64(end)
-    while i < stop and a[i] > _SEP:
-        i += np.uint64(1)
-    return np.int64(i)
+    """Offset of the first separator (byte <= 32) at or after ``a[q]``, or ``end``; this runs over
+    every byte of the columns not read. Eight bytes at a time: (x - 0x21..21) & ~x & 0x80..80 flags
+    each byte below 0x21 exactly up to the first one (a borrow starts only there), and the lowest
+    flag is the first such byte; the last bytes one by one."""
+    while q + 8 <= end:
+        x = load_word(a, q)
+        below = (x - _EACH_21) & ~x & _EACH_80
+        if below != 0:
+            return q + np.int64(trailing_zeros(below) >> _U(3))
+        q += 8
+    while q < end and a[q] > _SEP:
+        q += 1
+    return q
 
 
 @kernel

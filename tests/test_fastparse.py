@@ -35,13 +35,22 @@ def fmt(x: float, f: str) -> str:
 
 
 def kernel_real(token: str) -> tuple[int, float | None, bool]:
-    """parse_rows on the one-row, one-column text ``token\\n`` read as a real:
-    (status, value written or None, listed as a slow token)."""
-    a = np.frombuffer((token + "\n").encode(), dtype=np.uint8)
+    """parse_rows on a one-row text whose first column is ``token``, read as a real: (status, value
+    written or None, listed as a slow token). Read twice, alone on its line (the last bytes of a block,
+    read byte by byte) and followed by a long second column (read 8 bytes at a time); both must agree."""
+    results = [_kernel_real(token, pad) for pad in ("", " " + "7" * 40)]
+    assert results[0] == results[1] or (results[0][1] is not None and bits(results[0][1]) == bits(results[1][1])), \
+        (token, results)
+    return results[1]
+
+
+def _kernel_real(token: str, pad: str) -> tuple[int, float | None, bool]:
+    a = np.frombuffer((token + pad + "\n").encode(), dtype=np.uint8)
+    ncols = 2 if pad else 1
     reals = np.full((1, 1), 12345.0)
     slow = np.empty((4, 4), dtype=np.int64)
-    status, _, rows, n_slow = fp.parse_rows(a, 0, a.size, 1, False, np.array([1]), np.array([0]), reals,
-                                            np.empty((0, 1), np.int64), 0, 1, slow)
+    status, _, rows, n_slow = fp.parse_rows(a, 0, a.size, ncols, False, np.array([1, 0][:ncols]),
+                                            np.array([0, 0][:ncols]), reals, np.empty((0, 1), np.int64), 0, 1, slow)
     assert rows == 1
     if n_slow:
         assert slow[0].tolist() == [0, 0, 0, len(token)]  # slot, row, the token's byte range
@@ -100,6 +109,20 @@ def test_kernel_fast_path_covers_g_format():
         assert value is not None and bits(value) == bits(float(token)), token
 
 
+@settings(max_examples=1500, deadline=None)
+@given(token=st.text("0123456789.eE+-", min_size=1, max_size=30) | doubles.map(lambda x: "%.17g" % x)
+       | st.sampled_from(["12345678", "1234567.", "0.1234567890123456789", "00000000012345", "9007199254740993",
+                          "0.000000000000000000001234", "123456789012345678901234", "1." + "0" * 18]))
+def test_word_wise_real_equals_byte_wise(token):
+    """The word-at-a-time reader of a real returns what the byte-by-byte one does, bit for bit (where the
+    bytes are not a decimal literal, only that)."""
+    a = np.frombuffer((token + " " + "x" * 30).encode(), dtype=np.uint8)
+    words, byte = fp._real(a, 0, a.size), fp._real_bytewise(a, 0, a.size)
+    assert words[0] == byte[0], token
+    if byte[0] != 2:  # _NOT_DECIMAL: the offset says nothing
+        assert words[2] == byte[2] and bits(words[1]) == bits(byte[1]), token
+
+
 @pytest.mark.parametrize("token", ["nan", "-nan", "inf", "-inf", "abc", "1.5x", "1e", "-", ".", "1e+", "0x10",
                                    "1_0"])
 def test_kernel_leaves_non_decimals_to_the_fallback(token):
@@ -109,11 +132,13 @@ def test_kernel_leaves_non_decimals_to_the_fallback(token):
 
 @settings(max_examples=200, deadline=None)
 @given(v=st.integers(-2 ** 63, 2 ** 63 - 1))
-def test_kernel_integers_exact_or_fallback(v):
-    a = np.frombuffer(f"{v}\n".encode(), dtype=np.uint8)
+@pytest.mark.parametrize("pad", ["", " " + "7" * 40])
+def test_kernel_integers_exact_or_fallback(v, pad):
+    a = np.frombuffer(f"{v}{pad}\n".encode(), dtype=np.uint8)
     ints = np.zeros((1, 1), np.int64)
-    status, *_ = fp.parse_rows(a, 0, a.size, 1, False, np.array([2]), np.array([0]), np.empty((0, 1)), ints,
-                               0, 1, np.empty((1, 4), np.int64))
+    ncols = 2 if pad else 1
+    status, *_ = fp.parse_rows(a, 0, a.size, ncols, False, np.array([2, 0][:ncols]), np.array([0, 0][:ncols]),
+                               np.empty((0, 1)), ints, 0, 1, np.empty((1, 4), np.int64))
     if len(str(abs(v))) <= 18:
         assert status == fp.OK and int(ints[0, 0]) == v
     else:
