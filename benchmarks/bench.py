@@ -41,7 +41,17 @@ of each measurement kept (the machine is shared). Measurements:
 ``polars`` / ``pandas-c``
     bare parse of both dumps, every frame, every column, to numpy arrays; the
     frames' byte ranges are handed over for free (found by demsplit's index in
-    this parent), so this is the fastest parse the ecosystem offers.
+    this parent).
+``polars-needed``
+    the same with polars reading only the columns demsplit reads (``columns=``,
+    the indices demsplit's reader asks for): the fastest parse a user could
+    write with the ecosystem's tools, and demsplit's like-for-like baseline.
+``limits``
+    what the machine itself allows, in the same run: reading both files from
+    the page cache into a reused buffer (``readinto``), and counting their
+    newlines a word (8 bytes) at a time over a memory map (compiled, one
+    thread): no text reader can beat either; demsplit's read throughput is
+    printed as a fraction of each.
 ``ovito``
     ``ovito.io.import_file`` of the atom dump plus a ``LoadTrajectoryModifier``
     with OVITO's LAMMPS dump local reader for the contacts (every column
@@ -77,8 +87,8 @@ from pathlib import Path
 CHILDREN = ("warm-up", "imports", "demsplit-run", "demsplit-run-gzip", "demsplit-run-lzf", "demsplit-run-nocompress",
             "demsplit-run-nocompare",
             "demsplit-run-nocontacts", "pipeline-nostore",
-            "demsplit-read", "demsplit-atoms", "polars",
-            "pandas-c", "ovito", "mdanalysis", "convert", "cache-read", "kernel")
+            "demsplit-read", "demsplit-atoms", "polars", "polars-needed",
+            "pandas-c", "limits", "ovito", "mdanalysis", "convert", "cache-read", "kernel")
 KERNEL_REPEAT = 7  # timings of each in-memory kernel measurement, the best kept
 
 
@@ -147,8 +157,12 @@ def child(name: str, d: Path, work: Path, index_file: str) -> dict:
         from demsplit.cli import main
 
         return {"rc": main(["convert", str(script), "-o", str(work / "cache.h5"), "-q"])}
-    if name in ("polars", "pandas-c"):
-        return _bare_parse(name, {atoms: _frames(index_file, "atoms"), pairs: _frames(index_file, "pairs")})
+    if name in ("polars", "pandas-c", "polars-needed"):
+        needed = json.loads(Path(index_file).read_text())["needed"] if name == "polars-needed" else {}
+        return _bare_parse(name, {atoms: _frames(index_file, "atoms"), pairs: _frames(index_file, "pairs")},
+                           {atoms: needed.get("atoms"), pairs: needed.get("pairs")})
+    if name == "limits":
+        return _limits([atoms, pairs])
     if name == "ovito":
         return _ovito(atoms, pairs)
     if name == "mdanalysis":
@@ -164,7 +178,10 @@ def child(name: str, d: Path, work: Path, index_file: str) -> dict:
     raise ValueError(name)
 
 
-def _bare_parse(engine: str, files: dict[Path, list[tuple[int, int]]]) -> dict:
+def _bare_parse(engine: str, files: dict[Path, list[tuple[int, int]]],
+                columns: dict[Path, list[int] | None] | None = None) -> dict:
+    """Every frame of ``files`` (byte ranges of their rows) parsed by ``engine``; ``columns``: per file,
+    the indices of the columns polars reads (None: all)."""
     import io
 
     import numpy as np
@@ -175,10 +192,11 @@ def _bare_parse(engine: str, files: dict[Path, list[tuple[int, int]]]) -> dict:
             for start, end in ranges:
                 f.seek(start)
                 data = f.read(end - start)
-                if engine == "polars":
+                if engine.startswith("polars"):
                     import polars as pl
 
-                    df = pl.read_csv(data, separator=" ", has_header=False, quote_char=None)
+                    df = pl.read_csv(data, separator=" ", has_header=False, quote_char=None,
+                                     columns=(columns or {}).get(path))
                     arrays = [s.to_numpy() for s in df.iter_columns()]
                 else:
                     import pandas as pd
@@ -188,6 +206,55 @@ def _bare_parse(engine: str, files: dict[Path, list[tuple[int, int]]]) -> dict:
                 rows += len(arrays[0])
                 del data, df, arrays
     return {"rows": rows, "numpy": np.__version__}
+
+
+def _limits(paths: list[Path]) -> dict:
+    """The machine's limits for a text reader on ``paths`` (module docstring, ``limits``): seconds for a
+    page-cache read into a reused 16 MiB buffer, and for a word-at-a-time newline count over a memory
+    map (compiled, one thread; best of 3 each)."""
+    import mmap
+
+    import numba
+    import numpy as np
+
+    @numba.njit(nogil=True)
+    def newlines(words):  # exact count of 0x0a bytes, 8 per step (x ^ 0x0a..0a has a zero byte per newline)
+        ones, low7 = np.uint64(0x0101010101010101), np.uint64(0x7F7F7F7F7F7F7F7F)
+        nl = np.uint64(0x0A0A0A0A0A0A0A0A)
+        total = np.uint64(0)
+        for i in range(words.size):
+            x = words[i] ^ nl
+            zero = ~(((x & low7) + low7) | x | low7)
+            total += ((zero >> np.uint64(7)) * ones) >> np.uint64(56)
+        return total
+
+    def read_all():
+        buf = bytearray(1 << 24)
+        for path in paths:
+            with open(path, "rb", buffering=0) as f:
+                while f.readinto(buf):
+                    pass
+
+    def count_all():
+        n = 0
+        for path in paths:
+            with open(path, "rb") as f, mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as m:
+                a = np.frombuffer(m, dtype=np.uint8)
+                cut = a.size - a.size % 8
+                n += int(newlines(a[:cut].view(np.uint64))) + int(np.count_nonzero(a[cut:] == 10))
+                del a
+        return n
+
+    newlines(np.zeros(8, np.uint64))  # compiled before it is timed
+    out = {"bytes": sum(p.stat().st_size for p in paths)}
+    for label, f in (("page_cache_read", read_all), ("newline_count", count_all)):
+        times = []
+        for _ in range(3):
+            t = time.perf_counter()
+            f()
+            times.append(time.perf_counter() - t)
+        out[label] = min(times)
+    return out
 
 
 def _ovito(atoms: Path, pairs: Path) -> dict:
@@ -305,13 +372,21 @@ def _vm_hwm_mb() -> float:
 
 
 def frame_ranges(d: Path) -> dict:
-    """Byte range of every frame's rows in both dumps (demsplit's index)."""
+    """Byte range of every frame's rows in both dumps (demsplit's index), and ``needed``: per dump, the
+    indices of the columns demsplit's reader reads (for ``polars-needed``)."""
+    from demsplit.readers import open_run
     from demsplit.readers.lammps_dump import open_dump
 
-    out = {}
+    out: dict = {}
     for name in ("atoms", "pairs"):
         dump = open_dump(d / f"{name}.txt")
         out[name] = [(e.data_start, e.data_end) for e in dump._index()]
+    run = open_run(d / "in.bench")
+    try:
+        out["needed"] = {"atoms": sorted(run.atoms.columns.index(c) for c in run._atom_columns()),
+                         "pairs": sorted(run.pairs.columns.index(c) for c in run._wanted(run._pair_names))}
+    finally:
+        run.close()
     return out
 
 
@@ -398,10 +473,23 @@ def report(m: dict, d: Path, load0, load1, repeat: int) -> None:
     ratio("demsplit run --no-contacts vs polars bare parse", "demsplit-run-nocontacts", "polars")
     ratio("pipeline (no store) vs polars bare parse", "pipeline-nostore", "polars")
     ratio("demsplit reader (every Frame) vs polars bare parse", "demsplit-read", "polars")
+    ratio("demsplit reader (every Frame) vs polars, only the needed columns", "demsplit-read", "polars-needed")
+    ratio("demsplit run vs polars, only the needed columns", "demsplit-run", "polars-needed")
     ratio("demsplit run vs pandas C engine bare parse", "demsplit-run", "pandas-c")
     ratio("pipeline (no store) vs OVITO", "pipeline-nostore", "ovito")
     ratio("demsplit reader on the atom dump vs MDAnalysis (like for like)", "demsplit-atoms", "mdanalysis")
     ratio("cache read vs text read (every Frame)", "cache-read", "demsplit-read")
+    lim = m.get("limits", {})
+    if "page_cache_read" in lim and t("demsplit-read"):
+        gb = lim["bytes"] / 1e9
+        print(f"\nthroughput over both files ({gb:.2f} GB), GB/s, and demsplit's read as a fraction of each limit")
+        print(f"  page-cache read (readinto)           {gb / lim['page_cache_read']:6.2f}")
+        print(f"  newline count, 8 bytes a step        {gb / lim['newline_count']:6.2f}")
+        for n in ("demsplit-read", "polars-needed", "polars"):
+            if t(n):
+                print(f"  {n:36s} {gb / t(n):6.2f}   ({lim['page_cache_read'] / t(n):.0%} of the page-cache read, "
+                      f"{lim['newline_count'] / t(n):.0%} of the newline count; process start and imports "
+                      "included)")
     if k and "frame_bytes" in k and "imports" in m and "error" not in m["imports"]:
         fb = k["frame_bytes"] / 2**20
         base = m["imports"]["peak_rss_mb"]
