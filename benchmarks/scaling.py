@@ -1,0 +1,112 @@
+"""Cost of ``demsplit run`` against the size of a run: particles and frames.
+
+For each cell of a grid of (particles, frames), a run is written by
+:func:`generate.generate` (two contacts per particle, ``%g`` dumps) into a
+temporary directory outside the repository, its files are read once into the
+page cache (untimed), and ``demsplit run -q`` is timed in a fresh process,
+serially and with ``--jobs 2``; the peak resident memory is the child's own
+``VmHWM``. The run's directory is removed before the next cell is written.
+Printed: one row per cell (seconds, MB/s of input, peak RSS), then the
+exponent b of the fit seconds = a (particles x frames)^b by least squares in
+log-log over the cells that take at least one second (below that, process
+start and imports dominate), and the ratio of ``--jobs 2`` to serial per cell.
+The load average is printed before and after; a figure taken with a load
+above 1 is marked "under load".
+
+    python benchmarks/scaling.py [--big] [--cells 10000x1,10000x10] [--json FILE]
+
+``--big`` adds a 1e7-particle frame (about 10 GB of text; about 10 minutes to
+write).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench import warm  # noqa: E402
+from generate import generate  # noqa: E402
+
+GRID = [(10_000, 1), (10_000, 10), (10_000, 100), (100_000, 1), (100_000, 10), (100_000, 30),
+        (1_000_000, 1), (1_000_000, 3)]
+BIG = [(10_000_000, 1)]
+CHILD = ("import sys, pathlib\n"
+         "from demsplit.cli import main\n"
+         "rc = main(sys.argv[1:])\n"
+         "hwm = [l for l in pathlib.Path('/proc/self/status').read_text().splitlines() if l.startswith('VmHWM:')]\n"
+         "print(int(hwm[0].split()[1]) / 1024 if hwm else float('nan'))\n"
+         "sys.exit(rc)\n")
+
+
+def timed_run(script: Path, out: Path, jobs: int) -> tuple[float, float]:
+    """Wall seconds and peak RSS (MB) of ``demsplit run`` in a fresh process."""
+    os.sync()
+    warm([p for p in script.parent.iterdir() if p.suffix == ".txt"])
+    t = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-c", CHILD, "run", str(script), "-o", str(out), "-q", "--jobs", str(jobs)],
+                          capture_output=True, text=True)
+    seconds = time.perf_counter() - t
+    if proc.returncode != 0:
+        raise RuntimeError(f"demsplit run failed on {script}: {proc.stderr.strip().splitlines()[-1:]}")
+    out.unlink(missing_ok=True)
+    return seconds, float(proc.stdout.strip().splitlines()[-1])
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--big", action="store_true", help="add a 1e7-particle frame (about 10 GB)")
+    ap.add_argument("--cells", help="instead of the grid, e.g. 10000x1,10000x10 (particles x frames)")
+    ap.add_argument("--json", type=Path, help="also write the measurements here")
+    a = ap.parse_args(argv)
+    grid = [tuple(int(v) for v in c.split("x")) for c in a.cells.split(",")] if a.cells else GRID
+    grid += BIG if a.big else []
+    load0 = os.getloadavg()
+    rows = []
+    # a throw-away run first, so that numba's cached kernels are compiled before any cell is timed
+    with tempfile.TemporaryDirectory(prefix="demsplit-scaling-") as work:
+        sample = Path(__file__).resolve().parent.parent / "sample_dumps" / "liggghts" / "packing" / "in.packing"
+        timed_run(sample, Path(work) / "warm.h5", 1)
+        for particles, frames in grid:
+            d = Path(work) / f"run_{particles}_{frames}"
+            info = generate(d, particles, 2 * particles, frames)
+            size = sum(info["bytes"].values())
+            serial, rss = timed_run(d / "in.bench", Path(work) / "out.h5", 1)
+            parallel, rss2 = timed_run(d / "in.bench", Path(work) / "out.h5", 2)
+            rows.append({"particles": particles, "frames": frames, "bytes": size, "seconds": serial,
+                         "peak_rss_mb": rss, "seconds_jobs2": parallel, "peak_rss_mb_jobs2": rss2,
+                         "load": os.getloadavg()[0]})
+            r = rows[-1]
+            print(f"{particles:>10,d} particles x {frames:>3d} frames  {size / 1e6:8.0f} MB  {serial:7.2f} s  "
+                  f"{size / serial / 1e6:6.0f} MB/s  peak {rss:6.0f} MB  | --jobs 2 {parallel:7.2f} s "
+                  f"({serial / parallel:.2f}x serial)  load {r['load']:.2f}", flush=True)
+            shutil.rmtree(d)
+    load1 = os.getloadavg()
+    fit = [r for r in rows if r["seconds"] >= 1.0]
+    marked = " (under load)" if max(load0[0], load1[0]) > 1 else ""
+    print(f"\nload average {load0[0]:.2f} before / {load1[0]:.2f} after{marked}; {os.cpu_count()} cores")
+    if len(fit) >= 2:
+        x = np.log([r["particles"] * r["frames"] for r in fit])
+        b, log_a = np.polyfit(x, np.log([r["seconds"] for r in fit]), 1)
+        mx = np.log([r["particles"] * r["frames"] for r in fit])
+        bm, _ = np.polyfit(mx, np.log([r["peak_rss_mb"] for r in fit]), 1)
+        print(f"fit over the {len(fit)} cells of >= 1 s: seconds = {np.exp(log_a):.3g} (particles x frames)^{b:.3f}")
+        print(f"peak memory against particles x frames: exponent {bm:.3f} (memory follows one frame, not the run)")
+    worst = max(rows, key=lambda r: r["seconds_jobs2"] / r["seconds"])
+    print(f"--jobs 2 against serial: slowest {worst['seconds_jobs2'] / worst['seconds']:.2f}x "
+          f"({worst['particles']:,d} particles x {worst['frames']} frames)")
+    if a.json:
+        a.json.write_text(json.dumps({"rows": rows, "load": [load0, load1], "nproc": os.cpu_count()}, indent=1))
+
+
+if __name__ == "__main__":
+    main()
