@@ -310,15 +310,42 @@ def _windowed(submit: Callable[[int], object], result: Callable[[object], tuple]
         del fut  # its result is the consumer's now
 
 
+MIN_THREADS_PER_WORKER = 2
+"""A worker process runs only where each gets at least this many cores (see :func:`worker_processes`)."""
+
+
+def worker_processes(jobs: int) -> int:
+    """How many of the ``jobs`` worker processes asked for are used: at most one per
+    :data:`MIN_THREADS_PER_WORKER` cores, so 1 (this process alone) on fewer than 4. The serial path
+    already runs its parse and its store compression on every core; measured on 2 cores,
+    ``--jobs 2`` was 1.47-2.5x slower than serial from 1e4 to 1e6 particles (under a load of 2.7-3.1)
+    (``python benchmarks/scaling.py``, docs/performance.md), as the workers' start, their
+    thread pools competing for the same cores and the frames' transfer to the writing process
+    cost more than the per-frame physics they share out."""
+    from . import threads
+
+    return max(1, min(jobs, threads.THREADS // MIN_THREADS_PER_WORKER))
+
+
+def _worker_init(parent: int, threads_per_worker: int) -> None:
+    """Worker initializer: its share of the cores, and an end with its parent (:func:`_exit_with_parent`)."""
+    from . import threads
+
+    threads.limit(threads_per_worker)
+    _exit_with_parent(parent)
+
+
 def _processes(run: Run, indices: list[int], options: Options, jobs: int) -> Iterator[tuple]:
     import multiprocessing as mp
     from concurrent.futures import ProcessPoolExecutor
 
+    from . import threads
+
     spec = run.spec
     key = _spec_key(spec)
     ctx = mp.get_context("forkserver" if sys.platform != "win32" else "spawn")
-    with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_exit_with_parent,
-                             initargs=(os.getpid(),)) as pool:
+    with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_worker_init,
+                             initargs=(os.getpid(), threads.THREADS // jobs)) as pool:
         yield from _windowed(lambda k: pool.submit(_worker_frame, key, spec, k, options),
                              lambda fut: fut.result(), indices, 2 * jobs)
 
@@ -356,7 +383,8 @@ def process_run(run: Run, options: Options = Options(), *, jobs: int = 1, dask: 
                 report: RunReport | None = None) -> Iterator[Tables]:
     """Yield the tables of every frame of ``run`` in order.
 
-    jobs : worker processes (1: in this process). dask : a Dask scheduler
+    jobs : worker processes (1: in this process), at most :func:`worker_processes` of them (a note
+        says when fewer are used). dask : a Dask scheduler
         address (``tcp://HOST:PORT``), a scheduler file, or ``local:N`` to
         start a local cluster of N workers.
     on_bad_frame : ``"stop"`` raises the first frame's error; ``"skip"`` leaves
@@ -377,10 +405,18 @@ def process_run(run: Run, options: Options = Options(), *, jobs: int = 1, dask: 
     indices = [k for k, s in enumerate(all_steps)
                if (wanted is None or s in wanted) and not (skip_steps and s in skip_steps)]
     report.frames_resumed = len(skip_steps or ())
+    workers = worker_processes(jobs)
+    if workers < jobs and not dask:
+        from . import threads
+
+        used = "the frames computed in this process" if workers == 1 else f"{workers} worker processes"
+        report.notes.append(f"--jobs {jobs} on {threads.THREADS} cores: {used}; a worker process needs "
+                            f"{MIN_THREADS_PER_WORKER} cores to be faster than the serial path, which parses and "
+                            "compresses on every core (measured: docs/performance.md).")
     if dask:
         results = _dask(run, indices, options, dask)
-    elif jobs > 1:
-        results = _processes(run, indices, options, jobs)
+    elif workers > 1:
+        results = _processes(run, indices, options, workers)
     else:
         results = _serial(run, indices, options)
     from tqdm import tqdm

@@ -13,16 +13,36 @@ from __future__ import annotations
 import os
 from concurrent.futures import ThreadPoolExecutor
 
-THREADS = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
-"""Cores this process may run on: the pool's size."""
+def _cores() -> int:
+    """``DEMSPLIT_THREADS`` when set to a positive integer, else the cores this process may run on."""
+    value = os.environ.get("DEMSPLIT_THREADS", "")
+    if value.isdigit() and int(value) > 0:
+        return int(value)
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
 
+
+THREADS = _cores()
+"""Cores this process may run on (or ``DEMSPLIT_THREADS``): the pool's size, unless :func:`limit`-ed."""
+
+_limit: int | None = None  # this process's share of the cores, when it is one of several workers
 _pool: tuple[int, ThreadPoolExecutor] | None = None  # (process id, that process's threads)
 
 
+def count() -> int:
+    """Threads this process runs its pieces of work on."""
+    return _limit or THREADS
+
+
+def limit(n: int) -> None:
+    """Run this process's work on ``n`` threads (a worker process's share of the cores)."""
+    global _limit, _pool
+    _limit, _pool = max(1, int(n)), None
+
+
 def pool() -> ThreadPoolExecutor:
-    """The pool of :data:`THREADS` threads of this process (a forked worker
+    """The pool of :func:`count` threads of this process (a forked worker
     process gets its own: its parent's threads were not forked with it)."""
     global _pool
     if _pool is None or _pool[0] != os.getpid():
-        _pool = (os.getpid(), ThreadPoolExecutor(max_workers=THREADS, thread_name_prefix="demsplit"))
+        _pool = (os.getpid(), ThreadPoolExecutor(max_workers=count(), thread_name_prefix="demsplit"))
     return _pool[1]

@@ -102,7 +102,7 @@ from typing import TYPE_CHECKING, BinaryIO
 import numpy as np
 from demsplit.errors import DemsplitError, InputFormatError, PrecisionError, TruncatedFileError
 from demsplit.frame import Box, describe_steps
-from demsplit.threads import THREADS, pool
+from demsplit import threads
 
 if TYPE_CHECKING:  # polars is imported where the fallback parse needs it
     import polars as pl
@@ -690,7 +690,7 @@ def _parse_fast(a: np.ndarray, ncols: int, trailing: bool, cols: _Columns, row0:
     """
     from .fastparse import FALLBACK, SHAPE, count_newlines, next_newline, parse_rows
 
-    n_slices = max(1, min(THREADS, a.size // _SLICE_MIN))
+    n_slices = max(1, min(threads.count(), a.size // _SLICE_MIN))
     cuts = [0] + [next_newline(a, a.size * k // n_slices) for k in range(1, n_slices)] + [a.size]
     rows = [count_newlines(a, lo, hi) for lo, hi in zip(cuts[:-2], cuts[1:-1])]
     rows.append(rows_left - sum(rows))
@@ -701,7 +701,7 @@ def _parse_fast(a: np.ndarray, ncols: int, trailing: bool, cols: _Columns, row0:
     if n_slices == 1:
         results = [parse_rows(*jobs[0])]
     else:
-        results = list(pool().map(lambda job: parse_rows(*job), jobs))
+        results = list(threads.pool().map(lambda job: parse_rows(*job), jobs))
     statuses = [status for status, _, _, _ in results]
     if SHAPE in statuses:
         return None, False

@@ -78,7 +78,10 @@ def test_a_column_past_the_end_of_the_cache_is_refused_with_its_name(samples, tm
     run.close()
 
 
-def test_cache_results_equal_text_results_and_work_in_workers(samples, tmp_path):
+def test_cache_results_equal_text_results_and_work_in_workers(samples, tmp_path, monkeypatch):
+    from demsplit import threads
+
+    monkeypatch.setattr(threads, "THREADS", 4)  # as on 4 cores: --jobs 2 starts two worker processes
     script = samples / "liggghts" / "packing" / "in.packing"
     cache = tmp_path / "cache.h5"
     assert main(["convert", str(script), "-o", str(cache), "-q"]) == 0

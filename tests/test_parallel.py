@@ -40,9 +40,44 @@ def serial(request):
     return {name: analyze(path) for name, path in _runs(samples).items()}
 
 
+@pytest.fixture
+def four_cores(monkeypatch):
+    """A machine of 4 cores as demsplit sees it, so that --jobs 2 starts two worker processes."""
+    from demsplit import threads
+
+    monkeypatch.setattr(threads, "THREADS", 4)
+    monkeypatch.setenv("DEMSPLIT_THREADS", "4")
+
+
+def test_worker_processes_need_two_cores_each(monkeypatch):
+    from demsplit import threads
+    from demsplit.pipeline import worker_processes
+
+    for cores, jobs, used in ((2, 2, 1), (2, 8, 1), (3, 2, 1), (4, 2, 2), (4, 8, 2), (16, 4, 4), (16, 1, 1)):
+        monkeypatch.setattr(threads, "THREADS", cores)
+        assert worker_processes(jobs) == used, (cores, jobs)
+
+
+def test_jobs_beyond_the_cores_run_serially_with_a_note(samples, monkeypatch):
+    import demsplit.pipeline as pipeline
+    from demsplit import threads
+
+    monkeypatch.setattr(threads, "THREADS", 2)
+    monkeypatch.setattr(pipeline, "_processes", lambda *a: pytest.fail("no worker process on 2 cores"))
+    res = analyze(_runs(samples)["liggghts-packing"], jobs=2)
+    notes = res.provenance["notes"]
+    assert any(n.startswith("--jobs 2 on 2 cores: the frames computed in this process") for n in notes)
+
+
 @pytest.mark.parametrize("name", ["liggghts-packing", "yade-mindlin_box", "yade-cundall_periodic"])
-def test_worker_processes_equal_serial(name, serial, samples):
+def test_worker_processes_equal_serial(name, serial, samples, four_cores, monkeypatch):
+    import demsplit.pipeline as pipeline
+
+    started = []
+    processes = pipeline._processes
+    monkeypatch.setattr(pipeline, "_processes", lambda *a: started.append(a[-1]) or processes(*a))
     parallel = analyze(_runs(samples)[name], jobs=2)
+    assert started == [2]  # two worker processes did the work
     assert len(parallel.frames) == len(serial[name].frames) > 0
     assert_same_results(parallel, serial[name])
 
