@@ -42,6 +42,7 @@ from ..frame import Box, Frame, ParticleIndex, Table, describe_steps
 from ..physics.shares import contact_point
 from ..scene import Material, Scene
 from .base import Run
+from .dump_series import DumpSeries, series_files
 from .lammps_dump import HEADER_LINES, DumpFile, DumpFrame, open_dump
 from .liggghts_script import read_script
 from .liggghts_vtk import vtk_dump_note
@@ -217,7 +218,7 @@ class LiggghtsRun(Run):
         self.steps = np.asarray(self.atoms.steps, dtype=np.int64)
         self.damaged = self.atoms.damaged  # atom frames whose header is unreadable: frames len(steps)...
         self.sources = ([] if script is None else [self.script.path]) + [
-            d.path for d in (self.atoms, self.pairs, self.walls) if d is not None]
+            f for d in (self.atoms, self.pairs, self.walls) if d is not None for f in getattr(d, "files", [d.path])]
 
     # -- finding and opening the dumps -----------------------------------------------------
 
@@ -230,6 +231,22 @@ class LiggghtsRun(Run):
             specs = [d for d in self.script.dumps if d.layout is not None and d.layout.kind == kind]
         return sorted(specs, key=lambda d: not d.full_precision)
 
+    def _series(self, spec) -> DumpSeries | None:
+        """The dump of ``spec`` when it writes one file per timestep (``*``; see
+        :mod:`demsplit.readers.dump_series`), None for a single file or when no file matches;
+        one file per processor (``%``) is refused."""
+        name = Path(spec.file).name
+        if "%" in name:
+            raise InputFormatError(
+                f"dump {spec.id} writes one file per processor ({spec.file}), so each frame is split over "
+                "several files; demsplit reads a frame from one file.", file=self.script.path,
+                fix="write the dump without '%' in its file name (one file, or one per timestep with '*').")
+        if "*" not in name:
+            return None
+        files = series_files(spec.file)
+        return DumpSeries(spec.file, files, columns=spec.keywords if spec.style == "custom" else None) \
+            if files else None
+
     def _open_atoms(self, given) -> DumpFile:
         if given is not None:
             path = existing_file(given)
@@ -238,6 +255,8 @@ class LiggghtsRun(Run):
             spec = next((d for d in self._candidates("atoms") if existing_file(d.file) == path), None)
             return open_dump(path, columns=spec.keywords if spec else None)
         for spec in self._candidates("atoms"):
+            if (series := self._series(spec)) is not None:
+                return series
             path = existing_file(spec.file)
             if path is not None:
                 return open_dump(path, columns=spec.keywords)
@@ -255,11 +274,8 @@ class LiggghtsRun(Run):
                                        fix=f"check the --{'contacts' if kind == 'pair' else 'walls'} path.")
             return open_dump(path)
         for spec in self._candidates(kind):
-            if "*" in spec.file or "%" in spec.file:
-                raise InputFormatError(
-                    f"dump {spec.id} writes one file per step or processor ({spec.file}); demsplit reads one "
-                    "file holding all frames.", file=self.script.path,
-                    fix="concatenate the files in step order into one file and pass it with --contacts/--walls.")
+            if (series := self._series(spec)) is not None:
+                return series
             path = existing_file(spec.file)
             if path is not None:
                 return open_dump(path)
