@@ -10,6 +10,10 @@ Printed: one row per cell (seconds, MB/s of input, peak RSS), then the
 exponent b of the fit seconds = a (particles x frames)^b by least squares in
 log-log over the cells that take at least one second (below that, process
 start and imports dominate), and the ratio of ``--jobs 2`` to serial per cell.
+Then the per-file overhead: a run of ``--files`` frames (1,000 by default) of
+100 particles, read once from one file per dump and once from one file per
+timestep (``dump ... atoms*.txt``, :mod:`demsplit.readers.dump_series`):
+the difference over the number of files.
 The load average is printed before and after; a figure taken with a load
 above 1 is marked "under load".
 
@@ -66,6 +70,7 @@ def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--big", action="store_true", help="add a 1e7-particle frame (about 10 GB)")
     ap.add_argument("--cells", help="instead of the grid, e.g. 10000x1,10000x10 (particles x frames)")
+    ap.add_argument("--files", type=int, default=1000, help="frames (files per dump) of the per-file overhead run")
     ap.add_argument("--json", type=Path, help="also write the measurements here")
     a = ap.parse_args(argv)
     grid = [tuple(int(v) for v in c.split("x")) for c in a.cells.split(",")] if a.cells else GRID
@@ -90,6 +95,7 @@ def main(argv: list[str] | None = None) -> None:
                   f"{size / serial / 1e6:6.0f} MB/s  peak {rss:6.0f} MB  | --jobs 2 {parallel:7.2f} s "
                   f"({serial / parallel:.2f}x serial)  load {r['load']:.2f}", flush=True)
             shutil.rmtree(d)
+        per_file = per_file_overhead(Path(work), a.files)
     load1 = os.getloadavg()
     fit = [r for r in rows if r["seconds"] >= 1.0]
     marked = " (under load)" if max(load0[0], load1[0]) > 1 else ""
@@ -104,8 +110,30 @@ def main(argv: list[str] | None = None) -> None:
     worst = max(rows, key=lambda r: r["seconds_jobs2"] / r["seconds"])
     print(f"--jobs 2 against serial: slowest {worst['seconds_jobs2'] / worst['seconds']:.2f}x "
           f"({worst['particles']:,d} particles x {worst['frames']} frames)")
+    print(f"{a.files} frames of 100 particles: one file per dump {per_file['single']:.2f} s, one file per timestep "
+          f"({2 * a.files} files) {per_file['series']:.2f} s: {per_file['per_file_ms']:.2f} ms per file")
     if a.json:
-        a.json.write_text(json.dumps({"rows": rows, "load": [load0, load1], "nproc": os.cpu_count()}, indent=1))
+        a.json.write_text(json.dumps({"rows": rows, "per_file": per_file, "load": [load0, load1],
+                                      "nproc": os.cpu_count()}, indent=1))
+
+
+def per_file_overhead(work: Path, frames: int) -> dict:
+    """Seconds of ``demsplit run`` on ``frames`` frames of 100 particles in one file per dump and in one
+    file per timestep, and the difference per file (ms)."""
+    d = work / "files"
+    generate(d, 100, 200, frames)
+    single, _ = timed_run(d / "in.bench", work / "out.h5", 1)
+    script = (d / "in.bench").read_text()
+    for name in ("atoms", "pairs"):
+        text = (d / f"{name}.txt").read_text()
+        for block in text.split("ITEM: TIMESTEP\n")[1:]:
+            (d / f"{name}_{int(block.split(chr(10), 1)[0])}.txt").write_text("ITEM: TIMESTEP\n" + block)
+        (d / f"{name}.txt").unlink()
+        script = script.replace(f" {name}.txt", f" {name}_*.txt")
+    (d / "in.bench").write_text(script)
+    series, _ = timed_run(d / "in.bench", work / "out.h5", 1)
+    shutil.rmtree(d)
+    return {"single": single, "series": series, "per_file_ms": 1e3 * (series - single) / (2 * frames)}
 
 
 if __name__ == "__main__":
