@@ -385,9 +385,11 @@ def test_threaded_parse_equals_serial(generated, monkeypatch, block):
     path = generated / "pairs.txt"
     monkeypatch.setattr(ld, "BLOCK", block)
     monkeypatch.setattr(ld, "_SLICE_MIN", 1)
-    monkeypatch.setattr(ld, "THREADS", 1)  # slices per block
+    from demsplit import threads
+
+    monkeypatch.setattr(threads, "THREADS", 1)  # slices per block
     serial, _ = read_all(path)
-    monkeypatch.setattr(ld, "THREADS", 5)  # slices per block
+    monkeypatch.setattr(threads, "THREADS", 5)  # slices per block
     threaded, _ = read_all(path)
     assert_same_frames(serial, threaded)
 
