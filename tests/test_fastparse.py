@@ -170,6 +170,54 @@ def test_kernel_shape_check(text, trailing, row):
         assert (status, where) == (fp.SHAPE, row)
 
 
+def reference_shape(text: bytes, ncols: int, trailing: bool, max_rows: int) -> tuple[bool, int]:
+    """(well formed, rows) or (False, first bad row) by the rule parse_rows documents, in plain Python."""
+    rows = text.split(b"\n")
+    for r, row in enumerate(rows[:-1]):
+        if r >= max_rows:
+            return False, r
+        if trailing:
+            if not row.endswith(b" "):
+                return False, r
+            row = row[:-1]
+        fields = row.split(b" ")
+        if len(fields) != ncols or any(not f or min(f) <= 32 for f in fields):
+            return False, r
+    if rows[-1]:  # no final newline
+        return False, len(rows) - 1
+    return True, len(rows) - 1
+
+
+@settings(max_examples=600, deadline=None)
+@given(data=st.data(), ncols=st.integers(1, 14), trailing=st.booleans())
+def test_kernel_shape_check_equals_the_rule(data, ncols, trailing):
+    """Rows of digit tokens with now and then a damaged separator (two spaces, a tab, a CR, a newline,
+    an empty field, a missing or extra field), any columns requested: parse_rows finds the first
+    malformed row the plain rule finds, whether it steps over columns several at a time or not."""
+    token = st.text("0123456789", min_size=1, max_size=12)
+    sep = st.sampled_from([b" "] * 30 + [b"  ", b"\t", b"\r", b"\n", b""])
+    lines = []
+    for _ in range(data.draw(st.integers(1, 6))):
+        n = ncols + data.draw(st.sampled_from([0] * 8 + [-1, 1]))
+        fields = [data.draw(token).encode() for _ in range(max(n, 0))]
+        line = b""
+        for k, f in enumerate(fields):
+            line += f + (data.draw(sep) if k < len(fields) - 1 else b"")
+        lines.append(line + (b" " if trailing else b""))
+    text = b"\n".join(lines) + data.draw(st.sampled_from([b"\n"] * 5 + [b""]))
+    kind = np.array([data.draw(st.sampled_from([0, 0, 1, 2])) for _ in range(ncols)])
+    slot = np.zeros(ncols, dtype=np.int64)
+    a = np.frombuffer(text, dtype=np.uint8)
+    rows = len(lines)
+    status, where, n, _ = fp.parse_rows(a, 0, a.size, ncols, trailing, kind, slot, np.zeros((1, rows)),
+                                        np.zeros((1, rows), np.int64), 0, rows, np.empty((4, 4), np.int64))
+    ok, expected = reference_shape(text, ncols, trailing, rows)
+    if ok:
+        assert status in (fp.OK, fp.FALLBACK) and n == expected, text
+    else:
+        assert (status, where) == (fp.SHAPE, expected), text
+
+
 def test_scan_chunk_finds_markers_and_newlines():
     text = b"x\nITEM: TIMESTEP\n1\n" + b"1 2\n" * 50 + b"ITEM: TIMESTEP\n2\nITEM: TIMESTE" + b"I\n" * 30
     a = np.frombuffer(text, dtype=np.uint8)
