@@ -14,8 +14,14 @@ the file, the timestep, the table, the column and the row. The checks:
 * every real is finite, except ``r2 = inf`` (a plane);
 * radius, r1, r2 > 0; stored stiffnesses (``kn ks kno kso``) >= 0; the normal
   is a unit vector (to 1e-5, the precision of ``%g`` exports);
-* the box is finite with lo < hi;
+* the box is finite with lo < hi; the frame's time, when known, is finite and >= 0;
 * an overlap is not larger than the smaller of the two radii.
+
+:func:`typed_columns` is the same layer one step earlier, for a reader's raw
+records (a YADE snapshot's tables, before the reader combines their columns):
+every column the reader needs is there, one-dimensional, as long as the
+others, and of its kind (integers, reals or text), cast safely to int64,
+float64 or bytes, so that no reader computes in a narrow or foreign dtype.
 
 :func:`check_finite_energies` refuses a result that is not finite (a dumped
 shear history of 1e200 gives ``inf`` energies) before it is stored.
@@ -50,6 +56,9 @@ def validated_frame(frame: Frame) -> Frame:
         if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi)) and np.all(lo < hi)):
             raise InputFormatError(f"the box bounds are not finite with lo < hi (lo {lo.tolist()}, hi "
                                    f"{hi.tolist()}).", **where, fix="check the box lines of the file.")
+    if frame.time is not None and not (np.isfinite(frame.time) and frame.time >= 0):
+        raise InputFormatError(f"the frame's time {float(frame.time)!r} s is not a finite time >= 0.", **where,
+                               fix="check the run's timestep and the frame's step.")
     if contacts and len(contacts["delta"]):
         _check_geometry(contacts, {**where, "file": source})
     return replace(frame, particles=particles, contacts=contacts)
@@ -136,3 +145,70 @@ def check_finite_energies(u: np.ndarray, contacts: Table, *, file: str | None, s
                            "a stored force, stiffness or spring history of an implausible size; "
                            f"{int(np.count_nonzero(bad))} such contact(s).", file=file, step=step,
                            fix="check the contact file at that row (a damaged or foreign value).")
+
+
+COLUMN_KINDS = ("int", "real", "text")
+
+
+def typed_columns(table, schema: dict[str, str], *, name: str, optional: dict[str, str] | None = None,
+                  file=None, step: int | None = None, where: str = "") -> dict[str, np.ndarray]:
+    """The columns of a reader's raw ``table`` named in ``schema`` (required) and ``optional`` (kept when
+    present), each cast to its kind (:data:`COLUMN_KINDS`): ``int`` to int64 (integer dtypes within its
+    range, or finite integral reals), ``real`` to float64 (integer, real or boolean dtypes; values are
+    checked later, on the frame), ``text`` to bytes. Columns named in neither are dropped. A missing
+    column, one that is not 1-D, of another length or of another kind is an :class:`InputFormatError`
+    naming ``where`` (e.g. ``"snapshot 2"``), the table ``name`` and the column."""
+    prefix = f"{where}: " if where else ""
+
+    def bad(col: str, what: str) -> InputFormatError:
+        return InputFormatError(f"{prefix}column {name}.{col} {what}.", file=file, step=step,
+                                fix="the file is damaged or was not written by the simulator's exporter: "
+                                    "rewrite it (rerun the simulation).")
+
+    if not isinstance(table, dict):
+        raise InputFormatError(f"{prefix}table {name} is missing or not a table of columns.", file=file, step=step,
+                               fix="the file is damaged: rewrite it (rerun the simulation).")
+    out: dict[str, np.ndarray] = {}
+    length = None
+    for col, kind in {**schema, **(optional or {})}.items():
+        if col not in table:
+            if col in schema:
+                raise bad(col, "is missing")
+            continue
+        values = np.asarray(table[col])
+        if values.ndim != 1:
+            raise bad(col, f"has shape {values.shape}, expected one value per row")
+        if length is None:
+            length = len(values)
+        elif len(values) != length:
+            raise bad(col, f"has {len(values)} rows, the table's other columns {length}")
+        out[col] = _as_kind(values, kind, lambda what, c=col: bad(c, what))
+    return out
+
+
+def _as_kind(values: np.ndarray, kind: str, bad) -> np.ndarray:
+    dt = values.dtype
+    if kind == "text":
+        if dt.kind == "S":
+            return values
+        if dt.kind == "U":
+            try:
+                return values.astype("S")
+            except UnicodeEncodeError:
+                raise bad("holds text that is not ASCII") from None
+        raise bad(f"holds {dt} values, expected text")
+    if kind == "real":
+        if dt.kind in "fiub":
+            return values.astype(np.float64, copy=False)
+        raise bad(f"holds {dt} values, expected numbers")
+    if dt.kind in "iu":
+        if dt.kind == "u" and dt.itemsize == 8 and len(values) and values.max() > np.iinfo(np.int64).max:
+            raise bad("has values beyond int64")
+        return values.astype(np.int64, copy=False)
+    if dt.kind == "f":
+        ok = np.isfinite(values) & (values == np.round(values)) & (np.abs(values) < 2.0**63)
+        if not ok.all():
+            row = int(np.flatnonzero(~ok)[0])
+            raise bad(f"must hold integers, row {row} holds {float(values[row])!r}")
+        return values.astype(np.int64)
+    raise bad(f"holds {dt} values, expected integers")

@@ -239,7 +239,11 @@ def open_dump(path: str | Path, columns: Sequence[str] | None = None) -> DumpFil
     opener = next((op for magic, op in _MAGIC.items() if head.startswith(magic)), None)
     if opener is not None:
         with opener(path, "rb") as f:
-            head = f.read(HEADER_MAX)
+            buf = bytearray(HEADER_MAX)
+            head = bytes(buf[:_read_into(f, memoryview(buf))])  # a stream damaged at once reads as empty
+        if not head:
+            raise TruncatedFileError("the compressed file holds no data: it is cut or damaged at its start",
+                                     file=path, line=1, fix=FIX_TRUNCATED)
         if not head.startswith(MARKER):
             raise InputFormatError(
                 "the decompressed file does not start with 'ITEM: TIMESTEP'; compressed binary dumps are not "

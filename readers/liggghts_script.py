@@ -71,6 +71,7 @@ format prints garbage, because every ``c_`` value is a double (measured:
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
@@ -463,10 +464,14 @@ class _Reader:
 
     def number(self, text: str, where: Where, what: str) -> float:
         try:
-            return float(text)
+            value = float(text)
         except ValueError:
             raise self.error(ScriptError, f"{what}: expected a number, found {excerpt(text)}.", where,
                              "write a number (or a variable that holds one).") from None
+        if not math.isfinite(value):  # nan, inf, or a literal beyond the doubles such as 1e400
+            raise self.error(ScriptError, f"{what}: {excerpt(text)} is not a finite number.", where,
+                             "write a finite number.")
+        return value
 
     def integer(self, text: str, where: Where, what: str) -> int:
         try:
@@ -513,6 +518,9 @@ class _Reader:
     def cmd_timestep(self, args: list[str], where: Where) -> None:
         self.need(args, 1, where, "timestep", "timestep DT")
         self.timestep = self.number(args[0], where, "timestep")
+        if self.timestep <= 0:
+            raise self.error(ScriptError, f"timestep {excerpt(args[0])}: the timestep must be > 0.", where,
+                             "write the run's timestep (s).")
 
     def cmd_run(self, args: list[str], where: Where) -> None:
         self.need(args, 1, where, "run", "run N")
@@ -594,6 +602,8 @@ class _Reader:
         try:
             g = float(rest[0])
             d = np.array([float(v) for v in rest[2:5]])
+            if not (math.isfinite(g) and np.all(np.isfinite(d))):
+                raise ValueError
         except ValueError:
             self.warnings.append(f"{where.file}:{where.line}: fix gravity with a variable "
                                  f"({' '.join(rest)}) is not read; script.gravity is None.")

@@ -19,6 +19,7 @@ from __future__ import annotations
 import io
 import json
 import zlib
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -26,6 +27,7 @@ from demsplit.errors import (
     ContactError, DemsplitError, InputFormatError, MaterialError, TruncatedFileError, UnsupportedModelError,
 )
 from demsplit.frame import Box, Frame, Table
+from demsplit.validate import typed_columns
 from demsplit.physics import laws as law_registry
 from demsplit.scene import ContactModel, Material, Scene, Wall
 from demsplit.yade import (
@@ -35,6 +37,7 @@ from demsplit.yade import (
 
 from .base import Run
 from .hdf5_inputs import refuse_foreign_storage
+from .lammps_input import excerpt
 
 LAW_MODELS = {key[len(YADE_PREFIX):]: ContactModel(key) for key in law_registry.supported()
               if key.startswith(YADE_PREFIX)}
@@ -50,6 +53,32 @@ RawSnapshot = tuple[dict, dict[str, Table]]
 # Storage: both formats behind count / meta(k) / snapshot(k)
 # --------------------------------------------------------------------------
 
+BODY_COLUMNS = {"id": "int", "kind": "text", "shape_class": "text", "material": "int", "radius": "real",
+                "x": "real", "y": "real", "z": "real", "xw": "real", "yw": "real", "zw": "real", "vx": "real",
+                "vy": "real", "vz": "real", "mass": "real", "clump": "int", "wall_axis": "int"}
+INTERACTION_COLUMNS = {**{c: "int" for c in ("id1", "id2", "cdx", "cdy", "cdz")},
+                       **{c: "real" for c in ("depth", "nx", "ny", "nz", "cpx", "cpy", "cpz", "refR1", "refR2",
+                                              "fnx", "fny", "fnz", "fsx", "fsy", "fsz", "kn", "ks", "kno", "kso")}}
+OPTIONAL_INTERACTION_COLUMNS = {**{c: "real" for c in ("adhesion", "fcap", "mbx", "mby", "mbz", "mtwx", "mtwy",
+                                                       "mtwz", "kr", "ktw")}, "depth_text": "text"}
+"""The columns of a snapshot's tables this reader uses, and their kinds (demsplit.validate.typed_columns)."""
+FIX_DAMAGED = ("the snapshot file is damaged or was not written by demsplit.yade.snapshot(): rewrite it (rerun the "
+               "simulation).")
+
+
+@contextmanager
+def _reading(path: Path, what: str):
+    """Turn what h5py, numpy and json raise on a damaged file into one InputFormatError naming ``what``."""
+    try:
+        yield
+    except DemsplitError:
+        raise
+    except (OSError, KeyError, ValueError, TypeError, IndexError, EOFError, SyntaxError, RuntimeError) as exc:
+        cause = " ".join(str(exc).split())[:160].encode("ascii", "backslashreplace").decode()
+        raise InputFormatError(f"{what} cannot be read ({type(exc).__name__}: {cause}).", file=path,
+                               fix=FIX_DAMAGED) from None
+
+
 class _Hdf5Store:
     def __init__(self, path: Path) -> None:
         import h5py
@@ -62,29 +91,60 @@ class _Hdf5Store:
                                      file=path, fix="rerun the simulation to rewrite it; the numpy-only format "
                                      "(snapshot(..., format='npy')) keeps the complete snapshots readable "
                                      "after a crash.") from None
-        if self._file.attrs.get("format") != FORMAT_NAME:
-            raise InputFormatError(
-                f"HDF5 file without the {FORMAT_NAME!r} format attribute "
-                f"(found {self._file.attrs.get('format')!r}).",
-                file=path, fix="give the file written by demsplit.yade.snapshot().")
-        refuse_foreign_storage(self._file, path)
-        self._names = sorted(self._file["snapshots"]) if "snapshots" in self._file else []
+        with _reading(path, "the HDF5 file's layout"):
+            if self._file.attrs.get("format") != FORMAT_NAME:
+                raise InputFormatError(
+                    f"HDF5 file without the {FORMAT_NAME!r} format attribute "
+                    f"(found {excerpt(repr(self._file.attrs.get('format')))}).",
+                    file=path, fix="give the file written by demsplit.yade.snapshot().")
+            refuse_foreign_storage(self._file, path)
+            snaps = self._file.get("snapshots")
+            if snaps is not None and not isinstance(snaps, h5py.Group):
+                raise InputFormatError("/snapshots is not a group.", file=path, fix=FIX_DAMAGED)
+            self._names = sorted(snaps) if snaps is not None else []
 
     def __len__(self) -> int:
         return len(self._names)
 
-    def problem(self, k: int) -> str | None:
+    def _group(self, k: int):
+        import h5py
+
         g = self._file["snapshots"][self._names[k]]
-        if not g.attrs.get("complete", False):
+        if not isinstance(g, h5py.Group):
+            raise InputFormatError(f"snapshot {k} (/snapshots/{self._names[k]}) is not a group.", file=self.path,
+                                   fix=FIX_DAMAGED)
+        return g
+
+    def problem(self, k: int) -> str | None:
+        with _reading(self.path, f"snapshot {k} (/snapshots/{self._names[k]})"):
+            complete = self._group(k).attrs.get("complete", False)
+        if not (isinstance(complete, (bool, np.bool_)) and complete):
             return f"snapshot {k} (group /snapshots/{self._names[k]}) was cut short: it has no 'complete' mark"
         return None
 
     def meta(self, k: int) -> dict:
-        return json.loads(self._file["snapshots"][self._names[k]].attrs["meta_json"])
+        with _reading(self.path, f"the metadata of snapshot {k} (/snapshots/{self._names[k]})"):
+            text = self._group(k).attrs["meta_json"]
+            if not isinstance(text, (str, bytes)):
+                raise TypeError(f"meta_json is {type(text).__name__}, not text")
+            return json.loads(text)
 
     def snapshot(self, k: int) -> RawSnapshot:
-        g = self._file["snapshots"][self._names[k]]
-        tables = {t: {c: g[t][c][()] for c in g[t]} for t in ("bodies", "interactions")}
+        import h5py
+
+        tables: dict[str, Table] = {}
+        for t in ("bodies", "interactions"):
+            with _reading(self.path, f"table {t} of snapshot {k} (/snapshots/{self._names[k]})"):
+                group = self._group(k).get(t)
+                if not isinstance(group, h5py.Group):
+                    raise InputFormatError(f"snapshot {k}: table {t} is missing.", file=self.path, fix=FIX_DAMAGED)
+                tables[t] = {}
+                for c in group:
+                    ds = group[c]
+                    if not isinstance(ds, h5py.Dataset):
+                        raise InputFormatError(f"snapshot {k}: {t}/{c} is not a dataset.", file=self.path,
+                                               fix=FIX_DAMAGED)
+                    tables[t][c] = ds[()]
         return self.meta(k), tables
 
     def close(self) -> None:
@@ -108,24 +168,86 @@ class _NpyStore:
             f.seek(offset)
             payload = f.read(length)
             tail = f.read(RECORD_TAIL)
-        if int(tail[6:14], 16) != zlib.crc32(payload) & 0xFFFFFFFF:
+        try:
+            crc = int(tail[6:14], 16)
+        except ValueError:
+            crc = None
+        if crc != zlib.crc32(payload) & 0xFFFFFFFF:
             raise InputFormatError(f"snapshot {k} at byte {offset}: crc32 mismatch, the record is damaged.",
                                    file=self.path, fix="rewrite the snapshot file (rerun the simulation).")
         return payload
 
     def meta(self, k: int) -> dict:
-        return json.loads(np.load(io.BytesIO(self._payload(k)), allow_pickle=False).tobytes())
+        with _reading(self.path, f"the metadata of snapshot {k}"):
+            return json.loads(np.load(io.BytesIO(self._payload(k)), allow_pickle=False).tobytes())
 
     def snapshot(self, k: int) -> RawSnapshot:
         buf = io.BytesIO(self._payload(k))
-        meta = json.loads(np.load(buf, allow_pickle=False).tobytes())
-        tables: dict[str, Table] = {"bodies": {}, "interactions": {}}
-        for t, c in meta.pop("columns"):
-            tables.setdefault(t, {})[c] = np.load(buf, allow_pickle=False)
+        with _reading(self.path, f"snapshot {k}"):
+            meta = json.loads(np.load(buf, allow_pickle=False).tobytes())
+            if not isinstance(meta, dict) or not isinstance(meta.get("columns"), list):
+                raise InputFormatError(f"snapshot {k}: the record lists no columns.", file=self.path,
+                                       fix=FIX_DAMAGED)
+            tables: dict[str, Table] = {"bodies": {}, "interactions": {}}
+            for t, c in meta.pop("columns"):
+                tables.setdefault(str(t), {})[str(c)] = np.load(buf, allow_pickle=False)
         return meta, tables
 
     def close(self) -> None:
         pass
+
+
+def _is_int(v) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool)
+
+
+def _is_real(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v)
+
+
+def checked_meta(meta, *, path: Path, k: int) -> dict:
+    """A snapshot's metadata, or the InputFormatError of the first entry this reader needs that is missing
+    or of the wrong type: ``iter`` (an integer in [0, 2^63)), ``time`` (finite, >= 0), ``periodic`` (a
+    boolean) with ``hSize`` (nine finite numbers), ``materials`` (objects with an integer ``id``),
+    ``engines`` and ``functors.law`` (objects with a ``class`` name; a law's ``attrs`` an object), the
+    interaction counts (integers >= 0)."""
+    def need(ok: bool, what: str) -> None:
+        if not ok:
+            raise InputFormatError(f"snapshot {k}: the metadata's {what}.", file=path, fix=FIX_DAMAGED)
+
+    def named(items, what: str) -> None:
+        need(isinstance(items, list) and all(isinstance(e, dict) and isinstance(e.get("class"), str)
+                                             for e in items), f"{what} is not a list of objects with a class name")
+
+    need(isinstance(meta, dict), "record is not a JSON object")
+    need(_is_int(meta.get("iter")) and 0 <= meta["iter"] < 2**63, "'iter' is not an iteration number")
+    need(_is_real(meta.get("time")) and meta["time"] >= 0, "'time' is not a finite time >= 0")
+    need(isinstance(meta.get("periodic"), bool), "'periodic' is not true or false")
+    if meta["periodic"]:
+        h = meta.get("hSize")
+        rows = h if isinstance(h, list) and all(isinstance(r, list) for r in h) else [h]
+        flat = [v for r in rows if isinstance(r, list) for v in r]
+        need(len(flat) == 9 and all(_is_real(v) for v in flat), "'hSize' is not a 3x3 matrix of finite numbers")
+    need(isinstance(meta.get("materials"), list) and all(isinstance(m, dict) and _is_int(m.get("id"))
+                                                        for m in meta["materials"]),
+         "'materials' is not a list of objects with an integer id")
+    named(meta.get("engines"), "'engines'")
+    functors = meta.get("functors")
+    need(isinstance(functors, dict), "'functors' is not an object")
+    named(functors.get("law"), "'functors.law'")
+    need(all(isinstance(f.get("attrs", {}), dict) for f in functors["law"]), "law attrs are not an object")
+    for key in ("n_interactions_potential", "n_interactions_real"):
+        need(_is_int(meta.get(key)) and 0 <= meta[key] < 2**63, f"{key!r} is not a count")
+    need(_is_int(meta.get("format_version", 0)), "'format_version' is not an integer")
+    return meta
+
+
+def checked_tables(tables: dict, meta: dict, *, path: Path, k: int) -> dict[str, Table]:
+    """A snapshot's tables with the columns this reader uses, typed (:func:`demsplit.validate.typed_columns`)."""
+    where = {"file": path, "step": meta["iter"], "where": f"snapshot {k}"}
+    return {"bodies": typed_columns(tables.get("bodies"), BODY_COLUMNS, name="bodies", **where),
+            "interactions": typed_columns(tables.get("interactions"), INTERACTION_COLUMNS, name="interactions",
+                                          optional=OPTIONAL_INTERACTION_COLUMNS, **where)}
 
 
 def _open_store(path: Path):
@@ -160,6 +282,10 @@ def scene_from_snapshot(meta: dict, bodies: Table, *, path: Path, step: int | No
     for m in meta["materials"]:
         if "young" not in m or "poisson" not in m:
             continue
+        if not (_is_real(m["young"]) and _is_real(m["poisson"])):
+            raise MaterialError(f"YADE material {m['id']}: young {excerpt(repr(m['young']))} and poisson "
+                                f"{excerpt(repr(m['poisson']))} are not both finite numbers.", file=path, step=step,
+                                fix=FIX_DAMAGED)
         try:
             materials[int(m["id"])] = Material(E=float(m["young"]), nu=float(m["poisson"]),
                                                name=str(m.get("label") or ""))
@@ -173,6 +299,9 @@ def scene_from_snapshot(meta: dict, bodies: Table, *, path: Path, step: int | No
     for row in np.flatnonzero(np.isin(kinds, list(WALL_KINDS))):
         kind = WALL_KINDS[kinds[row]]
         axis = int(bodies["wall_axis"][row]) if kind == "yade_wall" else 2
+        if axis not in (0, 1, 2):
+            raise InputFormatError(f"body {int(bodies['id'][row])} is a wall along axis {axis}, not 0, 1 or 2.",
+                                   file=path, step=step, fix=FIX_DAMAGED)
         pos = (bodies["x"][row], bodies["y"][row], bodies["z"][row])[axis]
         walls.append(Wall(name=f"body {int(bodies['id'][row])} ({kind})", kind=kind,
                           type=int(bodies["material"][row]), axis=axis, position=float(pos)))
@@ -441,8 +570,19 @@ class YadeSnapshotRun(Run):
                                          plane_as_plane=plane_as_plane)
         self.sources = [self.path]
         self.notes = []
-        self.steps = np.array([int(self._store.meta(k)["iter"]) for k in range(len(self._store))
-                               if not self._store.problem(k)], dtype=np.int64)
+        complete = [k for k in range(len(self._store)) if not self._store.problem(k)]
+        if complete != list(range(len(complete))):
+            raise InputFormatError(f"snapshot {len(complete)} is incomplete, but a later one is complete: the file "
+                                   "is damaged (only the last snapshot can be cut short).", file=self.path,
+                                   fix=FIX_DAMAGED)
+        self.steps = np.array([self.meta(k)["iter"] for k in complete], dtype=np.int64)
+        first: dict[int, int] = {}
+        for k, step in enumerate(self.steps.tolist()):
+            if step in first:
+                raise InputFormatError(f"iteration {step} is in the file twice (snapshots {first[step]} and {k}).",
+                                       file=self.path, step=step,
+                                       fix="write each iteration once (a restarted run appends to a new file).")
+            first[step] = k
         kinds = _text(tables["bodies"]["kind"])
         wall_ids = tables["bodies"]["id"][np.isin(kinds, list(WALL_KINDS))]
         self._walls = {int(b): k for k, b in enumerate(wall_ids)}
@@ -454,7 +594,7 @@ class YadeSnapshotRun(Run):
     def _check(self, k: int) -> None:
         problem = self._store.problem(k)
         if problem:
-            step = int(self._store.meta(k - 1)["iter"]) if k > 0 else None
+            step = self.meta(k - 1)["iter"] if k > 0 else None
             raise TruncatedFileError(
                 f"{problem}; it is not read. {k} complete snapshot(s) precede it"
                 + (f" (the last at iteration {step})." if step is not None else "."),
@@ -463,12 +603,14 @@ class YadeSnapshotRun(Run):
 
     def _read(self, k: int) -> RawSnapshot:
         self._check(k)
-        return self._store.snapshot(k)
+        meta, tables = self._store.snapshot(k)
+        meta = checked_meta(meta, path=self.path, k=k)
+        return meta, checked_tables(tables, meta, path=self.path, k=k)
 
     def meta(self, k: int) -> dict:
         """Metadata of snapshot ``k`` without reading its tables."""
         self._check(k)
-        return self._store.meta(k)
+        return checked_meta(self._store.meta(k), path=self.path, k=k)
 
     def frame(self, k: int) -> Frame:
         return self._frame(*self._read(k))[0]

@@ -288,6 +288,21 @@ def test_script_that_is_not_text(run_dir):
     assert_where(info.value, "in.packing", None, 2)
 
 
+@pytest.mark.parametrize("old, new, words", [
+    ("zcylinder 0.004 0.0 0.0", "zcylinder nan 0.0 0.0", "'nan' is not a finite number"),
+    ("xplane -0.02", "xplane -1e400", "'-1e400' is not a finite number"),
+    ("timestep        2.0e-6", "timestep        inf", "'inf' is not a finite number"),
+    ("timestep        2.0e-6", "timestep        -2.0e-6", "the timestep must be > 0"),
+])
+def test_a_number_of_the_script_that_is_not_finite_is_refused(run_dir, old, new, words):
+    """A wall of radius NaN found no contact (exit 0 with its energy missing); an infinite timestep stored
+    infinite times."""
+    err, line = script_error(run_dir, old, new)
+    assert isinstance(err, ScriptError)
+    assert_where(err, "in.packing", None, line)
+    assert words in str(err)
+
+
 # --- the command: one message, no traceback, exit 2 ----------------------------------------
 
 def test_cli_prints_one_message_for_bad_input(run_dir, tmp_path):

@@ -4,6 +4,7 @@ Each is one message (exit 2) that names the file, the timestep, the column and t
 
 from __future__ import annotations
 
+import json
 import struct
 from pathlib import Path
 
@@ -184,3 +185,150 @@ def test_hdf5_inputs_never_read_data_from_elsewhere(tmp_path, capsys, kind):
     rc = main(["run", str(snap), "-o", str(tmp_path / "out.h5"), "-q"])
     err = capsys.readouterr().err
     assert rc == 2 and "outside" in err and "root:x" not in err
+
+
+# --- a YADE snapshot record of another layout: one message, never another exception ----------------------------
+
+def rewritten(tmp_path: Path, fmt: str, change) -> Path:
+    """The Mindlin sample's snapshots with ``change(snapshots)`` applied, rewritten valid (framing, checksums)."""
+    store = _open_store(SNAPSHOT)
+    snapshots = [store.snapshot(k) for k in range(len(store))]
+    change(snapshots)
+    out = tmp_path / f"changed.{'npys' if fmt == 'npy' else 'h5'}"
+    for meta, tables in snapshots:
+        write_snapshot(out, meta, tables, format=fmt)
+    return out
+
+
+def _set(table: str, column: str, value):
+    def change(snapshots):
+        snapshots[1][1][table][column] = value(snapshots[1][1][table][column])
+    return change
+
+
+def _meta(key, value):
+    def change(snapshots):
+        snapshots[1][0][key] = value
+    return change
+
+
+RECORD_DAMAGE = {
+    "missing column": (lambda s: s[1][1]["interactions"].pop("ny"), "column interactions.ny is missing"),
+    "text in a number column": (_set("bodies", "vy", lambda c: c.astype("S8")), "bodies.vy holds |S8 values"),
+    "2-D column": (_set("bodies", "radius", lambda c: c.reshape(-1, 1)), "bodies.radius has shape"),
+    "short column": (_set("interactions", "depth", lambda c: c[:-1]), "interactions.depth has"),
+    "fractional ids": (_set("interactions", "id2", lambda c: c + 0.5), "interactions.id2 must hold integers"),
+    "no law": (_meta("functors", {"law": 3}), "'functors.law' is not a list"),
+    "iteration as text": (_meta("iter", "24000"), "'iter' is not an iteration number"),
+    "time as text": (_meta("time", "later"), "'time' is not a finite time"),
+    "material not a number": (lambda s: s[0][0]["materials"][0].update(young="soft"), "are not both finite numbers"),
+    "cell of 2 numbers": (lambda s: s[1][0].update(periodic=True, hSize=[1.0, 2.0]), "'hSize' is not a 3x3"),
+    "an iteration twice": (lambda s: s.insert(2, s[1]), "iteration 16000 is in the file twice"),
+}
+
+
+@pytest.mark.parametrize("fmt", ["npy", "hdf5"])
+@pytest.mark.parametrize("damage", list(RECORD_DAMAGE))
+def test_a_snapshot_record_of_another_layout_is_one_message(tmp_path, capsys, fmt, damage):
+    """A column missing, of another dtype, shape or length, metadata of the wrong type: exit 2 naming the
+    snapshot and what is wrong (they were KeyError, TypeError, IndexError, ValueError: internal errors)."""
+    change, words = RECORD_DAMAGE[damage]
+    rc, err = run(rewritten(tmp_path, fmt, change), tmp_path, capsys)
+    assert rc == 2 and words in err and err.count("\n") == 1 and "internal error" not in err, err
+    assert not (tmp_path / "out.h5").exists()
+
+
+def test_a_pickled_object_column_is_refused_not_unpickled(tmp_path, capsys):
+    """np.save of an object array pickles it; the reader never unpickles (exit 2, it was a ValueError)."""
+    import io
+    import zlib
+
+    from demsplit.yade import NPY_STREAM_MAGIC
+
+    meta, tables = _open_store(SNAPSHOT).snapshot(0)
+    tables["bodies"]["radius"] = np.array(list(tables["bodies"]["radius"]), dtype=object)
+    columns = [[t, c] for t, table in tables.items() for c in table]
+    buf = io.BytesIO()
+    np.save(buf, np.frombuffer(json.dumps({**meta, "columns": columns}).encode(), np.uint8))
+    for t, c in columns:
+        np.save(buf, tables[t][c], allow_pickle=True)
+    payload = buf.getvalue()
+    path = tmp_path / "pickled.npys"
+    path.write_bytes(NPY_STREAM_MAGIC + b"DSREC %016d\n" % len(payload) + payload
+                     + b"DSEND %08x\n" % (zlib.crc32(payload) & 0xFFFFFFFF))
+    rc, err = run(path, tmp_path, capsys)
+    assert rc == 2 and "snapshot 0 cannot be read" in err and "allow_pickle" in err, err
+
+
+@pytest.mark.parametrize("kind", ["group for a column", "meta_json not text", "damaged metadata"])
+def test_a_damaged_hdf5_snapshot_is_one_message(tmp_path, capsys, kind):
+    import shutil
+
+    h5py = pytest.importorskip("h5py")
+    snap = tmp_path / "snap.h5"
+    shutil.copy(SAMPLES / "yade" / "mindlin_box.h5", snap)
+    if kind == "damaged metadata":  # bytes of the file's object headers flipped: h5py raises KeyError
+        data = bytearray(snap.read_bytes())
+        for k in range(2000, 2400):
+            data[k] ^= 0x5A
+        snap.write_bytes(bytes(data))
+    else:
+        with h5py.File(snap, "a") as f:
+            g = f["snapshots"][sorted(f["snapshots"])[1]]
+            if kind == "group for a column":
+                del g["interactions"]["kn"]
+                g["interactions"].create_group("kn")
+            else:
+                g.attrs["meta_json"] = np.arange(3)
+    rc, err = run(snap, tmp_path, capsys)
+    assert rc == 2 and err.count("\n") == 1 and "internal error" not in err, err
+
+
+def test_a_narrow_integer_force_is_computed_in_float64(tmp_path, capsys):
+    """Forces stored as int8 (the stored-force law squares them) give the energies of the same values as
+    float64: the reader's sums of squares wrapped in the narrow dtype."""
+    from demsplit.results import load_results
+
+    meta, tables = _open_store(SAMPLES / "yade" / "cundall_periodic.npys").snapshot(2)
+    forces = {c: np.clip(np.round(tables["interactions"][c]) * 50, -100, 100) for c in ("fnx", "fny", "fnz")}
+    assert np.any(np.abs(forces["fnx"]) >= 16)  # whose square is beyond int8
+    energies = []
+    for dtype in ("float64", "int8"):
+        tables["interactions"].update({c: f.astype(dtype) for c, f in forces.items()})
+        path = tmp_path / f"{dtype}.npys"
+        write_snapshot(path, meta, tables, format="npy")
+        assert main(["run", str(path), "-o", str(tmp_path / f"{dtype}.h5"), "-q"]) == 0, capsys.readouterr().err
+        energies.append(load_results(tmp_path / f"{dtype}.h5").contacts["u_n"].to_numpy())
+    np.testing.assert_array_equal(energies[0], energies[1])
+
+
+@pytest.mark.parametrize("compression", ["gz", "bz2", "xz"])
+def test_a_compressed_dump_damaged_at_its_start_is_one_message(tmp_path, capsys, compression):
+    """A stream cut (or damaged) in its first block: xz and bzip2 raised EOFError from the first read,
+    an internal error."""
+    import bz2
+    import gzip
+    import lzma
+
+    src = SAMPLES / "liggghts" / "packing"
+    for name in ("in.packing", "atoms_full.txt.gz", "pairs_full.txt.gz", "floor.stl"):
+        (tmp_path / name).write_bytes((src / name).read_bytes())
+    text = gzip.decompress((src / "wall_full.txt.gz").read_bytes())
+    data = {"gz": gzip.compress, "bz2": bz2.compress, "xz": lzma.compress}[compression](text)
+    walls = tmp_path / f"wall_full.txt.{compression}"
+    walls.write_bytes(data[:101])
+    rc = main(["run", str(tmp_path / "in.packing"), "--walls", str(walls), "-o", str(tmp_path / "out.h5"), "-q"])
+    err = capsys.readouterr().err
+    assert rc == 2 and walls.name in err and err.count("\n") == 1 and "internal error" not in err, err
+
+
+def test_a_frame_time_that_is_not_finite_is_refused(tmp_path, capsys):
+    """time = step x timestep beyond the doubles (timestep 1e304 at step 200000): stored as inf before."""
+    src = SAMPLES / "liggghts" / "packing"
+    for name in ("atoms_full.txt.gz", "pairs_full.txt.gz", "wall_full.txt.gz", "floor.stl"):
+        (tmp_path / name).write_bytes((src / name).read_bytes())
+    script = (src / "in.packing").read_text()
+    assert "timestep        2.0e-6" in script
+    (tmp_path / "in.packing").write_text(script.replace("timestep        2.0e-6", "timestep        1e304"))
+    rc, err = run(tmp_path / "in.packing", tmp_path, capsys)
+    assert rc == 2 and "the frame's time inf s is not a finite time" in err and "timestep 200000" in err, err
