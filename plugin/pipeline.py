@@ -509,7 +509,7 @@ def run_to_store(path: str | Path, out: str | Path, *, options: Options = Option
     run = open_run(path, **reader_options)
     try:
         sources = run.sources
-        check_output_path(out, sources)  # before anything is written: never over an input or a device
+        check_output_path(out, run.named_files())  # before anything is written: never over a file of the run
         report = RunReport()
         hash_in_background(sources)
         # A new run computes its first frame while the inputs are hashed, then opens the store (its

@@ -110,6 +110,11 @@ class Run(ABC):
         """Files, kinds and precision, for provenance and ``demsplit check``."""
         return {"kind": self.format_name, "sources": [str(s) for s in self.sources]}
 
+    def named_files(self) -> list[Path]:
+        """Every file the run names, read or not: what an output must never replace
+        (:func:`demsplit.outputs.check_output_path`). Default: ``sources``."""
+        return [Path(s) for s in self.sources]
+
     def check_files(self, out: list[str]) -> list[str]:
         """Problems of the run's files that reading frame by frame does not show (timesteps missing
         from one of several dumps, ...), for ``demsplit check``; lines describing the files go to

@@ -76,7 +76,7 @@ def convert_run(input: str | Path, output: str | Path, **reader_options) -> Path
 
     run = open_run(input, **reader_options)
     try:
-        output = check_output_path(output, run.sources)
+        output = check_output_path(output, run.named_files())
         # no chunk cache: each dataset is written once, whole (a cache only holds memory)
         with atomic_path(output) as tmp, h5py.File(tmp, "w", rdcc_nbytes=0) as h5:
             h5.attrs["format"] = FORMAT

@@ -220,6 +220,24 @@ class LiggghtsRun(Run):
         self.sources = ([] if script is None else [self.script.path]) + [
             f for d in (self.atoms, self.pairs, self.walls) if d is not None for f in getattr(d, "files", [d.path])]
 
+    def named_files(self) -> list[Path]:
+        """The files read, and every other file the script names: its includes, its mesh files and the
+        file (and compressed copies) of every dump it writes, a per-step or per-processor pattern's
+        existing files included."""
+        files = [Path(s) for s in self.sources]
+        if self.script_text is not None:  # no script of the user's: the dumps given are the run
+            return files
+        files += self.script.included
+        files += [Path(w.file) for w in self.script.scene.walls if w.kind == "mesh" and w.file]
+        for dump in self.script.dumps:
+            name = Path(dump.file)
+            if "*" in name.name or "%" in name.name:
+                pattern = name.name.replace("%", "*")
+                files += [p for suffix in ("", *_COMPRESSED) for p in name.parent.glob(pattern + suffix)]
+            else:
+                files += [name, *(name.with_name(name.name + suffix) for suffix in _COMPRESSED)]
+        return files
+
     # -- finding and opening the dumps -----------------------------------------------------
 
     def _candidates(self, kind: str) -> list:

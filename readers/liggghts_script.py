@@ -74,7 +74,7 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -256,6 +256,8 @@ class LiggghtsScript:
     dumped_mesh_walls: list[int]
     variables: dict[str, str]
     warnings: list[str]
+    included: list[Path] = field(default_factory=list)
+    """Every file an ``include`` line read, in order."""
 
 
 # --------------------------------------------------------------------------
@@ -416,6 +418,7 @@ class _Reader:
         self.run_steps: list[int] = []
         self.type_uses: list[tuple[int, str, Where]] = []
         self.include_stack: list[Path] = []
+        self.included: list[Path] = []
 
     # -- driver ------------------------------------------------------------
 
@@ -498,6 +501,7 @@ class _Reader:
         if not target.is_file():
             raise self.error(ScriptError, f"include: no file {target}.", where,
                              "check the path (relative paths are taken from the main script's directory).")
+        self.included.append(target)
         self.read(target)
 
     def cmd_units(self, args: list[str], where: Where) -> None:
@@ -887,7 +891,7 @@ class _Reader:
             path=self.root, scene=scene, periodic=self.periodic, dumps=list(self.dumps.values()),
             gravity=self.gravity, coefficients=coefficients, ntypes=self.ntypes, timestep=self.timestep,
             run_steps=self.run_steps, local_computes=layouts, dumped_mesh_walls=dumped_mesh_walls,
-            variables=variables, warnings=self.warnings)
+            variables=variables, warnings=self.warnings, included=self.included)
 
 
 def read_script(path: str | Path, variables: dict[str, str] | None = None) -> LiggghtsScript:

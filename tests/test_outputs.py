@@ -107,3 +107,21 @@ def test_a_second_run_on_a_live_output_is_told_another_run_writes_it(packing, tm
     finally:
         live.kill()
         live.wait()
+
+
+@pytest.mark.parametrize("which", ["floor.stl", "atoms.txt", "atoms.bin", "pairs.txt", "wall.txt", "extra.in"])
+def test_run_and_convert_never_write_over_a_file_the_script_names_but_does_not_read(packing, tmp_path, capsys, which):
+    """The mesh file, the dumps of lower precision the run does not read, an included file: files of the run,
+    protected like its inputs (they were replaced by the store, exit 0)."""
+    (packing / "extra.in").write_text("variable extra equal 1\n")
+    script = packing / "in.packing"
+    script.write_text("include extra.in\n" + script.read_text())
+    target = packing / which
+    before = digest(target)
+    names = aliases(tmp_path, target)
+    for command in ("run", "convert"):
+        for out in names.values():
+            assert main([command, str(script), "-o", str(out), "-q"]) == 2
+            assert "one of the run's inputs" in capsys.readouterr().err
+    assert digest(target) == before
+
