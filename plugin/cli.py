@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import DemsplitError
+from .errors import DemsplitError, system_error
 from .outputs import check_output_path
 from .physics import laws
 from .readers.liggghts_script import NORMAL, TANGENTIAL
@@ -413,9 +413,7 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as exc:  # the system's fault (disk full, read-only, permissions), not a bug: name the path
         if args.debug:
             traceback.print_exc()
-        where = f"{exc.filename}: " if exc.filename else ""
-        print(f"demsplit: error: {where}{exc.strerror or exc}. Fix: free space, or give a path you can "
-              "write (and read).", file=sys.stderr)
+        print(f"demsplit: error: {system_error(exc)}", file=sys.stderr)
         return EXIT_ERROR
     except (KeyboardInterrupt, Terminated) as exc:
         what = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"

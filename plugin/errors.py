@@ -8,6 +8,9 @@ print it as is, without a traceback.
 
 from __future__ import annotations
 
+import errno
+import os
+import re
 from pathlib import Path
 
 
@@ -107,3 +110,45 @@ class IncompleteRunError(DemsplitError):
 
 class StoreError(DemsplitError):
     """A result file cannot be written, read or resumed."""
+
+
+def os_error_cause(exc: OSError) -> str:
+    """The cause of an OSError in words: its ``strerror``, or the system's message inside an HDF5
+    error (h5py raises OSErrors without errno, their text holds ``errno = 28, error message = '...'``)."""
+    if exc.strerror:
+        return exc.strerror
+    text = " ".join(str(exc).split())
+    found = re.search(r"error message = '([^']*)'", text)
+    if found:
+        return found.group(1)
+    found = re.search(r"errno = (\d+)", text)
+    if found:
+        return os.strerror(int(found.group(1)))
+    return text[:200] or type(exc).__name__
+
+
+def system_error(exc: OSError, path: str | Path | None = None, *, doing: str = "", note: str = "") -> StoreError:
+    """The one error for an OSError of the system (a full disk, a read-only file system, permissions,
+    a name too long, a file that vanished): a :class:`StoreError` naming the path (the error's own, else
+    ``path``), what was being done (``doing``) and the cause, plus ``note`` (what was kept, e.g. for
+    ``--resume``). An error without an
+    errno (numpy's and HDF5's short writes) on a file system with no free block is said to be that."""
+    where = exc.filename if exc.filename else path
+    cause = os_error_cause(exc)
+    if exc.errno is None and re.fullmatch(r"\d+ requested and \d+ written", cause):  # numpy's short write
+        cause = f"a short write ({cause}): the file system is full, or a quota or file size limit is reached"
+    elif exc.errno is None and where is not None and _no_space(Path(where)):
+        cause = f"{os.strerror(errno.ENOSPC)} ({cause})"
+    return StoreError(f"{doing + ': ' if doing else ''}{cause}{note}.", file=where,
+                      fix="free space, or give a path you can write (and read), then run again.")
+
+
+def _no_space(path: Path) -> bool:
+    """Whether the file system of ``path`` (or of its nearest existing parent) has no free block."""
+    for p in (path, *path.parents):
+        try:
+            st = os.statvfs(p)
+        except OSError:
+            continue
+        return st.f_bavail == 0 and st.f_blocks > 0
+    return False

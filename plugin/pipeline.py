@@ -29,6 +29,7 @@ from .physics.bodies import ContactBodies
 from .physics.modes import ADHESION_COLUMN, NOT_COMPUTED_BITS
 from .physics.partition import ContactEnergy, contact_energies, particle_energy, partition, per_particle
 from .readers.base import Run
+from .results.schema import UNBOUNDED, UNKNOWN
 from .scene import Scene, Wall
 
 Tables = dict[str, dict[str, np.ndarray]]
@@ -148,7 +149,7 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = Options()) -> Ta
     err = frame.overlap_error
     tables["frames"] = {
         "step": np.array([step]),
-        "time": np.array([np.nan if frame.time is None else frame.time]),
+        "time": np.array([UNKNOWN if frame.time is None else frame.time]),
         "n_particles": np.array([len(ptable["id"])], dtype=np.int64),
         "n_contacts": np.array([n], dtype=np.int64),
         "n_wall_contacts": np.array([int(np.count_nonzero(contacts["wall"] >= 0))], dtype=np.int64),
@@ -158,7 +159,8 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = Options()) -> Ta
         **({ADHESION_COLUMN: np.array([main.u_adh.sum()])} if main.u_adh is not None else {}),
         "u_particles": np.array([ptable["u"].sum()]),
         "u_walls": np.array([wtable["u"].sum()]),
-        "overlap_max_rel_error": np.array([np.nan if err is None or len(err) == 0 else float(np.max(err))]),
+        "overlap_max_rel_error": np.array([UNKNOWN if err is None or len(err) == 0 else
+                                           min(float(np.max(err)), UNBOUNDED)]),
     }
     return tables
 

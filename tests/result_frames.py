@@ -71,7 +71,7 @@ def synthetic_frame(step: int, *, n_particles: int = 60, n_pairs: int = 150, n_w
         "step": np.array([step], np.int64), "time": np.array([step * 1e-6]),
         "n_particles": np.array([n_particles], np.int64), "n_contacts": np.array([n_pairs + n_wall_contacts], np.int64),
         "n_wall_contacts": np.array([n_wall_contacts], np.int64),
-        "u_n": np.array([u_n.sum()]), "u_t": np.array([u_t.sum()]), "overlap_max_rel_error": np.array([np.nan]),
+        "u_n": np.array([u_n.sum()]), "u_t": np.array([u_t.sum()]), "overlap_max_rel_error": np.array([-1.0]),
     }
     return {"particles": particles, "contacts": contacts, "walls": walls, "frames": frames}
 

@@ -10,7 +10,9 @@ takes a few seconds and can be interrupted after its first frames.
 
 from __future__ import annotations
 
+import collections
 import gzip
+import json
 import os
 import shutil
 import signal
@@ -177,3 +179,108 @@ def test_sigkill_of_a_parallel_run_leaves_no_process_behind(tmp_path):
     for pid in left:
         os.kill(pid, signal.SIGKILL)
     assert left == []
+
+
+# --- SIGKILL at every stage of the store's close() ---------------------------------------------------------
+
+CLOSE_KILLER = r"""
+import json, os, random, signal, sys, time
+sys.path.insert(0, sys.argv[1])
+import demsplit.atomic, demsplit.results.store as store
+from result_frames import PROVENANCE, WALLS_META, synthetic_frame
+
+root, steps, random_kills = sys.argv[2], [int(s) for s in sys.argv[3].split(",")], int(sys.argv[4])
+watched = {store.__file__, demsplit.atomic.__file__}
+for k in range(random_kills):  # SIGKILL at a random instant of close(), inside HDF5's own calls included
+    out = os.path.join(root, f"r{k}", "out.h5")
+    os.makedirs(os.path.dirname(out))
+    ready, go = os.pipe()
+    pid = os.fork()
+    if pid == 0:
+        w = store.ResultWriter(out, PROVENANCE, walls_meta=WALLS_META)
+        for s in steps:
+            w.append(synthetic_frame(s, n_particles=3000, n_pairs=5000))
+        os.write(go, b"x")
+        w.close()
+        os._exit(0)
+    os.read(ready, 1)
+    time.sleep(random.Random(k).uniform(0, 0.03))
+    os.kill(pid, signal.SIGKILL)
+    os.waitpid(pid, 0)
+    print(json.dumps({"k": f"r{k}", "out": out, "at": "random", "n_particles": 3000}), flush=True)
+k = 0
+while True:
+    k += 1
+    out = os.path.join(root, f"k{k}", "out.h5")
+    os.makedirs(os.path.dirname(out))
+    pid = os.fork()
+    if pid == 0:  # write every frame, then close, killed at the k-th distinct statement close() reaches
+        w = store.ResultWriter(out, PROVENANCE, walls_meta=WALLS_META)
+        for s in steps:
+            w.append(synthetic_frame(s, n_particles=300, n_pairs=500))
+        seen = []
+
+        def trace(frame, event, arg):
+            if frame.f_code.co_filename not in watched:
+                return None
+            if event == "line":
+                where = (frame.f_code.co_filename, frame.f_lineno)
+                if where not in seen:
+                    seen.append(where)
+                    if len(seen) == k:
+                        print(json.dumps({"k": k, "out": out, "at": f"{os.path.basename(where[0])}:{where[1]} "
+                                          f"{frame.f_code.co_name}"}), flush=True)
+                        os.kill(os.getpid(), signal.SIGKILL)
+            return trace
+
+        sys.settrace(trace)
+        w.close()
+        sys.settrace(None)
+        os._exit(0)
+    _, status = os.waitpid(pid, 0)
+    if os.WIFEXITED(status):  # close() ended before its k-th statement: every stage was killed
+        print(json.dumps({"k": k, "out": out, "at": None}), flush=True)
+        break
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("steps", [(0, 1000, 2000, 3000), (2000, 0, 3000, 1000)], ids=["in order", "out of order"])
+def test_sigkill_at_every_stage_of_close_leaves_a_resumable_run_or_a_complete_store(tmp_path, steps):
+    """close() finishes the store (last rows, frame index, attributes; a copy in step order when frames came
+    out of order), renames it into place and removes the work directory. Killed before any statement it reaches
+    (and before any of the functions it calls in the store and atomic modules), or at 12 random instants (inside
+    HDF5's calls too), the run is resumable to the same store, or the store is complete; a plain rerun is refused
+    only while committed frames wait for --resume."""
+    from demsplit.errors import StoreError
+    from demsplit.results import Results
+    from demsplit.results.store import ResultWriter, check_output, committed_steps, work_dir_of
+    from result_frames import PROVENANCE, WALLS_META, synthetic_frame
+
+    tests = Path(__file__).resolve().parent
+    proc = subprocess.run([sys.executable, "-c", CLOSE_KILLER, str(tests), str(tmp_path), ",".join(map(str, steps)),
+                           "12"], capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    kills = [json.loads(line) for line in proc.stdout.splitlines()]
+    assert kills[-1]["at"] is None and len(kills) > 50, kills  # every stage, then a close that ran through
+    outcomes = collections.Counter()
+    for kill in kills:
+        n = kill.get("n_particles", 300)
+        frames = [synthetic_frame(s, n_particles=n, n_pairs=5 * n // 3) for s in steps]
+        expected = Results.from_frames(frames, PROVENANCE, WALLS_META)
+        out = Path(kill["out"])
+        if out.exists():  # complete: readable, equal, and a new run on it is not refused
+            assert_same_results(demsplit.load_results(out), expected)
+            check_output(out)
+            assert not work_dir_of(out).exists()  # a leftover without a store is removed
+            outcomes["complete"] += 1
+            continue
+        assert sorted(committed_steps(out)) == sorted(steps), kill
+        with pytest.raises(StoreError, match="--resume"):  # committed frames are never silently discarded
+            check_output(out)
+        with ResultWriter(out, PROVENANCE, walls_meta=WALLS_META, resume=True) as w:
+            assert w.done_steps == set(steps), kill
+        assert_same_results(demsplit.load_results(out), expected)
+        assert not work_dir_of(out).exists()
+        outcomes["resumed"] += 1
+    assert outcomes["complete"] and outcomes["resumed"], outcomes

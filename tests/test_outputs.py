@@ -125,3 +125,84 @@ def test_run_and_convert_never_write_over_a_file_the_script_names_but_does_not_r
             assert "one of the run's inputs" in capsys.readouterr().err
     assert digest(target) == before
 
+
+# --- a full disk ---------------------------------------------------------------------------------------------
+
+H5_NO_SPACE = ("Can't synchronously write data (file write failed: time = Thu Nov 26 04:21:00 2026, filename = "
+               "'store.h5', file descriptor = 7, errno = 28, error message = 'No space left on device', buf = "
+               "0x55d0, total write size = 8192, bytes this sub-write = 8192, bytes actually written = "
+               "18446744073709551615, offset = 0)")
+"""What h5py raises when the disk fills under HDF5: an OSError without errno, the cause inside its text."""
+
+
+@pytest.mark.parametrize("failing_commit", [1, 2])
+def test_a_full_disk_is_one_message_with_the_path_and_a_rerun_works(packing, tmp_path, capsys, monkeypatch,
+                                                                   failing_commit):
+    """ENOSPC inside HDF5 at the first frame's commit: exit 2 naming the output and the cause, nothing left
+    behind, and a plain rerun works (it was refused as 'interrupted'). At a later commit: the committed frames
+    are kept for --resume, said so, and --resume completes."""
+    from demsplit.results import store
+
+    real, calls = store.ResultWriter._commit, []
+
+    def full(self):
+        calls.append(1)
+        if len(calls) == failing_commit:
+            raise OSError(H5_NO_SPACE)
+        return real(self)
+
+    out = tmp_path / "out.h5"
+    monkeypatch.setattr(store.ResultWriter, "_commit", full)
+    assert main(["run", str(packing / "in.packing"), "-o", str(out), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"demsplit: error: {out}: cannot write the store: No space left on device")
+    assert err.count("\n") == 1 and "internal error" not in err
+    monkeypatch.setattr(store.ResultWriter, "_commit", real)
+    if failing_commit == 1:
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["packing"]  # nothing left behind
+        assert main(["run", str(packing / "in.packing"), "-o", str(out), "-q"]) == 0
+    else:
+        assert f"the 1 frame(s) committed before it are kept in {store.work_dir_of(out)} for --resume" in err
+        assert main(["run", str(packing / "in.packing"), "-o", str(out), "-q"]) == 2  # not silently discarded
+        assert "--resume" in capsys.readouterr().err
+        assert main(["run", str(packing / "in.packing"), "-o", str(out), "-q", "--resume"]) == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.h5", "packing"]
+
+
+def _mount_tmpfs(where: Path, size: str, remount: bool = False) -> bool:
+    import subprocess
+
+    options = f"remount,size={size}" if remount else f"size={size}"
+    return subprocess.run(["mount", "-t", "tmpfs", "-o", options, "tmpfs", str(where)],
+                          capture_output=True).returncode == 0
+
+
+@pytest.mark.skipif(not hasattr(os, "geteuid") or os.geteuid() != 0 or not shutil.which("mount"),
+                    reason="mounts a small tmpfs (root only)")
+@pytest.mark.parametrize("size, kept", [("200k", 0), ("400k", 1)])
+def test_a_real_full_file_system(packing, tmp_path, capsys, size, kept):
+    """The output on a tmpfs too small for the store: exit 2 naming the output and the cause; nothing left
+    behind, or the committed frames for --resume; with space, the rerun (or --resume) writes the store."""
+    import subprocess
+
+    full = tmp_path / "full"
+    full.mkdir()
+    if not _mount_tmpfs(full, size):
+        pytest.skip("cannot mount a tmpfs here")
+    try:
+        out = full / "out.h5"
+        run = ["run", str(packing / "in.packing"), "-o", str(out), "-q"]
+        assert main(run) == 2
+        err = capsys.readouterr().err
+        assert err.startswith(f"demsplit: error: {out}: cannot write the store: ") and err.count("\n") == 1
+        assert "No space left on device" in err or "the file system is full" in err
+        left = sorted(p.name for p in full.iterdir())
+        if kept:
+            assert left == [".out.h5.partial"] and "for --resume" in err
+        else:
+            assert left == []
+        assert _mount_tmpfs(full, "50m", remount=True)
+        assert main(run + (["--resume"] if kept else [])) == 0
+        assert sorted(p.name for p in full.iterdir()) == ["out.h5"]
+    finally:
+        subprocess.run(["umount", str(full)], capture_output=True)

@@ -506,3 +506,37 @@ def test_parquet_export_keeps_units_and_wall_names_where_pandas_users_look(tmp_p
     walls = pd.read_parquet(tmp_path / "pq" / "walls.parquet")
     assert particles.attrs["units"]["u"] == "J" and particles.attrs["units"]["x"] == "m"
     assert [w["name"] for w in walls.attrs["walls"]][:1] == ["body 160 (yade_wall)"]
+
+
+def test_no_stored_number_is_nan_or_inf(tmp_path):
+    """The store's last guard: a table with a NaN or inf is refused by name, nothing is left behind."""
+    frame = synthetic_frame(0)
+    frame["contacts"]["u_n"][3] = np.nan
+    out = tmp_path / "out.h5"
+    with pytest.raises(StoreError, match="table contacts, column u_n, row 3 is nan"):
+        with ResultWriter(out, PROVENANCE, walls_meta=WALLS_META) as w:
+            w.append(frame)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_unknown_frame_values_are_stored_as_the_documented_sentinel(tmp_path, run_dir):
+    """A run without a timestep (time unknown) whose overlaps all come from dumps (no error bound): both
+    frames columns hold UNKNOWN (-1), not NaN; a store written with NaN there reads back as UNKNOWN."""
+    from demsplit.cli import main
+    from demsplit.results.schema import UNKNOWN
+
+    script = run_dir / "in.packing"
+    script.write_text("\n".join(line for line in script.read_text().split("\n") if not line.startswith("timestep")))
+    yade = Path(__file__).resolve().parent.parent / "sample_dumps" / "yade" / "mindlin_box.npys"
+    for path, out in ((script, tmp_path / "liggghts.h5"), (yade, tmp_path / "yade.h5")):
+        assert main(["run", str(path), "-o", str(out), "-q"]) == 0
+        with h5py.File(out, "r") as h5:
+            for col in ("time", "overlap_max_rel_error"):
+                values = h5["frames"][col][()]
+                assert np.all(np.isfinite(values))
+    with h5py.File(tmp_path / "liggghts.h5", "r") as h5:
+        assert np.all(h5["frames/time"][()] == UNKNOWN)
+    with h5py.File(tmp_path / "yade.h5", "r+") as h5:
+        assert np.all(h5["frames/overlap_max_rel_error"][()] == UNKNOWN) and np.all(h5["frames/time"][()] > 0)
+        h5["frames/overlap_max_rel_error"][...] = np.nan  # as stores written before the sentinel hold it
+    assert np.all(load_results(tmp_path / "yade.h5").frames["overlap_max_rel_error"] == UNKNOWN)

@@ -32,6 +32,7 @@ import pandas as pd
 from ..atomic import atomic_path
 from ..errors import StoreError
 from .aggregate import elastic_columns
+from .schema import UNBOUNDED, known
 from .tables import Results
 
 MODE_NAMES = {"u_n": "normal", "u_t": "tangential", "u_r": "rolling", "u_tw": "twisting",
@@ -122,7 +123,7 @@ def text_summary(results: Results, step: int | None = None, names: Mapping[int, 
     parts = ", ".join(f"{MODE_NAMES.get(m, m)} {fr[m]:.6g} J" for m in modes)
     lines = [
         f"demsplit results: {len(results.steps)} frame(s); frame at timestep {step}"
-        + (f" (t = {fr['time']:.6g} s)" if np.isfinite(fr.get("time", np.nan)) else ""),
+        + (f" (t = {fr['time']:.6g} s)" if known(fr.get("time")) else ""),
     ]
     missing = not_computed(results, fr)
     if missing:
@@ -136,9 +137,11 @@ def text_summary(results: Results, step: int | None = None, names: Mapping[int, 
         params = ", ".join(f"{k}={v!r}" for k, v in sorted(model.get("params", {}).items())
                            if v is not None and v != "off")
         lines.append(f"  contact law: {model.get('law')}" + (f" ({params})" if params else ""))
-    if np.isfinite(fr.get("overlap_max_rel_error", np.nan)):
+    if known(fr.get("overlap_max_rel_error")):
+        bound = fr["overlap_max_rel_error"]
+        shown = "unbounded (a contact the printed positions may hide)" if bound >= UNBOUNDED else f"{bound:.3g}"
         lines.append("  overlaps recomputed from printed positions (contacts without a dumped delta, e.g. primitive "
-                     f"walls): max relative error bound {fr['overlap_max_rel_error']:.3g}")
+                     f"walls): max relative error bound {shown}")
     cols = ["type", "count", "total", "share_of_total", "mean", "p50", "p95", "top10_share", "gini"]
     table = one.per_type()
     cols += ["expected_error"] if "expected_error" in table else []
@@ -431,7 +434,7 @@ def _fig_frames(pf: pd.DataFrame):
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(8, 4.5))
-    use_time = "time" in pf and len(pf) > 0 and pf["time"].notna().all()
+    use_time = "time" in pf and len(pf) > 0 and pf["time"].map(known).all()
     x = pf["time"] if use_time else pf["step"]
     marker = "o" if len(pf) < 50 else None
     ax.plot(x, pf["u_contacts"], "k-", marker=marker, linewidth=2, label="elastic total (contacts)")
@@ -531,7 +534,7 @@ def write_html(results: Results, path: str | Path, step: int | None = None,
     pf = results.per_frame()
     prov = results.provenance or {}
     esc = html.escape
-    time = f" (t = {fr['time']:.6g} s)" if np.isfinite(fr.get("time", np.nan)) else ""
+    time = f" (t = {fr['time']:.6g} s)" if known(fr.get("time")) else ""
     steps = results.steps
     head = [f"<h1>demsplit report</h1><p>{len(steps)} frame(s), timesteps {int(steps.min())} to {int(steps.max())}; "
             f"detailed frame: <b>timestep {step}</b>{esc(time)} (another: <code>demsplit report FILE --step N</code>)."]

@@ -36,6 +36,24 @@ _COUNT = {c: "1" for c in ("step", "id", "clump", "n_members", "id1", "id2", "wa
 UNITS: dict[str, str] = {**_ENERGY, **_LENGTH, **_COUNT, "time": "s"}
 """Unit of every known column; a column not listed here gets the unit ``""`` (unknown)."""
 
+UNKNOWN = -1.0
+"""What a ``frames`` column of :data:`UNKNOWN_COLUMNS` holds in a frame where its value is not known: no
+stored table holds NaN or inf (docs/store.md)."""
+UNKNOWN_COLUMNS = ("time", "overlap_max_rel_error")
+"""``time`` (s): unknown when the run does not give it (a LIGGGHTS script without ``timestep``);
+``overlap_max_rel_error``: unknown (none) when no overlap was recomputed from printed positions. Both are
+>= 0 when known."""
+UNBOUNDED = float(np.finfo(np.float64).max)
+"""What ``overlap_max_rel_error`` holds when a contact's overlap has no finite bound (printed positions
+may hide it: it is kept within its uncertainty): the largest double, above every finite bound, not inf."""
+
+
+def known(value) -> bool:
+    """Whether a value of an :data:`UNKNOWN_COLUMNS` column is known (>= 0; stores written before
+    :data:`UNKNOWN` held NaN)."""
+    return value is not None and bool(np.isfinite(value)) and value >= 0
+
+
 _INT64 = ("step", "id", "clump", "n_members", "id1", "id2", "wall", "n_contacts", "n_particles", "n_wall_contacts",
           "n_not_computed")
 _INT32 = ("type", "not_computed")

@@ -41,6 +41,7 @@ import json
 import os
 import shutil
 from collections.abc import Iterable, Mapping
+from contextlib import contextmanager
 from concurrent.futures import Executor
 from pathlib import Path
 
@@ -49,11 +50,11 @@ from isal import isal_zlib
 
 from .. import threads
 from ..atomic import atomic_path, publish
-from ..errors import StoreError
+from ..errors import StoreError, system_error
 from ..fingerprint import file_fingerprint  # noqa: F401  (part of this module's API)
 from ..outputs import check_output_path
 from ..scene import scene_to_dict
-from .schema import TABLES, UNITS, Table, canonical_table, to_dataframe
+from .schema import TABLES, UNITS, UNKNOWN, UNKNOWN_COLUMNS, Table, canonical_table, to_dataframe
 from .tables import Results
 
 FORMAT = "demsplit-results"
@@ -94,6 +95,8 @@ _STORE = "store.h5"
 _COMMIT = "commit.npys"
 _MANIFEST = "run.json"
 _LOCK = "lock"
+_SORTED = "sorted.h5.new"  # close(): the store in step order, when frames came out of order
+_PUBLISHED = "published"  # close(): device and inode of the complete store it renames into place
 
 
 def demsplit_version() -> str:
@@ -137,17 +140,35 @@ def work_dir_of(path: str | Path) -> Path:
 def check_output(path: str | Path, *, resume: bool = False) -> None:
     """Raise :class:`StoreError` when a store cannot be started at ``path``: it is not a
     writable output (:func:`demsplit.outputs.check_output_path`: empty, a directory, a device, in a
-    missing directory), or an interrupted run's work directory is there and ``resume`` is false (it
-    is never silently discarded)."""
+    missing directory), another live process writes it, or an interrupted run's committed frames are
+    there and ``resume`` is false (they are never silently discarded). A work directory that holds no
+    committed frame (a run killed before its first commit, or after its store was complete, or whose
+    first commit failed) is a leftover with nothing to resume: it is removed."""
     path = check_output_path(path)
     work = work_dir_of(path)
     writer = _live_writer(work)
     if writer:
         raise StoreError(f"another demsplit process (pid {writer}) is writing this store.", file=path,
                          fix="wait for it to finish, or write to another path.")
+    if work.exists() and not _resumable(work):
+        shutil.rmtree(work, ignore_errors=True)
     if work.exists() and not resume:
         raise StoreError(f"an interrupted run left its finished frames in {work}.", file=path,
                          fix=f"resume it (resume=True, demsplit run --resume), or delete {work} to start over.")
+
+
+def _resumable(work: Path) -> bool:
+    """Whether the work directory ``work`` holds committed frames to resume: a commit record and the store it
+    describes, unless its run already renamed its complete store (a copy in step order) into place (the
+    ``published`` record names that file by device and inode, which the rename keeps)."""
+    if not ((work / _COMMIT).is_file() and (work / _STORE).is_file()):
+        return False
+    try:
+        published = (work / _PUBLISHED).read_text().split()
+        st = os.stat(work.parent / work.name[1:-len(".partial")])
+    except (OSError, ValueError):
+        return True
+    return published != [str(st.st_dev), str(st.st_ino)]
 
 
 def committed_steps(path: str | Path) -> list[int]:
@@ -211,17 +232,25 @@ class ResultWriter:
         manifest = {"format": FORMAT, "format_version": FORMAT_VERSION, "work_version": WORK_VERSION,
                     "identity": resume_identity(self.provenance), "provenance": self.provenance,
                     "walls_meta": self.walls_meta, "compression": self.compression}
-        if self.work_dir.exists():
-            self._lock()
-            try:
-                self._resume(manifest)
-            except StoreError:
+        resuming = self.work_dir.exists()
+        try:
+            with self._system_errors():
+                if resuming:
+                    self._lock()
+                    self._resume(manifest)
+                else:
+                    self.work_dir.mkdir()
+                    self._lock()
+                _write_atomic(self.work_dir / _MANIFEST,
+                              lambda f: f.write(_to_json(manifest, "provenance").encode()))
+        except BaseException:
+            self._closed = True
+            self._release(quiet=True)
+            if resuming and _resumable(self.work_dir):
                 (self.work_dir / _LOCK).unlink(missing_ok=True)
-                raise
-        else:
-            self.work_dir.mkdir()
-            self._lock()
-        _write_atomic(self.work_dir / _MANIFEST, lambda f: f.write(_to_json(manifest, "provenance").encode()))
+            else:  # nothing committed: nothing is left behind
+                shutil.rmtree(self.work_dir, ignore_errors=True)
+            raise
 
     # -- lifecycle -------------------------------------------------------
     def _lock(self) -> None:
@@ -258,7 +287,7 @@ class ResultWriter:
                 fix=f"rerun with the same inputs and options, or delete {self.work_dir} to start over.",
             )
         for p in self.work_dir.iterdir():  # a commit record or copy being written when the run died
-            if p.name.endswith((".tmp", ".new")):
+            if p.name.endswith((".tmp", ".new")) or p.name == _PUBLISHED:
                 p.unlink()
         commit = self.work_dir / _COMMIT
         if not commit.exists():  # killed before its first frame was committed: nothing to resume
@@ -304,21 +333,45 @@ class ResultWriter:
 
     def abandon(self) -> None:
         """Stop without writing the store; the committed frames stay for a
-        resume (a work directory that holds no frame is removed: there is
-        nothing to resume)."""
+        resume (a work directory that holds no committed frame, e.g. after
+        its first commit failed on a full disk, is removed: there is
+        nothing to resume, and nothing is left behind)."""
         if not self._closed:
             self._closed = True
-            self._release()
-            if self._steps:
+            self._release(quiet=True)
+            if _resumable(self.work_dir):
                 (self.work_dir / _LOCK).unlink(missing_ok=True)
             else:
                 shutil.rmtree(self.work_dir, ignore_errors=True)
 
-    def _release(self) -> None:
-        """Close the store file."""
+    def _release(self, quiet: bool = False) -> None:
+        """Close the store file (``quiet``: a file given up, whose close may fail too, e.g. on a full disk:
+        the commit record says what it holds)."""
         if self._h5 is not None:
-            self._h5.close()
-            self._h5 = None
+            h5, self._h5 = self._h5, None
+            try:
+                h5.close()
+            except Exception:
+                if not quiet:
+                    raise
+
+    @contextmanager
+    def _system_errors(self):
+        """An OSError of the system while writing (a full disk, a read-only file system) becomes the one
+        StoreError naming the output and the cause, and what is kept for ``--resume``."""
+        try:
+            yield
+        except OSError as exc:
+            kept = self._steps_committed()
+            note = (f"; the {kept} frame(s) committed before it are kept in {self.work_dir} for --resume "
+                    f"(delete it to start over)") if kept else ""
+            raise system_error(exc, self.path, doing="cannot write the store", note=note) from exc
+
+    def _steps_committed(self) -> int:
+        try:
+            return len(committed_steps(self.path)) if _resumable(self.work_dir) else 0
+        except StoreError:
+            return 0
 
     # -- writing ---------------------------------------------------------
     def _open(self, path: Path, schema: Mapping[str, Mapping[str, str]], filters: Mapping[str, Mapping[str, str]],
@@ -335,7 +388,12 @@ class ResultWriter:
         self._h5.swmr_mode = True
 
     def append(self, tables: Mapping[str, Mapping[str, np.ndarray]]) -> None:
-        """Store the tables of one frame and commit it (see the module docstring)."""
+        """Store the tables of one frame and commit it (see the module docstring). A table with a value
+        that is not finite is refused: no stored number is NaN or inf."""
+        with self._system_errors():
+            self._append(tables)
+
+    def _append(self, tables: Mapping[str, Mapping[str, np.ndarray]]) -> None:
         if self._closed:
             raise StoreError("append() after close().", file=self.path, fix="append every frame before closing.")
         step = _frame_step(tables)
@@ -351,6 +409,7 @@ class ResultWriter:
             if "step" in table and np.any(table["step"] != step):
                 raise StoreError(f"table {name!r} has rows of other timesteps than its frame.", step=step,
                                  fix="append one frame at a time.")
+            _refuse_non_finite(name, table, step)
         schema = _schema_of(canon)
         if self._h5 is None:
             self._open(self._store, schema, _choose_filters(canon, self.compression, threads.pool()),
@@ -378,40 +437,63 @@ class ResultWriter:
         _write_records(self.work_dir / _COMMIT, header, {name: sink.carry for name, sink in self._sinks.items()})
 
     def close(self) -> None:
-        """Write the last rows, the frame index and the provenance; rename the store into place."""
+        """Write the last rows, the frame index and the provenance; rename the store into place.
+
+        At every instant of it (SIGKILL included) the run stays resumable or the store is complete at
+        its path: the store the commit record describes gets only its last rows, in SWMR mode, and
+        then, still in SWMR mode, the frame index and the attributes (frames appended out of step order
+        are copied in order into a new file, finished there); the file is fsynced and renamed to the
+        output. The work directory, whose store is then gone (or, for a copy in step order, which names
+        the file it renamed), is removed last (a run killed before that leaves one with nothing to
+        resume, which the next run removes)."""
         if self._closed:
             return
-        import h5py
-
-        if self._h5 is None:  # no frame: a store with empty tables
-            self._open(self._store, {}, {}, {})
-        for sink in self._sinks.values():
-            sink.finish()
-        self._release()
-        order = np.argsort(np.array(self._steps, dtype=np.int64), kind="stable")
-        if np.any(order != np.arange(len(order))):
-            self._rewrite_in_step_order(order)
-        with h5py.File(self._store, "r+", libver=LIBVER) as h5:
-            h5.attrs.update(format=FORMAT, format_version=FORMAT_VERSION, demsplit_version=demsplit_version(),
-                            provenance=_to_json(self.provenance, "provenance"),
-                            walls_meta=_to_json(self.walls_meta, "walls_meta"), compression=self.compression)
-            index = h5.create_group("index")
-            index.create_dataset("step", data=np.array(self._steps, dtype=np.int64))
-            for name in TABLES:
-                index.create_dataset(name, data=np.array(self._rows[name], dtype=np.int64))
-        publish(self._store, self.path)
+        try:
+            with self._system_errors():
+                if self._h5 is None:  # no frame: a store with empty tables
+                    self._open(self._store, {}, {}, {})
+                for sink in self._sinks.values():
+                    sink.finish()
+                final = self._store
+                order = np.argsort(np.array(self._steps, dtype=np.int64), kind="stable")
+                if np.any(order != np.arange(len(order))):
+                    final = self._rewrite_in_step_order(order)
+                self._write_index()
+                self._release()
+                if final != self._store:  # the commit record stays valid: say which file completes the run
+                    st = os.stat(final)
+                    _write_atomic(self.work_dir / _PUBLISHED, lambda f: f.write(f"{st.st_dev} {st.st_ino}".encode()),
+                                  durable=False)
+                publish(final, self.path)
+        except BaseException:
+            self.abandon()  # the committed frames stay for --resume
+            raise
         self._closed = True
-        shutil.rmtree(self.work_dir)
+        shutil.rmtree(self.work_dir, ignore_errors=True)
 
-    def _rewrite_in_step_order(self, order: np.ndarray) -> None:
-        """Copy the store frame by frame in step order (frames were appended out
-        of order; one frame's rows in memory at a time)."""
+    def _write_index(self) -> None:
+        """The frame index and the attributes, into the open store."""
+        h5 = self._h5
+        h5.attrs.update(format=FORMAT, format_version=FORMAT_VERSION, demsplit_version=demsplit_version(),
+                        provenance=_to_json(self.provenance, "provenance"),
+                        walls_meta=_to_json(self.walls_meta, "walls_meta"), compression=self.compression)
+        index = h5.create_group("index")
+        index.create_dataset("step", data=np.array(self._steps, dtype=np.int64))
+        for name in TABLES:
+            index.create_dataset(name, data=np.array(self._rows[name], dtype=np.int64))
+        h5.flush()
+
+    def _rewrite_in_step_order(self, order: np.ndarray) -> Path:
+        """Copy the store frame by frame in step order into a new file (frames were appended out of
+        order; one frame's rows in memory at a time) and return it, open as the writer's file; the store
+        the commit record describes is left as it is."""
         import h5py
 
         schema = {name: sink.schema for name, sink in self._sinks.items()}
         filters = {name: sink.filters for name, sink in self._sinks.items()}
         chunks = {name: sink.chunk_rows for name, sink in self._sinks.items()}
-        sorted_path = self._store.with_name("sorted.h5")
+        self._release()
+        sorted_path = self.work_dir / _SORTED
         with h5py.File(self._store, "r", libver=LIBVER) as src:
             self._open(sorted_path, schema, filters, chunks)
             for k in order:
@@ -420,12 +502,28 @@ class ResultWriter:
                     sink.append({col: src[name][col][lo:hi] for col in sink.schema} if sink.schema else None)
             for sink in self._sinks.values():
                 sink.finish()
-            self._release()
-        os.replace(sorted_path, self._store)
         for name in TABLES:
             sizes = np.diff(self._rows[name])[order]
             self._rows[name] = [0, *np.cumsum(sizes).tolist()]
         self._steps = [self._steps[k] for k in order]
+        return sorted_path
+
+
+def _refuse_non_finite(name: str, table: Table, step: int) -> None:
+    """Raise StoreError for the first value of ``table`` that is not finite (NaN or inf)."""
+    for col, values in table.items():
+        if values.dtype.kind != "f" or not len(values):
+            continue
+        with np.errstate(all="ignore"):
+            if np.isfinite(np.add.reduce(values)):  # fast: a NaN or inf anywhere makes the sum one
+                continue
+        bad = ~np.isfinite(values)
+        if bad.any():
+            row = int(np.flatnonzero(bad)[0])
+            raise StoreError(f"table {name}, column {col}, row {row} is {float(values[row])} ({int(bad.sum())} "
+                             "value(s) of the column are not finite): no stored number is NaN or inf.", step=step,
+                             fix=f"give a finite number, or {UNKNOWN} in a frames column of "
+                                 f"{', '.join(UNKNOWN_COLUMNS)} whose value is not known.")
 
 
 class _TableSink:
@@ -706,6 +804,9 @@ def read_store(path: str | Path, *, steps: Iterable[int] | None = None, every_fr
                 else:
                     table = {col: np.concatenate([group[col][off[k]:off[k + 1]] for k in frames_k]
                                                  or [np.empty(0, group[col].dtype)]) for col in columns}
+                if name == "frames":  # stores written before UNKNOWN held NaN for it
+                    for col in set(UNKNOWN_COLUMNS) & set(table):
+                        table[col] = np.where(np.isnan(table[col]), UNKNOWN, table[col])
                 frames[name] = to_dataframe(table)
             return Results(**frames, provenance=json.loads(h5.attrs["provenance"]),
                            walls_meta=json.loads(h5.attrs["walls_meta"]))
