@@ -845,6 +845,8 @@ def _parse_header(lines: list[bytes], path: str, line0: int, last: bool) -> dict
         step = int(text[1])
     except ValueError:
         raise bad(1, "an integer timestep") from None
+    if not 0 <= step < 2**63:  # LAMMPS' bigint; beyond it the store's int64 steps overflow
+        raise bad(1, "a timestep in [0, 2^63)")
     if not text[2].startswith("ITEM: NUMBER OF "):
         raise bad(2, "'ITEM: NUMBER OF <label>'", step)
     try:

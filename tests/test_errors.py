@@ -231,6 +231,17 @@ def test_negative_radius(run_dir):
     assert "radius must be > 0" in str(err) and "-0.002" in str(err)
 
 
+@pytest.mark.parametrize("step", [b"9223372036854775808", b"-2000"])
+def test_a_dump_timestep_beyond_int64_or_negative_is_refused(run_dir, step):
+    """A timestep >= 2^63 (LAMMPS' bigint) overflowed the store's int64 steps: OverflowError, exit 3."""
+    atoms = run_dir / "atoms_full.txt"
+    edit_lines(atoms, lambda lines: lines.__setitem__(atom_row_line(1, 0) - 9, step))  # line 311: the step
+    err = analyze_error(run_dir)
+    assert isinstance(err, InputFormatError)
+    assert_where(err, "atoms_full.txt", None, atom_row_line(1, 0) - 8)
+    assert "a timestep in [0, 2^63)" in str(err)
+
+
 def test_binary_dump_with_a_wrong_header(run_dir):
     data = bytearray((PACKING / "atoms.bin").read_bytes())
     struct.pack_into("=i", data, 16, 7)  # the triclinic flag (after step and row count, two int64)
