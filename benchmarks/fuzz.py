@@ -246,7 +246,25 @@ def mutate(data: bytes, kind: str, where: float, size: int, token: int) -> bytes
     raise ValueError(kind)
 
 
+def mutate_header(rng: random.Random, data: bytes) -> tuple[bytes, str]:
+    """A token of a dump frame's header (the timestep, the count, a box bound, a column name) replaced."""
+    starts = [i for i in range(len(data)) if data.startswith(b"ITEM: TIMESTEP", i)][:50] or [0]
+    start = rng.choice(starts)
+    lines = data[start:].split(b"\n", 9)
+    k = rng.choice((1, 1, 3, 3, 4, 5, 6, 7, 8))
+    if len(lines) <= k:
+        return data, "no header to change"
+    tokens = lines[k].split(b" ")
+    j = rng.randrange(len(tokens))
+    old, tokens[j] = tokens[j], rng.choice(TOKENS)
+    lines[k] = b" ".join(tokens)
+    what = f"header line {k} of the frame at byte {start}: {old[:30]!r} -> {tokens[j][:30]!r}"
+    return data[:start] + b"\n".join(lines), what
+
+
 def random_text_mutation(rng: random.Random, data: bytes) -> tuple[bytes, str]:
+    if data.startswith(b"ITEM: TIMESTEP") and rng.random() < 0.2:
+        return mutate_header(rng, data)
     kind = rng.choice(KINDS)
     m = (kind, rng.random(), rng.randint(1, 8), rng.randrange(len(TOKENS)))
     return mutate(data, *m), f"{kind} at {m[1]:.4f} size {m[2]} token {TOKENS[m[3]][:20]!r}"
