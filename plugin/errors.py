@@ -112,6 +112,13 @@ class StoreError(DemsplitError):
     """A result file cannot be written, read or resumed."""
 
 
+def plain(value):
+    """``value`` as a message shows it: a numpy scalar as the Python number or bytes it holds (a message
+    says 7, not np.int64(7))."""
+    item = getattr(value, "item", None)
+    return item() if callable(item) and getattr(value, "shape", None) == () else value
+
+
 def os_error_cause(exc: OSError) -> str:
     """The cause of an OSError in words: its ``strerror``, or the system's message inside an HDF5
     error (h5py raises OSErrors without errno, their text holds ``errno = 28, error message = '...'``)."""

@@ -48,7 +48,7 @@ import numpy as np
 
 from .. import errors
 from ..atomic import atomic_path
-from ..errors import DemsplitError, InputFormatError
+from ..errors import DemsplitError, InputFormatError, plain
 from ..frame import Box, Frame
 from ..outputs import check_output_path
 from ..scene import scene_from_dict, scene_to_dict
@@ -161,8 +161,9 @@ class CacheRun(Run):
         self._h5 = h5py.File(path, "r")
         attrs = self._h5.attrs
         if attrs.get("format") != FORMAT:
+            found = plain(attrs.get("format"))
             self._h5.close()
-            raise InputFormatError(f"not a demsplit ingest cache (format attribute {attrs.get('format')!r}).",
+            raise InputFormatError(f"not a demsplit ingest cache (format attribute {found!r}).",
                                    file=path, fix="write one with 'demsplit convert RUN -o CACHE.h5'.")
         if int(attrs["version"]) != VERSION:
             version = int(attrs["version"])

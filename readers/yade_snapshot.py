@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 from demsplit.errors import (
-    ContactError, DemsplitError, InputFormatError, MaterialError, TruncatedFileError, UnsupportedModelError,
+    ContactError, DemsplitError, InputFormatError, MaterialError, TruncatedFileError, UnsupportedModelError, plain,
 )
 from demsplit.frame import Box, Frame, Table
 from demsplit.validate import typed_columns
@@ -95,7 +95,7 @@ class _Hdf5Store:
             if self._file.attrs.get("format") != FORMAT_NAME:
                 raise InputFormatError(
                     f"HDF5 file without the {FORMAT_NAME!r} format attribute "
-                    f"(found {excerpt(repr(self._file.attrs.get('format')))}).",
+                    f"(found {excerpt(str(plain(self._file.attrs.get('format'))))}).",
                     file=path, fix="give the file written by demsplit.yade.snapshot().")
             refuse_foreign_storage(self._file, path)
             snaps = self._file.get("snapshots")

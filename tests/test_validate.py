@@ -332,3 +332,16 @@ def test_a_frame_time_that_is_not_finite_is_refused(tmp_path, capsys):
     (tmp_path / "in.packing").write_text(script.replace("timestep        2.0e-6", "timestep        1e304"))
     rc, err = run(tmp_path / "in.packing", tmp_path, capsys)
     assert rc == 2 and "the frame's time inf s is not a finite time" in err and "timestep 200000" in err, err
+
+
+def test_a_value_in_a_message_is_printed_plain(tmp_path, capsys):
+    """An HDF5 format attribute that is a number: "found '7'", not 'found np.int64(7)' (found by the fuzzer)."""
+    import shutil
+
+    h5py = pytest.importorskip("h5py")
+    snap = tmp_path / "snap.h5"
+    shutil.copy(SAMPLES / "yade" / "mindlin_box.h5", snap)
+    with h5py.File(snap, "a") as f:
+        f.attrs["format"] = 7
+    rc, err = run(snap, tmp_path, capsys)
+    assert rc == 2 and "(found '7')" in err and "np." not in err, err
