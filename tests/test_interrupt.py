@@ -143,7 +143,8 @@ def test_interrupted_run_resumes_to_the_same_results(long_run, reference, tmp_pa
 @pytest.mark.skipif(not Path("/proc/self/environ").exists(), reason="needs Linux /proc")
 def test_sigkill_of_a_parallel_run_leaves_no_process_behind(tmp_path):
     """demsplit run -j 2 killed with SIGKILL: its workers, the fork server and the resource tracker are
-    gone within 5 s (they were left running)."""
+    gone within 5 s (they were left running); the run then completes with --resume when it had committed
+    frames, and with a plain rerun (not refused) when it had none."""
     import uuid
 
     mark = f"DEMSPLIT_TEST_MARK={uuid.uuid4().hex}".encode()
@@ -179,6 +180,12 @@ def test_sigkill_of_a_parallel_run_leaves_no_process_behind(tmp_path):
     for pid in left:
         os.kill(pid, signal.SIGKILL)
     assert left == []
+    out = tmp_path / "o.h5"
+    resume = ["--resume"] if done_steps(out) else []
+    again = subprocess.run([sys.executable, "-m", "demsplit.cli", "run", str(script), "-o", str(out), "-j", "2", "-q",
+                            *resume], capture_output=True, text=True, timeout=600)
+    assert again.returncode == 0, again.stderr
+    assert len(demsplit.load_results(out).frames) == 6 and not work_of(out).exists()
 
 
 # --- SIGKILL at every stage of the store's close() ---------------------------------------------------------

@@ -206,3 +206,32 @@ def test_a_real_full_file_system(packing, tmp_path, capsys, size, kept):
         assert sorted(p.name for p in full.iterdir()) == ["out.h5"]
     finally:
         subprocess.run(["umount", str(full)], capture_output=True)
+
+
+@pytest.mark.skipif(not hasattr(os, "geteuid") or os.geteuid() != 0 or not shutil.which("mount"),
+                    reason="mounts a read-only tmpfs and makes a device node (root only)")
+def test_a_read_only_file_system_and_a_device_node_are_one_message(packing, tmp_path, capsys):
+    """-o on a read-only file system: exit 2 naming the output and the cause (an OSError of the system, not
+    an internal error); -o onto a device node with /dev/null's numbers in a temporary directory: refused, the
+    node stays a node (it was replaced by a regular file, as /dev/full was)."""
+    import stat
+    import subprocess
+
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    if not _mount_tmpfs(ro, "1m,ro"):
+        pytest.skip("cannot mount a tmpfs here")
+    try:
+        assert main(["run", str(packing / "in.packing"), "-o", str(ro / "out.h5"), "-q"]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith(f"demsplit: error: {ro}") and "Read-only file system" in err and err.count("\n") == 1
+        assert list(ro.iterdir()) == []
+    finally:
+        subprocess.run(["umount", str(ro)], capture_output=True)
+    node = tmp_path / "null.h5"
+    os.mknod(node, stat.S_IFCHR | 0o666, os.makedev(1, 3))
+    for argv in (["run", str(packing / "in.packing")], ["convert", str(packing / "in.packing")]):
+        assert main([*argv, "-o", str(node), "-q"]) == 2
+        assert "not a regular file" in capsys.readouterr().err
+    st = os.lstat(node)
+    assert stat.S_ISCHR(st.st_mode) and st.st_rdev == os.makedev(1, 3)
