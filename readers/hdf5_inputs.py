@@ -13,11 +13,14 @@ from pathlib import Path
 from ..errors import InputFormatError
 
 
-def refuse_foreign_storage(group, path: Path | str) -> None:
+def refuse_foreign_storage(group, path: Path | str, _seen: set | None = None) -> None:
     """Raise :class:`InputFormatError` when ``group`` (an open h5py file or group) or anything below it
-    keeps data outside the file."""
+    keeps data outside the file. Each group is walked once, whatever hard links lead to it again (a group
+    linked into itself made the walk endless); objects that hold no data (named datatypes) are passed."""
     import h5py
 
+    seen = set() if _seen is None else _seen
+    seen.add(h5py.h5o.get_info(group.id).addr)
     for name in group:
         link = group.get(name, getlink=True)
         if isinstance(link, (h5py.ExternalLink, h5py.SoftLink)):
@@ -26,8 +29,9 @@ def refuse_foreign_storage(group, path: Path | str) -> None:
                                    fix="give the file as demsplit or YADE wrote it; links are never written.")
         obj = group[name]
         if isinstance(obj, h5py.Group):
-            refuse_foreign_storage(obj, path)
-        elif obj.external or obj.is_virtual:
+            if h5py.h5o.get_info(obj.id).addr not in seen:
+                refuse_foreign_storage(obj, path, seen)
+        elif isinstance(obj, h5py.Dataset) and (obj.external or obj.is_virtual):
             raise InputFormatError(f"dataset {obj.name} is stored outside the file ("
                                    f"{'virtual' if obj.is_virtual else 'external storage'}).", file=path,
                                    fix="give the file as demsplit or YADE wrote it.")

@@ -373,3 +373,16 @@ def test_row_shape_faults_are_named_as_what_they_are(run_dir, change, message):
     err = analyze_error(run_dir)
     assert isinstance(err, InputFormatError) and message in str(err)
     assert_where(err, "pairs.txt", STEPS[0], 13)
+
+
+def test_a_foreign_file_given_as_a_dump_is_named_and_quoted_bounded_and_printable(run_dir, tmp_path, capsys):
+    """A dump path that points at another file (as --atoms /etc/shadow would): the message names the file and
+    quotes at most 40 characters of its first line, control characters escaped."""
+    from demsplit.cli import main
+
+    secret = tmp_path / "shadow"
+    secret.write_bytes(b"root:$6$" + b"x" * 200 + b"\x1b[2J:19000:0:99999:7:::\nuser:$6$second line\n")
+    rc = main(["run", str(run_dir / "in.packing"), "--atoms", str(secret), "-o", str(tmp_path / "out.h5"), "-q"])
+    err = capsys.readouterr().err
+    assert rc == 2 and str(secret) in err and err.count("\n") == 1
+    assert "x" * 41 not in err and "\x1b" not in err and "second line" not in err and "19000" not in err

@@ -345,3 +345,23 @@ def test_a_value_in_a_message_is_printed_plain(tmp_path, capsys):
         f.attrs["format"] = 7
     rc, err = run(snap, tmp_path, capsys)
     assert rc == 2 and "(found '7')" in err and "np." not in err, err
+
+
+@pytest.mark.parametrize("kind", ["a group linked into itself", "a named datatype"])
+def test_the_walk_of_an_hdf5_input_ends_and_passes_objects_without_data(tmp_path, capsys, kind):
+    """The walk that refuses data from elsewhere recursed without end into a group hard-linked into itself
+    (RecursionError) and took a named datatype (what a damaged object header can read as) for a dataset
+    (AttributeError): internal errors (found by the fuzzer)."""
+    import shutil
+
+    h5py = pytest.importorskip("h5py")
+    snap = tmp_path / "snap.h5"
+    shutil.copy(SAMPLES / "yade" / "mindlin_box.h5", snap)
+    with h5py.File(snap, "a") as f:
+        group = f["snapshots"][sorted(f["snapshots"])[0]]
+        if kind == "a group linked into itself":
+            group["loop"] = f["/"]
+        else:
+            group["extra"] = np.dtype("f8")
+    rc, err = run(snap, tmp_path, capsys)
+    assert rc == 0, err
