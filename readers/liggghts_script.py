@@ -49,7 +49,8 @@ the Debian 3.8.0 binary crashes on it.
 
 History columns: the law's own history, in LIGGGHTS' order (normal model,
 e.g. ``delta_max`` for ``hooke/hysteresis``; ``shearx sheary shearz`` with
-``tangential history`` or ``tan_luding``; ``rolling_torquex ..z`` with ``rolling_friction
+``tangential history`` or ``tan_luding``; ``liquid_bridge`` (after the normal model's values) with ``cohesion
+easo/capillary/viscous|washino/capillary/viscous``; ``rolling_torquex ..z`` with ``rolling_friction
 epsd|epsd2|epsd3``, then ``torsion_torquex ..z`` with ``luding``:
 :meth:`~demsplit.physics.laws._liggghts.LiggghtsNormalModel.history_columns`),
 then 10 (pair) / 14 (wall) columns with ``computeElasticPotential on``
@@ -82,6 +83,7 @@ import numpy as np
 from ..errors import DemsplitError, MaterialError, ScriptError, UnsupportedModelError
 from ..physics.laws import ContactLaw, law_class
 from ..physics.laws._liggghts import COHESION_MODELS, ROLLING_MODELS, TANGENTIAL_MODELS
+from ..physics.laws._liquid_bridge import BRIDGE_MODELS
 from ..physics.laws._liggghts import SHEAR as SHEAR_COLUMNS
 from ..scene import ContactModel, Material, Scene, Wall
 from .lammps_input import (Unevaluable, Variables, Where, excerpt, logical_lines, split_words,
@@ -285,7 +287,10 @@ PROPERTY_PARAMETERS = {"characteristicVelocity": "characteristic_velocity",
                        "UnloadingStiffness": "unloading_stiffness", "pullOffForce": "pull_off_force",
                        "overlapExponent": "overlap_exponent", "surfaceEnergy": "surface_energy",
                        "coeffFrictionStiffness": "friction_stiffness",
-                       "coeffRollingStiffness": "rolling_stiffness_ratio"}
+                       "coeffRollingStiffness": "rolling_stiffness_ratio", "surfaceTension": "surface_tension",
+                       "contactAngle": "contact_angle", "maxSeparationDistanceRatio": "max_separation_ratio",
+                       "minSeparationDistanceRatio": "min_separation_ratio", "fluidViscosity": "fluid_viscosity",
+                       "surfaceLiquidContentInitial": "liquid_content_initial"}
 """``fix property/global`` scalar -> the law parameter it gives, where the law declares that parameter."""
 _MODEL_KEYS = ("model", "tangential", "cohesion", "rolling_friction", "surface")
 
@@ -339,8 +344,7 @@ def _parse_model(words: list[str], stop: tuple[str, ...], where: Where,
                           ", ".join(f"tangential {w}" for w in TANGENTIAL))
     cohesion = kinds.get("cohesion", "off")
     if cohesion not in COHESION_MODELS:
-        raise unsupported(f"cohesion model {cohesion!r} is not supported (its work needs the per-atom liquid "
-                          "content, which demsplit does not read).",
+        raise unsupported(f"cohesion model {cohesion!r} is not supported.",
                           ", ".join(f"cohesion {c}" for c in COHESION_MODELS))
     rolling = kinds.get("rolling_friction", "off")
     if rolling not in ROLLING_MODELS:
@@ -417,6 +421,7 @@ class _Reader:
         self.timestep: float | None = None
         self.run_steps: list[int] = []
         self.type_uses: list[tuple[int, str, Where]] = []
+        self.contact_distance_factor: float | None = None
         self.include_stack: list[Path] = []
         self.included: list[Path] = []
 
@@ -541,6 +546,11 @@ class _Reader:
                              "use 'pair_style gran model hertz|hooke tangential history|no_history'.")
         self.pair, _ = _parse_model(args[1:], (), where, self.warnings, "pair_style gran")
 
+    def cmd_neigh_modify(self, args: list[str], where: Where) -> None:
+        if "contact_distance_factor" in args[:-1]:
+            value = args[args.index("contact_distance_factor") + 1]
+            self.contact_distance_factor = self.number(value, where, "neigh_modify contact_distance_factor")
+
     def cmd_unfix(self, args: list[str], where: Where) -> None:
         if args and args[0] in self.walls:
             self.warnings.append(f"{where.file}:{where.line}: wall fix {args[0]} is removed here; it "
@@ -555,6 +565,10 @@ class _Reader:
             self.wall_gran(fid, rest, where)
         elif style in ("mesh/surface", "mesh/surface/stress"):
             self.mesh_surface(fid, rest, where)
+        elif "liquidtransfer" in style.split("/"):
+            raise self.error(UnsupportedModelError, f"fix {fid} {style}: a mesh that holds liquid is not supported: "
+                             "washino/capillary/viscous bridges take its per-triangle liquid content, which LIGGGHTS "
+                             "does not dump.", where, "use a dry mesh (fix ID all mesh/surface ...).")
         elif style == "gravity":
             self.fix_gravity(rest, where)
         elif style.startswith("particletemplate/"):
@@ -763,6 +777,17 @@ class _Reader:
             params["kt_to_kn"] = 2.0 / 7.0 if spec.on("ktToKnUser") else 1.0
         if "torsion" in declared:
             params["torsion"] = "on" if spec.on("torsion") else "off"
+        if spec.cohesion in BRIDGE_MODELS:
+            params["contact_distance_factor"] = self.contact_distance_factor
+        if spec.cohesion == "washino/capillary/viscous":
+            params["limit_liquid_content"] = "on" if spec.on("limitLiquidContent") else "off"
+            if spec.on("modifyLbVolume"):
+                lb = self.properties.get("lbVolumeFraction")
+                if lb is None:
+                    raise self.error(ScriptError, "washino/capillary/viscous with modifyLbVolume on needs 'fix ID all "
+                                     "property/global lbVolumeFraction scalar F', which the script does not define.",
+                                     spec.where, "add the lbVolumeFraction the run used.")
+                params["bridge_volume_fraction"] = float(lb[1])
         try:
             return ContactModel(spec.law, params)
         except DemsplitError as exc:  # a parameter the model's words need, missing from the script

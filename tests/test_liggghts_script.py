@@ -104,7 +104,11 @@ def test_materials_model_coefficients_gravity(tmp_path):
     assert s.scene.model.params == {"tangential": "history", "characteristic_velocity": 2.5, "kt_to_kn": 2 / 7,
                                     "rolling": "off", "cohesion": "off", "rolling_friction": None,
                                     "rolling_stiffness": None, "cohesion_energy_density": None,
-                                    "friction_stiffness": None, "rolling_stiffness_ratio": None, "torsion": "off"}
+                                    "friction_stiffness": None, "rolling_stiffness_ratio": None, "torsion": "off",
+                                    "surface_tension": None, "contact_angle": None, "max_separation_ratio": None,
+                                    "min_separation_ratio": None, "fluid_viscosity": None,
+                                    "liquid_content_initial": None, "bridge_volume_fraction": None,
+                                    "limit_liquid_content": "off", "contact_distance_factor": None}
     np.testing.assert_array_equal(s.coefficients["coefficientFriction"], [[0.5, 0.6], [0.6, 0.7]])
     assert s.coefficients["characteristicVelocity"] == 2.5
     np.testing.assert_allclose(s.gravity, [0, 9.81 * 0.6, -9.81 * 0.8])
@@ -140,7 +144,8 @@ def test_walls_primitive_and_mesh(tmp_path):
     ("model hertz tangential history rolling_friction luding torsion on", UnsupportedModelError, "torsion on"),
     ("model hertz tangential tan_luding", UnsupportedModelError, "friction_stiffness"),
     ("model hertz/stiffness tangential history", ScriptError, "property/global kn"),
-    ("model hertz tangential history cohesion easo/capillary/viscous", UnsupportedModelError, "liquid content"),
+    ("model hertz tangential history cohesion easo/capillary/viscous", UnsupportedModelError, "surface_tension"),
+    ("model hertz tangential history cohesion capillary", UnsupportedModelError, "easo/capillary/viscous"),
     ("model hertz tangential history cohesion sjkr", UnsupportedModelError, "cohesion_energy_density"),
     ("model hertz tangential history rolling_friction epsd", UnsupportedModelError, "rolling_friction"),
     ("model hertz tangential history_mdm", UnsupportedModelError, "history_mdm"),
@@ -151,6 +156,49 @@ def test_unsupported_models(tmp_path, pair, cls, match):
     with pytest.raises(cls, match=match) as err:
         script(tmp_path, f"pair_style gran {pair}\n")
     assert err.value.line == HEADER.count("\n") + 1 and err.value.fix
+
+
+BRIDGE_PROPERTIES = """
+    fix b1 all property/global surfaceLiquidContentInitial scalar 0.02
+    fix b2 all property/global surfaceTension scalar 0.072
+    fix b3 all property/global contactAngle peratomtype 20 35
+    fix b4 all property/global minSeparationDistanceRatio scalar 1.01
+    fix b5 all property/global maxSeparationDistanceRatio scalar 1.1
+    fix b6 all property/global fluidViscosity scalar 0.001
+    fix b7 all property/global lbVolumeFraction scalar 0.1
+"""
+
+
+@pytest.mark.parametrize("model, lb", [("easo/capillary/viscous", ""), ("washino/capillary/viscous", ""),
+                                       ("washino/capillary/viscous", "modifyLbVolume on")])
+def test_liquid_bridges_map_their_properties_and_history(tmp_path, model, lb):
+    """The liquid-bridge models take their properties, washino its bridge volume fraction (lbVolumeFraction only with
+    modifyLbVolume on, else 0.05) and the contact distance factor of neigh_modify; their history holds the bridge
+    flag (LIGGGHTS' contflag) between the normal model's and the shear; the law reads the liquid content."""
+    s = script(tmp_path, BRIDGE_PROPERTIES + f"""
+        neigh_modify delay 0 contact_distance_factor 1.5
+        pair_style gran model hertz tangential history cohesion {model} {lb}
+        compute cp all pair/gran/local id history delta
+    """)
+    law = s.scene.model.contact_law
+    p = law.params
+    assert (p["surface_tension"], p["contact_angle"], p["max_separation_ratio"], p["min_separation_ratio"],
+            p["fluid_viscosity"], p["liquid_content_initial"]) == (0.072, (20.0, 35.0), 1.1, 1.01, 0.001, 0.02)
+    assert p["bridge_volume_fraction"] == (0.1 if lb else None) and law.contact_distance_factor() == 1.5
+    assert law.particle_columns == ("f_surfaceLiquidContent",) and "u_adh" in law.modes
+    assert s.local_computes["cp"].columns == ["id1", "id2", "periodic", "liquid_bridge", "shearx", "sheary", "shearz",
+                                              "delta"]
+
+
+def test_liquid_bridge_refusals(tmp_path):
+    with pytest.raises(UnsupportedModelError, match="limitLiquidContent on"):
+        script(tmp_path, BRIDGE_PROPERTIES + "pair_style gran model hertz tangential history cohesion "
+               "washino/capillary/viscous limitLiquidContent on\n")
+    with pytest.raises(ScriptError, match="lbVolumeFraction"):
+        script(tmp_path, BRIDGE_PROPERTIES.replace("lbVolumeFraction", "otherProperty") + "pair_style gran model hertz "
+               "tangential history cohesion washino/capillary/viscous modifyLbVolume on\n")
+    with pytest.raises(UnsupportedModelError, match="holds liquid"):
+        script(tmp_path, "fix wet all mesh/surface/liquidtransfer file floor.stl type 2\n")
 
 
 def test_rolling_friction_is_a_mode_and_widens_history(tmp_path):

@@ -1,5 +1,6 @@
 """LIGGGHTS sub-models composed with a normal model: rolling springs (u_r), cohesion work (u_adh), the tan_luding
-spring; and the normal models thornton_ning (its unloading branch at 40 digits) and edinburgh/stiffness.
+spring, liquid bridges (easo, washino: their work against 40-digit quadrature of LIGGGHTS' own capillary force,
+contacts apart); and the normal models thornton_ning (its unloading branch at 40 digits) and edinburgh/stiffness.
 
 The cohesion work is checked against LIGGGHTS' own contact area (``cohesion_model_sjkr.h``: the
 lens area of two spheres, pi (r^2 - d^2) on a wall) by quadrature and by its derivative, the
@@ -19,6 +20,7 @@ from demsplit.physics.laws._liggghts import (rolling_spring_energy, sjkr2_area_i
                                               sjkr_area_integral)
 from demsplit.physics.partition import contact_energies, partition, per_particle
 from demsplit.scene import ContactModel, Material, Scene, Wall
+from liggghts_bridges import BRIDGE_MODELS, liggghts_capillary
 
 
 def liggghts_sjkr_area(delta: np.ndarray, ri: np.ndarray, rj: np.ndarray) -> np.ndarray:
@@ -258,3 +260,121 @@ def test_edinburgh_stiffness_uses_the_given_stiffness():
     np.testing.assert_allclose(e.u_n, 0.5 * 4 * 3e3 * (d - 0.4 * d) ** 2, rtol=1e-12, atol=1e-30)
     s2 = sum(contacts[f"shear{c}"] ** 2 for c in "xyz")
     np.testing.assert_allclose(e.u_t, np.where(d > 0, 0.5 * 3e3 * s2, 0), rtol=1e-12)
+
+
+# ------------------------------------------------------------------ liquid bridges (easo, washino)
+
+@pytest.mark.parametrize("model", BRIDGE_MODELS)
+@pytest.mark.parametrize("rj, ci, cj", [(1.6e-3, 0.01, 0.004), (0.7e-3, 2e-5, 0.03), (None, 0.01, 0.0),
+                                         (None, 3e-6, 0.0)])
+def test_bridge_work_is_the_integral_of_liggghts_capillary_force(model, rj, ci, cj):
+    """u_adh(delta) = int_{-s_rup}^delta F of LIGGGHTS' own force, by 40-digit quadrature of its transcription,
+    touching and apart; its derivative is the force, which equals LIGGGHTS'; 0 from rupture on."""
+    from demsplit.physics.laws._liquid_bridge import LiquidBridges
+
+    ri, angles, gamma, max_ratio, cdf = 1.2e-3, (20.0, 35.0), 0.072, 1.1, 1.21
+    mpmath.mp.dps = 40
+    force, rupture = liggghts_capillary(model, ri, rj, ci, cj, *angles, gamma, max_ratio, cdf)
+    s_rup = float(rupture)
+    delta = np.array([3e-5, 1e-6, 1e-9, 0.0, -1e-9 * s_rup, -0.1 * s_rup, -0.5 * s_rup, -0.9 * s_rup, -0.999 * s_rup,
+                      -1.0001 * s_rup, -1.5 * s_rup])
+    n = len(delta)
+    theta = 0.5 * np.radians(angles[0]) * np.radians(angles[1])
+    b = LiquidBridges(model, np.full(n, ri), np.full(n, np.inf if rj is None else rj), np.full(n, ci), np.full(n, cj),
+                      theta, gamma, max_ratio, cdf)
+    assert b.rupture[0] == pytest.approx(s_rup, rel=1e-14)
+    # at delta = 0 exactly washino's apart branch is 0/0 in LIGGGHTS (NaN); demsplit gives its limit
+    exact_force = [float(force(d if d != 0 else -1e-40)) for d in delta]
+    np.testing.assert_allclose(b.force(delta), exact_force, rtol=1e-13, atol=0)
+    for d, w in zip(delta, b.work(delta)):
+        if -d >= s_rup:
+            assert w == 0.0
+            continue
+        exact = mpmath.quad(force, [-rupture, *([0] if d > 0 else []), mpmath.mpf(d)])
+        assert w == pytest.approx(float(exact), rel=1e-12, abs=0), d
+    assert np.all(b.work(delta)[:-2] < 0)  # the bridge holds the bodies together
+    h = 1e-7 * s_rup
+    for d in (2e-6, -0.3 * s_rup):  # d(u_adh)/d(delta) = F, touching and apart
+        slope = (b.work(np.full(n, d + h)) - b.work(np.full(n, d - h)))[0] / (2 * h)
+        assert slope == pytest.approx(float(force(d)), rel=1e-6)
+
+
+def bridge_scene(model: str = BRIDGE_MODELS[0], **extra) -> Scene:
+    params = {**dict(cohesion=model, surface_tension=0.072, contact_angle=(20.0, 35.0), max_separation_ratio=1.1,
+                     min_separation_ratio=1.01, fluid_viscosity=0.0, liquid_content_initial=0.01), **extra}
+    return Scene(materials={1: Material(5e6, 0.45), 2: Material(7e7, 0.3)},
+                 model=ContactModel("liggghts:hertz", params), walls=[Wall("floor", "plane", 2)])
+
+
+def bridge_contacts(delta: list[float], id2: list[int], flag: list[float], lost: list[int]) -> tuple[dict, dict]:
+    """Particles 1 (r 1 mm, type 1) and 2 (r 1.5 mm, type 2) with their liquid; contacts of 1 with 2 or the wall."""
+    particles = {"id": np.array([1, 2]), "type": np.array([1, 2]), "radius": np.array([1e-3, 1.5e-3]),
+                 "x": np.zeros(2), "y": np.zeros(2), "z": np.array([0.0, 3e-3]),
+                 "f_surfaceLiquidContent": np.array([0.01, 0.02])}
+    n = len(delta)
+    id2 = np.array(id2)
+    contacts = {"id1": np.ones(n, dtype=np.int64), "id2": id2, "wall": np.where(id2 < 0, 0, -1),
+                "delta": np.array(delta), "r1": np.full(n, 1e-3), "r2": np.where(id2 < 0, np.inf, 1.5e-3),
+                "nx": np.zeros(n), "ny": np.zeros(n), "nz": np.ones(n), "x1": np.zeros(n), "y1": np.zeros(n),
+                "z1": np.zeros(n), "liquid_bridge": np.array(flag, dtype=float), "history_unknown": np.array(lost),
+                **{f"shear{c}": np.full(n, 1e-6) for c in "xyz"}}
+    return particles, contacts
+
+
+def test_bridge_law_apart_holds_only_its_bridge():
+    """Apart (delta < 0) a contact has no elastic energy (LIGGGHTS resets the shear there) and a bridge's work while
+    its flag is 1; a primitive-wall contact apart within rupture, whose flag LIGGGHTS never writes, is not computed
+    (bit 16), while touching it holds a bridge for certain; a flag of 1 beyond rupture is refused."""
+    from demsplit.errors import ContactError
+
+    sc = bridge_scene()
+    law = sc.model.contact_law
+    assert law.history_columns() == ["liquid_bridge", "shearx", "sheary", "shearz"]
+    assert law.particle_columns == ("f_surfaceLiquidContent",) and law.mode_columns["u_adh"] == ("liquid_bridge",)
+    particles, contacts = bridge_contacts([2e-5, -3e-5, -3e-5, 2e-5, -2e-5, -5e-4], [2, 2, 2, -1, -1, -1],
+                                          [1, 1, 0, 0, 0, 0], [0, 0, 0, 1, 1, 1])
+    e = contact_energies(contacts, sc, particles)
+    assert e.u_n[0] > 0 and e.u_t[0] > 0 and np.all(e.u_n[[1, 2, 4, 5]] == 0) and np.all(e.u_t[[1, 2, 4, 5]] == 0)
+    assert e.u_adh[0] < e.u_adh[1] < 0 and e.u_adh[2] == 0 and e.u_adh[3] < 0
+    assert e.u_adh[4] == 0 and e.u_adh[5] == 0  # unknown (flagged), and beyond any bridge's reach (known 0)
+    assert e.not_computed.tolist() == [0, 0, 0, 2, 16, 0]
+    contacts["liquid_bridge"][5] = 1  # a bridge LIGGGHTS would have broken
+    contacts["history_unknown"][5] = 0
+    with pytest.raises(ContactError, match="beyond its rupture distance"):
+        contact_energies(contacts, sc, particles)
+    # LIGGGHTS writes a pair apart while its bridge may act, a wall contact within (cdf - 1) r1
+    np.testing.assert_allclose(law.separation_limit(np.array([1e-3, 1e-3]), np.array([1.5e-3, np.inf])),
+                               [0.1 * 2.5e-3, (1.21 - 1) * 1e-3], rtol=1e-12)
+    assert make("liggghts:hertz").separation_limit(1e-3, np.inf) == 0.0
+
+
+def test_a_washino_bridge_forms_across_a_gap_without_history():
+    """washino's bridge also forms on approach, wherever the gap is below rupture: apart it needs no history
+    value, so a primitive-wall contact apart is computed, not flagged."""
+    sc = bridge_scene(BRIDGE_MODELS[1])
+    assert "u_adh" not in sc.model.contact_law.mode_columns
+    particles, contacts = bridge_contacts([-3e-5, -2e-5, -5e-4], [2, -1, -1], [0, 0, 0], [0, 1, 1])
+    e = contact_energies(contacts, sc, particles)
+    assert e.u_adh[0] < 0 and e.u_adh[1] < 0 and e.u_adh[2] == 0
+    assert e.not_computed is None or not np.any(e.not_computed & 16)
+
+
+def test_bridge_law_parameters():
+    law = bridge_scene(BRIDGE_MODELS[1], bridge_volume_fraction=0.1, contact_distance_factor=1.5).model.contact_law
+    assert law.contact_distance_factor() == 1.5  # the larger of neigh_modify's and 1.1 maxSeparationDistanceRatio
+    assert law.dump_setup() == ["fix liquidtransfer all transportequation/scalar equation_id liquidtransfer quantity "
+                                "surfaceLiquidContent default_value 1.000000e-02 flux_quantity liquidFlux "
+                                "source_quantity liquidSource capacity_quantity none"]
+    assert "liquid content f_surfaceLiquidContent" in law.describe()
+    with pytest.raises(Exception, match="limitLiquidContent"):
+        bridge_scene(BRIDGE_MODELS[1], limit_liquid_content="on")
+    with pytest.raises(Exception, match="contactAngle"):
+        bridge_scene(contact_angle=(20.0, 190.0))
+    with pytest.raises(Exception, match="fluid_viscosity"):
+        make("liggghts:hertz", {"cohesion": BRIDGE_MODELS[0], "surface_tension": 0.07, "contact_angle": 30.0,
+                                "max_separation_ratio": 1.1, "min_separation_ratio": 1.01,
+                                "liquid_content_initial": 0.01})
+    particles, contacts = bridge_contacts([2e-5], [2], [1], [0])
+    particles["f_surfaceLiquidContent"][1] = -0.01
+    with pytest.raises(Exception, match="must be >= 0"):
+        contact_energies(contacts, bridge_scene(), particles)

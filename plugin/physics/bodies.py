@@ -220,13 +220,18 @@ class LawRows:
         c, rows = self.contacts, self.rows
         if "m1" in c and "m2" in c:
             return reduced_mass(c["m1"][rows], c["m2"][rows])
-        if self.particles is None or "mass" not in self.particles:
-            raise InputFormatError(f"the contact law {self.law} needs particle masses, which the atom dump "
-                                   "does not have.", fix="add 'mass' to the dump custom columns.")
+        m1, m2 = self.particle_column("mass")
+        return reduced_mass(m1, np.where(c["wall"][rows] < 0, m2, np.inf))
+
+    def particle_column(self, name: str) -> tuple[np.ndarray, np.ndarray]:
+        if self.particles is None or name not in self.particles:
+            raise InputFormatError(f"the contact law {self.law} needs the particle column {name!r}, which the atom "
+                                   "dump does not have.", fix=f"add '{name}' to the dump custom columns.")
+        c, rows = self.contacts, self.rows
         index = self.index or ParticleIndex(self.particles["id"])
-        mass = np.asarray(self.particles["mass"], dtype=np.float64)
-        m1 = mass[index.rows(c["id1"][rows])]
-        m2 = np.full_like(m1, np.inf)
+        values = np.asarray(self.particles[name], dtype=np.float64)
+        v1 = values[index.rows(c["id1"][rows])]
+        v2 = np.full_like(v1, np.nan)
         pair = c["wall"][rows] < 0
-        m2[pair] = mass[index.rows(c["id2"][rows][pair])]
-        return reduced_mass(m1, m2)
+        v2[pair] = values[index.rows(c["id2"][rows][pair])]
+        return v1, v2

@@ -56,7 +56,9 @@ class ContactLawEnergy(_ByMode):
     contact, the bits (:data:`~demsplit.physics.modes.NOT_COMPUTED_BITS`) of the modes whose value is
     unknown (``missing`` modes, and history-dependent modes of contacts whose history the simulator
     never wrote, flagged by the reader with the contact column ``history_unknown``), or None when
-    every value is known."""
+    every value is known. A law may decide itself which of its rows are unknown (``LawEnergy.unknown``), e.g. a
+    liquid bridge apart from a primitive wall, whose state LIGGGHTS never writes, while the same contact
+    touching holds one for certain."""
 
     u: np.ndarray
     skipped: dict[str, str] = field(default_factory=dict)
@@ -165,13 +167,17 @@ def contact_energies(contacts: Table, scene: Scene, particles: Table | None = No
                 skipped.setdefault(ADHESION_COLUMN, f"the contact law {law.key} has no cohesion (0)")
         missing.update(result.skipped)  # modes the law has, whose columns the data lacks
         bits = sum(NOT_COMPUTED_BITS[m] for m in result.skipped)
-        bits_without_history = sum(NOT_COMPUTED_BITS[m] for m in law.mode_columns if m not in result.skipped)
-        if bits or (unknown is not None and bits_without_history):
+        bits_without_history = sum(NOT_COMPUTED_BITS[m] for m in law.mode_columns
+                                   if m not in result.skipped and m not in result.unknown)
+        decided = {m: mask for m, mask in result.unknown.items() if mask.any()}  # rows the law itself says are unknown
+        if bits or decided or (unknown is not None and bits_without_history):
             if not_computed is None:
                 not_computed = np.zeros(n, dtype=np.int32)
             not_computed[rows] |= bits
             if unknown is not None and bits_without_history:
                 not_computed[rows] |= np.where(unknown[rows], bits_without_history, 0).astype(np.int32)
+            for m, mask in decided.items():
+                not_computed[rows] |= np.where(mask, NOT_COMPUTED_BITS[m], 0).astype(np.int32)
     return ContactLawEnergy(u, skipped, modes, u_adh, missing, not_computed)
 
 

@@ -22,7 +22,18 @@ and sub-models that use them (``contact_models.h``):
   pi (r1^2 - (r1 - delta)^2) on a wall (``cohesion_model_sjkr.h``); ``sjkr2``
   A = 4 pi R* delta (wall: 2 pi r1 delta, ``cohesion_model_sjkr2.h``). The normal
   force is the normal model's plus this one, so the elastic energy is unchanged
-  and the cohesion work u_adh = -k int_0^delta A(s) ds (J, negative) is reported apart.
+  and the cohesion work u_adh = -k int_0^delta A(s) ds (J, negative) is reported apart;
+- ``cohesion easo/capillary/viscous|washino/capillary/viscous`` add a liquid bridge's capillary
+  force, which also acts across a gap up to the bridge's rupture distance, and a viscous force
+  (dissipative: no energy). u_adh is the capillary force's work from the current state to rupture,
+  int_{-s_rup}^delta F (J, negative), from the per-atom liquid content ``f_surfaceLiquidContent``
+  of the atom dump (:mod:`._liquid_bridge`). Their contacts apart (delta < 0) hold a bridge within
+  its rupture distance, an easo bridge (formed when the bodies touched) only while the history
+  value ``liquid_bridge`` (LIGGGHTS' ``contflag``) is 1.
+
+Apart (delta <= 0) a contact has no normal, tangential or rolling energy: LIGGGHTS evaluates
+those models only on touching bodies and resets the tangential and rolling histories of bodies
+that part (``surfacesClose``).
 
 A normal-model law derives from :class:`LiggghtsNormalModel` and gives its
 normal (and tangential) energy and its kn, kt; this base adds the rolling and
@@ -36,9 +47,10 @@ from typing import Any
 
 import numpy as np
 
-from ...errors import UnsupportedModelError
+from ...errors import ContactError, InputFormatError, UnsupportedModelError
 from ..elastic import history_spring_energy, overlap
 from ..moduli import effective_radius
+from ._liquid_bridge import BRIDGE_MODELS, FORMED_ON_TOUCH, WASHINO_FRACTION, LiquidBridges
 from .base import ContactLaw, ContactRows, LawEnergy
 
 SHEAR = ("shearx", "sheary", "shearz")
@@ -52,8 +64,18 @@ TANGENTIAL_MODELS = {"history": True, "no_history": False, "tan_luding": True}
 """LIGGGHTS ``tangential`` model -> whether it keeps a spring (``shear`` history)."""
 ROLLING_MODELS = {"off": False, "cdt": False, "epsd": True, "epsd2": True, "epsd3": True, "luding": True}
 """LIGGGHTS ``rolling_friction`` model -> whether it keeps a spring (rolling-torque history)."""
-COHESION_MODELS = ("off", "sjkr", "sjkr2")
+COHESION_MODELS = ("off", "sjkr", "sjkr2", *BRIDGE_MODELS)
 """LIGGGHTS ``cohesion`` models whose work demsplit computes."""
+LIQUID_CONTENT = "f_surfaceLiquidContent"
+"""Atom-dump column of the per-atom liquid content the liquid-bridge models read: the ``fix property/atom``
+``surfaceLiquidContent`` LIGGGHTS creates for them (volume of liquid over the particle's volume)."""
+BRIDGE_FLAG = "liquid_bridge"
+"""Contact column of the liquid-bridge models' history value (``contflag``): 1 while the contact holds a bridge."""
+LIQUID_TRANSFER_FIX = ("fix liquidtransfer all transportequation/scalar equation_id liquidtransfer quantity "
+                       "surfaceLiquidContent default_value {initial:e} flux_quantity liquidFlux source_quantity "
+                       "liquidSource capacity_quantity none")
+"""The fix a liquid-bridge model creates when the first run starts (``cohesion_model_*_capillary_viscous.h``, with
+its ``%e`` of surfaceLiquidContentInitial); it creates the ``surfaceLiquidContent`` property/atom."""
 
 
 def _table(value: Any) -> Any:
@@ -133,6 +155,21 @@ class LiggghtsNormalModel(ContactLaw):
                                      "pair (tan_luding)"),
         "rolling_stiffness_ratio": (None, "coeffRollingStiffness kR2kcMax, kr/(kt R*^2), per type pair (luding)"),
         "torsion": ("off", "the torsion setting of rolling_friction luding; only off is supported"),
+        "surface_tension": (None, "surfaceTension gamma (N/m), scalar (liquid bridges)"),
+        "contact_angle": (None, "contactAngle (degrees), per atom type (liquid bridges)"),
+        "max_separation_ratio": (None, "maxSeparationDistanceRatio: a bridge breaks at a gap of (ratio - 1)(r1 + r2), "
+                                       "scalar (liquid bridges)"),
+        "min_separation_ratio": (None, "minSeparationDistanceRatio, scalar: the viscous force's smallest gap over "
+                                       "R* (liquid bridges; dissipative, no energy)"),
+        "fluid_viscosity": (None, "fluidViscosity (Pa s), scalar (liquid bridges; the viscous force is "
+                                  "dissipative, no energy)"),
+        "liquid_content_initial": (None, "surfaceLiquidContentInitial, scalar: the liquid content every particle "
+                                         "starts with (liquid bridges; the energy reads the atom dump's)"),
+        "bridge_volume_fraction": (None, "the share of the two particles' liquid in a washino bridge: lbVolumeFraction "
+                                         f"with modifyLbVolume on (default {WASHINO_FRACTION})"),
+        "limit_liquid_content": ("off", "washino's limitLiquidContent setting; only off is supported"),
+        "contact_distance_factor": (None, "neigh_modify contact_distance_factor (default 1); LIGGGHTS raises it to "
+                                          "1.1 maxSeparationDistanceRatio (liquid bridges)"),
     }
 
     def check(self) -> None:
@@ -147,11 +184,20 @@ class LiggghtsNormalModel(ContactLaw):
                 f"{self.key}: rolling_friction luding with torsion on is not supported: LIGGGHTS 3.8 writes the "
                 "torsion torque into the rolling torque's history values (rolling_model_luding.h, calcTorTorque), "
                 "so the dump holds neither spring's state.", fix="analyse a run with torsion off, or leave it out.")
+        if p["limit_liquid_content"] != "off":
+            raise UnsupportedModelError(
+                f"{self.key}: cohesion washino/capillary/viscous with limitLiquidContent on is not supported: LIGGGHTS "
+                "3.8 clips the particles' liquid content inside the force evaluation (after the atom dump wrote it) "
+                "and replaces maxSeparationDistanceRatio by a value of its own, so the dump does not hold the "
+                "bridges' state.", fix="analyse a run with limitLiquidContent off.")
+        bridge = p["cohesion"] in BRIDGE_MODELS
         needed = {"rolling_friction": p["rolling"] in ("epsd", "epsd3"),
                   "rolling_stiffness": p["rolling"] == "epsd3",
                   "rolling_stiffness_ratio": p["rolling"] == "luding",
                   "friction_stiffness": p["tangential"] == "tan_luding",
-                  "cohesion_energy_density": p["cohesion"] != "off"}
+                  "cohesion_energy_density": p["cohesion"] in ("sjkr", "sjkr2"),
+                  **{name: bridge for name in ("surface_tension", "contact_angle", "max_separation_ratio",
+                                               "min_separation_ratio", "fluid_viscosity", "liquid_content_initial")}}
         for name, need in needed.items():
             if need and p[name] is None:
                 raise UnsupportedModelError(f"{self.key} with tangential {p['tangential']}, rolling_friction "
@@ -171,6 +217,30 @@ class LiggghtsNormalModel(ContactLaw):
                                             ("u_r", ROLLING_MODELS[p["rolling"]]),
                                             ("u_adh", p["cohesion"] != "off" or self.has_pull_off())) if has)
         self.mode_columns = {m: cols for m, cols in type(self).mode_columns.items() if m in self.modes}
+        if bridge:
+            self._check_bridge()
+
+    def _check_bridge(self) -> None:
+        """The liquid-bridge parameters checked as LIGGGHTS does; the contact-angle table theta1 theta2/2 (rad, per
+        type pair, LIGGGHTS 3.8.0: ``_liquid_bridge``), the liquid-content particle column and the bridge flag."""
+        p = self.params
+        for name in ("surface_tension", "max_separation_ratio", "min_separation_ratio", "fluid_viscosity",
+                     "liquid_content_initial", "bridge_volume_fraction", "contact_distance_factor"):
+            if p[name] is not None:
+                p[name] = float(self.table(name))
+        angles = np.atleast_1d(np.asarray(p["contact_angle"], dtype=np.float64))
+        if angles.ndim != 1 or not np.all((angles >= 0) & (angles <= 180)):
+            raise UnsupportedModelError(f"{self.key}: contactAngle must be one value per atom type in 0..180 degrees, "
+                                        f"got {angles.tolist()!r}.", fix="correct the fix property/global line of "
+                                        "the script (LIGGGHTS refuses it too).")
+        p["contact_angle"] = angles.item() if np.ndim(p["contact_angle"]) == 0 else tuple(angles.tolist())
+        theta = angles * np.pi / 180.0  # as LIGGGHTS converts it (global_properties.cpp)
+        self._theta = _table(0.5 * np.outer(theta, theta)) if theta.size > 1 else 0.5 * float(theta[0]) ** 2
+        self.particle_columns = (*type(self).particle_columns, LIQUID_CONTENT)
+        if FORMED_ON_TOUCH[p["cohesion"]]:  # whether a bridge holds across a gap is in the history
+            self.mode_columns = {**self.mode_columns, "u_adh": (BRIDGE_FLAG,)}
+        else:  # read where dumped, to check it (a bridge LIGGGHTS holds beyond rupture is refused)
+            self.contact_columns = (*type(self).contact_columns, BRIDGE_FLAG)
 
     def has_pull_off(self) -> bool:
         """Whether the normal model pulls the bodies with a nonzero constant force f0 (``pull_off_force``)."""
@@ -212,17 +282,21 @@ class LiggghtsNormalModel(ContactLaw):
     def history_columns(self) -> list[str]:
         """The contact history LIGGGHTS keeps for this model, as demsplit names its columns, in LIGGGHTS'
         order (sub-model construction order, ``contact_models.h``): surface (none for ``default``), normal,
-        cohesion (none for sjkr, sjkr2), tangential, rolling (``luding``: the rolling, then the torsion torque)."""
+        cohesion (none for sjkr, sjkr2; the bridge flag for the liquid bridges), tangential, rolling (``luding``:
+        the rolling, then the torsion torque)."""
         rolling = (*ROLLING_TORQUE, *(TORSION_TORQUE if self.params["rolling"] == "luding" else ()))
-        return [*self.normal_history, *(SHEAR if "u_t" in self.modes else ()),
-                *(rolling if "u_r" in self.modes else ())]
+        return [*self.normal_history, *((BRIDGE_FLAG,) if self.params["cohesion"] in BRIDGE_MODELS else ()),
+                *(SHEAR if "u_t" in self.modes else ()), *(rolling if "u_r" in self.modes else ())]
 
     def describe(self) -> str:
         """The normal model's line, then the rolling and cohesion sub-models the contact has."""
         extra = []
         if "u_r" in self.modes:
             extra.append(f"rolling {self.params['rolling']} u_r = |M_r|^2/(2 kr)")
-        if "u_adh" in self.modes:
+        if self.params["cohesion"] in BRIDGE_MODELS:
+            extra.append(f"cohesion {self.params['cohesion']} work u_adh = int F_cap from rupture (liquid content "
+                         f"{LIQUID_CONTENT}; apart from u; its viscous force stores no energy)")
+        elif "u_adh" in self.modes:
             extra.append(f"cohesion {self.params['cohesion']} work u_adh = -k int A (apart from u)")
         return super().describe() + "".join(f"; {e}" for e in extra)
 
@@ -239,20 +313,99 @@ class LiggghtsNormalModel(ContactLaw):
             modes["u_t"] = rows.type_pair(self.params["friction_stiffness"]) * modes["u_t"]
         if "u_r" in self.modes and "u_r" not in skipped:
             modes["u_r"] = rolling_spring_energy(self.vectors(rows, ROLLING_TORQUE), self.kr(rows))
-        if self.params["cohesion"] != "off":
-            k = rows.type_pair(self.params["cohesion_energy_density"])
-            modes["u_adh"] = -k * _AREA_INTEGRAL[self.params["cohesion"]](rows.delta, rows.r1, rows.r2)
-        if self.has_pull_off():  # the constant pull-off force's work f0 delta, also cohesion work
+        touching = rows.delta > 0
+        if not touching.all():  # apart: no normal, tangential or rolling energy (module docstring)
+            for m in ("u_n", "u_t", "u_r"):
+                if m in modes:
+                    modes[m] = np.where(touching, modes[m], 0.0)
+        unknown = {}
+        lost = rows.column("history_unknown") != 0 if rows.has("history_unknown") else None
+        if lost is not None and lost.any():  # no history written: only a touching contact's history modes unknown
+            unknown = {m: lost & touching for m in self.mode_columns if m not in skipped}
+        if self.params["cohesion"] != "off" and "u_adh" not in skipped:
+            modes["u_adh"], unknown_adh = self._cohesion(rows, work=True)
+            if lost is not None and lost.any():
+                unknown["u_adh"] = lost & unknown_adh
+        if self.has_pull_off() and "u_adh" not in skipped:  # the constant pull-off force's work f0 delta
             work = rows.type_pair(self.params["pull_off_force"]) * overlap(rows.delta)
             modes["u_adh"] = modes.get("u_adh", 0.0) + work
-        return LawEnergy(modes, skipped)
+        return LawEnergy(modes, skipped, unknown)
 
     def cohesion_force(self, rows: ContactRows) -> np.ndarray:
-        """The cohesion model's normal force -k A (N, negative: attractive), d(u_adh)/d(delta); 0 without one."""
+        """The cohesion model's normal force (N, negative: attractive), d(u_adh)/d(delta): -k A (sjkr, sjkr2), a
+        liquid bridge's capillary force; 0 without one."""
         if self.params["cohesion"] == "off":
             return np.zeros_like(rows.delta)
-        k = rows.type_pair(self.params["cohesion_energy_density"])
-        return -k * _AREA[self.params["cohesion"]](rows.delta, rows.r1, rows.r2)
+        return self._cohesion(rows, work=False)[0]
+
+    def _cohesion(self, rows: ContactRows, work: bool) -> tuple[np.ndarray, np.ndarray]:
+        """The cohesion model's work u_adh (J, ``work``) or force (N) of every row, and the rows whose value the
+        data cannot give without the contact's history: an easo bridge's contacts apart within rupture."""
+        cohesion = self.params["cohesion"]
+        none = np.zeros(rows.delta.shape, dtype=bool)
+        if cohesion not in BRIDGE_MODELS:
+            k = rows.type_pair(self.params["cohesion_energy_density"])
+            area = (_AREA_INTEGRAL if work else _AREA)[cohesion](rows.delta, rows.r1, rows.r2)
+            return -k * area, none
+        bridges = self.bridges(rows)
+        apart = ~(rows.delta > 0)
+        acting = apart & bridges.present & (-rows.delta < bridges.rupture)
+        value = bridges.work(rows.delta) if work else bridges.force(rows.delta)
+        on_touch = FORMED_ON_TOUCH[cohesion]
+        flag = rows.column(BRIDGE_FLAG) if on_touch or rows.has(BRIDGE_FLAG) else np.zeros_like(value)
+        beyond = apart & (flag == 1) & (-rows.delta > bridges.rupture * (1.0 + 1e-12))
+        if beyond.any():
+            i = int(np.flatnonzero(beyond)[0])
+            raise ContactError(
+                f"{int(np.count_nonzero(beyond))} contact(s) hold a liquid bridge (history value {BRIDGE_FLAG} 1) at "
+                f"a gap beyond its rupture distance, e.g. a gap of {float(-rows.delta[i]):g} m for a rupture "
+                f"distance of {float(bridges.rupture[i]):g} m: LIGGGHTS breaks such a bridge, so the liquid contents "
+                "or the positions are not those of the contact dump's step.",
+                fix=f"dump {LIQUID_CONTENT} in the atom dump of the same run and steps as the contact dump.")
+        if not on_touch:  # a washino bridge acts wherever the gap is below rupture
+            return value, none
+        held = ~apart | (flag == 1)  # touching: LIGGGHTS always holds a bridge (surfacesIntersect sets contflag)
+        return np.where(held, value, 0.0), acting
+
+    def bridges(self, rows: ContactRows) -> LiquidBridges:
+        """The liquid bridge of every row (:class:`._liquid_bridge.LiquidBridges`) with the particles' liquid content
+        ``f_surfaceLiquidContent``."""
+        p = self.params
+        c1, c2 = rows.particle_column(LIQUID_CONTENT)
+        wall = np.isinf(rows.r2)
+        bad = ~(c1 >= 0) | (~wall & ~(c2 >= 0))
+        if bad.any():
+            value = c1[bad][0] if not (c1[bad][0] >= 0) else c2[bad][0]
+            raise InputFormatError(f"the liquid content {LIQUID_CONTENT} of a particle is {float(value)!r}; it must be "
+                                   ">= 0.", fix="check the atom dump's column (a damaged or foreign value).")
+        return LiquidBridges(p["cohesion"], rows.r1, rows.r2, c1, c2, rows.type_pair(self._theta),
+                             p["surface_tension"], p["max_separation_ratio"], self.contact_distance_factor(),
+                             WASHINO_FRACTION if p["bridge_volume_fraction"] is None else p["bridge_volume_fraction"])
+
+    def dump_setup(self) -> list[str]:
+        """LIGGGHTS commands that, placed before the first run, let a ``dump custom`` write the law's particle columns
+        (which LIGGGHTS checks when it reads the dump command): with a liquid bridge, the fix the model would
+        create at the first run (:data:`LIQUID_TRANSFER_FIX`), created earlier, to the same effect."""
+        if self.params["cohesion"] not in BRIDGE_MODELS:
+            return []
+        return [LIQUID_TRANSFER_FIX.format(initial=self.params["liquid_content_initial"])]
+
+    def contact_distance_factor(self) -> float:
+        """LIGGGHTS' contact distance factor with a liquid bridge: the larger of ``neigh_modify
+        contact_distance_factor`` (1 by default) and 1.1 maxSeparationDistanceRatio (``neighbor.h``)."""
+        given = self.params["contact_distance_factor"]
+        return max(1.0 if given is None else given, self.params["max_separation_ratio"] * 1.1)
+
+    def separation_limit(self, r1: np.ndarray | float, r2: np.ndarray | float) -> np.ndarray | float:
+        """0 but with a liquid bridge: LIGGGHTS writes a pair apart only while its bridge acts, so below
+        (maxSeparationDistanceRatio - 1)(r1 + r2), and a wall contact apart while it evaluates it, below
+        (cdf - 1) r1 (``fix_wall_gran.cpp``; :meth:`contact_distance_factor`)."""
+        if self.params["cohesion"] not in BRIDGE_MODELS:
+            return 0.0
+        r1, r2 = np.asarray(r1, dtype=np.float64), np.asarray(r2, dtype=np.float64)
+        wall = np.isinf(r2)
+        return np.where(wall, (self.contact_distance_factor() - 1.0) * r1,
+                        (self.params["max_separation_ratio"] - 1.0) * (r1 + np.where(wall, 0.0, r2)))
 
     def kr(self, rows: ContactRows) -> np.ndarray:
         """Rolling stiffness of the ``rolling_friction`` model (N m/rad), per row (module docstring)."""

@@ -49,16 +49,24 @@ class ContactRows(Protocol):
     def reduced_mass(self) -> np.ndarray:
         """m* = m1 m2/(m1 + m2) of every row (kg); a wall has infinite mass."""
 
+    def particle_column(self, name: str) -> tuple[np.ndarray, np.ndarray]:
+        """Particle column ``name`` of body 1 and of body 2 of every row (float64; body 2 of a wall row: NaN)."""
+
     def type_pair(self, table: Any) -> np.ndarray | float:
         """A per-type-pair property ``table[t1 - 1][t2 - 1]`` of every row (a scalar if it holds one value)."""
 
 
 @dataclass
 class LawEnergy:
-    """Energy of every mode a law has, per contact row (J), and the modes it could not compute, with why."""
+    """Energy of every mode a law has, per contact row (J), and the modes it could not compute, with why.
+
+    ``unknown``: per mode, the rows whose value the law could not know from the data (a boolean array);
+    for a mode named there the law has itself decided which rows without a written history
+    (``history_unknown``) are unknown, instead of all of them."""
 
     modes: dict[str, np.ndarray]
     skipped: dict[str, str] = field(default_factory=dict)
+    unknown: dict[str, np.ndarray] = field(default_factory=dict)
 
 
 class ContactLaw(ABC):
@@ -97,6 +105,9 @@ class ContactLaw(ABC):
         the normal energy comes from a force the simulator stored (a cohesive bond
         holds energy in tension, at delta < 0), not from delta: the properties "no
         energy without overlap" and "dU_n/d(delta) is the normal force" do not apply.
+
+    A law whose contacts act across a gap (a liquid bridge) says how far with
+    :meth:`separation_limit`.
     """
 
     REQUIRED: ClassVar[object] = object()
@@ -141,6 +152,12 @@ class ContactLaw(ABC):
     @abstractmethod
     def normal_force(self, rows: ContactRows) -> np.ndarray:
         """Elastic normal force of the contacts ``rows`` (N): the derivative dU_n/d(delta)."""
+
+    def separation_limit(self, r1: np.ndarray | float, r2: np.ndarray | float) -> np.ndarray | float:
+        """The largest gap -delta (m) at which the simulator writes a contact of this law between bodies of radii
+        ``r1`` and ``r2`` (r2 = inf: a wall): a contact further apart is not its output. 0 for a law whose
+        contacts end when the bodies part (delta <= 0 is then no contact)."""
+        return 0.0
 
     def describe(self) -> str:
         """One line for ``info``/``check``: the key, its parameters (but those unset or ``off``) and the summary."""
