@@ -1147,6 +1147,8 @@ def fuzz(seed: int, count: int | None, seconds: float | None, families=FAMILIES,
         work = root / "work"
         warm_up(base, work)
         full_fs = stack.enter_context(full_file_system(root, mount and "output_path" in families))
+        running: list = []  # the worker, killed first when the fuzzer is interrupted (before the unmount)
+        stack.callback(lambda: [_kill(p) for p in running])
         next_index, stop = 0, False
         while not stop and (count is None or next_index < count):
             end = next_index + batch if count is None else min(next_index + batch, count)
@@ -1154,6 +1156,7 @@ def fuzz(seed: int, count: int | None, seconds: float | None, families=FAMILIES,
             proc = ctx.Process(target=_child, args=(child, base, work, seed, list(range(next_index, end)),
                                                     families, full_fs))
             proc.start()
+            running[:] = [proc]
             child.close()
             current, started = None, time.monotonic()
             while True:
@@ -1245,6 +1248,10 @@ def main(argv: list[str] | None = None) -> int:
     unknown = set(families) - set(FAMILIES)
     if unknown:
         p.error(f"unknown families {sorted(unknown)}")
+    def stop(signum, frame):  # as Ctrl-C: the worker killed, the full file system unmounted, the work files removed
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGTERM, stop)
     os.environ.setdefault("NUMBA_NUM_THREADS", "1")
     import demsplit.threads
 
@@ -1260,8 +1267,12 @@ def main(argv: list[str] | None = None) -> int:
                 print(outcome, detail, sep="\n")
                 return 0 if kept(outcome) else 1
     seconds = None if args.count is not None else 60.0 if args.seconds is None else args.seconds
-    summary = fuzz(args.seed, args.count, seconds, families, None if args.root is None else Path(args.root),
-                   mount=not args.no_mount)
+    try:
+        summary = fuzz(args.seed, args.count, seconds, families, None if args.root is None else Path(args.root),
+                       mount=not args.no_mount)
+    except KeyboardInterrupt:
+        print("interrupted: no summary", file=sys.stderr)
+        return 130
     print_summary(summary)
     if args.json:
         Path(args.json).write_text(json.dumps(summary, indent=1, default=str))
