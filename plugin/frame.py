@@ -6,12 +6,16 @@ ids, int32 for types); DataFrames are only built at the user-facing edges.
 
 ``particles`` columns
     ``id`` (int64), ``type`` (int32), ``x y z`` (m), ``radius`` (m);
-    optional ``mass`` (kg), ``vx vy vz`` (m/s), ``fx fy fz`` (N).
+    optional ``mass`` (kg), ``vx vy vz`` (m/s), ``fx fy fz`` (N), and any other
+    column a contact law declares in ``particle_columns`` under its dump name
+    (``f_surfaceLiquidContent``, LIGGGHTS' per-atom liquid content, for its
+    liquid bridges).
 
 ``contacts`` columns (one row per physical contact, never twice)
     ``id1 id2`` (int64; for a wall contact ``id1`` is the particle and ``id2``
     is -1), ``wall`` (int64, -1 for particle-particle, else an index into
-    ``Scene.walls``), ``delta`` (m, overlap), ``nx ny nz`` (unit normal from
+    ``Scene.walls``), ``delta`` (m, overlap; negative: a gap, across which
+    some laws act: a liquid bridge, a bond in tension), ``nx ny nz`` (unit normal from
     body 1 to body 2), ``x1 y1 z1`` (m, centre of body 1 in the frame of the
     normal, i.e. consistent with ``delta`` and ``n``), ``r1 r2`` (m, radii the
     contact law uses; ``inf`` for a plane).

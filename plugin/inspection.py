@@ -175,11 +175,18 @@ def _finish(out: list[str], problems: list[str]) -> tuple[str, bool]:
 
 
 def _check_overlaps(run, frame: Frame) -> list[str]:
-    """0 < delta <= min(r1, r2) for every contact (first offending row of each kind)."""
+    """-limit < delta <= min(r1, r2) for every contact (first offending row of each kind), with limit the largest
+    gap at which the contact's law acts (0: delta > 0, ``ContactLaw.separation_limit``)."""
+    from .physics.partition import law_groups
+
     c = frame.contacts
     delta = c["delta"]
+    limit = np.zeros(len(delta))
+    for model, rows in law_groups(c, run.scene):
+        limit[rows] = model.contact_law.separation_limit(c["r1"][rows], c["r2"][rows])
     problems = []
-    for bad, what in ((~(delta > 0), "overlap delta <= 0 (not in contact)"),
+    for bad, what in ((~(delta > -limit), "overlap delta <= 0 (not in contact)" if not limit.any() else
+                       "a gap -delta at or beyond the largest its law acts across (0 but for a liquid bridge)"),
                       (delta > np.minimum(c["r1"], c["r2"]), "overlap larger than the smaller radius")):
         if bad.any():
             row = int(np.flatnonzero(bad)[0])

@@ -124,9 +124,9 @@ def scene_script(*, materials: dict[int, Material], contacts: Path, walls: Path 
 
 PRIMITIVE_HISTORY_UNKNOWN = (
     "the energies that depend on a contact's history (tangential and rolling springs, elasto-plastic normal "
-    "state) of primitive-wall contacts are NOT COMPUTED: LIGGGHTS never writes the history of primitive-wall "
-    "contacts (their rows carry not_computed bits). An equivalent mesh wall (fix mesh/surface of the same "
-    "plane or cylinder, with compute wall/gran/local) would give them.")
+    "state, an easo liquid bridge across a gap) of primitive-wall contacts are NOT COMPUTED: LIGGGHTS never writes "
+    "the history of primitive-wall contacts (their rows carry not_computed bits). An equivalent mesh wall (fix "
+    "mesh/surface of the same plane or cylinder, with compute wall/gran/local) would give them.")
 """The note of a run whose law reads a history and which has primitive walls."""
 
 MESH_WALL_NOT_DUMPED = (
@@ -372,7 +372,7 @@ class LiggghtsRun(Run):
     def _atom_columns(self) -> list[str]:
         cols = list(ATOM_COLUMNS)
         models = [self.scene.model] + [w.model for w in self.scene.walls if w.model is not None]
-        for model in models:  # what the laws need of the particles (mass for hooke)
+        for model in models:  # what the laws need of the particles (mass for hooke, the liquid content of bridges)
             cols += [c for c in model.contact_law.particle_columns if c not in cols]
         missing = [c for c in cols if c not in (self.atoms.columns or [])]
         if missing:
@@ -429,8 +429,7 @@ class LiggghtsRun(Run):
         particles: Table = {"id": af.int_column("id"), "type": af.int_column("type").astype(np.int32),
                             "x": af.columns["x"], "y": af.columns["y"], "z": af.columns["z"],
                             "radius": af.columns["radius"]}
-        if "mass" in af.columns:
-            particles["mass"] = af.columns["mass"]
+        particles.update({c: af.columns[c] for c in self._atom_columns()[len(ATOM_COLUMNS):]})
         if np.any(~(particles["radius"] > 0)):
             row = int(np.flatnonzero(~(particles["radius"] > 0))[0])
             raise InputFormatError(f"particle radius must be > 0, found {float(particles['radius'][row])!r}.",
@@ -460,8 +459,11 @@ class LiggghtsRun(Run):
         parts = [self._pairs(pf, index, xyzr, h, box)]
         if wf is not None:
             parts.append(self._mesh_walls(wf, particles, index, xyz, h))
-        # printed positions can hide a contact: keep those within their uncertainty (bound inf)
-        primitive = primitive_wall_contacts(particles, self.scene.walls, margin=np.sqrt(3.0) * h) \
+        # printed positions can hide a contact: keep those within their uncertainty (bound inf); and those apart
+        # that the wall's law still acts across (a liquid bridge), as LIGGGHTS evaluates them
+        reach = [(w.model or self.scene.model).contact_law.separation_limit(particles["radius"], np.inf)
+                 for w in self.scene.walls]
+        primitive = primitive_wall_contacts(particles, self.scene.walls, margin=np.sqrt(3.0) * h, reach=reach) \
             if has_primitive else {}
         notes = []
         # the law reads a contact history, which LIGGGHTS never writes for primitive walls: every frame's
@@ -472,7 +474,10 @@ class LiggghtsRun(Run):
                 part["history_unknown"] = np.zeros(len(part["delta"]), dtype=np.int8)
         if primitive:
             rows = index.rows(primitive["id1"])
-            primitive["bound"] = position_error(h[rows], primitive["delta"])
+            # a contact apart beyond the positions' uncertainty (a liquid bridge's): the bound of its gap
+            gap = -primitive["delta"]
+            primitive["bound"] = np.where(gap >= np.sqrt(3.0) * h[rows], position_error(h[rows], gap),
+                                          position_error(h[rows], primitive["delta"]))
             # LIGGGHTS' own point for a wall contact is on the wall: the particle takes the whole overlap
             primitive["cpx"], primitive["cpy"], primitive["cpz"] = contact_point(
                 np.stack([primitive[c] for c in ("x1", "y1", "z1")], -1),

@@ -15,6 +15,8 @@ LIGGGHTS uses R* = r (the wall's curvature is ignored), so ``r2 = inf``.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from ..frame import Table
@@ -43,7 +45,8 @@ def wall_distance(x: np.ndarray, wall: Wall) -> tuple[np.ndarray, np.ndarray]:
     raise ValueError(f"wall {wall.name!r} of kind {wall.kind!r} is not a primitive wall")
 
 
-def primitive_wall_contacts(particles: Table, walls: list[Wall], margin: np.ndarray | float = 0.0) -> Table:
+def primitive_wall_contacts(particles: Table, walls: list[Wall], margin: np.ndarray | float = 0.0,
+                            reach: Sequence[np.ndarray | float] | None = None) -> Table:
     """Contacts (canonical columns, see :mod:`demsplit.frame`) of the particles
     with every primitive wall (``plane``/``cylinder``) in ``walls``; a contact
     exists where delta = r - d > 0, as LIGGGHTS decides it.
@@ -51,6 +54,9 @@ def primitive_wall_contacts(particles: Table, walls: list[Wall], margin: np.ndar
     ``margin`` (m, scalar or one value per particle): also return the pairs with
     -margin < delta <= 0, whose contact the uncertainty of printed positions can
     hide (their delta stays <= 0, so they carry no energy; the caller flags them).
+    ``reach`` (one entry per wall of ``walls``, m, scalar or one value per particle):
+    also return the pairs with -reach < delta <= 0, that the wall's law still acts
+    across (a liquid bridge, :meth:`~demsplit.physics.laws.ContactLaw.separation_limit`).
     """
     x = np.stack([particles["x"], particles["y"], particles["z"]], axis=-1).astype(np.float64)
     r = np.asarray(particles["radius"], dtype=np.float64)
@@ -61,7 +67,8 @@ def primitive_wall_contacts(particles: Table, walls: list[Wall], margin: np.ndar
             continue
         d, n = wall_distance(x, wall)
         delta = r - d
-        hit = np.flatnonzero((delta > 0) | (delta > -margin))
+        apart = np.maximum(margin, 0.0 if reach is None else reach[k])
+        hit = np.flatnonzero((delta > 0) | (delta > -apart))
         parts.append({
             "id1": np.asarray(particles["id"], dtype=np.int64)[hit], "id2": np.full(len(hit), -1, np.int64),
             "wall": np.full(len(hit), k, np.int64), "delta": delta[hit],
