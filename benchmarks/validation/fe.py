@@ -157,6 +157,13 @@ def _inv_det(F):
     return inv, det2 * t
 
 
+def _log_J(G):
+    """ln J = ln det(I + G) without the round-off of det - 1 (log1p of J - 1 expanded in G's entries): a stiff
+    body's strains are ~1e-7 and its energy would otherwise be round-off."""
+    a, b, c, d, t = G[0, 0], G[0, 1], G[1, 0], G[1, 1], G[2, 2]
+    return np.log1p((a + d + a * d - b * c) * (1.0 + t) + t)
+
+
 def _stress(G, model, lam, mu):
     """First Piola(-Kirchhoff) stress (Pa) for displacement gradient G (the Cauchy stress for 'small')."""
     if model == "small":
@@ -164,7 +171,8 @@ def _stress(G, model, lam, mu):
     F = G + np.eye(3)[:, :, None, None]
     Fi, J = _inv_det(F)
     FiT = Fi.transpose(1, 0, 2, 3)
-    return mu * (F - FiT) + lam * np.log(J) * FiT
+    # F - F^-T = G + G^T F^-T (F^-T - I = -G^T F^-T): no difference of two numbers near 1
+    return mu * (G + np.einsum("ji...,jk...->ik...", G, FiT)) + lam * _log_J(G) * FiT
 
 
 def _dstress(G, dG, model, lam, mu):
@@ -176,7 +184,7 @@ def _dstress(G, dG, model, lam, mu):
     FiT = Fi.transpose(1, 0, 2, 3)
     trFidG = np.einsum("ij...,ji...", Fi, dG)
     FiT_dGT_FiT = np.einsum("ij...,kj...,kl...->il...", FiT, dG, FiT)
-    return mu * dG + (mu - lam * np.log(J)) * FiT_dGT_FiT + lam * trFidG * FiT
+    return mu * dG + (mu - lam * _log_J(G)) * FiT_dGT_FiT + lam * trFidG * FiT
 
 
 def _density(G, model, lam, mu):
@@ -185,10 +193,10 @@ def _density(G, model, lam, mu):
         eps = 0.5 * (G + G.transpose(1, 0, 2, 3))
         tr = np.einsum("ii...", eps)
         return 0.5 * lam * tr**2 + mu * np.einsum("ij...,ij...", eps, eps)
-    F = G + np.eye(3)[:, :, None, None]
-    _, J = _inv_det(F)
-    lnJ = np.log(J)
-    return 0.5 * mu * (np.einsum("ij...,ij...", F, F) - 3.0) - mu * lnJ + 0.5 * lam * lnJ**2
+    # tr C - 3 = 2 tr G + G:G, written so that a stiff body's tiny strains keep their digits
+    lnJ = _log_J(G)
+    trC3 = 2.0 * np.einsum("ii...", G) + np.einsum("ij...,ij...", G, G)
+    return 0.5 * mu * (trC3 - 2.0 * lnJ) + 0.5 * lam * lnJ**2
 
 
 # ------------------------------------------------------------------------------------------------ bodies
