@@ -19,9 +19,9 @@ coefficient is 0 and the dumped forces are the elastic ones). For every dumped c
   spring increment than they store at an output step (``rolling_model_epsd.h``: the history is
   written only when ``computeflag``), so their dumped torque is not compared;
 - the dumped history is laid out as demsplit's law says (the dump is read by its names);
-- totals per mode are conserved by the split, to 1e-12, and for the models added from the
-  LIGGGHTS source (``thornton_ning``, ``edinburgh/stiffness``, ``tan_luding``, rolling
-  ``luding``) equal an independent recomputation from LIGGGHTS' dumped forces and torques.
+- totals per mode are conserved by the split, to 1e-12, and for every model equal an independent
+  recomputation from LIGGGHTS' dumped forces, torques and history (``liggghts_reference.py``)
+  to 1e-12.
 """
 
 from __future__ import annotations
@@ -33,6 +33,7 @@ import demsplit
 import numpy as np
 import pytest
 from conftest import SAMPLES
+from liggghts_reference import has_reference, reference_energies, submodels
 from demsplit.frame import ParticleIndex
 from demsplit.physics.bodies import ContactBodies, LawRows
 from demsplit.readers import open_run
@@ -45,14 +46,34 @@ _spec.loader.exec_module(make_run)
 pytestmark = pytest.mark.simulator
 
 
+_RUNS: dict[str, Path] = {}
+
+
+def liggghts_run(name: str, tmp_path_factory) -> tuple[str, Path]:
+    """Model ``name`` run by LIGGGHTS once per session (the fixtures below share it): (name, in.run)."""
+    if name not in _RUNS:
+        from conftest import require_program
+
+        liggghts = require_program("liggghts")
+        script = make_run.write_run(name, tmp_path_factory.mktemp(name.replace("/", "_")))
+        make_run.run(script, liggghts)
+        _RUNS[name] = script
+    return name, _RUNS[name]
+
+
+ROLLING_SPRINGS = sorted(name for name, (words, _, _) in make_run.MODELS.items()
+                         if submodels(words).get("rolling_friction", "cdt") != "cdt")
+"""The models with a rolling spring (``rolling_friction`` but ``cdt``, which has none)."""
+
+
 @pytest.fixture(scope="module", params=sorted(make_run.MODELS))
 def model_run(request, tmp_path_factory) -> tuple[str, Path]:
-    from conftest import require_program
+    return liggghts_run(request.param, tmp_path_factory)
 
-    liggghts = require_program("liggghts")
-    script = make_run.write_run(request.param, tmp_path_factory.mktemp(request.param.replace("/", "_")))
-    make_run.run(script, liggghts)
-    return request.param, script
+
+@pytest.fixture(scope="module", params=ROLLING_SPRINGS)
+def rolling_run(request, tmp_path_factory) -> tuple[str, Path]:
+    return liggghts_run(request.param, tmp_path_factory)
 
 
 def dumped(run, k: int, names: list[str]) -> dict[tuple[int, int], np.ndarray]:
@@ -177,7 +198,7 @@ def test_tangential_force_is_minus_the_energy_gradient(model_run):
         np.testing.assert_allclose(mine, ft, rtol=1e-9, atol=1e-12 * np.abs(ft).max(), err_msg=name)
 
 
-def test_rolling_torque_is_liggghts_own(model_run):
+def test_rolling_torque_is_liggghts_own(rolling_run):
     """The rolling torque LIGGGHTS applies, the dumped torque minus the moment -(r1 - delta/2) e_n x F_t of the
     tangential force (e_n from body 2 to body 1, surface_model_default.h), is that of demsplit's rolling energy,
     sqrt(2 kr u_r) along the stored torque M_r. ``luding`` applies the torque it stores; ``epsd*`` apply M_r plus
@@ -185,11 +206,10 @@ def test_rolling_torque_is_liggghts_own(model_run):
     only when ``computeflag``), w = w1 - w2 (a wall: w1 (r1 - delta/2)/(r1 - delta)) without its normal part,
     capped at mu_r |F_n| R*: this checks demsplit's kr. At the cap the same formula holds on both sides of
     LIGGGHTS' rounding decision (the capped torque differs from the uncapped one by rounding only)."""
-    name, script = model_run
+    name, script = rolling_run
     run = open_run(script)
     law = run.scene.model.contact_law
-    if "u_r" not in law.modes:
-        pytest.skip("no rolling spring")
+    assert "u_r" in law.modes
     for k in range(len(run)):
         c, rows, known, theirs = aligned(run, k, ["tqx", "tqy", "tqz", "ftx", "fty", "ftz", "fnx", "fny", "fnz"])
         n = np.stack([c[f"n{x}"] for x in "xyz"], -1)[known]
@@ -217,11 +237,11 @@ def test_rolling_torque_is_liggghts_own(model_run):
 def raw_contacts(run, k: int) -> dict[str, np.ndarray]:
     """Every contact LIGGGHTS dumped in frame k (pair rows, then mesh-wall rows), from the dump files alone:
     the normal force F (N, > 0 repulsive), delta, the tangential force ft and torque tq on body 1, the
-    history columns by name, the radii and types of both bodies (a wall: r2 = inf, its type), the normal n
-    from body 1 to body 2."""
+    history columns by name, the radii, masses and types of both bodies (a wall: r2 = m2 = inf, its type), the
+    normal n from body 1 to body 2."""
     atoms = open_dump(run.atoms.path).frame(k)
     row = {int(i): j for j, i in enumerate(atoms.int_column("id"))}
-    radius, types = atoms.columns["radius"], atoms.int_column("type")
+    radius, mass, types = atoms.columns["radius"], atoms.columns["mass"], atoms.int_column("type")
     wall_type = run.scene.walls[run.script.dumped_mesh_walls[0]].type
     parts = []
     for dump, cols in ((run.pairs, run._pair_names), (run.walls, run._wall_names)):
@@ -231,77 +251,45 @@ def raw_contacts(run, k: int) -> dict[str, np.ndarray]:
         i1 = np.array([row[int(i)] for i in f.int_column(cols["id1"])], dtype=np.int64)
         if "id2" in cols:
             i2 = np.array([row[int(i)] for i in f.int_column(cols["id2"])], dtype=np.int64)
-            towards, r2, t2 = np.stack([part[f"{x}2"] for x in "xyz"], -1), radius[i2], types[i2]
+            towards, r2, m2, t2 = np.stack([part[f"{x}2"] for x in "xyz"], -1), radius[i2], mass[i2], types[i2]
         else:
             towards = np.stack([part[f"wall_cp{x}"] for x in "xyz"], -1)
             r2, t2 = np.full(len(i1), np.inf), np.full(len(i1), wall_type)
+            m2 = np.full(len(i1), np.inf)
         n = towards - np.stack([part[f"{x}1"] for x in "xyz"], -1)
         n /= np.linalg.norm(n, axis=1)[:, None]
         part.update(F=-np.einsum("ij,ij->i", vec["fn"], n), ft=vec["ft"], tq=vec["tq"], n=n, r1=radius[i1], r2=r2,
-                    t1=types[i1], t2=t2)
+                    m1=mass[i1], m2=m2, t1=types[i1], t2=t2)
         parts.append(part)
     return {key: np.concatenate([p[key] for p in parts]) for key in parts[0] if key in parts[1]}
 
 
-def luding_k2(run, x: dict, k1: np.ndarray, R: np.ndarray) -> np.ndarray:
-    """Luding's unloading stiffness from the stored delta_max (normal_model_luding.h): k2Max = k1
-    UnloadingStiffness beyond delta_lim = k2Max/(k2Max - k1) coefficientPlasticityDepth 2 R*, else
-    k1 + (k2Max - k1) delta_max/delta_lim."""
-    pair = (x["t1"] - 1, x["t2"] - 1)
-    k2max = k1 * run.script.coefficients["UnloadingStiffness"][pair]
-    lim = k2max / (k2max - k1) * run.script.coefficients["coefficientPlasticityDepth"][pair] * 2 * R
-    return np.where(x["delta_max"] >= lim, k2max, k1 + (k2max - k1) * x["delta_max"] / lim)
+REFERENCED = sorted(name for name, (words, _, _) in make_run.MODELS.items() if has_reference(words))
+"""The models with an independent reference in liggghts_reference.py (every model:
+:func:`test_every_model_has_an_independent_reference`)."""
 
 
-def reference_energies(name: str, run, x: dict) -> dict[str, np.ndarray]:
-    """Energies of every dumped contact computed here from LIGGGHTS' dumped forces and the source's stiffnesses,
-    without demsplit's laws: u_t = |F_t|^2/(2 kt), u_r = |M_r|^2/(2 kr) with M_r the applied rolling torque, and
-    u_n the integral of the normal force along its unloading branch down to zero force (in long double)."""
-    props = run.script.coefficients
-    pair = (x["t1"] - 1, x["t2"] - 1)
-    E, nu = props["youngsModulus"], props["poissonsRatio"]
-    a, b = pair
-    Y = 1 / ((1 - nu[a] ** 2) / E[a] + (1 - nu[b] ** 2) / E[b])
-    G = 1 / (2 * (2 - nu[a]) * (1 + nu[a]) / E[a] + 2 * (2 - nu[b]) * (1 + nu[b]) / E[b])
-    R = 1 / (1 / x["r1"] + 1 / x["r2"])
-    F, d = x["F"], x["delta"]
-    ft2 = np.einsum("ij,ij->i", x["ft"], x["ft"])
-    if name.startswith("thornton_ning"):  # F(s) = F + k (s^1.5 - delta^1.5) from s0, where it is 0 (or 0), to delta
-        k = (4 / 3 * Y * np.sqrt(R)).astype(np.longdouble)
-        F, d = F.astype(np.longdouble), d.astype(np.longdouble)
-        C = F - k * d**1.5
-        s0 = np.minimum(np.maximum(-C / k, 0) ** (np.longdouble(2) / 3), d)
-        u_n = C * (d - s0) + k * (d**2.5 - s0**2.5) / np.longdouble(2.5)
-        return {"u_n": u_n.astype(np.float64), "u_t": ft2 / (2 * 8 * G * np.sqrt(R * x["delta"]))}
-    k1 = props["LoadingStiffness"][pair]
-    if name == "edinburgh_stiffness":  # overlapExponent 1: F = k2 (delta - dp) on unloading, k1 delta = k2 (delta
-        assert props["overlapExponent"] == 1  # - lambda delta) on loading: F^2/(2 k2) either way
-        return {"u_n": F**2 / (2 * k1 * props["UnloadingStiffness"][pair]), "u_t": ft2 / (2 * k1)}
-    u_n = F**2 / (2 * luding_k2(run, x, k1, R))
-    if name == "tan_luding":
-        return {"u_n": u_n, "u_t": ft2 / (2 * props["coeffFrictionStiffness"][pair] * k1)}
-    assert name == "rolling_luding"
-    m = -(x["tq"] + (x["r1"] - d / 2)[:, None] * np.cross(-x["n"], x["ft"]))
-    kr = props["coeffRollingStiffness"][pair] * k1 * R**2
-    return {"u_n": u_n, "u_t": ft2 / (2 * k1), "u_r": np.einsum("ij,ij->i", m, m) / (2 * kr)}
+@pytest.fixture(scope="module", params=REFERENCED)
+def referenced_run(request, tmp_path_factory) -> tuple[str, Path]:
+    return liggghts_run(request.param, tmp_path_factory)
 
 
-REFERENCE_MODELS = ("thornton_ning", "thornton_ning_mixed", "edinburgh_stiffness", "tan_luding", "rolling_luding")
-
-
-def test_totals_equal_an_independent_recomputation(model_run):
+def test_totals_equal_an_independent_recomputation(referenced_run):
     """Per frame and mode, demsplit's total over the dumped contacts equals the sum of :func:`reference_energies`
-    (the models added from the LIGGGHTS source; the others are checked by the force tests above)."""
-    name, script = model_run
-    if name not in REFERENCE_MODELS:
-        pytest.skip("no independent reference written for this model")
+    to 1e-12."""
+    name, script = referenced_run
     run = open_run(script)
     res = demsplit.analyze(script)
     dumped_walls = [-1, *run.script.dumped_mesh_walls]
     for k, step in enumerate(sorted(res.contacts["step"].unique())):
         ours = res.contacts[(res.contacts["step"] == step) & res.contacts["wall"].isin(dumped_walls)]
-        reference = reference_energies(name, run, raw_contacts(run, k))
+        reference = reference_energies(make_run.MODELS[name][0], run, raw_contacts(run, k))
         assert len(ours) == len(reference["u_n"]) > 300
         assert set(reference) == {m for m in ("u_n", "u_t", "u_r", "u_adh") if m in ours}
         for mode, u in reference.items():
             assert ours[mode].sum() == pytest.approx(u.sum(), rel=1e-12, abs=0), (name, step, mode)
+
+
+def test_every_model_has_an_independent_reference():
+    """Every model of make_run.MODELS is in the totals test: none lacks a reference."""
+    assert set(REFERENCED) == set(make_run.MODELS)
