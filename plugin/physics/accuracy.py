@@ -65,6 +65,24 @@ def body_terms(x: ArrayLike, f: ArrayLike, y: ArrayLike, nu: ArrayLike, form=FOR
     return np.stack([mono[m] * nu**j for m, n in form for j in range(n)])
 
 
+def body_correction(x: np.ndarray, f: np.ndarray, y: np.ndarray, nu: np.ndarray, coef: np.ndarray,
+                    form=FORM) -> np.ndarray:
+    """k_i of one body (-): the sum over the blocks (m, n) of FORM of m_i times the block's polynomial in nu_i
+    (Horner), the same number as ``coef . body_terms(...)`` without the (nterms, contacts) array of terms."""
+    monomial = {"x": lambda: x, "x2": lambda: x * x, "x3": lambda: x * x * x, "fy": lambda: f * y,
+                "fyx": lambda: f * y * x}
+    k = np.zeros(np.shape(x))
+    at = 0
+    for m, n in form:
+        c = coef[at:at + n]
+        at += n
+        poly = c[n - 1]
+        for j in range(n - 2, -1, -1):
+            poly = poly * nu + c[j]
+        k += monomial[m]() * poly
+    return k
+
+
 def _parts(a_over_R1, a_over_R2, nu1, nu2, E1, E2):
     x1, x2, nu1, nu2, E1, E2 = np.broadcast_arrays(
         *(np.asarray(v, dtype=np.float64) for v in (a_over_R1, a_over_R2, nu1, nu2, E1, E2)))
@@ -75,19 +93,31 @@ def _parts(a_over_R1, a_over_R2, nu1, nu2, E1, E2):
     return x1, x2, nu1, nu2, c1, c2, f1
 
 
+def _correction(x1, x2, nu1, f1, nu2, reference: str) -> np.ndarray:
+    """k1 - k2 from arrays already broadcast (see :func:`log_ratio_correction`)."""
+    coef = np.asarray(COEFFICIENTS[reference])
+    x1, x2 = np.clip(x1, 0.0, FIT_A_OVER_R), np.clip(x2, 0.0, FIT_A_OVER_R)
+    nu1, nu2 = np.clip(nu1, 0.0, FIT_NU), np.clip(nu2, 0.0, FIT_NU)
+    y = x1 + x2  # a/R* = a/R1 + a/R2
+    return body_correction(x1, f1, y, nu1, coef) - body_correction(x2, 1.0 - f1, y, nu2, coef)
+
+
 def log_ratio_correction(a_over_R1: ArrayLike, a_over_R2: ArrayLike, nu1: ArrayLike, nu2: ArrayLike,
                          E1: ArrayLike, E2: ArrayLike, reference: str = REFERENCE) -> np.ndarray:
     """k1 - k2 = ln((S1/S2)_FE / (c1/c2)): the model's log-correction of the law's energy ratio (-).
 
     a/R and nu beyond the fitted range are clipped to it (FIT_A_OVER_R, [0, FIT_NU])."""
-    coef = np.asarray(COEFFICIENTS[reference])
     x1, x2, nu1, nu2, c1, c2, f1 = _parts(a_over_R1, a_over_R2, nu1, nu2, E1, E2)
-    x1, x2 = np.clip(x1, 0.0, FIT_A_OVER_R), np.clip(x2, 0.0, FIT_A_OVER_R)
-    nu1, nu2 = np.clip(nu1, 0.0, FIT_NU), np.clip(nu2, 0.0, FIT_NU)
-    y = x1 + x2  # a/R* = a/R1 + a/R2
-    k1 = np.tensordot(coef, body_terms(x1, f1, y, nu1), axes=1)
-    k2 = np.tensordot(coef, body_terms(x2, 1.0 - f1, y, nu2), axes=1)
-    return k1 - k2
+    return _correction(x1, x2, nu1, f1, nu2, reference)
+
+
+def _shares(a_over_R1, a_over_R2, nu1, nu2, E1, E2, reference: str) -> tuple[np.ndarray, np.ndarray]:
+    """(corrected share, law share) of body 1, from one broadcast of the arguments."""
+    x1, x2, nu1, nu2, c1, c2, f1 = _parts(a_over_R1, a_over_R2, nu1, nu2, E1, E2)
+    d = _correction(x1, x2, nu1, f1, nu2, reference)
+    # c1 e^k1 / (c1 e^k1 + c2 e^k2) = c1 / (c1 + c2 e^-(k1 - k2))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return c1 / (c1 + c2 * np.exp(-d)), f1
 
 
 def corrected_share(a_over_R1: ArrayLike, a_over_R2: ArrayLike, nu1: ArrayLike, nu2: ArrayLike,
@@ -98,11 +128,7 @@ def corrected_share(a_over_R1: ArrayLike, a_over_R2: ArrayLike, nu1: ArrayLike, 
     nu1, nu2 : Poisson's ratios; E1, E2 : Young's moduli (Pa; inf is rigid). reference : 'neohooke'
     (finite strain, the default) or 'small' (linear elastic bodies). Two rigid bodies give NaN.
     """
-    x1, x2, nu1, nu2, c1, c2, f1 = _parts(a_over_R1, a_over_R2, nu1, nu2, E1, E2)
-    d = log_ratio_correction(x1, x2, nu1, nu2, E1, E2, reference)
-    # c1 e^k1 / (c1 e^k1 + c2 e^k2) = c1 / (c1 + c2 e^-(k1 - k2))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return c1 / (c1 + c2 * np.exp(-d))
+    return _shares(a_over_R1, a_over_R2, nu1, nu2, E1, E2, reference)[0]
 
 
 def expected_share_error(a_over_R1: ArrayLike, a_over_R2: ArrayLike, nu1: ArrayLike, nu2: ArrayLike,
@@ -112,8 +138,8 @@ def expected_share_error(a_over_R1: ArrayLike, a_over_R2: ArrayLike, nu1: ArrayL
     Same arguments as ``corrected_share``. E.g. -0.005 means the finite-element body 1 holds 0.5 % of the
     contact's energy less than the law gives it (and body 2 that much more).
     """
-    x1, x2, nu1, nu2, c1, c2, f1 = _parts(a_over_R1, a_over_R2, nu1, nu2, E1, E2)
-    return corrected_share(x1, x2, nu1, nu2, E1, E2, reference) - f1
+    corrected, law = _shares(a_over_R1, a_over_R2, nu1, nu2, E1, E2, reference)
+    return corrected - law
 
 
 def beyond_fit(a_over_R1: ArrayLike, a_over_R2: ArrayLike, nu1: ArrayLike, nu2: ArrayLike) -> np.ndarray:
