@@ -20,8 +20,14 @@ coefficient is 0 and the dumped forces are the elastic ones). For every dumped c
   written only when ``computeflag``), so their dumped torque is not compared;
 - the dumped history is laid out as demsplit's law says (the dump is read by its names);
 - totals per mode are conserved by the split, to 1e-12, and for every model equal an independent
-  recomputation from LIGGGHTS' dumped forces, torques and history (``liggghts_reference.py``)
-  to 1e-12.
+  recomputation from LIGGGHTS' dumped forces, torques and history (``liggghts_reference.py``; the
+  liquid bridges' here) to 1e-12;
+- liquid bridges (``cohesion easo/capillary/viscous``, ``washino/capillary/viscous``; their runs
+  also dump the liquid content ``f_surfaceLiquidContent``, and set fluidViscosity 0, so that the
+  dumped forces hold no viscous part): the pair dump lists bridges apart (negative overlap) and the
+  wall dump contacts apart with and without a bridge; for every one, touching or apart, the dumped
+  normal force is Hertz's plus the capillary force of LIGGGHTS' C++ transcribed independently
+  (``liggghts_bridges.py``), and demsplit's u_adh is that force integrated from rupture by quadrature.
 """
 
 from __future__ import annotations
@@ -30,10 +36,13 @@ import importlib.util
 from pathlib import Path
 
 import demsplit
+import mpmath
 import numpy as np
 import pytest
 from conftest import SAMPLES
-from liggghts_reference import has_reference, reference_energies, submodels
+from liggghts_bridges import BRIDGE_MODELS, liggghts_capillary
+import liggghts_reference
+from liggghts_reference import has_reference, submodels
 from demsplit.frame import ParticleIndex
 from demsplit.physics.bodies import ContactBodies, LawRows
 from demsplit.readers import open_run
@@ -237,11 +246,12 @@ def test_rolling_torque_is_liggghts_own(rolling_run):
 def raw_contacts(run, k: int) -> dict[str, np.ndarray]:
     """Every contact LIGGGHTS dumped in frame k (pair rows, then mesh-wall rows), from the dump files alone:
     the normal force F (N, > 0 repulsive), delta, the tangential force ft and torque tq on body 1, the
-    history columns by name, the radii, masses and types of both bodies (a wall: r2 = m2 = inf, its type), the
-    normal n from body 1 to body 2."""
+    history columns by name, the radii, masses, types and liquid contents (NaN without; a wall: dry) of both bodies
+    (a wall: r2 = m2 = inf, its type), the normal n from body 1 to body 2."""
     atoms = open_dump(run.atoms.path).frame(k)
     row = {int(i): j for j, i in enumerate(atoms.int_column("id"))}
     radius, mass, types = atoms.columns["radius"], atoms.columns["mass"], atoms.int_column("type")
+    liquid = atoms.columns.get(LIQUID, np.full(len(radius), np.nan))
     wall_type = run.scene.walls[run.script.dumped_mesh_walls[0]].type
     parts = []
     for dump, cols in ((run.pairs, run._pair_names), (run.walls, run._wall_names)):
@@ -252,20 +262,72 @@ def raw_contacts(run, k: int) -> dict[str, np.ndarray]:
         if "id2" in cols:
             i2 = np.array([row[int(i)] for i in f.int_column(cols["id2"])], dtype=np.int64)
             towards, r2, m2, t2 = np.stack([part[f"{x}2"] for x in "xyz"], -1), radius[i2], mass[i2], types[i2]
+            c2 = liquid[i2]
         else:
             towards = np.stack([part[f"wall_cp{x}"] for x in "xyz"], -1)
-            r2, t2 = np.full(len(i1), np.inf), np.full(len(i1), wall_type)
+            r2, t2, c2 = np.full(len(i1), np.inf), np.full(len(i1), wall_type), np.zeros(len(i1))
             m2 = np.full(len(i1), np.inf)
         n = towards - np.stack([part[f"{x}1"] for x in "xyz"], -1)
         n /= np.linalg.norm(n, axis=1)[:, None]
         part.update(F=-np.einsum("ij,ij->i", vec["fn"], n), ft=vec["ft"], tq=vec["tq"], n=n, r1=radius[i1], r2=r2,
-                    m1=mass[i1], m2=m2, t1=types[i1], t2=t2)
+                    m1=mass[i1], m2=m2, t1=types[i1], t2=t2, c1=liquid[i1], c2=c2)
         parts.append(part)
     return {key: np.concatenate([p[key] for p in parts]) for key in parts[0] if key in parts[1]}
 
 
-REFERENCED = sorted(name for name, (words, _, _) in make_run.MODELS.items() if has_reference(words))
-"""The models with an independent reference in liggghts_reference.py (every model:
+LIQUID = "f_surfaceLiquidContent"
+_BRIDGES: dict[tuple[str, int], tuple[np.ndarray, np.ndarray]] = {}
+
+
+def bridge_reference(name: str, run, k: int, x: dict) -> tuple[np.ndarray, np.ndarray]:
+    """The capillary force (N) of every contact of frame k (:func:`raw_contacts` ``x``) by LIGGGHTS' C++ transcribed
+    in liggghts_bridges.py, and its work from rupture, int_{-s_rup}^delta F (J), by quadrature (mpmath, 20 digits).
+    Touching, a contact holds a bridge; apart, an easo one where LIGGGHTS' flag (history value contflag) is 1 (it
+    forms at contact), a washino one wherever the gap is below rupture (it forms on approach too). Cached per run
+    and frame: two tests use it."""
+    key = (str(run.script.path), k)
+    if key not in _BRIDGES:
+        props = run.script.coefficients
+        model = BRIDGE_MODELS[0] if "easo" in name else BRIDGE_MODELS[1]
+        ratio, angle = props["maxSeparationDistanceRatio"], props["contactAngle"]
+        mpmath.mp.dps = 20
+        force, work = np.zeros(len(x["delta"])), np.zeros(len(x["delta"]))
+        for i, d in enumerate(x["delta"]):
+            f, rupture = liggghts_capillary(model, x["r1"][i], None if np.isinf(x["r2"][i]) else x["r2"][i],
+                                            x["c1"][i], x["c2"][i], angle[x["t1"][i] - 1], angle[x["t2"][i] - 1],
+                                            props["surfaceTension"], ratio, ratio * 1.1)
+            if not (d > 0 or (x["liquid_bridge"][i] == 1 if model == BRIDGE_MODELS[0] else -d < rupture)):
+                continue
+            force[i] = f(d)
+            work[i] = mpmath.quad(f, [-rupture, *([0] if d > 0 else []), d])
+        _BRIDGES[key] = force, work
+    return _BRIDGES[key]
+
+
+def reference_energies(name: str, run, k: int, x: dict) -> dict[str, np.ndarray]:
+    """Energies of every dumped contact of model ``name`` computed from LIGGGHTS' dumped forces, torques and history
+    and the source's stiffnesses, without demsplit's laws (liggghts_reference.py); with a liquid bridge, here:
+    u_n = (2/5) F_el delta with F_el the dumped force less the capillary one, u_t = |F_t|^2/(2 kt) and u_adh the
+    capillary force's work (:func:`bridge_reference`), 0 apart but for u_adh."""
+    if name.startswith("cohesion_") and name not in ("cohesion_sjkr", "cohesion_sjkr2"):
+        props = run.script.coefficients
+        E, nu = props["youngsModulus"], props["poissonsRatio"]
+        a, b = x["t1"] - 1, x["t2"] - 1
+        G = 1 / (2 * (2 - nu[a]) * (1 + nu[a]) / E[a] + 2 * (2 - nu[b]) * (1 + nu[b]) / E[b])
+        R = 1 / (1 / x["r1"] + 1 / x["r2"])
+        F, d = x["F"], x["delta"]
+        ft2 = np.einsum("ij,ij->i", x["ft"], x["ft"])
+        f_cap, u_adh = bridge_reference(name, run, k, x)
+        touching = d > 0
+        kt = 8 * G * np.sqrt(R * np.maximum(d, 0))
+        return {"u_n": np.where(touching, 0.4 * (F - f_cap) * d, 0.0),
+                "u_t": np.where(touching, ft2 / (2 * np.where(touching, kt, 1.0)), 0.0), "u_adh": u_adh}
+    return liggghts_reference.reference_energies(make_run.MODELS[name][0], run, x)
+
+
+REFERENCED = sorted(name for name, (words, _, _) in make_run.MODELS.items()
+                    if has_reference(words) or submodels(words).get("cohesion") in BRIDGE_MODELS)
+"""The models with an independent reference: liggghts_reference.py's, and the liquid bridges' here (every model:
 :func:`test_every_model_has_an_independent_reference`)."""
 
 
@@ -283,11 +345,80 @@ def test_totals_equal_an_independent_recomputation(referenced_run):
     dumped_walls = [-1, *run.script.dumped_mesh_walls]
     for k, step in enumerate(sorted(res.contacts["step"].unique())):
         ours = res.contacts[(res.contacts["step"] == step) & res.contacts["wall"].isin(dumped_walls)]
-        reference = reference_energies(make_run.MODELS[name][0], run, raw_contacts(run, k))
+        reference = reference_energies(name, run, k, raw_contacts(run, k))
         assert len(ours) == len(reference["u_n"]) > 300
         assert set(reference) == {m for m in ("u_n", "u_t", "u_r", "u_adh") if m in ours}
         for mode, u in reference.items():
             assert ours[mode].sum() == pytest.approx(u.sum(), rel=1e-12, abs=0), (name, step, mode)
+
+
+BRIDGES = sorted(name for name, (words, _, _) in make_run.MODELS.items()
+                 if submodels(words).get("cohesion") in BRIDGE_MODELS)
+"""The models with a liquid bridge."""
+
+
+@pytest.fixture(scope="module", params=BRIDGES)
+def bridge_run(request, tmp_path_factory) -> tuple[str, Path]:
+    return liggghts_run(request.param, tmp_path_factory)
+
+
+def test_liquid_bridges_are_liggghts_own(bridge_run):
+    """Liquid bridges: the pair dump holds bridges apart (negative overlap), the wall dump contacts apart with and
+    without one; for every dumped contact the normal force is Hertz's plus the capillary force of LIGGGHTS' C++
+    (transcribed in liggghts_bridges.py, with the atom dump's liquid content) to 1e-9, and demsplit's u_adh is that
+    force's work from rupture by quadrature (:func:`bridge_reference`), touching and apart."""
+    name, script = bridge_run
+    run = open_run(script)
+    law = run.scene.model.contact_law
+    assert law.params["cohesion"] in BRIDGE_MODELS
+    res = demsplit.analyze(script)
+    dumped_walls = [-1, *run.script.dumped_mesh_walls]
+    props = run.script.coefficients
+    counts = {"pairs apart": 0, "wall rows apart": 0}
+    for k, step in enumerate(sorted(res.contacts["step"].unique())):
+        x = raw_contacts(run, k)
+        f_cap, work = bridge_reference(name, run, k, x)
+        E, nu = props["youngsModulus"], props["poissonsRatio"]
+        a, b = x["t1"] - 1, x["t2"] - 1
+        Y = 1 / ((1 - nu[a] ** 2) / E[a] + (1 - nu[b] ** 2) / E[b])
+        hertz = 4 / 3 * Y * np.sqrt(1 / (1 / x["r1"] + 1 / x["r2"])) * np.maximum(x["delta"], 0) ** 1.5
+        np.testing.assert_allclose(x["F"], hertz + f_cap, rtol=1e-9, atol=1e-12 * np.abs(x["F"]).max(), err_msg=name)
+        apart = x["delta"] < 0
+        pair = np.isfinite(x["r2"])
+        assert np.all(x["liquid_bridge"][pair] == 1)  # LIGGGHTS lists a pair apart only while its bridge acts
+        counts["pairs apart"] += int(np.count_nonzero(apart & pair))
+        counts["wall rows apart"] += int(np.count_nonzero(apart & ~pair))
+        ours = res.contacts[(res.contacts["step"] == step) & res.contacts["wall"].isin(dumped_walls)]
+        np.testing.assert_array_equal(ours["delta"], x["delta"])  # the same contacts in the same order
+        np.testing.assert_allclose(ours["u_adh"], work, rtol=1e-10, atol=1e-10 * np.abs(work).max(), err_msg=name)
+        assert np.all(ours["u_n"][ours["delta"] < 0] == 0) and np.all(ours["u_t"][ours["delta"] < 0] == 0)
+        assert np.all(ours["u_adh"][ours["delta"] < 0] <= 0) and np.any(ours["u_adh"][ours["delta"] < 0] < 0)
+    assert counts["pairs apart"] > 100, counts
+
+
+def test_a_gap_beyond_a_bridge_is_refused(bridge_run, tmp_path, capsys):
+    """The bridges apart of a real run pass ``demsplit check``; a pair row apart beyond any bridge's reach (its dumped
+    delta edited to -1 mm, with its history flag still 1) is a problem for ``check`` and refused by ``run``."""
+    import shutil
+
+    from demsplit.cli import main
+
+    name, script = bridge_run
+    assert open_run(script).scene.model.contact_law.params["cohesion"] in BRIDGE_MODELS
+    copy = tmp_path / "run"
+    shutil.copytree(script.parent, copy)
+    assert main(["check", str(copy / script.name)]) == 0, capsys.readouterr().out
+    lines = (copy / "pairs.txt").read_text().split("\n")
+    apart = next(k for k, line in enumerate(lines) if len(line.split()) == 42 and float(line.split()[38]) < 0)
+    words = lines[apart].split()
+    words[38] = "-0.001"
+    lines[apart] = " ".join(words) + " "
+    (copy / "pairs.txt").write_text("\n".join(lines))
+    capsys.readouterr()
+    assert main(["check", str(copy / script.name)]) == 1
+    assert "beyond the largest its law acts across" in capsys.readouterr().out
+    assert main(["run", str(copy / script.name), "-o", str(tmp_path / "r.h5"), "-q"]) == 2
+    assert "beyond its rupture distance" in capsys.readouterr().err
 
 
 def test_every_model_has_an_independent_reference():

@@ -4,8 +4,10 @@
 
 Each run is template.in with the model's words, the properties it needs and the
 dump column list of its compute width (38 columns plus the model's history,
-measured: the runs fail to write a longer list). Used by regenerate.sh and by
-tests/test_liggghts_laws_vs_liggghts.py.
+measured: the runs fail to write a longer list); with a liquid-bridge cohesion
+model the atom dump also writes the liquid content f_surfaceLiquidContent (the
+fix the model creates at the first run, before the dump is defined). Used by
+regenerate.sh and by tests/test_liggghts_laws_vs_liggghts.py.
 """
 
 from __future__ import annotations
@@ -20,6 +22,14 @@ HERE = Path(__file__).resolve().parent
 
 def _table(value: str) -> str:
     return " ".join([value] * 16)  # 4 atom types, every pair alike
+
+
+# the liquid bridges: 1 % of each particle's volume in liquid, a contact angle per type (LIGGGHTS 3.8.0 takes
+# half their product), fluidViscosity 0 (no viscous force: undamped like the other runs)
+_BRIDGE = ["surfaceLiquidContentInitial scalar 0.01", "surfaceTension scalar 0.072",
+           "contactAngle peratomtype 20 35 10 25", "minSeparationDistanceRatio scalar 1.01",
+           "maxSeparationDistanceRatio scalar 1.1", "fluidViscosity scalar 0"]
+LIQUID_CONTENT = "f_surfaceLiquidContent"
 
 
 MODELS: dict[str, tuple[str, list[str], int]] = {
@@ -61,6 +71,8 @@ MODELS: dict[str, tuple[str, list[str], int]] = {
                       [f"cohesionEnergyDensity peratomtypepair 4 {_table('2e4')}"], 41),
     "cohesion_sjkr2": ("model hertz tangential history cohesion sjkr2",
                        [f"cohesionEnergyDensity peratomtypepair 4 {_table('2e4')}"], 41),
+    "cohesion_easo": ("model hertz tangential history cohesion easo/capillary/viscous", _BRIDGE, 42),
+    "cohesion_washino": ("model hertz tangential history cohesion washino/capillary/viscous", _BRIDGE, 42),
     "thornton_ning": ("model thornton_ning tangential history",
                       [f"surfaceEnergy peratomtypepair 4 {_table('0')}",
                        "coefficientYieldRatio peratomtype 0.02 0.02 0.02 0.02"], 53),  # nearly all yielded
@@ -105,6 +117,9 @@ def write_run(name: str, directory: Path) -> Path:
     text = (HERE / "template.in").read_text().replace("MODEL", words).replace("EXTRA_PROPS", lines)
     text = text.replace("PAIRCOLS", columns["cpgl"]).replace("WALLCOLS", columns["cwgl"])
     text = text.replace("PAIRFMT", " ".join(["%.17g"] * width)).replace("WALLFMT", " ".join(["%.17g"] * width))
+    liquid = "/capillary/" in words  # a liquid-bridge cohesion model
+    text = text.replace("ATOMCOLS", f" {LIQUID_CONTENT}" if liquid else "")
+    text = text.replace("ATOMFMT", " %.17g" if liquid else "")
     (directory / "in.run").write_text(text)
     return directory / "in.run"
 
