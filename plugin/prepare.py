@@ -13,7 +13,12 @@ requires of the contact computes):
   :func:`~demsplit.readers.liggghts_script.local_layout`) at ``%.17g``;
 - ``compute dsWall all wall/gran/local ...`` and its dump only when the run has mesh
   walls (LIGGGHTS stops on it with primitive walls only);
-- a full-precision atom dump, unless the script already writes one.
+- a full-precision atom dump with the columns the laws read of the particles (the liquid
+  content ``f_surfaceLiquidContent`` of a liquid-bridge cohesion model), unless the script
+  already writes one; LIGGGHTS checks a ``f_`` column when it reads the dump command, so the
+  fix behind it, which a liquid-bridge model creates only when the first run starts, is
+  created just before (:meth:`~demsplit.physics.laws._liggghts.LiggghtsNormalModel.dump_setup`;
+  checked in Debian's LIGGGHTS: the trajectory is bit for bit the same).
 
 A mesh wall fix placed after a ``run`` cannot get its contact compute in the
 same LIGGGHTS session (LIGGGHTS accepts ``wall/gran/local`` only before the
@@ -39,6 +44,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .errors import ScriptError
+from .physics.laws import ContactLaw
 from .readers.lammps_input import logical_lines, strip_comment
 from .readers.liggghts_script import LiggghtsScript, local_layout, read_script
 
@@ -93,14 +99,19 @@ def _commands(path: Path) -> list[tuple[int, list[str]]]:
     return out
 
 
-def _has_full_atom_dump(script: LiggghtsScript, declared: set[str]) -> int | None:
+def _has_full_atom_dump(script: LiggghtsScript, declared: set[str], needed: list[str]) -> int | None:
     """The ``every`` of a full-precision atom dump (among the dump ids ``declared``) with what demsplit
-    reads, or None."""
+    reads (``id type x y z radius`` and the ``needed`` columns of the laws), or None."""
     for d in script.dumps:
         if d.id in declared and d.style == "custom" and d.full_precision and \
-                {"id", "type", "x", "y", "z", "radius"} <= set(d.keywords):
+                {"id", "type", "x", "y", "z", "radius", *needed} <= set(d.keywords):
             return d.every
     return None
+
+
+def _laws(script: LiggghtsScript) -> list[ContactLaw]:
+    """The contact laws of the script's pair style and walls."""
+    return [m.contact_law for m in [script.scene.model] + [w.model for w in script.scene.walls if w.model is not None]]
 
 
 def _has_local_dump(script: LiggghtsScript, declared: set[str], kind: str, needed: set[str]) -> bool:
@@ -226,13 +237,22 @@ def _prepare_part(path: Path, script: LiggghtsScript, history: list[str], comman
     runs = [line for line, words in commands if start <= line < end and words[0] == "run"]
     body = lines[start - 1:end - 1]
     notes, block = [], []
-    every = _has_full_atom_dump(script, declared)
+    laws = _laws(script)
+    extra = list(dict.fromkeys(c for law in laws for c in law.particle_columns if c not in ATOM_COLUMNS.split()))
+    every = _has_full_atom_dump(script, declared, extra)
     if every is None:
         every = DEFAULT_EVERY
-        block += [f"dump dsAtoms all custom {every} ds_atoms{suffix}.txt {ATOM_COLUMNS}",
-                  'dump_modify dsAtoms format "%d %d' + " %.17g" * (len(ATOM_COLUMNS.split()) - 2) + '" sort id']
+        columns = " ".join([ATOM_COLUMNS, *extra])
+        fixes = {words[1] for line, words in commands if line < end and words[0] == "fix" and len(words) > 1}
+        setup = [c for c in dict.fromkeys(c for law in laws for c in law.dump_setup()) if c.split()[1] not in fixes]
+        block += [*setup, f"dump dsAtoms all custom {every} ds_atoms{suffix}.txt {columns}",
+                  'dump_modify dsAtoms format "%d %d' + " %.17g" * (len(columns.split()) - 2) + '" sort id']
         notes.append(f"{label}atoms: a full-precision atom dump every {every} steps (ds_atoms{suffix}.txt); change "
                      "the interval to the output you want.")
+        if setup:
+            notes.append(f"{label}atoms: {' and '.join(extra)} from the fix the cohesion model creates at the first "
+                         "run, created just before the dump (LIGGGHTS checks a dump's f_ columns when it reads "
+                         "it); the run is the same.")
     else:
         notes.append(f"{label}atoms: the script's full-precision atom dump (every {every} steps) is used.")
     if _has_local_dump(script, declared, "pair", needed):
