@@ -62,6 +62,8 @@ INTERACTION_COLUMNS = {**{c: "int" for c in ("id1", "id2", "cdx", "cdy", "cdz")}
 OPTIONAL_INTERACTION_COLUMNS = {**{c: "real" for c in ("adhesion", "fcap", "mbx", "mby", "mbz", "mtwx", "mtwy",
                                                        "mtwz", "kr", "ktw")}, "depth_text": "text"}
 """The columns of a snapshot's tables this reader uses, and their kinds (demsplit.validate.typed_columns)."""
+MOMENT_COLUMNS = ("mbx", "mby", "mbz", "mtwx", "mtwy", "mtwz", "kr", "ktw")
+"""Optional interaction columns the exporter writes together (the laws with moment springs read them together)."""
 FIX_DAMAGED = ("the snapshot file is damaged or was not written by demsplit.yade.snapshot(): rewrite it (rerun the "
                "simulation).")
 
@@ -243,11 +245,15 @@ def checked_meta(meta, *, path: Path, k: int) -> dict:
 
 
 def checked_tables(tables: dict, meta: dict, *, path: Path, k: int) -> dict[str, Table]:
-    """A snapshot's tables with the columns this reader uses, typed (:func:`demsplit.validate.typed_columns`)."""
+    """A snapshot's tables with the columns this reader uses, typed (:func:`demsplit.validate.typed_columns`);
+    the moment columns (:data:`MOMENT_COLUMNS`) all or none."""
     where = {"file": path, "step": meta["iter"], "where": f"snapshot {k}"}
+    inter = tables.get("interactions")
+    present = [c for c in MOMENT_COLUMNS if isinstance(inter, dict) and c in inter]
+    schema = {**INTERACTION_COLUMNS, **({c: "real" for c in MOMENT_COLUMNS} if present else {})}
     return {"bodies": typed_columns(tables.get("bodies"), BODY_COLUMNS, name="bodies", **where),
-            "interactions": typed_columns(tables.get("interactions"), INTERACTION_COLUMNS, name="interactions",
-                                          optional=OPTIONAL_INTERACTION_COLUMNS, **where)}
+            "interactions": typed_columns(inter, schema, name="interactions", optional=OPTIONAL_INTERACTION_COLUMNS,
+                                          **where)}
 
 
 def _open_store(path: Path):

@@ -214,6 +214,9 @@ def _meta(key, value):
 
 RECORD_DAMAGE = {
     "missing column": (lambda s: s[1][1]["interactions"].pop("ny"), "column interactions.ny is missing"),
+    "one moment column missing": (lambda s: s[1][1]["interactions"].update(mbx=s[1][1]["interactions"]["kn"] * 0)
+                                  if "mbx" not in s[1][1]["interactions"] else None,
+                                  "column interactions.mby is missing"),
     "text in a number column": (_set("bodies", "vy", lambda c: c.astype("S8")), "bodies.vy holds |S8 values"),
     "2-D column": (_set("bodies", "radius", lambda c: c.reshape(-1, 1)), "bodies.radius has shape"),
     "short column": (_set("interactions", "depth", lambda c: c[:-1]), "interactions.depth has"),
