@@ -453,9 +453,9 @@ class LiggghtsRun(Run):
         xyzr = np.stack([particles["x"], particles["y"], particles["z"], particles["radius"]], axis=-1)
         xyz = xyzr[:, :3]
         has_primitive = any(w.kind in ("plane", "cylinder") for w in self.scene.walls)
-        # printed step of every particle's coordinates (0 at full precision), where positions make overlaps
-        h = np.max([printed_step(particles[c], af.digits.get(c)) for c in ("x", "y", "z")], axis=0) \
-            if "delta" not in self._pair_names or wf is not None or has_primitive else None
+        # printed step of every particle's coordinates (0 at full precision): where positions make overlaps,
+        # and where a dumped overlap is checked against them
+        h = np.max([printed_step(particles[c], af.digits.get(c)) for c in ("x", "y", "z")], axis=0)
         parts = [self._pairs(pf, index, xyzr, h, box)]
         if wf is not None:
             parts.append(self._mesh_walls(wf, particles, index, xyz, h))
@@ -517,10 +517,10 @@ class LiggghtsRun(Run):
                 fix="each contact must appear once per frame: check that the dump is not the concatenation of "
                     "two runs or of two MPI ranks' output for the same step.")
         dumped_cp = all(c in col for c in ("cpx", "cpy", "cpz"))
-        # h (printed steps) only for overlaps recomputed from positions
         nx, ny, nz, x1, y1, z1, r1, r2, gap, hmax, cp = pair_geometry(
-            rows1, rows2, xyzr, h if "delta" not in names else np.zeros(0), box.lengths, box.tilt, box.periodic,
-            not dumped_cp)
+            rows1, rows2, xyzr, np.zeros(0) if h is None else h, box.lengths, box.tilt, box.periodic, not dumped_cp)
+        if "delta" in col and len(hmax):
+            _refuse_overlaps_off_positions(pf, names["delta"], col["delta"], gap, hmax, r1 + r2, id1, id2)
         out: Table = {"id1": id1, "id2": id2, "wall": wall, "delta": col["delta"] if "delta" in col else gap,
                       "nx": nx, "ny": ny, "nz": nz, "x1": x1, "y1": y1, "z1": z1, "r1": r1, "r2": r2}
         out["bound"] = self._delta_error(pf, names, hmax, gap)
@@ -701,6 +701,25 @@ class LiggghtsRun(Run):
                 return str(dump.path), f.line_of(row - offset)
             offset += n
         return str(self.atoms.path), None
+
+
+def _refuse_overlaps_off_positions(pf: DumpFrame, token: str, delta: np.ndarray, gap: np.ndarray, h: np.ndarray,
+                                   r: np.ndarray, id1: np.ndarray, id2: np.ndarray) -> None:
+    """A dumped overlap must be the one the positions give, r1 + r2 - |x2 - x1| (LIGGGHTS computes it from
+    the same positions, at the same step: they agree to 4e-18 m in the samples), within what the printing of
+    both allows: twice sqrt(3) h for the centres, the dumped value's own rounding, and 1e-9 of r1 + r2 for
+    the arithmetic. A pair dump of another run or step, or a damaged value, is refused by its line (an
+    overlap > 0 only: a dumped overlap <= 0 is named by the checks of a contact that is not one)."""
+    tol = 2.0 * np.sqrt(3.0) * h + np.abs(delta) * relative_rounding(pf.digits.get(token)) + 1e-9 * r
+    # an overlap <= 0, or positions that are not finite, are the other checks' findings
+    off = (delta > 0) & np.isfinite(gap) & ~(np.abs(delta - gap) <= tol)
+    if off.any():
+        row = int(np.flatnonzero(off)[0])
+        raise ContactError(
+            f"the contact of particles {int(id1[row])} and {int(id2[row])} has a dumped overlap of "
+            f"{float(delta[row]):.6g} m, but its particles' positions give {float(gap[row]):.6g} m (the printing "
+            f"allows {float(tol[row]):.2g} m); {int(off.sum())} such contact(s).", file=pf.file, step=pf.step,
+            line=pf.line_of(row), fix="check that the pair and atom dumps belong to the same run and timestep.")
 
 
 def _refuse_repeated_steps(dump: DumpFile) -> None:

@@ -368,3 +368,16 @@ def test_the_walk_of_an_hdf5_input_ends_and_passes_objects_without_data(tmp_path
             group["extra"] = np.dtype("f8")
     rc, err = run(snap, tmp_path, capsys)
     assert rc == 0, err
+
+
+def test_a_dumped_overlap_that_the_positions_do_not_give_is_refused(run_dir, tmp_path, capsys):
+    """Half a contact's dumped delta passes the radius check and halved its energy with exit 0. The dumped
+    overlap must be r1 + r2 - |x2 - x1| within the printing (the samples agree to 4e-18 m)."""
+    pairs = run_dir / "pairs.txt"
+    lines = pairs.read_bytes().split(b"\n")
+    tokens = lines[15 - 1].split(b" ")
+    tokens[37] = b"%g" % (float(tokens[37]) * 0.5)  # c_cpgl[38]: delta, printed as %g like the rest
+    lines[15 - 1] = b" ".join(tokens)
+    pairs.write_bytes(b"\n".join(lines))
+    rc, err = run(run_dir / "in.packing", tmp_path, capsys)
+    assert rc == 2 and "pairs.txt:15, timestep 200000" in err and "its particles' positions give" in err, err
