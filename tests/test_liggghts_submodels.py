@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from demsplit.frame import ParticleIndex
 from demsplit.physics.bodies import ContactBodies, LawRows
-from demsplit.physics.laws import make
+from demsplit.physics.laws import law_class, make, supported
 from demsplit.physics.laws._liggghts import (rolling_spring_energy, sjkr2_area_integral, sjkr_area,
                                               sjkr_area_integral)
 from demsplit.physics.partition import contact_energies, partition, per_particle
@@ -378,3 +378,27 @@ def test_bridge_law_parameters():
     particles["f_surfaceLiquidContent"][1] = -0.01
     with pytest.raises(Exception, match="must be >= 0"):
         contact_energies(contacts, bridge_scene(), particles)
+
+
+@pytest.mark.parametrize("model", BRIDGE_MODELS)
+@pytest.mark.parametrize("key", [k for k in supported() if k.startswith("liggghts:")])
+def test_every_liggghts_normal_model_takes_a_bridge(key, model):
+    """Any normal model composes with a liquid bridge: apart no elastic energy, u_adh the bridge's work whatever
+    the normal model (it adds the pull-off work of luding and edinburgh only where they touch), and the model
+    survives the scene's dict (its contact angles as a list)."""
+    from demsplit.scene import scene_from_dict, scene_to_dict
+
+    params = {**law_class(key).example_params, "cohesion": model, "surface_tension": 0.072,
+              "contact_angle": (20.0, 35.0), "max_separation_ratio": 1.1, "min_separation_ratio": 1.01,
+              "fluid_viscosity": 0.0, "liquid_content_initial": 0.01}
+    sc = Scene(materials={1: Material(5e6, 0.45), 2: Material(7e7, 0.3)}, model=ContactModel(key, params),
+               walls=[Wall("floor", "plane", 2)])
+    assert scene_from_dict(scene_to_dict(sc)).model == sc.model
+    particles, contacts = bridge_contacts([2e-5, -3e-5, -2e-5], [2, 2, -1], [1, 1, 1], [0, 0, 0])
+    particles["mass"] = np.array([1e-5, 2e-5])
+    for column in sc.model.contact_law.needs():  # the normal model's own history, as at a first touch
+        contacts.setdefault(column, np.where(contacts["delta"] > 0, contacts["delta"], 0.0))
+    e = contact_energies(contacts, sc, particles)
+    reference = contact_energies(contacts, bridge_scene(model), particles)
+    assert np.all(e.u[:, 1:] == 0) and np.all(np.isfinite(e.u))
+    np.testing.assert_array_equal(e.u_adh[1:], reference.u_adh[1:])
