@@ -203,6 +203,7 @@ class LiggghtsRun(Run):
         self.walls = self._open_local(walls, "wall")
         self._pair_names = self._local_names(self.pairs, "pair")
         self._wall_names = self._local_names(self.walls, "wall")
+        self._refuse_wall_columns_apart()
         self.notes: list[str] = list(self.script.warnings)
         dumped = set(self.script.dumped_mesh_walls) if self.walls is not None else set()
         self.scene = replace(self.scene, walls=[
@@ -379,6 +380,20 @@ class LiggghtsRun(Run):
             raise InputFormatError(f"the atom dump lacks the columns {missing}.", file=self.atoms.path,
                                    fix="add them to the 'dump ... custom' line.")
         return cols
+
+    def _refuse_wall_columns_apart(self) -> None:
+        """The mesh-wall contacts join the pair contacts in one table: a law column (a history) the pair dump
+        holds and the wall dump does not is refused, naming the wall dump's header (it was a KeyError)."""
+        if self.walls is None:
+            return
+        missing = [c for c in self._law_columns() if c in self._pair_names and c not in self._wall_names]
+        if missing:
+            raise InputFormatError(
+                f"the wall contact dump has no column for {', '.join(missing)}, which the law reads and the pair "
+                f"dump holds: its header names {len(self.walls.columns or [])} columns, its compute's keywords "
+                "differ from the pair compute's, or the header is damaged.", file=self.walls.path,
+                step=int(self.walls.steps[0]) if len(self.walls.steps) else None, line=HEADER_LINES,
+                fix="give the wall compute the pair compute's keywords and dump all its columns; check the header.")
 
     def _law_columns(self) -> list[str]:
         """Contact columns the scene's laws read (the tangential history, ...), in their order."""

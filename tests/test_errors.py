@@ -362,6 +362,17 @@ def test_every_frame_bad_under_skip_is_one_failure_with_or_without_quiet(run_dir
     assert not list(tmp_path.glob(".out.h5*"))  # nothing left behind
 
 
+def test_a_damaged_column_name_in_the_wall_dump_header_is_refused(run_dir):
+    """The wall dump's header with the history column c_cwgl[34] (shearx) damaged to 'nan': its rows lacked
+    a column the pair rows have (KeyError 'shearx', exit 3; found by the fuzzer)."""
+    edit_lines(run_dir / "wall.txt",
+               lambda lines: lines.__setitem__(9 - 1, lines[9 - 1].replace(b"c_cwgl[34]", b"nan")))
+    err = analyze_error(run_dir)
+    assert isinstance(err, InputFormatError)
+    assert_where(err, "wall.txt", STEPS[0], 9)
+    assert "no column for shearx" in str(err)
+
+
 @pytest.mark.parametrize("change, message", [
     (lambda line: line + b"\r", "ends with a carriage return (CR LF"),
     (lambda line: b" " + line, "starts with a space"),
