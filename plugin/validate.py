@@ -190,6 +190,8 @@ def _as_kind(values: np.ndarray, kind: str, bad) -> np.ndarray:
     dt = values.dtype
     if kind == "text":
         if dt.kind == "S":
+            if len(values) and np.any(np.frombuffer(values.tobytes(), np.uint8) >= 0x80):
+                raise bad("holds text that is not ASCII")
             return values
         if dt.kind == "U":
             try:

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import io
 import json
+import math
 import zlib
 from contextlib import contextmanager
 from pathlib import Path
@@ -204,7 +205,13 @@ def _is_int(v) -> bool:
 
 
 def _is_real(v) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v)
+    """A finite JSON number (an integer beyond the doubles, 2^1100, is not one)."""
+    if not isinstance(v, (int, float)) or isinstance(v, bool):
+        return False
+    try:
+        return math.isfinite(v)
+    except OverflowError:
+        return False
 
 
 def checked_meta(meta, *, path: Path, k: int) -> dict:

@@ -224,6 +224,9 @@ RECORD_DAMAGE = {
     "no law": (_meta("functors", {"law": 3}), "'functors.law' is not a list"),
     "iteration as text": (_meta("iter", "24000"), "'iter' is not an iteration number"),
     "time as text": (_meta("time", "later"), "'time' is not a finite time"),
+    "time beyond the doubles": (_meta("time", 2**1100), "'time' is not a finite time"),
+    "a kind that is not ASCII": (_set("bodies", "kind", lambda c: np.where(np.arange(len(c)) == 3, b"\x8e\xff", c)),
+                                 "bodies.kind holds text that is not ASCII"),
     "material not a number": (lambda s: s[0][0]["materials"][0].update(young="soft"), "are not both finite numbers"),
     "cell of 2 numbers": (lambda s: s[1][0].update(periodic=True, hSize=[1.0, 2.0]), "'hSize' is not a 3x3"),
     "an iteration twice": (lambda s: s.insert(2, s[1]), "iteration 16000 is in the file twice"),
@@ -236,6 +239,8 @@ def test_a_snapshot_record_of_another_layout_is_one_message(tmp_path, capsys, fm
     """A column missing, of another dtype, shape or length, metadata of the wrong type: exit 2 naming the
     snapshot and what is wrong (they were KeyError, TypeError, IndexError, ValueError: internal errors)."""
     change, words = RECORD_DAMAGE[damage]
+    if fmt == "hdf5" and damage == "time beyond the doubles":
+        pytest.skip("the HDF5 snapshot writer cannot store that time as an attribute")
     rc, err = run(rewritten(tmp_path, fmt, change), tmp_path, capsys)
     assert rc == 2 and words in err and err.count("\n") == 1 and "internal error" not in err, err
     assert not (tmp_path / "out.h5").exists()
