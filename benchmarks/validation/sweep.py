@@ -8,7 +8,8 @@ log-uniform in [0.1, 10] or (one point in six) near-rigid, 1000 or 1/1000; nu1, 
 (0.5 is out of reach of a displacement formulation: P2 triangles lock). Every point is solved with both
 materials of fe.py (``small``: linear elastic, ``neohooke``: compressible neo-Hookean),
 mesh refine 1 (docs/accuracy.md's convergence table: share within 1e-5 of refine 2), 2 load steps (4, then 8
-if Newton fails: an inverted element or no convergence).
+if Newton fails, an inverted element or no convergence, or stalls above 1e-6 of the Hertz force; the
+solution with the smallest out-of-balance force is kept; stalled.py checks the stalled ones).
 
 Two sweeps, two seeds: the fit sweep (seed 20240611, ``--name fit``) and the held-out sweep (seed 314159,
 ``--name heldout``), whose points fit.py never fits. Writes results/sweep_<name>/sweep_<model>.csv (every
@@ -43,6 +44,7 @@ RESULTS = HERE / "results"
 MODELS = ("neohooke", "small")
 SEEDS = {"fit": 20240611, "heldout": 314159}
 INPUTS = ("a_over_R1", "R1", "R2", "E1", "E2", "nu1", "nu2", "block_L")
+STALLED = 1e-6  # a Newton accepted above this out-of-balance force (/ Hertz force) stalled: more load steps
 BLOCK = 2000.0  # a plane is an elastic block of radius and depth BLOCK * R1: a half-space to ~1e-5 in share
 sys.path.insert(0, str(HERE))
 
@@ -73,22 +75,25 @@ def run_point(pt: dict, model: str) -> dict:
     import fe
 
     delta = fe.delta_for(pt["a_over_R1"], pt["R1"], pt["R2"])
-    for steps in (2, 4, 8):  # more load steps when Newton fails (an inverted element, no convergence)
+    best = None
+    for steps in (2, 4, 8):  # more load steps when Newton fails (an inverted element, no convergence) or stalls
         try:
             res = fe.solve(pt["R1"], pt["R2"], pt["E1"], pt["nu1"], pt["E2"], pt["nu2"], delta, model=model,
                            refine=1.0, steps=steps, block=pt["block_L"])
         except (RuntimeError, FloatingPointError) as exc:
             print(f"{model} #{pt['i']} steps={steps}: {exc}", flush=True)
             continue
-        if res.converged:
+        if res.converged and (best is None or res.residual < best.residual):
+            best = res
+        if res.converged and res.residual <= STALLED:
             break
-    else:
+    if best is None:
         return {"i": pt["i"], "model": model, "failed": True}
-    s = fe.summary(res)
+    s = fe.summary(best)
     s = {k: (float(v) if isinstance(v, (np.floating, np.integer, np.bool_, float, int, bool)) else v)
          for k, v in s.items()}
     s.update(i=pt["i"], a_over_R2=(s["a_over_R1"] * pt["R1"] / pt["R2"]), E_ratio=pt["E2"] / pt["E1"],
-             block_L=pt["block_L"])
+             block_L=pt["block_L"], stall_retried=True)
     return s
 
 
@@ -143,7 +148,7 @@ def main(argv=None):
         rows, failed, solved = [], [], 0
         for pt in pts:
             r = old.get(pt["i"])
-            if r is None or not same_inputs(r, pt):
+            if r is None or not same_inputs(r, pt) or (r["residual"] > STALLED and not r.get("stall_retried")):
                 r = run_point(pt, model)
                 solved += 1
                 print(f"{model} #{pt['i']} a/R1={pt['a_over_R1']:.3f} "

@@ -92,8 +92,6 @@ def heldout_rows():
 
 
 def test_error_model_reproduces_committed_heldout_predictions():
-    if not (VALIDATION / "results" / "heldout_predictions.csv").exists():
-        pytest.skip("no held-out sweep committed")
     rows = heldout_rows()
     assert len(rows) >= 10
     for model in sorted({r["model"] for r in rows}):
@@ -116,6 +114,14 @@ def test_error_model_coefficients_are_the_committed_fit():
     assert accuracy.term_names() == fit["terms"]
     for model, entry in fit["models"].items():
         np.testing.assert_allclose(accuracy.COEFFICIENTS[model], entry["coefficients"], rtol=1e-11, atol=0)
+
+
+def test_committed_heldout_check_meets_the_target():
+    """The issue's target: the model predicts the FE share on held-out points (a separate seed) within 0.3 %."""
+    fit = json.loads((VALIDATION / "results" / "fit.json").read_text())
+    for entry in fit["models"].values():
+        assert entry["heldout_points"] >= 100
+        assert entry["heldout"]["model_error"]["max_abs"] < 0.003
 
 
 def test_error_model_is_not_extrapolated():
