@@ -9,6 +9,8 @@
 4. Energy conservation: work of the reaction int P d(delta) (Simpson in sqrt(delta)) against the stored
    U1 + U2 + Pi_c, case 2, neo-Hookean, 4, 8 and 16 load steps.
 5. nu = 0.49 (near-incompressible), case 2 geometry, refine 1 against 2.
+6. Size of the block that stands for a plane: point 49 of the fit sweep (a/R1 = 0.273, E2/E1 = 0.139), both
+   materials, block radius and depth L = 20, 200, 2000 R1 (sweep.py uses 2000 R1).
 
 Run::
 
@@ -49,7 +51,7 @@ def table(rows, cols) -> str:
             v = r[c]
             if isinstance(v, str):
                 cells.append(v)
-            elif c in ("ndofs", "nelements", "steps"):
+            elif c in ("ndofs", "nelements", "steps", "L_over_R1"):
                 cells.append(f"{int(v)}")
             elif c.startswith("e_") or c == "share_err":
                 cells.append(f"{100 * v:+.4f} %")
@@ -118,6 +120,21 @@ def main():
     res["nu049"] = rows
     md += ["## nu1 = 0.49, case 2 geometry\n",
            table(rows, ["model", "refine", "ndofs", "P_fe", "ratio_fe", "share_fe", "seconds"])]
+    # 6. block size
+    rows = []
+    from sweep import sweep_points
+
+    p = sweep_points(50)[49]
+    d = fe.delta_for(p["a_over_R1"], p["R1"], p["R2"])
+    for model in ("small", "neohooke"):
+        for L in (20, 200, 2000):
+            r = run(p["R1"], p["R2"], p["E1"], p["nu1"], p["E2"], p["nu2"], d, model=model, steps=2, block=L * p["R1"])
+            r["L_over_R1"] = L
+            rows.append(r)
+            print(r, flush=True)
+    res["block"] = rows
+    md += ["## Block size (a plane), fit sweep point 49\n",
+           table(rows, ["model", "L_over_R1", "ndofs", "P_fe", "U1", "U2", "share_fe", "share_err", "seconds"])]
     out = HERE / "results"
     out.mkdir(exist_ok=True)
     (out / "convergence.json").write_text(json.dumps(res, indent=1) + "\n")
