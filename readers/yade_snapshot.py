@@ -417,6 +417,14 @@ def particle_first(t: Table, sphere1: np.ndarray, wall1: np.ndarray, wall2: np.n
     return out
 
 
+def _written(col: np.ndarray) -> bool:
+    """Whether the interactions' physics have the attribute of column ``col``: the exporter writes NaN for an
+    attribute a phys lacks; a snapshot without interactions says nothing against it (the columns, and so the
+    energy modes, of a run do not depend on whether a frame has contacts: a first snapshot without any made
+    the later frames' tables another layout, which the store refused)."""
+    return len(col) == 0 or bool(np.isfinite(col).any())
+
+
 def frame_from_snapshot(meta: dict, tables: dict[str, Table], scene_walls: dict[int, int], *,
                         path: Path, plane_as_plane: bool = False,
                         keep_separated: bool = False) -> tuple[Frame, np.ndarray]:
@@ -481,11 +489,11 @@ def frame_from_snapshot(meta: dict, tables: dict[str, Table], scene_walls: dict[
         "xa": xa[:, 0], "ya": xa[:, 1], "za": xa[:, 2], "xb": xb[:, 0], "yb": xb[:, 1], "zb": xb[:, 2],
         "type_a": bodies["material"][ra], "type_b": bodies["material"][rb],
     }
-    if np.isfinite(inter["kno"]).any():
+    if _written(inter["kno"]):
         yade_order["kno"], yade_order["kso"] = inter["kno"], inter["kso"]
-    if "adhesion" in inter and np.isfinite(inter["adhesion"]).any():  # MindlinPhys' DMT adhesion force
+    if "adhesion" in inter and _written(inter["adhesion"]):  # MindlinPhys' DMT adhesion force
         yade_order["adhesion_force"] = inter["adhesion"]
-    if "mbx" in inter and np.isfinite(inter["mbx"]).any():  # CohFrictPhys: bending and twisting springs
+    if "mbx" in inter and _written(inter["mbx"]):  # CohFrictPhys: bending and twisting springs
         # an interaction whose phys has no moments (the exporter wrote NaN for the absent attributes; MindlinPhys
         # has kr and ktw but no moment_bending) holds no such springs: 0, not a bad number
         absent = np.isnan(inter["mbx"]) & np.isnan(inter["mtwx"])

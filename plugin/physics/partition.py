@@ -145,9 +145,12 @@ def contact_energies(contacts: Table, scene: Scene, particles: Table | None = No
     n = table_length(contacts)
     bodies = bodies or ContactBodies.build(contacts, scene, particles, index)
     groups = [(model.contact_law, rows) for model, rows in law_groups(contacts, scene)]
-    modes = scene_modes(c for law, _ in groups for c in law.modes)
+    # the modes of every law of the scene, whether or not this frame has contacts it acts on: every frame
+    # of a run has the same columns (a frame without contacts had only u_n and u_t)
+    laws = [scene.model.contact_law] + [w.model.contact_law for w in scene.walls if w.model is not None]
+    modes = scene_modes(c for law in laws for c in law.modes)
     u = np.zeros((len(modes), n))
-    with_adhesion = any(ADHESION_COLUMN in law.modes for law, _ in groups)
+    with_adhesion = any(ADHESION_COLUMN in law.modes for law in laws)
     u_adh = np.zeros(n) if with_adhesion else None
     skipped: dict[str, str] = {}
     missing: dict[str, str] = {}
