@@ -5,7 +5,8 @@ Hashing a multi-GB dump costs a full read of it at the speed of sha256
 early with :func:`hash_in_background`: one daemon thread hashes the files
 while the first frame is read and computed, and :func:`file_fingerprint`
 waits for that thread's result (a digest is reused as long as the file's
-size and modification time are unchanged; a changed file is read again).
+size, modification time, inode and inode change time are unchanged; a changed or replaced file is
+read again).
 """
 
 from __future__ import annotations
@@ -20,13 +21,16 @@ from pathlib import Path
 from .errors import StoreError
 
 _BLOCK = 1 << 24  # bytes read and hashed at a time
-_KNOWN: dict[tuple[str, int, int], str] = {}
-_PENDING: dict[tuple[str, int, int], tuple[int, Future]] = {}  # key -> (process id, the digest to come)
+_KNOWN: dict[tuple[str, int, int, int, int], str] = {}
+_PENDING: dict[tuple[str, int, int, int, int], tuple[int, Future]] = {}  # key -> (process id, the digest to come)
 
 
-def _key(path: Path) -> tuple[str, int, int]:
+def _key(path: Path) -> tuple[str, int, int, int, int]:
+    """The file as the digests know it: its path, size, modification time, inode and inode change time (a
+    file replaced by another of the same size and time, a copy that kept its times, is another file, even
+    on the inode the replaced one freed: a new file's change time is its creation)."""
     st = os.stat(path)
-    return (str(path.resolve()), st.st_size, st.st_mtime_ns)
+    return (str(path.resolve()), st.st_size, st.st_mtime_ns, st.st_ino, st.st_ctime_ns)
 
 
 def _sha256(path: Path) -> str:

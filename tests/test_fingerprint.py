@@ -60,3 +60,19 @@ def test_a_run_stores_the_sha256_of_every_input(tmp_path):
     for i in inputs:
         data = open(i["path"], "rb").read()
         assert i["sha256"] == hashlib.sha256(data).hexdigest() and i["size"] == len(data), i["path"]
+
+
+def test_a_file_replaced_by_another_of_the_same_size_and_time_is_hashed_again(tmp_path):
+    """A copy that keeps its times (cp -p, shutil.copy2) of another file of the same size: the digest of the
+    file it replaced was reused, or its failed pending hash (the old file deleted) reported (found by the
+    fuzzer, which runs many inputs in one process)."""
+    path = tmp_path / "dump.txt"
+    path.write_bytes(b"A" * 1000)
+    os.utime(path, ns=(10**18, 10**18))
+    first = fingerprint.file_fingerprint(path)["sha256"]
+    other = tmp_path / "other.txt"
+    other.write_bytes(b"B" * 1000)
+    os.utime(other, ns=(10**18, 10**18))
+    path.unlink()
+    shutil.copy2(other, path)
+    assert fingerprint.file_fingerprint(path)["sha256"] == hashlib.sha256(b"B" * 1000).hexdigest() != first
