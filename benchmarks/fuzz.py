@@ -992,6 +992,8 @@ def check_case(case: Case) -> tuple[str, str]:
     outcome, detail = ("ok", "") if rc == 0 else (f"error {seen.get('class', '?')}", err_text.strip())
     if rc == 2 and "no stored number is NaN or inf" in err_text:  # the store's last guard: the pipeline let it by
         return "NONFINITE caught by the store", err_text
+    if rc == 2 and "earlier frames had" in err_text:  # the pipeline gave the frames of one run other columns
+        return "INCONSISTENT frames caught by the store", err_text
     if rc not in (0, 2):
         return f"EXIT{rc} {seen.get('class', '?')}", seen.get("traceback", "") + err_text
     if case.expect == "error" and rc == 0:
