@@ -233,14 +233,16 @@ RECORD_DAMAGE = {
 }
 
 
-@pytest.mark.parametrize("fmt", ["npy", "hdf5"])
-@pytest.mark.parametrize("damage", list(RECORD_DAMAGE))
+HDF5_CANNOT_HOLD = {"time beyond the doubles"}
+"""Damage the HDF5 snapshot writer cannot write (2**1100 is no attribute value): npy only."""
+
+
+@pytest.mark.parametrize("fmt, damage", [(fmt, damage) for fmt in ("npy", "hdf5") for damage in RECORD_DAMAGE
+                                         if not (fmt == "hdf5" and damage in HDF5_CANNOT_HOLD)])
 def test_a_snapshot_record_of_another_layout_is_one_message(tmp_path, capsys, fmt, damage):
     """A column missing, of another dtype, shape or length, metadata of the wrong type: exit 2 naming the
     snapshot and what is wrong (they were KeyError, TypeError, IndexError, ValueError: internal errors)."""
     change, words = RECORD_DAMAGE[damage]
-    if fmt == "hdf5" and damage == "time beyond the doubles":
-        pytest.skip("the HDF5 snapshot writer cannot store that time as an attribute")
     rc, err = run(rewritten(tmp_path, fmt, change), tmp_path, capsys)
     assert rc == 2 and words in err and err.count("\n") == 1 and "internal error" not in err, err
     assert not (tmp_path / "out.h5").exists()
