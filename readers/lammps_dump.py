@@ -17,43 +17,51 @@ a time and reports bad input precisely.
 
 Index
     The first access to ``n_frames``/``steps``/``frame(k)`` scans the
-    (decompressed) file once in 16 MiB windows (memory maps of a plain file,
-    a reused buffer for a compressed one: :func:`_windows`): one compiled
-    pass per window (:func:`~demsplit.readers.fastparse.scan_chunk`, numba)
-    counts the newlines and finds the ``ITEM: TIMESTEP`` markers; no per-line
-    Python. (The sha256 for the provenance is not taken here but by
-    :mod:`demsplit.fingerprint`, in the background while the first frame is
-    computed.) Each frame's entry holds its step, header row count, box,
-    column names, the byte range of its rows and their line numbers. The
-    index is cached on the object. Binary files are indexed by hopping from
-    header to header.
+    (decompressed) file once: a plain file in 16 MiB windows mapped into
+    memory and scanned on every core (:func:`_scan_mapped`), a compressed one
+    through a reused buffer (:func:`_windows`); one compiled pass per 1 MiB
+    (:func:`~demsplit.readers.fastparse.scan_chunk`, numba) counts the
+    newlines and finds the ``ITEM: TIMESTEP`` markers; no per-line Python.
+    Each frame's entry holds its step, header row count, box, column names,
+    the byte range of its rows and their line numbers; the index also keeps
+    the newlines before every 1 MiB (the checkpoints), which is where a
+    frame's rows are cut for the threads. (The sha256 for the provenance is
+    not taken here but by :mod:`demsplit.fingerprint`, in the background
+    while the first frame is computed.) The index is cached on the object.
+    Binary files are indexed by hopping from header to header.
 
 Reading a frame
-    ``frame(k)`` seeks to the frame's rows (a compressed file re-decompresses
-    from the start up to frame k; iteration, ``for f in dump``, reads the
-    stream once, forwards) and reads them in blocks of about 16 MiB of whole
-    rows into one reused buffer, each parsed straight into arrays
-    preallocated from the header's row count (the requested columns of each
-    dtype are the rows of one 2-D array): the text of a frame is never in
-    memory at once, so memory is the requested columns plus one block.
+    Rows are parsed straight into arrays preallocated from the header's row
+    count (the requested columns of each dtype are the rows of one 2-D
+    array); the text of a frame is never in memory at once. A plain file's
+    frame is cut at checkpoints into slices (a quarter of a thread's share, 1
+    to 16 MiB), and each thread of the pool reads a slice (``os.preadv``
+    into its own reused buffer) and parses it; the checkpoint's newline count
+    gives the slice's first row, so no slice waits for another and the copy
+    out of the page cache runs on every core too. A compressed file
+    (``frame(k)`` re-decompresses from the start up to frame k; iteration,
+    ``for f in dump``, reads the stream once, forwards) is read in blocks of
+    about 16 MiB of whole rows into one reused buffer, each block cut into
+    line-aligned slices, one per core. Memory: the requested columns plus a
+    buffer per thread.
 
 Parser
-    Each block is cut into line-aligned slices, one per core, parsed by the
-    compiled kernel :func:`~demsplit.readers.fastparse.parse_rows` in a
-    thread pool (it releases the GIL): in one pass it checks every row's
-    shape (``ncols`` fields, single spaces, the optional trailing space, a
-    newline) and converts the requested columns, integers exactly, reals by
-    Clinger's fast path (correctly rounded: bit for bit Python's ``float``).
+    Each slice is parsed by the compiled kernel
+    :func:`~demsplit.readers.fastparse.parse_rows` (it releases the GIL): in
+    one pass it checks every row's shape (``ncols`` fields, single spaces,
+    the optional trailing space, a newline) and converts the requested
+    columns, integers exactly, reals by Clinger's fast path (correctly
+    rounded: bit for bit Python's ``float``).
     The rare real outside that path (a mantissa above 2**53: 17 digits, some
     of 16; or a decimal exponent beyond +-22 such as ``8.4781e-19``) is
-    converted by ``float`` (at most 4096 per slice). A block holding anything
-    else (``%.17g`` text beyond that count, ``nan``, a non-number, a real in an
-    integer column) is parsed again by the general path, ``polars.read_csv``
-    (full schema, only the requested columns converted), which also makes an
-    integer column real and, for bad input, leads to the located error.
-    ``fast_blocks`` and ``fallback_blocks`` on a :class:`TextDump` count the
-    two. What it costs, and what it replaced: ``docs/performance.md``,
-    "Parser and index".
+    converted by ``float`` (at most 4096 per slice). A slice or block holding
+    anything else (``%.17g`` text beyond that count, ``nan``, a non-number, a
+    real in an integer column) is parsed again by the general path,
+    ``polars.read_csv`` (full schema, only the requested columns converted),
+    which also makes an integer column real and, for bad input, leads to the
+    located error. ``fast_blocks`` and ``fallback_blocks`` on a
+    :class:`TextDump` count the slices (blocks) of each. What it costs, and
+    what it replaced: ``docs/performance.md``, "Parser and index".
 
 Validation (every frame that is read)
     * the header's ``NUMBER OF ATOMS/ENTRIES`` equals the number of lines
@@ -92,6 +100,7 @@ import lzma
 import mmap
 import os
 import struct
+import threading
 import zlib
 from abc import ABC, abstractmethod
 from collections.abc import Iterator, Sequence
@@ -113,6 +122,8 @@ MARKER = b"ITEM: TIMESTEP"
 HEADER_LINES = 9            # TIMESTEP, step, NUMBER OF, n, BOX BOUNDS, 3 bounds, ITEM: <label> names
 HEADER_MAX = 1 << 16        # bytes a header may occupy (hundreds of column names fit)
 CHUNK = 1 << 24             # index scan chunk (16 MiB)
+CHECKPOINT = 1 << 20        # the index records the newlines before every CHECKPOINT bytes (1 MiB)
+ROW_MAX = 1 << 16           # bytes a slice reads past its end to finish its last row
 DIGITS_SAMPLE = 1 << 17     # bytes of rows sampled per frame for DumpFrame.digits
 BLOCK = 1 << 24             # bytes of rows parsed at a time (16 MiB)
 LOW_VARIETY = 16            # distinct values at or below which a column gets the frame's precision
@@ -441,7 +452,8 @@ class TextDump(DumpFile):
     # -- index
     def _build_index(self) -> tuple[list[_TextEntry], list[DemsplitError]]:
         with self._stream() as f:
-            markers, headers, lines_before, total, total_newlines, last_byte = _scan(f)
+            markers, headers, lines_before, total, total_newlines, last_byte, checkpoints = _scan(f)
+        self._checkpoints = checkpoints
         entries: list[_TextEntry] = []
         damaged: list[DemsplitError] = []
         for i, (pos, head, nl_before) in enumerate(zip(markers, headers, lines_before)):
@@ -507,32 +519,22 @@ class TextDump(DumpFile):
             file=self.path, step=e.step, line=e.first_line + e.n_lines, fix=FIX_COUNT)
 
     def _parse(self, e: _TextEntry, stream: BinaryIO, idx: list[int]) -> DumpFrame:
-        """Parse the rows of frame ``e`` from ``stream`` (positioned at its first row)
-        block by block into preallocated arrays of the requested columns."""
+        """Parse the rows of frame ``e`` (``stream`` is positioned at its first row) into
+        preallocated arrays of the requested columns: a plain file in slices read and parsed on
+        every core (:meth:`_parse_slices`), a compressed stream block by block (:meth:`_parse_blocks`)."""
         names = [e.names[i] for i in idx]
         if e.n_rows == 0:
             return DumpFrame(e.step, 0, e.box, {n: np.empty(0) for n in names}, self.path,
                              e.first_line, {n: None for n in names})
         ncols = len(e.names)
-        cols: _Columns | None = None
-        row, sample = 0, None
-        for block in _blocks(stream, e.data_end - e.data_start):
-            if cols is None:  # first block: separators, integer columns and the digits sample
-                head = block[:DIGITS_SAMPLE].tobytes()
-                trailing = head.split(b"\n", 1)[0].endswith(b" ")
-                sample = _tokens(head[: head.rfind(b"\n") + 1] or head, ncols)
-                int_like = _integer_columns(sample, ncols)
-                cols = _Columns(ncols, e.n_rows, [i for i in idx if not int_like[i]],
-                                [i for i in idx if int_like[i]])
-            n, converted = _parse_fast(block, ncols, trailing, cols, row, e.n_rows - row)
-            if n is None:
-                raise self._diagnose(e, block.tobytes(), row, trailing)
-            if converted:
-                self.fast_blocks += 1
-            else:
-                self.fallback_blocks += 1
-                self._parse_block(e, block.tobytes(), row, n, trailing, cols)
-            row += n
+        row = None
+        if self._opener is None:
+            head = _pread(stream.fileno(), e.data_start, min(DIGITS_SAMPLE, e.data_end - e.data_start))
+            cols, trailing, sample, int_like = self._layout(e, idx, head)
+            row = self._parse_slices(e, stream.fileno(), cols, trailing)
+        if row is None:  # compressed, or a row longer than ROW_MAX
+            stream.seek(e.data_start)
+            cols, row, sample, int_like = self._parse_blocks(e, stream, idx)
         if row != e.n_rows:  # the file shrank since it was indexed
             raise TruncatedFileError(f"the frame ends after {row} of its {e.n_rows} rows: the file changed "
                                      "after it was indexed", file=self.path, step=e.step,
@@ -551,6 +553,67 @@ class TextDump(DumpFile):
         digits = _digits(sample, ncols, idx, out, int_like)
         return DumpFrame(e.step, e.n_rows, e.box, out, self.path, e.first_line,
                          {n: digits[i] for n, i in zip(names, idx)})
+
+    def _layout(self, e: _TextEntry, idx: list[int], head: bytes) -> tuple[_Columns, bool, tuple, np.ndarray]:
+        """From the first bytes of the frame's rows: the arrays to fill, whether rows end with
+        a space, the digits sample and which columns hold integer literals."""
+        ncols = len(e.names)
+        trailing = head.split(b"\n", 1)[0].endswith(b" ")
+        sample = _tokens(head[: head.rfind(b"\n") + 1] or head, ncols)
+        int_like = _integer_columns(sample, ncols)
+        cols = _Columns(ncols, e.n_rows, [i for i in idx if not int_like[i]], [i for i in idx if int_like[i]])
+        return cols, trailing, sample, int_like
+
+    def _parse_blocks(self, e: _TextEntry, stream: BinaryIO, idx: list[int]) -> tuple[_Columns, int, tuple, np.ndarray]:
+        """The rows of frame ``e`` from a (compressed) ``stream`` in blocks of about ``BLOCK``
+        bytes through one reused buffer, each block parsed on every core (:func:`_parse_fast`):
+        (arrays, rows parsed, digits sample, integer-like columns)."""
+        ncols = len(e.names)
+        cols, sample, int_like = None, None, None
+        row = 0
+        for block in _blocks(stream, e.data_end - e.data_start):
+            if cols is None:
+                cols, trailing, sample, int_like = self._layout(e, idx, block[:DIGITS_SAMPLE].tobytes())
+            n, converted = _parse_fast(block, ncols, trailing, cols, row, e.n_rows - row)
+            if n is None:
+                raise self._diagnose(e, block.tobytes(), row, trailing)
+            if converted:
+                self.fast_blocks += 1
+            else:
+                self.fallback_blocks += 1
+                self._parse_block(e, block.tobytes(), row, n, trailing, cols)
+            row += n
+        return cols, row, sample, int_like
+
+    def _parse_slices(self, e: _TextEntry, fd: int, cols: _Columns, trailing: bool) -> int | None:
+        """The rows of frame ``e`` of the plain file ``fd`` into ``cols``, in slices cut at the
+        index's checkpoints, each read (``os.preadv``) and parsed
+        (:func:`~demsplit.readers.fastparse.parse_rows`) by one thread of the pool: the copy out of
+        the page cache runs on every core with the parse. A slice's first row number is the
+        newlines before its checkpoint (from the index), so no slice waits for another. A slice
+        with a malformed row is diagnosed, one with a token the compiled parse leaves (``nan``,
+        long ``%.17g`` text) is parsed again by polars (:meth:`_parse_block`), after the others.
+        Returns the rows parsed, or None when a row is longer than a slice's margin (``ROW_MAX``
+        bytes past its end): then nothing is parsed."""
+        cuts = _slice_cuts(self._checkpoints, e.data_start, e.data_end, e.first_line - 1, threads.count())
+        jobs = [(fd, lo, hi, e.data_start, e.data_end, nl - (e.first_line - 1), e.n_rows, trailing, cols)
+                for (lo, nl), hi in zip(cuts, [c for c, _ in cuts[1:]] + [e.data_end])]
+        results = list(threads.pool().map(lambda job: _parse_slice(*job), jobs))
+        if any(status is None for status, *_ in results):
+            return None
+        row = 0
+        for status, row0, n, lo, hi in results:
+            if status == SLICE_SHAPE:
+                raise self._diagnose(e, _pread(fd, lo, hi - lo), row0, trailing)
+            if row0 != row:  # the file changed after it was indexed
+                break
+            if status == SLICE_OK:
+                self.fast_blocks += 1
+            else:
+                self.fallback_blocks += 1
+                self._parse_block(e, _pread(fd, lo, hi - lo), row0, n, trailing, cols)
+            row += n
+        return row
 
     def _parse_block(self, e: _TextEntry, block: bytes, row: int, n: int, trailing: bool,
                      cols: _Columns) -> None:
@@ -676,6 +739,89 @@ class _Columns:
         self.ints = self.ints[:0]
 
 
+SLICE_OK, SLICE_FALLBACK, SLICE_SHAPE = "ok", "fallback", "shape"   # what _parse_slice found
+_thread_buffers = threading.local()
+
+
+def _slice_cuts(checkpoints: np.ndarray, start: int, end: int, newlines_before: int,
+                n_threads: int) -> list[tuple[int, int]]:
+    """Where :meth:`TextDump._parse_slices` cuts the rows in ``[start, end)`` (``newlines_before``
+    ``start``): checkpoints (offset, newlines before it) about a quarter of a thread's share apart
+    (so that slices of uneven cost still end together), at least ``CHECKPOINT`` and at most
+    ``BLOCK`` bytes, the first cut ``start`` itself."""
+    target = min(BLOCK, max(CHECKPOINT, (end - start) // (4 * n_threads)))
+    inside = checkpoints[(checkpoints[:, 0] > start) & (checkpoints[:, 0] < end)]
+    cuts = [(start, newlines_before)]
+    for offset, newlines in inside.tolist():
+        if offset - cuts[-1][0] >= target:
+            cuts.append((offset, newlines))
+    return cuts
+
+
+def _parse_slice(fd: int, lo: int, hi: int, data_start: int, data_end: int, row_base: int, n_rows: int,
+                 trailing: bool, cols: _Columns) -> tuple[str | None, int, int, int, int]:
+    """Read and parse the rows of a frame (bytes ``[data_start, data_end)`` of the file ``fd``) that
+    start in ``[lo, hi)``, ``row_base`` being the rows before ``lo``, into ``cols``; run by one thread.
+
+    The slice owns the first row starting at or after ``lo`` up to the first starting at or after
+    ``hi`` (the next slice's first), so it reads from ``lo - 1`` (is ``lo`` itself a row start?) to
+    ``ROW_MAX`` bytes past ``hi``, into this thread's reused buffer. Returns (status, first row,
+    rows, byte range of those rows): ``SLICE_OK`` (every requested token written; the few reals
+    outside the compiled fast path converted by ``float``), ``SLICE_FALLBACK`` (well formed, but some
+    token left for the general parse), ``SLICE_SHAPE`` (a malformed row), or None when the last row
+    runs past the margin.
+    """
+    from .fastparse import FALLBACK, SHAPE, next_newline, parse_rows
+
+    begin = lo if lo == data_start else lo - 1
+    stop = min(hi + ROW_MAX, data_end)
+    a = _thread_buffer(stop - begin)
+    a = a[: _read_at(fd, a, begin)]                 # shorter only when the file shrank since the index
+    p = 0 if lo == data_start else next_newline(a, 0)
+    row0 = row_base + (0 if lo == data_start or p == 1 else 1)
+    q = a.size if hi == data_end else next_newline(a, hi - 1 - begin)
+    if q == a.size and stop < data_end and (a.size == 0 or a[-1] != 10):
+        return None, row0, 0, begin + p, begin + q
+    if p >= q or row0 >= n_rows:
+        return SLICE_OK, row0, 0, begin + q, begin + q
+    slow = np.empty((_SLOW_MAX, 4), dtype=np.int64)
+    status, _, n, n_slow = parse_rows(a, p, q, len(cols.kind), trailing, cols.kind, cols.slot, cols.reals,
+                                      cols.ints, row0, n_rows - row0, slow)
+    if status == SHAPE:
+        return SLICE_SHAPE, row0, n, begin + p, begin + q
+    if status == FALLBACK:
+        return SLICE_FALLBACK, row0, n, begin + p, begin + q
+    for slot, row, t0, t1 in slow[:n_slow].tolist():
+        cols.reals[slot, row] = float(a[t0:t1].tobytes())
+    return SLICE_OK, row0, n, begin + p, begin + q
+
+
+def _thread_buffer(n: int) -> np.ndarray:
+    """``n`` bytes of this thread's reused read buffer (grown when too small)."""
+    buf = getattr(_thread_buffers, "buffer", None)
+    if buf is None or buf.size < n:
+        buf = _thread_buffers.buffer = np.empty(n, dtype=np.uint8)
+    return buf[:n]
+
+
+def _read_at(fd: int, out: np.ndarray, offset: int) -> int:
+    """Fill ``out`` with the bytes of ``fd`` from ``offset`` (``os.preadv``, which releases the GIL);
+    bytes read (fewer at the end of the file)."""
+    view, total = memoryview(out), 0
+    while total < out.size:
+        n = os.preadv(fd, [view[total:]], offset + total)
+        if not n:
+            break
+        total += n
+    return total
+
+
+def _pread(fd: int, offset: int, n: int) -> bytes:
+    """``n`` bytes of ``fd`` from ``offset`` (fewer at the end of the file)."""
+    out = np.empty(n, dtype=np.uint8)
+    return out[: _read_at(fd, out, offset)].tobytes()
+
+
 _SLICE_MIN = 1 << 20        # bytes below which a block is parsed by one thread
 _SLOW_MAX = 4096            # reals outside the compiled fast path converted by float() per slice, at most
 
@@ -718,64 +864,97 @@ def _parse_fast(a: np.ndarray, ncols: int, trailing: bool, cols: _Columns, row0:
     return rows_parsed, True
 
 
-def _scan(f: BinaryIO) -> tuple[list[int], list[bytes], list[int], int, int, bytes]:
-    """One pass over a (decompressed) stream, window by window (:func:`_windows`).
+def _scan(f: BinaryIO) -> tuple[list[int], list[bytes], list[int], int, int, bytes, np.ndarray]:
+    """One pass over a (decompressed) stream, window by window.
 
     Returns the byte offsets of the ``ITEM: TIMESTEP`` lines, up to
     ``HEADER_MAX`` bytes of text from each (cut at the next marker), the number
-    of newlines before each, the total size, the total number of newlines and
-    the last byte. Newlines are counted and markers found by one compiled pass
-    per window (:func:`~demsplit.readers.fastparse.scan_chunk`). (The provenance's
+    of newlines before each, the total size, the total number of newlines, the
+    last byte, and the checkpoints: an (n, 2) int64 array of offsets, one per
+    ``CHECKPOINT`` bytes, with the newlines before each (where a frame's rows
+    can be cut into slices whose first row number is known: :meth:`TextDump._parse_slices`).
+    Newlines are counted and markers found by one compiled pass per
+    ``CHECKPOINT`` bytes (:func:`~demsplit.readers.fastparse.scan_chunk`). A
+    plain file is scanned through memory maps, one per window of ``CHUNK``
+    bytes, the windows on every core (:func:`_scan_mapped`); a compressed
+    stream through one reused buffer (:func:`_windows`). (The provenance's
     sha256 of the file is not taken here: :mod:`demsplit.fingerprint` hashes
     the inputs in the background while the first frame is computed.)
     """
-    from .fastparse import scan_chunk
-
+    if isinstance(f, (io.BufferedReader, io.FileIO)) and (size := os.fstat(f.fileno()).st_size):
+        fd = f.fileno()
+        pieces = threads.pool().map(lambda start: _scan_mapped(fd, start, size), range(0, size, CHUNK))
+    else:  # (an empty file cannot be mapped: it takes the buffered path, which reads nothing)
+        pieces = (_scan_window(start, window, limit) for start, window, limit in _windows(f))
     markers: list[int] = []
     headers: list[bytes] = []
     lines_before: list[int] = []
-    pos_out = np.empty((HEADER_MAX + CHUNK) // len(MARKER) + 1, dtype=np.int64)
-    nl_out = np.empty_like(pos_out)
+    checkpoints: list[np.ndarray] = []
     newlines, total, last_byte = 0, 0, b""
-    for start, window, limit in _windows(f):
-        found, nl = scan_chunk(window, limit, pos_out, nl_out)
-        for pos, before in zip(pos_out[:found].tolist(), nl_out[:found].tolist()):
-            head = window[pos: pos + HEADER_MAX].tobytes()
-            nxt = head.find(MARKER, 1)
-            markers.append(start + pos)
-            headers.append(head if nxt == -1 else head[:nxt])
+    for found, nl, marks, end, last in pieces:
+        for pos, before, head in found:
+            markers.append(pos)
+            headers.append(head)
             lines_before.append(newlines + before)
+        marks[:, 1] += newlines
+        checkpoints.append(marks)
         newlines += nl
-        total = start + window.size
-        if window.size:
-            last_byte = window[-1:].tobytes()
-    return markers, headers, lines_before, total, newlines, last_byte
+        total, last_byte = end, last or last_byte
+    return (markers, headers, lines_before, total, newlines, last_byte,
+            np.concatenate(checkpoints) if checkpoints else np.zeros((0, 2), np.int64))
+
+
+def _scan_window(start: int, window: np.ndarray, limit: int) -> tuple[list, int, np.ndarray, int, bytes]:
+    """The markers of ``window[:limit]`` (``window`` holds the stream from offset ``start``):
+    ([(offset, newlines before it in the window, its header text)], newlines in ``window[:limit]``,
+    the checkpoints of the window (offset, newlines before it in the window), the offset after
+    ``window``, its last byte)."""
+    from .fastparse import scan_chunk
+
+    step = max(1, min(CHECKPOINT, limit))
+    pos_out = np.empty(step // len(MARKER) + 1, dtype=np.int64)
+    nl_out = np.empty_like(pos_out)
+    found: list[tuple[int, int, bytes]] = []
+    marks = np.zeros((len(range(0, limit, step)), 2), dtype=np.int64)
+    newlines = 0
+    for k, lo in enumerate(range(0, limit, step)):
+        n, nl = scan_chunk(window[lo:], min(step, limit - lo), pos_out, nl_out)
+        for pos, before in zip(pos_out[:n].tolist(), nl_out[:n].tolist()):
+            head = window[lo + pos: lo + pos + HEADER_MAX].tobytes()
+            nxt = head.find(MARKER, 1)
+            found.append((start + lo + pos, newlines + before, head if nxt == -1 else head[:nxt]))
+        marks[k] = start + lo, newlines
+        newlines += nl
+    return found, newlines, marks, start + window.size, window[-1:].tobytes()
+
+
+def _scan_mapped(fd: int, start: int, size: int) -> tuple[list, int, np.ndarray, int, bytes]:
+    """:func:`_scan_window` of the window of a plain file of ``size`` bytes that starts at ``start``:
+    a memory map of it (``CHUNK`` bytes and ``HEADER_MAX`` more, so that a header starting in it is
+    whole), unmapped before returning. No copy out of the page cache, which is most of a scan's
+    time with ``read()`` (docs/performance.md, "Parser and index")."""
+    base = start - start % mmap.ALLOCATIONGRANULARITY  # a map starts on a page
+    mapped = mmap.mmap(fd, min(start + CHUNK + HEADER_MAX, size) - base, access=mmap.ACCESS_READ, offset=base)
+    try:
+        if hasattr(mapped, "madvise"):
+            mapped.madvise(mmap.MADV_SEQUENTIAL)
+        window = np.frombuffer(mapped, dtype=np.uint8)[start - base:]
+        result = _scan_window(start, window, min(CHUNK, size - start))
+        del window
+    finally:
+        mapped.close()
+    return result
 
 
 def _windows(f: BinaryIO) -> Iterator[tuple[int, np.ndarray, int]]:
-    """The stream as ``(offset, window, limit)``, for the index scan: ``window``
-    holds the bytes from ``offset`` on (uint8, valid until the next window is
-    asked for); the scan searches ``window[:limit]``, and the window reaches
-    ``HEADER_MAX`` bytes past ``limit`` (or to the end) so that a header that
-    starts before ``limit`` is whole. Consecutive limits tile the stream.
-
-    A plain file's windows are memory maps of it, one per window (unmapped
-    when the next is asked for, so the resident memory stays one or two
-    windows): no copy out of the page cache, which is most of a scan's time
-    with ``read()`` (docs/performance.md, "Parser and index"). A compressed
-    stream is read into one reused buffer of ``HEADER_MAX + CHUNK`` bytes, the last
-    ``HEADER_MAX`` bytes of each window moving to the front for the next.
+    """A compressed stream as ``(offset, window, limit)``, for the index scan:
+    ``window`` holds the bytes from ``offset`` on (uint8, valid until the next
+    window is asked for); the scan searches ``window[:limit]``, and the window
+    reaches ``HEADER_MAX`` bytes past ``limit`` (or to the end) so that a header
+    that starts before ``limit`` is whole. Consecutive limits tile the stream.
+    One reused buffer of ``HEADER_MAX + CHUNK`` bytes, the last ``HEADER_MAX``
+    bytes of each window moving to the front for the next.
     """
-    # (an empty file cannot be mapped: it takes the buffered path, which reads nothing)
-    if isinstance(f, (io.BufferedReader, io.FileIO)) and (size := os.fstat(f.fileno()).st_size):
-        for start in range(0, size, CHUNK):
-            base = start - start % mmap.ALLOCATIONGRANULARITY  # a map starts on a page
-            mapped = mmap.mmap(f.fileno(), min(start + CHUNK + HEADER_MAX, size) - base,
-                               access=mmap.ACCESS_READ, offset=base)
-            if hasattr(mapped, "madvise"):
-                mapped.madvise(mmap.MADV_SEQUENTIAL)
-            yield start, np.frombuffer(mapped, dtype=np.uint8)[start - base:], min(CHUNK, size - start)
-        return
     buf = bytearray(HEADER_MAX + CHUNK)
     kept, limit, start = 0, 0, 0
     while True:

@@ -247,12 +247,18 @@ def test_index_scan_is_the_same_for_any_window(tmp_path, monkeypatch, compressed
     path.write_bytes(gzip.compress(text) if compressed else text)
     markers = [k for k in range(len(text)) if text.startswith(b"ITEM: TIMESTEP", k)]
     whole = index_of(path)
-    assert whole[0] == markers and whole[3:] == (len(text), text.count(b"\n"), text[-1:])
+    assert whole[0] == markers and whole[3:6] == (len(text), text.count(b"\n"), text[-1:])
     assert whole[2] == [text[:m].count(b"\n") for m in markers]
     assert whole[1] == [text[m: n] for m, n in zip(markers, markers[1:] + [len(text)])]
     monkeypatch.setattr(ld, "CHUNK", chunk)
+    monkeypatch.setattr(ld, "CHECKPOINT", max(1, chunk // 3))
     monkeypatch.setattr(ld, "HEADER_MAX", 200)  # holds each header (at most 155 bytes here)
-    assert index_of(path) == whole
+    windowed = index_of(path)
+    assert windowed[:6] == whole[:6]
+    checkpoints = windowed[6].tolist()  # (offset, newlines before it), at most CHECKPOINT bytes apart
+    offsets = [o for o, _ in checkpoints] + [len(text)]
+    assert offsets[0] == 0 and all(0 < b - a <= max(1, chunk // 3) for a, b in zip(offsets, offsets[1:]))
+    assert all(n == text[:o].count(b"\n") for o, n in checkpoints)
 
 
 # --------------------------------------------------------------------------- the reader
@@ -288,13 +294,19 @@ def test_reader_equals_pythons_float_per_token(xs, f, first):
 
 
 def force_polars(monkeypatch):
-    """Make every block go through the polars path (after the kernel's shape check)."""
-    fast = ld._parse_fast
+    """Make every block (compressed dumps) and slice (plain files) go through the polars path
+    (after the kernel's shape check)."""
+    fast, fast_slice = ld._parse_fast, ld._parse_slice
 
     def slow_path(*args):
         n, _ = fast(*args)
         return n, False
+
+    def slow_slice(*args):
+        status, *rest = fast_slice(*args)
+        return (ld.SLICE_FALLBACK if status == ld.SLICE_OK else status, *rest)
     monkeypatch.setattr(ld, "_parse_fast", slow_path)
+    monkeypatch.setattr(ld, "_parse_slice", slow_slice)
 
 
 def read_all(path: Path, columns=None) -> tuple[list, object]:
@@ -337,7 +349,7 @@ def test_fast_path_equals_polars_path_on_samples(path, monkeypatch):
 @pytest.mark.parametrize("name", ["atoms.txt", "pairs.txt"])
 def test_fast_path_equals_polars_path_on_generated_run(generated, name, monkeypatch):
     fast, d = read_all(generated / name)
-    assert d.fast_blocks == 2 and d.fallback_blocks == 0
+    assert d.fast_blocks >= 2 and d.fallback_blocks == 0   # a slice or more per frame
     force_polars(monkeypatch)
     slow, _ = read_all(generated / name)
     assert_same_frames(fast, slow)
@@ -399,8 +411,9 @@ def ld_write(tmp_path: Path, text: str, name: str = "d.txt") -> Path:
 ])
 @pytest.mark.parametrize("block", [None, 64])
 def test_errors_name_the_line(tmp_path, monkeypatch, bad, expect, block):
-    if block:  # the bad row in a later block than the first
+    if block:  # the bad row in a later block (slice) than the first
         monkeypatch.setattr(ld, "BLOCK", block)
+        monkeypatch.setattr(ld, "CHECKPOINT", block)
     rows = [f"{k} 0.5 0.25" for k in range(20)]
     rows[7] = bad
     text = local_dump(rows, 3)
@@ -420,6 +433,7 @@ def test_missing_final_newline(tmp_path):
 def test_integer_column_turning_real_in_a_later_block(tmp_path, monkeypatch):
     monkeypatch.setattr(ld, "DIGITS_SAMPLE", 64)
     monkeypatch.setattr(ld, "BLOCK", 100)
+    monkeypatch.setattr(ld, "CHECKPOINT", 100)
     rows = [f"{k} {k * 0.5:g}" for k in range(40)]
     rows[20] = "2.5e+06 10"
     f = open_dump(ld_write(tmp_path, local_dump(rows, 2))).frame(0)
@@ -432,6 +446,7 @@ def test_integer_column_turning_real_in_a_later_block(tmp_path, monkeypatch):
 def test_threaded_parse_equals_serial(generated, monkeypatch, block):
     path = generated / "pairs.txt"
     monkeypatch.setattr(ld, "BLOCK", block)
+    monkeypatch.setattr(ld, "CHECKPOINT", min(block, 1 << 20))
     monkeypatch.setattr(ld, "_SLICE_MIN", 1)
     from demsplit import threads
 
@@ -440,6 +455,32 @@ def test_threaded_parse_equals_serial(generated, monkeypatch, block):
     monkeypatch.setattr(threads, "THREADS", 5)  # slices per block
     threaded, _ = read_all(path)
     assert_same_frames(serial, threaded)
+
+
+@pytest.mark.parametrize("margin", [200, 1 << 16])
+def test_slices_equal_blocks(generated, monkeypatch, margin):
+    """A plain file read in slices cut at the index's checkpoints (each read and parsed by one
+    thread) equals the same file read as a compressed stream, block by block; rows longer than a
+    slice's margin (ROW_MAX bytes past its end) make the frame take the block path."""
+    plain = generated / "pairs.txt"
+    packed = generated / "pairs.txt.gz"
+    packed.write_bytes(gzip.compress(plain.read_bytes()))
+    monkeypatch.setattr(ld, "CHECKPOINT", 64)
+    monkeypatch.setattr(ld, "BLOCK", 64)
+    monkeypatch.setattr(ld, "ROW_MAX", margin)
+    from demsplit import threads
+
+    monkeypatch.setattr(threads, "THREADS", 3)
+    block_reads = []
+    by_blocks = ld.TextDump._parse_blocks
+    monkeypatch.setattr(ld.TextDump, "_parse_blocks", lambda self, e, *a: block_reads.append(self.path)
+                        or by_blocks(self, e, *a))
+    sliced, _ = read_all(plain)
+    blocks, _ = read_all(packed)
+    assert_same_frames(sliced, blocks)
+    row = len(plain.read_text().splitlines()[-1]) + 1
+    assert block_reads.count(str(plain)) == (0 if margin > row else 2)  # each frame, when rows do not fit
+    assert block_reads.count(str(packed)) == 2
 
 
 def test_compressed_dump_uses_the_fast_path(tmp_path):
