@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import threads
 from .jit import kernel
 from .physics import formulas
 
@@ -339,13 +340,17 @@ def pair_geometry(rows1, rows2, xyzr, h, lengths, tilt, periodic, with_cp):
     overlap from positions r1 + r2 - dist, the larger printed step of the two
     centres (when ``h`` is given, else an empty array) and, ``with_cp``,
     LIGGGHTS' radius-weighted contact point x1 + r1/(r1 + r2) d, shape (3, n)
-    (``contactPoint`` of ``compute pair/gran/local``).
+    (``contactPoint`` of ``compute pair/gran/local``), pieces of the list on every core.
     Returns (nx, ny, nz, x1, y1, z1, r1, r2, gap, hmax, cp)."""
     n = len(rows1)
     out = [np.empty(n) for _ in range(9)]
     hmax = np.empty(n if len(h) else 0)
     cp = np.empty((3, n if with_cp else 0))
-    _pair_geometry(rows1, rows2, xyzr, h, lengths, tilt, periodic, *out, hmax, cp)
+
+    def piece(lo: int, hi: int) -> None:
+        _pair_geometry(rows1[lo:hi], rows2[lo:hi], xyzr, h, lengths, tilt, periodic, *(o[lo:hi] for o in out),
+                       hmax[lo:hi], cp[:, lo:hi])
+    threads.map_ranges(piece, n)
     return (*out, hmax, cp)
 
 

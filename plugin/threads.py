@@ -11,7 +11,11 @@ the pool must not wait for other tasks on it.
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
+from typing import TypeVar
+
+T = TypeVar("T")
 
 def _cores() -> int:
     """``DEMSPLIT_THREADS`` when set to a positive integer, else the cores this process may run on."""
@@ -46,3 +50,18 @@ def pool() -> ThreadPoolExecutor:
     if _pool is None or _pool[0] != os.getpid():
         _pool = (os.getpid(), ThreadPoolExecutor(max_workers=count(), thread_name_prefix="demsplit"))
     return _pool[1]
+
+
+MIN_RANGE = 1 << 16
+"""Rows below which :func:`map_ranges` does not split (a task costs about 10 us to hand over)."""
+
+
+def map_ranges(fn: Callable[[int, int], T], n: int) -> list[T]:
+    """``fn(lo, hi)`` over :func:`count` contiguous pieces of ``range(n)`` (at least ``MIN_RANGE``
+    rows each) on the pool, the results in order: for per-row work that releases the GIL (numba
+    kernels, numpy on large arrays). Not to be called from a task on the pool."""
+    k = max(1, min(count(), n // MIN_RANGE))
+    cuts = [n * i // k for i in range(k + 1)]
+    if k == 1:
+        return [fn(0, n)]
+    return list(pool().map(lambda i: fn(cuts[i], cuts[i + 1]), range(k)))

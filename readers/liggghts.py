@@ -37,6 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import threads
 from ..errors import ContactError, InputFormatError, MaterialError, PrecisionError
 from ..frame import Box, Frame, ParticleIndex, Table, describe_steps
 from ..physics.shares import contact_point
@@ -470,7 +471,7 @@ class LiggghtsRun(Run):
         has_primitive = any(w.kind in ("plane", "cylinder") for w in self.scene.walls)
         # printed step of every particle's coordinates (0 at full precision): where positions make overlaps,
         # and where a dumped overlap is checked against them
-        h = np.max([printed_step(particles[c], af.digits.get(c)) for c in ("x", "y", "z")], axis=0)
+        h = _largest_printed_step([particles[c] for c in ("x", "y", "z")], [af.digits.get(c) for c in ("x", "y", "z")])
         parts = [self._pairs(pf, index, xyzr, h, box)]
         if wf is not None:
             parts.append(self._mesh_walls(wf, particles, index, xyz, h))
@@ -725,16 +726,36 @@ def _refuse_overlaps_off_positions(pf: DumpFrame, token: str, delta: np.ndarray,
     both allows: twice sqrt(3) h for the centres, the dumped value's own rounding, and 1e-9 of r1 + r2 for
     the arithmetic. A pair dump of another run or step, or a damaged value, is refused by its line (an
     overlap > 0 only: a dumped overlap <= 0 is named by the checks of a contact that is not one)."""
-    tol = 2.0 * np.sqrt(3.0) * h + np.abs(delta) * relative_rounding(pf.digits.get(token)) + 1e-9 * r
-    # an overlap <= 0, or positions that are not finite, are the other checks' findings
-    off = (delta > 0) & np.isfinite(gap) & ~(np.abs(delta - gap) <= tol)
+    rounding = relative_rounding(pf.digits.get(token))
+
+    def tolerance(lo: int, hi: int) -> np.ndarray:
+        return 2.0 * np.sqrt(3.0) * h[lo:hi] + np.abs(delta[lo:hi]) * rounding + 1e-9 * r[lo:hi]
+
+    def outside(lo: int, hi: int) -> np.ndarray:
+        # an overlap <= 0, or positions that are not finite, are the other checks' findings
+        d, g = delta[lo:hi], gap[lo:hi]
+        return (d > 0) & np.isfinite(g) & ~(np.abs(d - g) <= tolerance(lo, hi))
+
+    off = np.concatenate(threads.map_ranges(outside, len(delta)))  # numpy releases the GIL: pieces on every core
     if off.any():
+        tol = tolerance(0, len(delta))
         row = int(np.flatnonzero(off)[0])
         raise ContactError(
             f"the contact of particles {int(id1[row])} and {int(id2[row])} has a dumped overlap of "
             f"{float(delta[row]):.6g} m, but its particles' positions give {float(gap[row]):.6g} m (the printing "
             f"allows {float(tol[row]):.2g} m); {int(off.sum())} such contact(s).", file=pf.file, step=pf.step,
             line=pf.line_of(row), fix="check that the pair and atom dumps belong to the same run and timestep.")
+
+
+def _largest_printed_step(coordinates: list[np.ndarray], digits: list[int | None]) -> np.ndarray:
+    """Per particle, the largest :func:`~demsplit.readers.precision.printed_step` of its coordinates
+    (m; 0 at full precision), pieces of the particles on every core."""
+    h = np.empty(len(coordinates[0]))
+
+    def piece(lo: int, hi: int) -> None:
+        h[lo:hi] = np.max([printed_step(x[lo:hi], d) for x, d in zip(coordinates, digits)], axis=0)
+    threads.map_ranges(piece, len(h))
+    return h
 
 
 def _refuse_repeated_steps(dump: DumpFile) -> None:

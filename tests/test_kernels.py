@@ -340,8 +340,15 @@ def test_repeated_pair_matches_lexsort(seed, n, m, no_self):
     assert tuple(kernels.repeated_pair(a, b, n)) == reference_repeated_pair(a, b)
 
 
+@pytest.mark.parametrize("pieces", [1, 3])
 @pytest.mark.parametrize("periodic", [(False, False, False), (True, True, True), (True, False, True)])
-def test_pair_geometry_matches_numpy(periodic):
+def test_pair_geometry_matches_numpy(periodic, pieces, monkeypatch):
+    """One piece, or pieces of the list on the pool's threads (threads.map_ranges): the same numbers."""
+    from demsplit import threads
+
+    monkeypatch.setattr(threads, "MIN_RANGE", 1 if pieces > 1 else 1 << 16)
+    monkeypatch.setattr(threads, "THREADS", pieces)
+    monkeypatch.setattr(threads, "_pool", None)
     rng = np.random.default_rng(8)
     n_particles, n = 40, 300
     box = ds.Box(np.zeros(3), np.array([1.0, 2.0, 0.5]), periodic, np.array([0.1, -0.05, 0.2]))
@@ -393,3 +400,14 @@ def test_walls_with_their_own_model():
     assert wall.sum() > 10
     u_n, _ = reference_hertz(contacts, reference_constants(contacts, scene, particles))
     assert not np.array_equal(e.u_n[wall], u_n[wall])  # the walls' own law, not hertz
+
+
+@pytest.mark.parametrize("n, threads_, expect", [(10, 4, 1), (1 << 17, 1, 1), (1 << 17, 2, 2), (3 << 16, 8, 3)])
+def test_map_ranges_tiles_the_rows_in_order(n, threads_, expect, monkeypatch):
+    from demsplit import threads
+
+    monkeypatch.setattr(threads, "THREADS", threads_)
+    monkeypatch.setattr(threads, "_pool", None)
+    pieces = threads.map_ranges(lambda lo, hi: (lo, hi), n)
+    assert len(pieces) == expect and pieces[0][0] == 0 and pieces[-1][1] == n
+    assert all(a[1] == b[0] for a, b in zip(pieces, pieces[1:]))

@@ -666,3 +666,21 @@ def test_cli_info(capsys):
     text = capsys.readouterr().out
     for words in ("pairs.txt", "CONTACTS", "200000", "204000", "c_cpgl[38]", "c_cpgl[41]"):
         assert words in text
+
+
+def test_a_frame_assembled_in_pieces_is_the_frame_in_one(monkeypatch):
+    """The join, the printed steps and the overlap check run in pieces of the contacts on the pool's
+    threads (threads.map_ranges): the frame is the same, bit for bit."""
+    from demsplit import threads
+
+    script = SAMPLES / "packing" / "in.packing"
+    whole = open_run(script).frame(-1)
+    monkeypatch.setattr(threads, "MIN_RANGE", 1)
+    monkeypatch.setattr(threads, "THREADS", 3)
+    monkeypatch.setattr(threads, "_pool", None)
+    pieces = open_run(script).frame(-1)
+    for table in ("particles", "contacts"):
+        a, b = getattr(whole, table), getattr(pieces, table)
+        assert list(a) == list(b)
+        for c in a:
+            assert np.array_equal(np.asarray(a[c]), np.asarray(b[c])), (table, c)

@@ -377,9 +377,16 @@ def test_the_walk_of_an_hdf5_input_ends_and_passes_objects_without_data(tmp_path
     assert rc == 0, err
 
 
-def test_a_dumped_overlap_that_the_positions_do_not_give_is_refused(run_dir, tmp_path, capsys):
+@pytest.mark.parametrize("pieces", [1, 3])
+def test_a_dumped_overlap_that_the_positions_do_not_give_is_refused(run_dir, tmp_path, capsys, pieces, monkeypatch):
     """Half a contact's dumped delta passes the radius check and halved its energy with exit 0. The dumped
-    overlap must be r1 + r2 - |x2 - x1| within the printing (the samples agree to 4e-18 m)."""
+    overlap must be r1 + r2 - |x2 - x1| within the printing (the samples agree to 4e-18 m); checked in
+    one piece or in pieces on the pool's threads."""
+    from demsplit import threads
+
+    monkeypatch.setattr(threads, "MIN_RANGE", 1 if pieces > 1 else 1 << 16)
+    monkeypatch.setattr(threads, "THREADS", pieces)
+    monkeypatch.setattr(threads, "_pool", None)
     pairs = run_dir / "pairs.txt"
     lines = pairs.read_bytes().split(b"\n")
     tokens = lines[15 - 1].split(b" ")
