@@ -139,3 +139,45 @@ def test_the_summary_states_what_was_not_computed_first(packing, capsys):
     lines = capsys.readouterr().out.splitlines()
     assert lines[1].startswith("  NOT COMPUTED") and "wall 'floor'" in lines[2]
     assert any("primitive-wall contacts are NOT COMPUTED" in line for line in lines[2:5])
+
+
+def test_not_computed_is_never_a_zero_in_an_export_or_the_report(packing, capsys):
+    """--allow-missing floor with primitive walls: the floor's energies and contact count, and the
+    primitive-wall tangential energies (per contact, per particle, per wall), are empty CSV cells,
+    Parquet nulls, NaN in VTK and the OVITO dump, "not computed" in the report's tables; the store
+    keeps 0 with the bits (docs/design.md)."""
+    import pandas as pd
+
+    pytest.importorskip("pyarrow")
+    meshio = pytest.importorskip("meshio")
+    for name in ("wall.txt", "wall_full.txt.gz"):
+        (packing.parent / name).unlink()
+    d = packing.parent
+    out = d / "out.h5"
+    assert main(["run", str(packing), "-o", str(out), "-q", "--allow-missing", "floor"]) == 0
+    assert main(["export", str(out), "--csv", str(d / "csv"), "--parquet", str(d / "pq"), "--vtk", str(d / "vtk"),
+                 "--dump", str(d / "p.dump"), "-q"]) == 0
+    for table, unknown in (("walls", ["u", "u_t"]), ("particles", ["u", "u_t", "u_equal", "u_radius"]),
+                           ("contacts", ["u_t", "u1", "u2"])):
+        for df in (pd.read_csv(d / "csv" / f"{table}.csv"), pd.read_parquet(d / "pq" / f"{table}.parquet")):
+            flagged = (df["not_computed"] & U_T) != 0
+            assert flagged.any() and (df.loc[flagged, unknown].isna().all().all())
+            assert df.loc[~flagged, unknown].notna().all().all()  # what is known stays a number
+    walls = pd.read_csv(d / "csv" / "walls.csv")
+    floor = walls[walls["name"] == "floor"]
+    assert floor[["u", "u_n", "u_t", "n_contacts"]].isna().all().all()
+    assert walls.loc[walls["kind"] == "plane", "u_n"].gt(0).all()  # primitive walls' normal energy is known
+    mesh = meshio.read(d / "vtk" / "particles_000000204000.vtu")
+    flagged = (mesh.point_data["not_computed"] & U_T) != 0
+    assert flagged.any() and np.isnan(mesh.point_data["u_t"][flagged]).all()
+    assert not np.isnan(mesh.point_data["u_t"][~flagged]).any()
+    assert " nan " in (d / "p.dump").read_text()
+    capsys.readouterr()
+    assert main(["report", str(out)]) == 0
+    text = capsys.readouterr().out
+    floor_row = next(line for line in text.splitlines() if line.split()[1:3] == ["floor", "mesh"])
+    assert floor_row.count("not computed") == 5  # u u_n u_t n_contacts share
+    assert "tangential" in text and "without 104 contact(s) not computed" in text and "n_not_computed" in text
+    assert main(["report", str(out), "-o", str(d / "r.html"), "-q"]) == 0
+    page = (d / "r.html").read_text()
+    assert page.count(">not computed</td>") == 6 * 3 + 2 and "contacts_not_computed" in page  # u u_t share; u_n n

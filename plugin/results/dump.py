@@ -3,7 +3,8 @@
 :func:`export_dump` writes one ``ITEM: TIMESTEP`` frame per stored frame:
 ``ITEM: ATOMS id type x y z radius`` followed by every other per-particle
 column (``u u_n u_t``, the comparison splits, ``n_contacts``, ...), reals at
-full precision (``%.17g``). OVITO maps ``id type x y z radius`` to its
+full precision (``%.17g``); a value that was not computed (the ``not_computed`` bits, also written)
+is ``nan``, never the store's 0. OVITO maps ``id type x y z radius`` to its
 standard properties and keeps the others under their own names, so a
 ``ColorCodingModifier(property='u')`` colours the particles by their energy
 (``docs/visualization.md``). The store keeps no box, so each frame's box is
@@ -19,7 +20,7 @@ import numpy as np
 
 from ..atomic import atomic_path
 from ..outputs import check_output_path
-from .tables import Results
+from .tables import Results, with_not_computed_as_nan
 
 LEADING = ("id", "type", "x", "y", "z", "radius")
 """The columns every frame starts with, in OVITO's and LAMMPS' names."""
@@ -28,7 +29,7 @@ LEADING = ("id", "type", "x", "y", "z", "radius")
 def export_dump(results: Results, path: str | Path, inputs: Iterable[str | Path] = ()) -> Path:
     """Write the per-particle table of every frame of ``results`` to the dump ``path`` (module docstring)."""
     path = check_output_path(path, inputs)
-    df = results.particles
+    df = with_not_computed_as_nan(results.particles)
     columns = [*LEADING, *(c for c in df.columns if c not in (*LEADING, "step"))]
     integer = [df[c].dtype.kind in "iu" for c in columns]
     with atomic_path(path) as tmp, open(tmp, "w") as f:

@@ -33,7 +33,7 @@ from ..atomic import atomic_path
 from ..errors import StoreError
 from .aggregate import elastic_columns
 from .schema import UNBOUNDED, known
-from .tables import Results
+from .tables import NOT_COMPUTED_TEXT, Results, not_computed_mask
 
 MODE_NAMES = {"u_n": "normal", "u_t": "tangential", "u_r": "rolling", "u_tw": "twisting",
               "u_adh": "cohesion work (signed, apart from the elastic total)"}
@@ -85,9 +85,36 @@ def _pick_step(results: Results, step: int | None) -> int:
     return int(step)
 
 
-def _fmt(df: pd.DataFrame) -> pd.DataFrame:
-    """Floats with 4 significant digits for display."""
-    return df.map(lambda v: f"{v:.4g}" if isinstance(v, float) else v)
+def _fmt(df: pd.DataFrame, unknown: Mapping[str, np.ndarray] | None = None) -> pd.DataFrame:
+    """Floats with 4 significant digits for display; the cells of ``unknown`` (column -> rows, as
+    :func:`~demsplit.results.tables.not_computed_mask` gives them for the same rows) read "not computed"."""
+    out = df.map(lambda v: f"{v:.4g}" if isinstance(v, float) else v)
+    for column, rows in (unknown or {}).items():
+        if column in out:
+            out[column] = np.where(rows, NOT_COMPUTED_TEXT, out[column].astype(object))
+    return out
+
+
+def _incomplete_per_type(table: pd.DataFrame, particles: pd.DataFrame) -> pd.DataFrame:
+    """``table`` (one row per type) with ``n_not_computed``: the particles of each type with a mode not
+    computed (their ``u`` holds only what is known), when any particle has one."""
+    if "not_computed" not in particles or not (particles["not_computed"] != 0).any():
+        return table
+    counts = particles.assign(n=particles["not_computed"] != 0).groupby("type")["n"].sum()
+    return table.assign(n_not_computed=[int(counts.get(t, 0)) for t in table["type"]])
+
+
+def _mode_total(frame: pd.Series, contacts: pd.DataFrame, mode: str) -> str:
+    """A frame's total of ``mode`` for display (J), followed by how many contacts it leaves out as not
+    computed (their ``not_computed`` bit of that mode)."""
+    from ..physics.modes import NOT_COMPUTED_BITS
+
+    text = f"{frame[mode]:.6g} J"
+    if "not_computed" in contacts and mode in NOT_COMPUTED_BITS:
+        n = int(((contacts["not_computed"].to_numpy(dtype=np.int64) & NOT_COMPUTED_BITS[mode]) != 0).sum())
+        if n:
+            text += f" without {n} contact(s) not computed"
+    return text
 
 
 def not_computed(results: Results, frame: pd.Series | None = None) -> list[str]:
@@ -120,7 +147,7 @@ def text_summary(results: Results, step: int | None = None, names: Mapping[int, 
     names = results.type_names(names)
     modes = elastic_columns(one.frames)
     u_total = sum(fr[m] for m in modes)
-    parts = ", ".join(f"{MODE_NAMES.get(m, m)} {fr[m]:.6g} J" for m in modes)
+    parts = ", ".join(f"{MODE_NAMES.get(m, m)} {_mode_total(fr, one.contacts, m)}" for m in modes)
     lines = [
         f"demsplit results: {len(results.steps)} frame(s); frame at timestep {step}"
         + (f" (t = {fr['time']:.6g} s)" if known(fr.get("time")) else ""),
@@ -131,7 +158,7 @@ def text_summary(results: Results, step: int | None = None, names: Mapping[int, 
         lines += [f"    - {n}" for n in missing]
     lines.append(f"  {int(fr['n_particles'])} particles, {int(fr['n_contacts'])} contacts "
                  f"({int(fr['n_wall_contacts'])} with walls); elastic contact energy {u_total:.6g} J ({parts})"
-                 + (f"; cohesion work {fr['u_adh']:.6g} J, apart" if "u_adh" in fr else ""))
+                 + (f"; cohesion work {_mode_total(fr, one.contacts, 'u_adh')}, apart" if "u_adh" in fr else ""))
     model = results.provenance.get("model")
     if model:
         params = ", ".join(f"{k}={v!r}" for k, v in sorted(model.get("params", {}).items())
@@ -145,7 +172,7 @@ def text_summary(results: Results, step: int | None = None, names: Mapping[int, 
     cols = ["type", "count", "total", "share_of_total", "mean", "p50", "p95", "top10_share", "gini"]
     table = one.per_type()
     cols += ["expected_error"] if "expected_error" in table else []
-    table = table[cols]
+    table = _incomplete_per_type(table[cols], one.particles)
     if names:
         table = table.assign(material=[names.get(int(t), "") for t in table["type"]])
     lines += ["", "Energy per particle type (J; material distribution law; expected_error: the split's expected "
@@ -158,7 +185,8 @@ def text_summary(results: Results, step: int | None = None, names: Mapping[int, 
     if len(one.walls):
         we = one.wall_energy()
         lines += ["", "Walls (J):", _fmt(we[[c for c in ("wall", "name", "kind", "u", *energy_modes(we),
-                                                         "n_contacts", "share") if c in we]]).to_string(index=False)]
+                                                         "n_contacts", "share") if c in we]],
+                                         not_computed_mask(we)).to_string(index=False)]
     if {"cpx_sim", "cpy_sim", "cpz_sim"} <= set(one.contacts.columns):
         lines += ["", "Contact point: |cp - cp_simulator| / overlap (print_bound_median: what the dump's printed "
                   "digits alone allow; a shift not far above it measures the print precision):",
@@ -503,12 +531,13 @@ pre{background:#f6f6f6;padding:0.5em;font-size:0.8em;overflow-x:auto}
 details{margin:1em 0}summary{cursor:pointer;font-weight:bold}"""
 
 
-def _table(df: pd.DataFrame) -> str:
-    return _fmt(df).to_html(index=False, border=0, escape=True)
+def _table(df: pd.DataFrame, unknown: Mapping[str, np.ndarray] | None = None) -> str:
+    return _fmt(df, unknown).to_html(index=False, border=0, escape=True)
 
 
 def _mode_table(one: Results) -> pd.DataFrame:
-    """Frame totals of every energy mode over contacts, particles and walls."""
+    """Frame totals of every energy mode over contacts, particles and walls (J), and how many contacts
+    each total leaves out as not computed (``contacts_not_computed``)."""
     rows = []
     found = dict.fromkeys([*one.frames.columns, *one.contacts.columns, *one.particles.columns])
     for col in energy_modes(pd.DataFrame(columns=list(found))):
@@ -516,8 +545,9 @@ def _mode_table(one: Results) -> pd.DataFrame:
         total = table[col].sum() if table is not None else np.nan
         rows.append({"mode": MODE_NAMES.get(col, col), "column": col, "contacts": float(total),
                      "particles": float(one.particles[col].sum()) if col in one.particles else np.nan,
-                     "walls": float(one.walls[col].sum()) if col in one.walls else np.nan})
-    return pd.DataFrame(rows, columns=["mode", "column", "contacts", "particles", "walls"])
+                     "walls": float(one.walls[col].sum()) if col in one.walls else np.nan,
+                     "contacts_not_computed": int(not_computed_mask(one.contacts).get(col, np.zeros(0, bool)).sum())})
+    return pd.DataFrame(rows, columns=["mode", "column", "contacts", "particles", "walls", "contacts_not_computed"])
 
 
 def write_html(results: Results, path: str | Path, step: int | None = None,
@@ -565,7 +595,8 @@ def write_html(results: Results, path: str | Path, step: int | None = None,
             "top10_share", "gini"]
     per_type = one.per_type()
     cols += ["expected_error"] if "expected_error" in per_type else []
-    body += ["<h2>Energy per particle type</h2>", _table(_with_names(per_type[cols], names)),
+    body += ["<h2>Energy per particle type</h2>",
+             _table(_with_names(_incomplete_per_type(per_type[cols], one.particles), names)),
              _figure(_fig_histogram(one.particles, step, names),
                      "Histogram of per-particle elastic energy (material distribution law).",
                      "Energy histogram per type")]
@@ -612,7 +643,8 @@ def write_html(results: Results, path: str | Path, step: int | None = None,
                                         "Energy per frame"),
              _table(pf[[c for c in dict.fromkeys(frame_cols) if c in pf]])]
     if len(one.walls):
-        body += ["<h2>Walls</h2>", _table(_with_names(one.wall_energy(), names))]
+        we = one.wall_energy()
+        body += ["<h2>Walls</h2>", _table(_with_names(we, names), not_computed_mask(we))]
     if {"cpx_sim", "cpy_sim", "cpz_sim"} <= set(one.contacts.columns):
         body += ["<h2>Contact point</h2>", _figure(
             _fig_cp(one.contacts, step), "Distance between the material-weighted contact point and the simulator's "

@@ -55,7 +55,7 @@ from ..fingerprint import file_fingerprint  # noqa: F401  (part of this module's
 from ..outputs import check_output_path
 from ..scene import scene_to_dict
 from .schema import TABLES, UNITS, UNKNOWN, UNKNOWN_COLUMNS, Table, canonical_table, to_dataframe
-from .tables import Results
+from .tables import Results, with_not_computed_as_nan
 
 FORMAT = "demsplit-results"
 FORMAT_VERSION = 1
@@ -836,7 +836,9 @@ def export_tables(results: Results, directory: str | Path, fmt: str = "parquet",
     the units (field metadata ``unit``) and the provenance (schema metadata).
     CSV numbers are written with 17 significant digits (round-trip exact); CSV has no metadata, so
     ``units.csv`` lists the unit of every column of every table (``1``: dimensionless or a count; empty
-    for text and ids) and the walls table gets each wall's ``name`` and ``kind``.
+    for text and ids) and the walls table gets each wall's ``name`` and ``kind``. A value that was not
+    computed (the row's ``not_computed`` bits) is an empty CSV cell or a Parquet null, never the store's 0
+    (:func:`~demsplit.results.tables.with_not_computed_as_nan`).
     No file is written over one of ``inputs`` (:func:`demsplit.outputs.check_output_path`)."""
     if fmt not in ("parquet", "csv"):
         raise StoreError(f"unknown export format {fmt!r}.", fix="use 'parquet' or 'csv'.")
@@ -852,7 +854,7 @@ def export_tables(results: Results, directory: str | Path, fmt: str = "parquet",
     if directory.exists() and not directory.is_dir():
         raise StoreError("the export directory is a file.", file=directory, fix="give a directory name.")
     directory.mkdir(parents=True, exist_ok=True)
-    frames = {name: getattr(results, name) for name in TABLES}
+    frames = {name: with_not_computed_as_nan(getattr(results, name)) for name in TABLES}
     if "clump" in results.particles and (results.particles["clump"] >= 0).any():
         frames["clumps"] = results.per_clump()  # YADE clumps: the members' sums, next to the spheres
         frames["clumps"].attrs["units"] = {c: results.particles.attrs.get("units", {}).get(c, "")

@@ -241,3 +241,49 @@ class Results:
 def _with_units(df: pd.DataFrame, like: pd.DataFrame) -> pd.DataFrame:
     df.attrs["units"] = dict(like.attrs.get("units", {}))
     return df
+
+
+ELASTIC_TOTALS = ("u", "u1", "u2", "u_equal", "u_radius", "u_springs", "share")
+"""Columns that sum (or split, or divide) a row's elastic modes: unknown when any elastic mode is."""
+DERIVED_FROM = {"u_n_error": "u_n"}
+"""Columns computed from one mode: unknown when that mode is."""
+NOT_COMPUTED_TEXT = "not computed"
+"""What a text table shows in place of a value that was not computed."""
+
+
+def not_computed_mask(df: pd.DataFrame) -> dict[str, np.ndarray]:
+    """For a ``particles``, ``contacts`` or ``walls`` table: column -> boolean array of the rows whose
+    value in that column is unknown (the bits of the row's ``not_computed`` column,
+    :data:`demsplit.physics.modes.NOT_COMPUTED_BITS`; the column holds 0 there in the store). Mode
+    columns follow their bit, :data:`ELASTIC_TOTALS` any elastic mode's, :data:`DERIVED_FROM` their
+    mode's; a wall's ``n_contacts`` is unknown with its ``u_n`` (its contacts were not read). Empty
+    when the table has no ``not_computed`` column or no bit set."""
+    from ..physics.modes import ADHESION_COLUMN, NOT_COMPUTED_BITS
+
+    if "not_computed" not in df or not len(df):
+        return {}
+    bits = df["not_computed"].to_numpy(dtype=np.int64)
+    if not bits.any():
+        return {}
+    elastic = sum(bit for mode, bit in NOT_COMPUTED_BITS.items() if mode != ADHESION_COLUMN)
+    mask = {mode: (bits & bit) != 0 for mode, bit in NOT_COMPUTED_BITS.items() if mode in df}
+    mask |= {c: (bits & elastic) != 0 for c in ELASTIC_TOTALS if c in df}
+    mask |= {c: (bits & NOT_COMPUTED_BITS[mode]) != 0 for c, mode in DERIVED_FROM.items() if c in df}
+    if "n_contacts" in df and "wall" in df and "id" not in df:  # a wall whose contacts were not read
+        mask["n_contacts"] = (bits & NOT_COMPUTED_BITS["u_n"]) != 0
+    return {c: m for c, m in mask.items() if m.any()}
+
+
+def with_not_computed_as_nan(df: pd.DataFrame) -> pd.DataFrame:
+    """A copy of ``df`` whose not-computed values (:func:`not_computed_mask`) are NaN instead of the
+    store's 0, so that no export shows an unknown energy as a measured 0 (CSV: an empty cell, Parquet:
+    null, VTK and text dumps: NaN); the ``not_computed`` column stays beside them. ``df`` itself
+    when nothing is unknown. Units and attrs are kept."""
+    mask = not_computed_mask(df)
+    if not mask:
+        return df
+    out = df.copy()
+    for column, rows in mask.items():
+        out[column] = out[column].astype(np.float64).mask(rows)
+    out.attrs = dict(df.attrs)
+    return out

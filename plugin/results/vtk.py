@@ -7,7 +7,8 @@ id, type, radius, the energy of every mode, ``u``, the comparison splits,
 as points at the material-weighted contact point (``contacts_<step>.vtu``:
 ids, wall, overlap, the energies, shares, ``u1 u2 depth1``), plus
 ``particles.pvd`` and ``contacts.pvd``: ParaView opens a ``.pvd`` as one time
-series. Units are SI (m, J). Where types have material names (YADE's material
+series. Units are SI (m, J). A value that was not computed (the row's ``not_computed`` bits, which
+are written too) is NaN, never the store's 0. Where types have material names (YADE's material
 labels, ``demsplit run --type-name``), every file's field data carries them as two
 parallel arrays, ``type_id`` (integers) and ``material`` (strings). The files are VTK XML unstructured grids of
 vertex cells, written by meshio: pure Python and a small fraction of VTK's
@@ -26,7 +27,7 @@ import numpy as np
 from ..atomic import atomic_path
 from ..errors import StoreError
 from ..outputs import check_output_path
-from .tables import Results
+from .tables import Results, with_not_computed_as_nan
 
 POSITIONS = {"particles": ("x", "y", "z"), "contacts": ("cpx", "cpy", "cpz")}
 """Where each table's rows are drawn: the particle centre, the contact point (m)."""
@@ -44,7 +45,7 @@ def export_vtk(results: Results, directory: str | Path, inputs: Iterable[str | P
     if directory.exists() and not directory.is_dir():
         raise StoreError("the export directory is a file.", file=directory, fix="give a directory name.")
     directory.mkdir(parents=True, exist_ok=True)
-    tables = {name: getattr(results, name) for name, position in POSITIONS.items()
+    tables = {name: with_not_computed_as_nan(getattr(results, name)) for name, position in POSITIONS.items()
               if not getattr(results, name).empty and set(position) <= set(getattr(results, name).columns)}
     plan = {name: [(int(step), directory / f"{name}_{int(step):012d}.vtu") for step in df["step"].unique()]
             for name, df in tables.items()}
