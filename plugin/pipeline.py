@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import threads
 from .errors import DemsplitError, IncompleteRunError, InputFormatError
 from .fingerprint import hash_in_background
 from .outputs import check_output_path
@@ -165,6 +166,10 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = Options()) -> Ta
     return tables
 
 
+ACCURACY_ROWS = 1 << 16
+"""Contacts per piece of the error model's evaluation: its two dozen temporaries stay a few MB a thread."""
+
+
 def _accuracy(contacts: Table, ratios: tuple[np.ndarray, np.ndarray], bodies: ContactBodies,
               main: ContactEnergy, ptable: Table, index: ParticleIndex) -> Table:
     """How far the split can be trusted, from the fitted finite-element error model
@@ -174,13 +179,18 @@ def _accuracy(contacts: Table, ratios: tuple[np.ndarray, np.ndarray], bodies: Co
     energy, the sum over its contacts of +-share_n1_error u_n, added to ``ptable``. ``ratios``: a/R1, a/R2
     (:func:`~demsplit.physics.accuracy.contact_radius_ratios`)."""
     x1, x2 = ratios
-    err = np.broadcast_to(expected_share_error(x1, x2, bodies.nu1, bodies.nu2, bodies.E1, bodies.E2), x1.shape)
+    err = np.empty(x1.shape)
+
+    def piece(lo: int, hi: int) -> None:  # numpy releases the GIL: pieces of the contacts on every core
+        per_contact = (v[lo:hi] if np.ndim(v) else v for v in (bodies.nu1, bodies.nu2, bodies.E1, bodies.E2))
+        err[lo:hi] = expected_share_error(x1[lo:hi], x2[lo:hi], *per_contact)
+    threads.map_ranges(piece, len(err), max_rows=ACCURACY_ROWS)
     du = err * main.u[0]
     rows1, rows2 = index.contact_rows(contacts["id1"], contacts["id2"], contacts["wall"])
     pair = rows2 >= 0
     m = len(ptable["id"])
     ptable["u_n_error"] = np.bincount(rows1, du, minlength=m) - np.bincount(rows2[pair], du[pair], minlength=m)
-    return {"a_over_r1": x1, "a_over_r2": x2, "share_n1_error": np.array(err)}
+    return {"a_over_r1": x1, "a_over_r2": x2, "share_n1_error": err}
 
 
 def missing_walls(scene: Scene) -> list[tuple[int, Wall]]:

@@ -56,11 +56,15 @@ MIN_RANGE = 1 << 16
 """Rows below which :func:`map_ranges` does not split (a task costs about 10 us to hand over)."""
 
 
-def map_ranges(fn: Callable[[int, int], T], n: int) -> list[T]:
-    """``fn(lo, hi)`` over :func:`count` contiguous pieces of ``range(n)`` (at least ``MIN_RANGE``
-    rows each) on the pool, the results in order: for per-row work that releases the GIL (numba
-    kernels, numpy on large arrays). Not to be called from a task on the pool."""
+def map_ranges(fn: Callable[[int, int], T], n: int, max_rows: int | None = None) -> list[T]:
+    """``fn(lo, hi)`` over contiguous pieces of ``range(n)`` on the pool, the results in order: for
+    per-row work that releases the GIL (numba kernels, numpy on large arrays). :func:`count` pieces of
+    at least ``MIN_RANGE`` rows, or, with ``max_rows``, pieces of at most that many (which bounds the
+    temporaries of numpy expressions to ``max_rows`` rows per thread). Not to be called from a task
+    on the pool."""
     k = max(1, min(count(), n // MIN_RANGE))
+    if max_rows is not None:
+        k = max(k, -(-n // max_rows))
     cuts = [n * i // k for i in range(k + 1)]
     if k == 1:
         return [fn(0, n)]
