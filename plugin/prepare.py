@@ -156,7 +156,8 @@ def prepare_script(path: str | Path) -> Prepared:
     path = Path(path)
     script = read_script(path)
     law = script.scene.model.contact_law
-    history = law.history_columns()  # a LIGGGHTS law (the script reader maps only LIGGGHTS models)
+    # the history each compute writes: the pair and the mesh-wall model's own, computeElasticPotential's too
+    histories = {kind: script.local_histories.get(kind, law.history_columns()) for kind in ("pair", "wall")}
     commands = _commands(path)
     if not any(words[0] == "run" for _, words in commands):
         raise ScriptError("the script has no 'run' command: there is nothing to dump.", file=path,
@@ -172,7 +173,7 @@ def prepare_script(path: str | Path) -> Prepared:
         last = k == len(bounds) - 2
         header = _replayed(commands, start, k + 1)
         footer = [] if last else ["", f"write_restart {RESTART.format(k=k + 1)}"]
-        parts.append(_prepare_part(path, script, history, commands, lines, start, end, k + 1 if points else 0,
+        parts.append(_prepare_part(path, script, histories, commands, lines, start, end, k + 1 if points else 0,
                                    header, footer))
     for part, after in zip(parts, parts[1:]):
         part.part2 = after
@@ -223,14 +224,16 @@ def _renamed_dump(words: list[str], k: int) -> list[str]:
     return [*words[:5], renamed, *words[6:]]
 
 
-def _prepare_part(path: Path, script: LiggghtsScript, history: list[str], commands: list[tuple[int, list[str]]],
-                  lines: list[str], start: int, end: int, k: int, header: list[str], footer: list[str]) -> Prepared:
+def _prepare_part(path: Path, script: LiggghtsScript, histories: dict[str, list[str]],
+                  commands: list[tuple[int, list[str]]], lines: list[str], start: int, end: int, k: int,
+                  header: list[str], footer: list[str]) -> Prepared:
     """Lines ``start``..``end - 1`` of the script (part ``k``; 0 when not split) with ``header`` and
-    ``footer`` and, before the part's first run, the computes and dumps it lacks."""
+    ``footer`` and, before the part's first run, the computes and dumps it lacks; ``histories``: the
+    history columns of the pair and the wall compute (``'pair'``, ``'wall'``)."""
     suffix = f".part{k}" if k > 1 else ""
     label = f"part {k}: " if k else ""
     law = script.scene.model.contact_law
-    keywords = [w for w in KEYWORDS if w != "history" or history]
+    keywords = {kind: [w for w in KEYWORDS if w != "history" or history] for kind, history in histories.items()}
     needed = {"id1", "id2", "delta", *law.needs()}
     declared = {words[1] for line, words in commands if line < end and words[0] == "dump" and len(words) > 1}
     mesh = [name for line, words in commands if line < end and _is_mesh_wall_fix(words) for name in _mesh_names(words)]
@@ -258,12 +261,12 @@ def _prepare_part(path: Path, script: LiggghtsScript, history: list[str], comman
     if _has_local_dump(script, declared, "pair", needed):
         notes.append(f"{label}pairs: the script's full-precision pair dump holds every column the law needs.")
     else:
-        block += _local("pair", "dsPair", keywords, history, every, suffix)
-        width = len(local_layout("pair", keywords, len(history), history=history))
+        block += _local("pair", "dsPair", keywords["pair"], histories["pair"], every, suffix)
+        width = len(local_layout("pair", keywords["pair"], len(histories["pair"]), history=histories["pair"]))
         notes.append(f"{label}pairs: compute dsPair and a full-precision dump of its {width} columns "
                      f"(ds_pairs{suffix}.txt).")
     if mesh and not _has_local_dump(script, declared, "wall", needed - {"id2"}):
-        block += _local("wall", "dsWall", keywords, history, every, suffix)
+        block += _local("wall", "dsWall", keywords["wall"], histories["wall"], every, suffix)
         notes.append(f"{label}mesh walls ({', '.join(mesh)}): compute dsWall and its full-precision dump "
                      f"(ds_walls{suffix}.txt).")
     elif not mesh:

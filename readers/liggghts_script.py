@@ -260,6 +260,11 @@ class LiggghtsScript:
     warnings: list[str]
     included: list[Path] = field(default_factory=list)
     """Every file an ``include`` line read, in order."""
+    local_histories: dict[str, list[str]] = field(default_factory=dict)
+    """The ``history`` block a ``compute pair/gran/local`` (``'pair'``: the pair_style's model) or
+    ``wall/gran/local`` (``'wall'``: the last mesh ``fix wall/gran``'s) would write, column names in
+    order (:func:`history_columns`, ``computeElasticPotential`` included): what ``demsplit prepare``
+    dumps whole."""
 
 
 # --------------------------------------------------------------------------
@@ -916,7 +921,11 @@ class _Reader:
             path=self.root, scene=scene, periodic=self.periodic, dumps=list(self.dumps.values()),
             gravity=self.gravity, coefficients=coefficients, ntypes=self.ntypes, timestep=self.timestep,
             run_steps=self.run_steps, local_computes=layouts, dumped_mesh_walls=dumped_mesh_walls,
-            variables=variables, warnings=self.warnings, included=self.included)
+            variables=variables, warnings=self.warnings, included=self.included,
+            local_histories={kind: history_columns(self.model(spec).contact_law, kind,
+                                                   elastic_potential=spec.on("computeElasticPotential"))
+                             for kind, spec in (("pair", self.pair), ("wall", mesh_fix[1] if mesh_fix else None))
+                             if spec is not None})
 
 
 def read_script(path: str | Path, variables: dict[str, str] | None = None) -> LiggghtsScript:

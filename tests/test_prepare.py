@@ -90,6 +90,30 @@ def test_rolling_and_cohesion(tmp_path, words, prop, mode):
         assert (res.contacts[mode] < 0).any()
 
 
+@pytest.mark.simulator
+def test_compute_elastic_potential_widens_the_dumped_history(tmp_path):
+    """computeElasticPotential on adds 10 history values to the pair compute and 14 to the wall compute
+    (with rolling friction: 32 + 6 + 10 = 48 and 32 + 6 + 14 = 52 columns): the prepared dumps hold them
+    all, LIGGGHTS writes them and the run is analysed with no further edit (prepare cut the list at the
+    law's own history before)."""
+    def extend(s: str) -> str:
+        s = s.replace("tangential history", "tangential history rolling_friction epsd2")
+        s = s.replace("meshes floor", "meshes floor computeElasticPotential on")
+        prop = "coefficientRollingFriction peratomtypepair 4 " + " ".join(["0.1"] * 16)
+        return s.replace("pair_style      gran model hertz tangential history rolling_friction epsd2",
+                         f"fix extra all property/global {prop}\npair_style      gran model hertz tangential "
+                         "history rolling_friction epsd2 computeElasticPotential on", 1)
+    script = user_script(tmp_path, extend)
+    assert script.read_text().count("computeElasticPotential on") == 2
+    out = prepared_run(script)
+    text = out.read_text()
+    assert "c_dsPair[48]" in text and "c_dsPair[49]" not in text and "c_dsWall[52]" in text
+    assert main(["run", str(out), "-o", str(tmp_path / "r.h5"), "-q"]) == 0
+    res = demsplit.load_results(tmp_path / "r.h5")
+    assert "u_r" in res.contacts and (res.contacts["wall"] == 0).any() and "not_computed" not in res.walls
+    assert res.frames.iloc[-1]["u_n"] > 0
+
+
 WALL = "fix wfloor all wall/gran model hertz tangential history mesh n_meshes 1 meshes floor\n"
 USER_DUMP = ('dump mine all custom 500 mine.txt id type x y z vx vy vz fx fy fz omegax omegay omegaz\n'
              'dump_modify mine format "%d %d' + " %.17g" * 12 + '" sort id\n')
