@@ -171,12 +171,20 @@ def split_contacts(share_values, share_code, u, delta, x1, y1, z1, nx, ny, nz, r
     """Per contact: the share of body 1 of every mode (``share_values`` of shape (modes or 1, K),
     ``share_code``: module docstring), u1 = sum_m s_m u_m, u2 = sum_m (1 - s_m) u_m (``u``: shape
     (modes, n), J), depth1 = s_0 delta (the normal mode's share) and the contact point
-    x1 + (r1 - depth1) n, shape (3, n). Returns (shares (modes, n), u1, u2, depth1, cp)."""
+    x1 + (r1 - depth1) n, shape (3, n), pieces of the contacts on every core.
+    Returns (shares (modes, n), u1, u2, depth1, cp)."""
     n = len(delta)
     shares = np.empty((u.shape[0], n))
     out = [np.empty(n) for _ in range(3)]
     cp = np.empty((3, n))
-    _split_contacts(share_values, share_code, tuple(u), delta, x1, y1, z1, nx, ny, nz, r1, tuple(shares), *out, cp)
+    per_contact = share_values.shape[1] > 1 and len(share_code) == 0
+
+    def piece(lo: int, hi: int) -> None:
+        values = share_values[:, lo:hi] if per_contact else share_values
+        _split_contacts(values, share_code[lo:hi], tuple(u[:, lo:hi]), delta[lo:hi], x1[lo:hi], y1[lo:hi],
+                        z1[lo:hi], nx[lo:hi], ny[lo:hi], nz[lo:hi], r1[lo:hi], tuple(shares[:, lo:hi]),
+                        *(o[lo:hi] for o in out), cp[:, lo:hi])
+    threads.map_ranges(piece, n)
     return (shares, *out, cp)
 
 # The energies and shares of the modes go into the loops as tuples of 1-D arrays (rows of the (modes, n)

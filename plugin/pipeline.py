@@ -96,7 +96,7 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = Options()) -> Ta
         energies = contact_energies(contacts, scene, particles, bodies, index)
         check_finite_energies(energies.u, contacts, file=frame.source[-1] if frame.source else None,
                               step=frame.step)
-        ratios = contact_radius_ratios(contacts["delta"], contacts["r1"], contacts["r2"]) \
+        ratios = _radius_ratios(contacts) \
             if options.accuracy or options.split == "corrected" else None  # a/R1, a/R2, once for both
         corrected = None
         if options.split == "corrected":
@@ -164,6 +164,18 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = Options()) -> Ta
                                            min(float(np.max(err)), UNBOUNDED)]),
     }
     return tables
+
+
+def _radius_ratios(contacts: Table) -> tuple[np.ndarray, np.ndarray]:
+    """a/R1 and a/R2 of every contact (:func:`~demsplit.physics.accuracy.contact_radius_ratios`), in pieces
+    of ``ACCURACY_ROWS`` contacts on the pool's threads."""
+    n = len(contacts["delta"])
+    x1, x2 = np.empty(n), np.empty(n)
+
+    def piece(lo: int, hi: int) -> None:
+        x1[lo:hi], x2[lo:hi] = contact_radius_ratios(*(contacts[c][lo:hi] for c in ("delta", "r1", "r2")))
+    threads.map_ranges(piece, n, max_rows=ACCURACY_ROWS)
+    return x1, x2
 
 
 ACCURACY_ROWS = 1 << 16

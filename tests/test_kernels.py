@@ -196,6 +196,29 @@ def test_random_frames_match_numpy(seed, n_particles, n_contacts, n_walls, n_typ
     check_against_reference(contacts, scene, particles, n_walls=n_walls)
 
 
+@pytest.mark.parametrize("seed", range(4))
+def test_frames_computed_in_pieces_are_the_frames_in_one(seed, monkeypatch):
+    """The per-contact loops and the accuracy columns run in pieces on the pool's threads
+    (threads.map_ranges): three pieces give the tables of one, bit for bit."""
+    from demsplit import pipeline, threads
+
+    rng = np.random.default_rng(seed)
+    contacts, particles = random_frame(rng, 30, 100, 2, 3, dense_ids=bool(seed % 2), hard=False)
+    scene = random_scene(rng, 3, 2, "hertz", rigid_walls=bool(seed % 2))
+    frame = ds.Frame(step=0, particles=particles, contacts=contacts)
+    whole = frame_tables(frame, scene, Options())
+    monkeypatch.setattr(threads, "MIN_RANGE", 1)
+    monkeypatch.setattr(threads, "THREADS", 3)
+    monkeypatch.setattr(threads, "_pool", None)
+    monkeypatch.setattr(pipeline, "ACCURACY_ROWS", 7)
+    pieces = frame_tables(frame, scene, Options())
+    assert list(whole) == list(pieces)
+    for name, table in whole.items():
+        assert list(table) == list(pieces[name])
+        for c, v in table.items():
+            assert np.array_equal(np.asarray(v), np.asarray(pieces[name][c]), equal_nan=True), (name, c)
+
+
 def test_single_material_and_float32_columns():
     rng = np.random.default_rng(11)
     contacts, particles = random_frame(rng, 30, 100, 2, 1)
