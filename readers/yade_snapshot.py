@@ -325,6 +325,14 @@ def scene_from_snapshot(meta: dict, bodies: Table, *, path: Path, step: int | No
         model = ContactModel(model.law, {**model.params, **given})
     if plane_as_plane and "normal_stiffness" in model.contact_law.parameters:
         model = ContactModel(model.law, {**model.params, "normal_stiffness": "materials"})
+    elif plane_as_plane and "kno" in model.contact_law.contact_columns:
+        raise UnsupportedModelError(
+            f"--plane-as-plane rebuilds a plane contact's Hertz stiffness from the materials, but "
+            f"{known[0]} reads the stiffness kno that YADE stored for each interaction, which YADE computed "
+            "with the plane as a sphere of the particle's radius; this law cannot take the plane as a plane.",
+            file=path, step=step,
+            fix="run without --plane-as-plane: the plane contacts are then analysed as YADE computed them "
+                "(a sphere of the particle's radius).")
     return Scene(materials=materials, model=model, walls=walls,
                  source=f"{path} (YADE {meta.get('yade_version', '?')}, {meta.get('precision_name', '?')})")
 

@@ -325,3 +325,16 @@ def test_info_on_vtk_files():
     text = describe_file(YADE / "mindlin_box-intrs-00024000.vtk")
     assert "legacy VTK file" in text and "lines: 235" in text and "not a run of its own" in text
     assert "LIGGGHTS" not in text
+
+
+@pytest.mark.parametrize("sample", ["laws_box_hertz_linear", "laws_box_deresiewitz"])
+def test_plane_as_plane_is_refused_by_a_law_that_reads_yades_kno(sample, capsys, tmp_path):
+    """HertzWithLinearShear and MindlinDeresiewitz read the kno YADE stored (the plane as a sphere);
+    with --plane-as-plane the run failed on a missing 'kno' column, a message that did not name the
+    option. Now one message names it and its fix."""
+    from demsplit.cli import main
+
+    rc = main(["run", str(YADE / f"{sample}.h5"), "--plane-as-plane", "-o", str(tmp_path / "out.h5"), "-q"])
+    err = capsys.readouterr().err
+    assert rc == 2 and "--plane-as-plane" in err and "without --plane-as-plane" in err, err
+    assert "kno" in err and "missing" not in err and not (tmp_path / "out.h5").exists()
