@@ -64,7 +64,20 @@ def test_summary_says_how_far_the_split_can_be_trusted(tmp_path, capsys):
     assert main(["report", str(out)]) == 0
     text = capsys.readouterr().out
     assert "Accuracy of the split (material" in text and "beyond the Hertz range a/R > 0.1" in text
+    assert "0 beyond the model's fit a/R > 0.3" in text
     assert main(["run", str(PACKING), "-o", str(tmp_path / "n.h5"), "-q", "--no-accuracy"]) == 0
+
+
+def test_accuracy_line_counts_the_contacts_beyond_the_fit():
+    """A contact with a/R > 0.3 (the fit's edge) gets the model's value at the edge: the summary says how many."""
+    import pandas as pd
+    from demsplit.results.report import accuracy_line
+
+    contacts = pd.DataFrame({"u_n": [1.0, 2.0, 3.0], "share_n1_error": [0.001, -0.02, 0.03],
+                             "a_over_r1": [0.05, 0.2, 0.31], "a_over_r2": [0.05, 0.35, 0.0]})
+    line = accuracy_line(contacts, "material")
+    assert "2 contact(s) beyond the Hertz range" in line and "2 beyond the model's fit a/R > 0.3" in line
+    assert "83.3% of the normal energy in contacts beyond 1 % expected error" in line
 
 
 def test_per_type_expected_error_is_energy_weighted(material):

@@ -202,21 +202,25 @@ def text_summary(results: Results, step: int | None = None, names: Mapping[int, 
 
 def accuracy_line(contacts: pd.DataFrame, split: str) -> str:
     """How far this frame's split can be trusted (finite-element error model, docs/accuracy.md): the
-    share of the normal energy in contacts whose expected share error exceeds 1 %, and the contacts
-    beyond the Hertz range a/R > 0.1."""
-    from ..physics.accuracy import HERTZ_VALIDITY
+    share of the normal energy in contacts whose expected share error exceeds 1 %, the contacts
+    beyond the Hertz range a/R > 0.1, and those beyond the model's fit a/R > 0.3, whose expected error is
+    the model's value at the edge of its fit (an extrapolation)."""
+    from ..physics.accuracy import FIT_A_OVER_R, HERTZ_VALIDITY
 
     u = contacts["u_n"].to_numpy()
     err = np.abs(contacts["share_n1_error"].to_numpy())
     big = err > 0.01
-    beyond = (contacts[["a_over_r1", "a_over_r2"]].to_numpy() > HERTZ_VALIDITY).any(axis=1)
+    a_over_r = contacts[["a_over_r1", "a_over_r2"]].to_numpy()
+    beyond = (a_over_r > HERTZ_VALIDITY).any(axis=1)
+    extrapolated = (a_over_r > FIT_A_OVER_R).any(axis=1)
     total = u.sum()
     frac = u[big].sum() / total if total > 0 else 0.0
     weighted = (err * u).sum() / total if total > 0 else 0.0
     return (f"Accuracy of the split ({split}; finite-element error model, docs/accuracy.md): expected share "
             f"error {weighted:.2%} energy-weighted, max {err.max() if len(err) else 0:.2%}; {frac:.1%} of the "
             f"normal energy in contacts beyond 1 % expected error; {int(beyond.sum())} contact(s) beyond the Hertz "
-            f"range a/R > {HERTZ_VALIDITY}")
+            f"range a/R > {HERTZ_VALIDITY}, {int(extrapolated.sum())} beyond the model's fit a/R > {FIT_A_OVER_R} "
+            "(their expected error extrapolated)")
 
 
 # --------------------------------------------------------------------------- figures
