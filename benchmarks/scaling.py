@@ -17,10 +17,13 @@ the difference over the number of files.
 The load average is printed before and after; a figure taken with a load
 above 1 is marked "under load".
 
-    python benchmarks/scaling.py [--big] [--cells 10000x1,10000x10] [--json FILE]
+    python benchmarks/scaling.py [--big] [--cells 10000x1,10000x10] [--keep DIR] [--json FILE]
 
 ``--big`` adds a 1e7-particle frame (about 10 GB of text; about 10 minutes to
-write).
+write). ``--keep DIR`` writes the runs into DIR and keeps them, and reuses
+the ones already there (``generate.py`` writes ``in.bench`` last): the
+writing, which takes longer than the timing, can then be done beforehand,
+while the machine is busy with something else (``--generate-only``).
 """
 
 from __future__ import annotations
@@ -72,9 +75,17 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--cells", help="instead of the grid, e.g. 10000x1,10000x10 (particles x frames)")
     ap.add_argument("--files", type=int, default=1000, help="frames (files per dump) of the per-file overhead run")
     ap.add_argument("--json", type=Path, help="also write the measurements here")
+    ap.add_argument("--keep", type=Path, help="write the runs here, keep them, reuse those already written")
+    ap.add_argument("--generate-only", action="store_true", help="with --keep: write the runs, time nothing")
     a = ap.parse_args(argv)
+    if a.generate_only and not a.keep:
+        ap.error("--generate-only needs --keep DIR")
     grid = [tuple(int(v) for v in c.split("x")) for c in a.cells.split(",")] if a.cells else GRID
     grid += BIG if a.big else []
+    if a.generate_only:
+        for particles, frames in grid:
+            _written(a.keep, particles, frames)
+        return
     load0 = os.getloadavg()
     rows = []
     # a throw-away run first, so that numba's cached kernels are compiled before any cell is timed
@@ -82,9 +93,10 @@ def main(argv: list[str] | None = None) -> None:
         sample = Path(__file__).resolve().parent.parent / "sample_dumps" / "liggghts" / "packing" / "in.packing"
         timed_run(sample, Path(work) / "warm.h5", 1)
         for particles, frames in grid:
-            d = Path(work) / f"run_{particles}_{frames}"
-            info = generate(d, particles, 2 * particles, frames)
-            size = sum(info["bytes"].values())
+            d = _written(a.keep, particles, frames) if a.keep else Path(work) / f"run_{particles}_{frames}"
+            if not a.keep:
+                generate(d, particles, 2 * particles, frames)
+            size = sum((d / f).stat().st_size for f in ("atoms.txt", "pairs.txt"))
             serial, rss = timed_run(d / "in.bench", Path(work) / "out.h5", 1)
             parallel, rss2 = timed_run(d / "in.bench", Path(work) / "out.h5", 2)
             rows.append({"particles": particles, "frames": frames, "bytes": size, "seconds": serial,
@@ -94,7 +106,8 @@ def main(argv: list[str] | None = None) -> None:
             print(f"{particles:>10,d} particles x {frames:>3d} frames  {size / 1e6:8.0f} MB  {serial:7.2f} s  "
                   f"{size / serial / 1e6:6.0f} MB/s  peak {rss:6.0f} MB  | --jobs 2 {parallel:7.2f} s "
                   f"({serial / parallel:.2f}x serial)  load {r['load']:.2f}", flush=True)
-            shutil.rmtree(d)
+            if not a.keep:
+                shutil.rmtree(d)
         per_file = per_file_overhead(Path(work), a.files)
     load1 = os.getloadavg()
     fit = [r for r in rows if r["seconds"] >= 1.0]
@@ -115,6 +128,14 @@ def main(argv: list[str] | None = None) -> None:
     if a.json:
         a.json.write_text(json.dumps({"rows": rows, "per_file": per_file, "load": [load0, load1],
                                       "nproc": os.cpu_count()}, indent=1))
+
+
+def _written(keep: Path, particles: int, frames: int) -> Path:
+    """The run of ``particles`` x ``frames`` in ``keep``, written unless it is there already."""
+    d = keep / f"run_{particles}_{frames}"
+    if not (d / "in.bench").exists():
+        generate(d, particles, 2 * particles, frames)
+    return d
 
 
 def per_file_overhead(work: Path, frames: int) -> dict:
