@@ -282,6 +282,7 @@ def _ovito(atoms: Path, pairs: Path) -> dict:
 
 def _kernel(script: Path, work: Path) -> dict:
     import numpy as np
+    from demsplit import threads
     from demsplit.frame import ParticleIndex
     from demsplit.physics.bodies import ContactBodies
     from demsplit.physics.partition import contact_energies, partition, per_particle
@@ -291,6 +292,7 @@ def _kernel(script: Path, work: Path) -> dict:
     cache = work / "cache.h5"
     run = open_run(cache if cache.exists() else script)
     frame = run.frame(0)
+    threads.limit(1)  # the kernels' pieces (threads.map_ranges) on one thread: contacts per second per core
     scene, p, c = run.scene, frame.particles, frame.contacts
     n = len(c["delta"])
     frame_bytes = sum(v.nbytes for v in p.values()) + sum(v.nbytes for v in c.values())
