@@ -156,6 +156,7 @@ TANGENTIAL: dict[str, Callable[[Contacts, np.ndarray], np.ndarray]] = {
     "history": lambda c, kt: np.einsum("ij,ij->i", c.x["ft"], c.x["ft"]) / (2 * kt),
     "tan_luding": lambda c, kt: np.einsum("ij,ij->i", c.x["ft"], c.x["ft"])
     / (2 * c.prop("coeffFrictionStiffness") * c.prop("LoadingStiffness")),
+    "no_history": lambda c, kt: np.zeros(len(c.x["F"])),  # no spring (its force is viscous only)
 }
 
 
@@ -174,13 +175,14 @@ def _applied_torque(c: Contacts) -> np.ndarray:
 
 
 # A rolling model: (contacts, kn, kt of the normal model) -> u_r.
-ROLLING: dict[str, Callable[[Contacts, np.ndarray, np.ndarray], np.ndarray]] = {
+ROLLING: dict[str, Callable[[Contacts, np.ndarray, np.ndarray], np.ndarray] | None] = {
     "epsd": lambda c, kn, kt: _stored_torque(c) / (2 * 2.25 * kn * c.prop("coefficientRollingFriction") ** 2 * c.R**2),
     "epsd2": lambda c, kn, kt: _stored_torque(c) / (2 * kt * c.R**2),
     "epsd3": lambda c, kn, kt: _stored_torque(c)
     / (2 * c.props["rollingStiffness"] * kn * c.prop("coefficientRollingFriction") ** 2 * c.R**2),
     "luding": lambda c, kn, kt: _applied_torque(c)
     / (2 * c.prop("coeffRollingStiffness") * c.prop("LoadingStiffness") * c.R**2),
+    "cdt": None,  # a constant torque mu_r |F_n| R*: no spring, no energy (rolling_model_cdt.h)
 }
 
 
@@ -235,6 +237,6 @@ def reference_energies(words: str, run, x: dict) -> dict[str, np.ndarray]:
         F = F + k * area  # the elastic force: the dumped one less the cohesion force -k A
     out["u_n"], kn, kt = NORMAL[models["model"]](c, F)
     out["u_t"] = TANGENTIAL[models["tangential"]](c, kt)
-    if "rolling_friction" in models:
+    if ROLLING.get(models.get("rolling_friction")) is not None:
         out["u_r"] = ROLLING[models["rolling_friction"]](c, kn, kt)
     return out

@@ -75,6 +75,20 @@ ROLLING_SPRINGS = sorted(name for name, (words, _, _) in make_run.MODELS.items()
 """The models with a rolling spring (``rolling_friction`` but ``cdt``, which has none)."""
 
 
+FEW_CONTACTS = {"no_history": 20}
+"""Contacts a model's run holds at least in each test, where not the usual 100 per frame and 300 in all: without
+friction and damping the particles of ``no_history`` keep bouncing (22-27 contacts per frame)."""
+
+
+def at_least(name: str, usual: int) -> int:
+    return FEW_CONTACTS.get(name, usual)
+
+
+def history_known(c: dict) -> np.ndarray:
+    """Per contact, whether demsplit has its history (not a primitive-wall row of a law with one)."""
+    return ~c["history_unknown"].astype(bool) if "history_unknown" in c else np.ones(len(c["id1"]), bool)
+
+
 @pytest.fixture(scope="module", params=sorted(make_run.MODELS))
 def model_run(request, tmp_path_factory) -> tuple[str, Path]:
     return liggghts_run(request.param, tmp_path_factory)
@@ -119,8 +133,9 @@ def test_forces_and_torques_are_liggghts_own(model_run):
         force = law.normal_force(rows)
         if "u_adh" in law.modes:  # plus the cohesion force, -k A = d(u_adh)/d(delta)
             force = force + law.cohesion_force(rows)
-        known = [i for i, key in enumerate(contact_keys(c)) if key in theirs and not c["history_unknown"][i]]
-        assert len(known) > 100
+        has_history = history_known(c)
+        known = [i for i, key in enumerate(contact_keys(c)) if key in theirs and has_history[i]]
+        assert len(known) > at_least(name, 100)
         for i in known:
             v = theirs[contact_keys(c)[i]]
             # the force on body 1 is -F_n n (n points from body 1 to body 2)
@@ -132,7 +147,7 @@ def test_forces_and_torques_are_liggghts_own(model_run):
             cap = rows.type_pair(law.params["rolling_friction"]) * fn * r
             assert np.all(m <= cap * (1 + 1e-9)) and np.any(m > 0.5 * cap)
         compared += len(known)
-    assert compared > 300
+    assert compared > at_least(name, 300)
 
 
 def test_rolling_energy_and_history_layout(model_run):
@@ -182,7 +197,8 @@ def aligned(run, k: int, names: list[str]) -> tuple[dict, LawRows, np.ndarray, n
     rows = LawRows(c, slice(None), ContactBodies.build(c, run.scene, p, index), law.key, p, index)
     theirs = dumped(run, k, names)
     keys = contact_keys(c)
-    known = np.array([i for i, key in enumerate(keys) if key in theirs and not c["history_unknown"][i]])
+    has_history = history_known(c)
+    known = np.array([i for i, key in enumerate(keys) if key in theirs and has_history[i]])
     return c, rows, known, np.array([theirs[keys[i]] for i in known])
 
 
@@ -200,8 +216,12 @@ def test_tangential_force_is_minus_the_energy_gradient(model_run):
     law = run.scene.model.contact_law
     for k in range(len(run)):
         c, rows, known, ft = aligned(run, k, ["ftx", "fty", "ftz"])
+        modes = law.energies(rows).modes
+        if law.params["tangential"] == "no_history":  # no spring (no u_t), undamped: a tangential force of round-off
+            assert "shearx" not in c and "u_t" not in modes and np.abs(ft).max() < 1e-15, name
+            continue
+        u_t = modes["u_t"][known]
         shear = np.stack([c[f"shear{x}"] for x in "xyz"], -1)[known]
-        u_t = law.energies(rows).modes["u_t"][known]
         s2 = np.einsum("ij,ij->i", shear, shear)
         mine = -2.0 * np.divide(u_t, s2, out=np.zeros_like(u_t), where=s2 > 0)[:, None] * shear
         np.testing.assert_allclose(mine, ft, rtol=1e-9, atol=1e-12 * np.abs(ft).max(), err_msg=name)
@@ -346,7 +366,7 @@ def test_totals_equal_an_independent_recomputation(referenced_run):
     for k, step in enumerate(sorted(res.contacts["step"].unique())):
         ours = res.contacts[(res.contacts["step"] == step) & res.contacts["wall"].isin(dumped_walls)]
         reference = reference_energies(name, run, k, raw_contacts(run, k))
-        assert len(ours) == len(reference["u_n"]) > 300
+        assert len(ours) == len(reference["u_n"]) > at_least(name, 300)
         assert set(reference) == {m for m in ("u_n", "u_t", "u_r", "u_adh") if m in ours}
         for mode, u in reference.items():
             assert ours[mode].sum() == pytest.approx(u.sum(), rel=1e-12, abs=0), (name, step, mode)

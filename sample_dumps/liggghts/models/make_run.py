@@ -36,6 +36,9 @@ MODELS: dict[str, tuple[str, list[str], int]] = {
     # name: (pair_style gran words, property/global lines, compute width = 38 + history)
     "hertz": ("model hertz tangential history", [], 41),
     "hooke": ("model hooke tangential history", [], 41),
+    "no_history": ("model hertz tangential no_history", [], 38),   # no shear spring: no history
+    "rolling_cdt": ("model hertz tangential history rolling_friction cdt",   # a constant torque: no spring
+                    [f"coefficientRollingFriction peratomtypepair 4 {_table('0.2')}"], 41),
     "hertz_stiffness": ("model hertz/stiffness tangential history",
                         [f"kn peratomtypepair 4 {_table('2e9')}", f"kt peratomtypepair 4 {_table('1e9')}",
                          f"gamman peratomtypepair 4 {_table('0')}", f"gammat peratomtypepair 4 {_table('0')}"], 41),
@@ -115,6 +118,7 @@ def write_run(name: str, directory: Path) -> Path:
     lines = "\n".join(f"fix p{k} all property/global {p}" for k, p in enumerate(props, 1))
     columns = {cid: " ".join(f"c_{cid}[{k}]" for k in range(1, width + 1)) for cid in ("cpgl", "cwgl")}
     text = (HERE / "template.in").read_text().replace("MODEL", words).replace("EXTRA_PROPS", lines)
+    text = text.replace("HISTORY", "history" if width > 38 else "")  # LIGGGHTS refuses it without a history
     text = text.replace("PAIRCOLS", columns["cpgl"]).replace("WALLCOLS", columns["cwgl"])
     text = text.replace("PAIRFMT", " ".join(["%.17g"] * width)).replace("WALLFMT", " ".join(["%.17g"] * width))
     liquid = "/capillary/" in words  # a liquid-bridge cohesion model
