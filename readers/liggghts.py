@@ -384,10 +384,14 @@ class LiggghtsRun(Run):
 
     def _refuse_wall_columns_apart(self) -> None:
         """The mesh-wall contacts join the pair contacts in one table: a law column (a history) the pair dump
-        holds and the wall dump does not is refused, naming the wall dump's header (it was a KeyError)."""
+        holds, the law of a dumped mesh wall reads and the wall dump does not hold is refused, naming the wall
+        dump's header (it was a KeyError). A column only the pairs' law reads (a mesh wall whose fix has no
+        rolling friction, say) is not needed of the wall: :meth:`_mesh_walls` gives its rows 0 there."""
         if self.walls is None:
             return
-        missing = [c for c in self._law_columns() if c in self._pair_names and c not in self._wall_names]
+        wall_reads = self._mesh_wall_law_columns()
+        missing = [c for c in self._law_columns()
+                   if c in self._pair_names and c not in self._wall_names and c in wall_reads]
         if missing:
             raise InputFormatError(
                 f"the wall contact dump has no column for {', '.join(missing)}, which the law reads and the pair "
@@ -395,6 +399,11 @@ class LiggghtsRun(Run):
                 "differ from the pair compute's, or the header is damaged.", file=self.walls.path,
                 step=int(self.walls.steps[0]) if len(self.walls.steps) else None, line=HEADER_LINES,
                 fix="give the wall compute the pair compute's keywords and dump all its columns; check the header.")
+
+    def _mesh_wall_law_columns(self) -> set[str]:
+        """Contact columns the laws of the dumped mesh walls read (each wall's own model, else the scene's)."""
+        models = [self.scene.walls[i].model or self.scene.model for i in self.script.dumped_mesh_walls]
+        return {c for model in models for c in model.contact_law.needs()}
 
     def _law_columns(self) -> list[str]:
         """Contact columns the scene's laws read (the tangential history, ...), in their order."""
@@ -581,7 +590,8 @@ class LiggghtsRun(Run):
         wall_digits = min((wf.digits.get(names[c]) or 17) for c in ("wall_cpx", "wall_cpy", "wall_cpz"))
         h_wall = np.max(printed_step(on_wall, wall_digits), axis=1)
         out["bound"] = self._delta_error(wf, names, np.maximum(h[rows], h_wall), r - dist)
-        out.update({c: col[c] for c in self._law_columns() if c in col})
+        out.update({c: col[c] if c in col else np.zeros(len(pid)) for c in self._law_columns()
+                    if c in col or c in self._pair_names})  # 0: a column only the pairs' law reads
         out.update(cpx=on_wall[:, 0], cpy=on_wall[:, 1], cpz=on_wall[:, 2])
         return out
 

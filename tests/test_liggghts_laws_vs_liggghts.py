@@ -444,3 +444,29 @@ def test_a_gap_beyond_a_bridge_is_refused(bridge_run, tmp_path, capsys):
 def test_every_model_has_an_independent_reference():
     """Every model of make_run.MODELS is in the totals test: none lacks a reference."""
     assert set(REFERENCED) == set(make_run.MODELS)
+
+
+def test_a_mesh_wall_with_its_own_model(tmp_path):
+    """The mesh wall's fix without the pairs' rolling friction: LIGGGHTS accepts it, and its wall compute then
+    writes 41 columns against the pairs' 44. demsplit reads both, the wall's contacts under the wall's own law
+    (no rolling spring), the pairs' with theirs. It was refused, blaming the wall dump's header."""
+    from conftest import require_program
+
+    script = make_run.write_run("rolling_epsd2", tmp_path / "mixed")
+    lines = script.read_text().splitlines()
+    for k, line in enumerate(lines):
+        if line.startswith("fix wfloor"):
+            lines[k] = line.replace(" rolling_friction epsd2", "")
+        elif line.startswith("dump dwall"):
+            lines[k] = " ".join(t for t in line.split() if not (t.startswith("c_cwgl[") and int(t[7:-1]) > 41))
+        elif line.startswith("dump_modify dwall"):
+            lines[k] = 'dump_modify dwall format "' + " ".join(["%.17g"] * 41) + '"'
+    script.write_text("\n".join(lines) + "\n")
+    make_run.run(script, require_program("liggghts"))
+    run = open_run(script)
+    floor = [k for k, w in enumerate(run.scene.walls) if w.name == "floor"][0]
+    assert run.scene.walls[floor].model.params["rolling"] == "off" and run.scene.model.params["rolling"] == "epsd2"
+    c = demsplit.analyze(script).contacts
+    on_floor, pairs = c["wall"] == floor, c["wall"] < 0
+    assert on_floor.sum() > 50 and (c.loc[on_floor, "u_r"] == 0).all() and (c.loc[pairs, "u_r"] > 0).sum() > 100
+    assert (c.loc[on_floor, "u_n"] > 0).all()
