@@ -289,6 +289,26 @@ def _particle_sums(rows1, rows2, share_values, u, acc):
             acc[r2, 1] += total - b1
 
 
+def signed_particle_sums(rows1, rows2, e, u, n_particles):
+    """Per particle, the sum of e u over the contacts where it is body 1 minus the sum over the particle
+    pairs (rows2 >= 0) where it is body 2 (the units of u): the expected error of each particle's normal
+    energy from the share errors e. Each sum in contact order, then their difference: bit for bit
+    ``np.bincount(rows1, e u) - np.bincount(rows2[pair], (e u)[pair])``, without those arrays."""
+    acc = np.zeros((n_particles, 2))
+    _signed_sums(rows1, rows2, e, u, acc)
+    return acc[:, 0] - acc[:, 1]
+
+
+@kernel
+def _signed_sums(rows1, rows2, e, u, acc):
+    for i in range(rows1.shape[0]):
+        d = e[i] * u[i]
+        acc[rows1[i], 0] += d
+        r2 = rows2[i]
+        if r2 >= 0:
+            acc[r2, 1] += d
+
+
 @kernel
 def max_wall(rows2):
     """Largest wall index of the contacts, from rows2 = -1 - wall (-1: no wall contact)."""

@@ -14,7 +14,7 @@ import os
 import sys
 from collections import deque
 from collections.abc import Callable, Iterator, Mapping
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -105,6 +105,8 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = Options()) -> Ta
                                         x1.shape)
         main = partition(contacts, scene, particles, split="material", tangential_rule=options.tangential_rule,
                          energies=energies, bodies=bodies, index=index, normal_shares=corrected)
+        contacts = _without(contacts, _used_up(scene))  # what the partition used up: freed before the tables
+        frame = replace(frame, contacts=contacts)  # (when the caller handed over its only reference)
         ptable, wtable = per_particle(contacts, main, particles, n_walls=len(scene.walls), index=index)
         if "clump" in particles:  # YADE clump membership, for per-clump sums
             ptable["clump"] = np.asarray(particles["clump"], dtype=np.int64)
@@ -166,6 +168,24 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = Options()) -> Ta
     return tables
 
 
+_KEPT = ("id1", "id2", "wall", "delta", "r1", "r2", "cpx", "cpy", "cpz", "history_unknown")
+"""Contact columns read after the partition: the contacts table, the comparison splits (the radii) and the
+accuracy columns."""
+
+
+def _used_up(scene: Scene) -> tuple[str, ...]:
+    """Contact columns nothing after the partition reads: body 1's centre and the normal (which gave the
+    contact point) and the laws' own columns (their histories, which gave the energies)."""
+    laws = [scene.model.contact_law] + [w.model.contact_law for w in scene.walls if w.model is not None]
+    own = [c for law in laws for c in law.needs()]
+    return tuple(dict.fromkeys(c for c in ("x1", "y1", "z1", "nx", "ny", "nz", *own) if c not in _KEPT))
+
+
+def _without(table: Table, columns: tuple[str, ...]) -> Table:
+    """``table`` without ``columns`` (a new dict: the caller's frame keeps its own)."""
+    return {c: v for c, v in table.items() if c not in columns}
+
+
 def _radius_ratios(contacts: Table) -> tuple[np.ndarray, np.ndarray]:
     """a/R1 and a/R2 of every contact (:func:`~demsplit.physics.accuracy.contact_radius_ratios`), in pieces
     of ``ACCURACY_ROWS`` contacts on the pool's threads."""
@@ -197,11 +217,10 @@ def _accuracy(contacts: Table, ratios: tuple[np.ndarray, np.ndarray], bodies: Co
         per_contact = (v[lo:hi] if np.ndim(v) else v for v in (bodies.nu1, bodies.nu2, bodies.E1, bodies.E2))
         err[lo:hi] = expected_share_error(x1[lo:hi], x2[lo:hi], *per_contact)
     threads.map_ranges(piece, len(err), max_rows=ACCURACY_ROWS)
-    du = err * main.u[0]
+    from .kernels import signed_particle_sums  # compiled, lazily
+
     rows1, rows2 = index.contact_rows(contacts["id1"], contacts["id2"], contacts["wall"])
-    pair = rows2 >= 0
-    m = len(ptable["id"])
-    ptable["u_n_error"] = np.bincount(rows1, du, minlength=m) - np.bincount(rows2[pair], du[pair], minlength=m)
+    ptable["u_n_error"] = signed_particle_sums(rows1, rows2, err, main.u[0], len(ptable["id"]))
     return {"a_over_r1": x1, "a_over_r2": x2, "share_n1_error": err}
 
 
@@ -305,10 +324,10 @@ def _spec_key(spec: dict) -> tuple:
 def _serial(run: Run, indices: list[int], options: Options) -> Iterator[tuple[int, Tables | DemsplitError, list]]:
     for k in indices:
         try:
-            frame = run.frame(k)
-            out: Tables | DemsplitError = frame_tables(frame, run.scene, options)
-            notes = frame.notes
-            del frame  # the input arrays go before the next frame is read (peak memory)
+            held = [run.frame(k)]
+            notes = held[0].notes  # frame_tables adds its notes to this list
+            # the frame handed over with its only reference: the columns frame_tables has used go at once
+            out: Tables | DemsplitError = frame_tables(held.pop(), run.scene, options)
         except DemsplitError as exc:
             out, notes = exc, []
         yield k, out, notes

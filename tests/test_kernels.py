@@ -434,3 +434,17 @@ def test_map_ranges_tiles_the_rows_in_order(n, threads_, expect, monkeypatch):
     pieces = threads.map_ranges(lambda lo, hi: (lo, hi), n)
     assert len(pieces) == expect and pieces[0][0] == 0 and pieces[-1][1] == n
     assert all(a[1] == b[0] for a, b in zip(pieces, pieces[1:]))
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_signed_particle_sums_are_the_two_bincounts(seed):
+    """The expected error per particle: bit for bit the difference of two bincounts (body 1, body 2 of pairs)."""
+    rng = np.random.default_rng(seed)
+    n, m = 5000, 300
+    rows1 = rng.integers(0, m, n).astype(np.int32)
+    rows2 = np.where(rng.random(n) < 0.2, -1 - rng.integers(0, 3, n), rng.integers(0, m, n)).astype(np.int32)
+    e, u = rng.normal(scale=0.01, size=n), rng.exponential(size=n)
+    du, pair = e * u, rows2 >= 0
+    expect = np.bincount(rows1, du, minlength=m) - np.bincount(rows2[pair], du[pair], minlength=m)
+    got = kernels.signed_particle_sums(rows1, rows2, e, u, m)
+    assert np.array_equal(got, expect)
