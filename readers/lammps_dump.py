@@ -594,7 +594,7 @@ class TextDump(DumpFile):
         with a malformed row is diagnosed, one with a token the compiled parse leaves (``nan``,
         long ``%.17g`` text) is parsed again by polars (:meth:`_parse_block`), after the others.
         Returns the rows parsed, or None when a row is longer than a slice's margin (``ROW_MAX``
-        bytes past its end): then nothing is parsed."""
+        bytes past its end): the caller then parses the whole frame block by block."""
         cuts = _slice_cuts(self._checkpoints, e.data_start, e.data_end, e.first_line - 1, threads.count())
         jobs = [(fd, lo, hi, e.data_start, e.data_end, nl - (e.first_line - 1), e.n_rows, trailing, cols)
                 for (lo, nl), hi in zip(cuts, [c for c, _ in cuts[1:]] + [e.data_end])]
