@@ -283,6 +283,12 @@ def flip_bytes(rng: random.Random, data: bytes, count: int | None = None) -> tup
     return bytes(a), f"{count} byte(s) flipped at {where[:4]}"
 
 
+def cut_bytes(rng: random.Random, data: bytes) -> tuple[bytes, str]:
+    """``data`` cut at a random byte (what a killed writer leaves)."""
+    pos = rng.randrange(len(data))
+    return data[:pos], f"cut at byte {pos}"
+
+
 # ------------------------------------------------------------------ LAMMPS binary dumps
 
 def binary_fields(data: bytes) -> list[tuple[int, str, str]]:
@@ -316,8 +322,7 @@ def mutate_binary(rng: random.Random, data: bytes) -> tuple[bytes, str]:
     if kind == "flip":
         return flip_bytes(rng, data)
     if kind == "truncate":
-        pos = rng.randrange(len(data))
-        return data[:pos], f"cut at byte {pos}"
+        return cut_bytes(rng, data)
     if kind == "append":
         extra = rng.choice((data[:100], data[: len(data) // 3], bytes(rng.randrange(256) for _ in range(64))))
         return data + extra, f"{len(extra)} bytes appended"
@@ -576,8 +581,7 @@ def mutate_npys_raw(rng: random.Random, data: bytes) -> tuple[bytes, str]:
     if kind == "flip":
         return flip_bytes(rng, data)
     if kind == "truncate":
-        pos = rng.randrange(len(data))
-        return data[:pos], f"cut at byte {pos}"
+        return cut_bytes(rng, data)
     heads = [i for i in range(len(data)) if data.startswith(b"DSREC ", i)] or [0]
     at = rng.choice(heads)
     if kind == "length":
@@ -599,11 +603,7 @@ def mutate_h5_file(rng: random.Random, path: Path) -> str:
                        "format", "meta_json", "scalar", "group", "filter", "attr_type", "snapshots_dataset"))
     if kind in ("flip", "truncate"):
         data = path.read_bytes()
-        if kind == "flip":
-            data, what = flip_bytes(rng, data)
-        else:
-            pos = rng.randrange(len(data))
-            data, what = data[:pos], f"cut at byte {pos}"
+        data, what = flip_bytes(rng, data) if kind == "flip" else cut_bytes(rng, data)
         path.write_bytes(data)
         return what
     with h5py.File(path, "a") as f:
