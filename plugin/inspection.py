@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ContactError, DemsplitError, InputFormatError, MaterialError, StoreError
+from .fingerprint import DIGEST
 from .frame import Frame, describe_steps
 
 MAX_LISTED = 20
@@ -97,7 +98,9 @@ def _store_lines(path: Path, h5) -> str:
     model = prov.get("model", {})
     lines.append(f"  model:    {model.get('law')} {model.get('params', {})}")
     for f in prov.get("inputs", []):
-        lines.append(f"  input:    {f.get('path')}  ({f.get('size')} bytes, sha256 {str(f.get('sha256'))[:12]}...)")
+        # stores written before the fingerprint became BLAKE3 hold sha256 digests
+        algo = next((a for a in (DIGEST, "sha256") if a in f), DIGEST)
+        lines.append(f"  input:    {f.get('path')}  ({f.get('size')} bytes, {algo} {str(f.get(algo))[:12]}...)")
     options = prov.get("options", {})
     if options:
         lines.append("  options:  " + ", ".join(f"{k}={v}" for k, v in options.items()))

@@ -511,7 +511,7 @@ def analyze(path: str | Path, *, options: Options = Options(), jobs: int = 1, da
     run = open_run(path, **reader_options)
     try:
         report = RunReport()
-        hash_in_background(run.sources)  # the provenance's sha256, while frames are computed
+        hash_in_background(run.sources)  # the provenance's digests, while frames are computed
         frames = list(process_run(run, options, jobs=jobs, dask=dask, on_bad_frame=on_bad_frame,
                                   progress=progress, report=report))
         provenance = build_provenance(run.sources, scene=run.scene, options=asdict(options),
@@ -556,7 +556,7 @@ def run_to_store(path: str | Path, out: str | Path, *, options: Options = Option
         report = RunReport()
         hash_in_background(sources)
         # A new run computes its first frame while the inputs are hashed, then opens the store (its
-        # provenance holds their sha256); a resumed run opens the store first, to skip its frames.
+        # provenance holds their digests); a resumed run opens the store first, to skip its frames.
         def frames_after(done: set[int]):
             return process_run(run, options, jobs=jobs, dask=dask, on_bad_frame=on_bad_frame,
                                skip_steps=done, progress=progress, report=report)

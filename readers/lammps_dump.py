@@ -25,7 +25,7 @@ Index
     Each frame's entry holds its step, header row count, box, column names,
     the byte range of its rows and their line numbers; the index also keeps
     the newlines before every 1 MiB (the checkpoints), which is where a
-    frame's rows are cut for the threads. (The sha256 for the provenance is
+    frame's rows are cut for the threads. (The digest for the provenance is
     not taken here but by :mod:`demsplit.fingerprint`, in the background
     while the first frame is computed.) The index is cached on the object.
     Binary files are indexed by hopping from header to header.
@@ -878,7 +878,7 @@ def _scan(f: BinaryIO) -> tuple[list[int], list[bytes], list[int], int, int, byt
     plain file is scanned through memory maps, one per window of ``CHUNK``
     bytes, the windows on every core (:func:`_scan_mapped`); a compressed
     stream through one reused buffer (:func:`_windows`). (The provenance's
-    sha256 of the file is not taken here: :mod:`demsplit.fingerprint` hashes
+    digest of the file is not taken here: :mod:`demsplit.fingerprint` hashes
     the inputs in the background while the first frame is computed.)
     """
     if isinstance(f, (io.BufferedReader, io.FileIO)) and (size := os.fstat(f.fileno()).st_size):

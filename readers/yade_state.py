@@ -23,7 +23,7 @@ for bit. The laws' own energy functions are then
 recorded for validation as in a run.
 
 Converted states are cached (``state_cache``, default ``$XDG_CACHE_HOME/demsplit/yade-states``),
-keyed by the state file's sha256 and the snapshot format, so a second run does
+keyed by the state file's BLAKE3 digest (its provenance fingerprint) and the snapshot format, so a second run does
 not start YADE. A state saved by ``yade-mpfr150`` or ``yade-float128`` is
 converted by the YADE that reads it: ``yade`` is tried first, then the
 high-precision builds (``yade=`` names one). Frames are ordered by iteration.
@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import bz2
 import gzip
-import hashlib
 import json
 import os
 import shutil
@@ -46,6 +45,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputFormatError, ScriptError
+from ..fingerprint import DIGEST, file_fingerprint
 from ..frame import Frame
 from ..yade import FORMAT_VERSION
 from .base import Run
@@ -125,14 +125,6 @@ def default_cache() -> Path:
     return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "demsplit" / "yade-states"
 
 
-def _sha256(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
 class YadeStateRun(Run):
     """Frames of YADE saved states, converted by YADE itself (module docstring)."""
 
@@ -155,7 +147,8 @@ class YadeStateRun(Run):
             states += [s for s in found if s not in states]
         cache = Path(state_cache) if state_cache is not None else default_cache()
         cache.mkdir(parents=True, exist_ok=True)
-        targets = [cache / f"{_sha256(s)}-v{FORMAT_VERSION}.npys" for s in states]
+        # the provenance fingerprints the same files: each is hashed once
+        targets = [cache / f"{file_fingerprint(s)[DIGEST]}-v{FORMAT_VERSION}.npys" for s in states]
         todo = [(s, t) for s, t in zip(states, targets) if not t.is_file()]
         if todo:
             _convert(todo, yade)

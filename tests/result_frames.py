@@ -80,7 +80,7 @@ WALLS_META = [{"wall": 0, "name": "floor", "kind": "plane", "type": 3},
               {"wall": 1, "name": "drum", "kind": "cylinder", "type": 3}]
 
 PROVENANCE = {
-    "inputs": [{"path": "/data/run.dump", "size": 123, "sha256": "ab" * 32}],
+    "inputs": [{"path": "/data/run.dump", "size": 123, "blake3": "ab" * 32}],
     "options": {"tangential_rule": "mindlin", "split": "material"},
     "scene": {"materials": {"1": {"E": 1e7, "nu": 0.3}, "2": {"E": 5e7, "nu": 0.25}}},
     "model": {"law": "liggghts:hertz", "params": {"tangential": "history"}},

@@ -119,13 +119,13 @@ def test_resume_refuses_other_inputs_or_options(tmp_path):
     w = ResultWriter(out, PROVENANCE)
     w.append(synthetic_frame(0))
     w.abandon()
-    other_input = {**PROVENANCE, "inputs": [{"path": "/data/run.dump", "size": 123, "sha256": "cd" * 32}]}
+    other_input = {**PROVENANCE, "inputs": [{"path": "/data/run.dump", "size": 123, "blake3": "cd" * 32}]}
     with pytest.raises(StoreError, match="different inputs") as err:
         ResultWriter(out, other_input, resume=True)
     assert "Fix:" in str(err.value) and str(out) in str(err.value)
     with pytest.raises(StoreError, match="different options"):
         ResultWriter(out, {**PROVENANCE, "options": {"split": "equal"}}, resume=True)
-    moved = {**PROVENANCE, "inputs": [{"path": "/elsewhere/run.dump", "size": 123, "sha256": "ab" * 32}]}
+    moved = {**PROVENANCE, "inputs": [{"path": "/elsewhere/run.dump", "size": 123, "blake3": "ab" * 32}]}
     with ResultWriter(out, moved, resume=True) as w:  # same content, another path: resumable
         assert w.done_steps == {0}
 
@@ -181,7 +181,8 @@ def test_file_fingerprint(tmp_path):
     p.write_bytes(b"abc")
     fp = file_fingerprint(p)
     assert fp["size"] == 3
-    assert fp["sha256"] == "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"  # FIPS 180-2 "abc"
+    # BLAKE3 of "abc" (b3sum 1.2.0 prints it; so does the reference implementation's test of "abc")
+    assert fp["blake3"] == "6437b3ac38465133ffb63b75273a8db548c558465d79db03fd359c6cd5bd9d85"
     with pytest.raises(StoreError, match="cannot read input"):
         file_fingerprint(tmp_path / "missing")
 

@@ -658,8 +658,8 @@ def write_html(results: Results, path: str | Path, step: int | None = None,
         rows = {int(t): {k: v for k, v in (m or {}).items() if k != "name"} for t, m in materials.items()}
         body += ["<h2>Materials</h2>", _table(pd.DataFrame(
             [{"type": t, "material": names.get(t, ""), **rows.get(t, {})} for t in sorted({*rows, *names})]))]
-    body += ["<details id='provenance'><summary>Provenance (inputs with sha256, options, scene, demsplit version)"
-             "</summary>",
+    body += ["<details id='provenance'><summary>Provenance (inputs with their BLAKE3 digest, options, scene, "
+             "demsplit version)</summary>",
              f"<pre>{esc(json.dumps(prov, indent=2, sort_keys=True, default=str))}</pre></details>"]
     page = ("<!DOCTYPE html><html><head><meta charset='utf-8'><title>demsplit report</title>"
             f"<style>{_CSS}</style></head><body>{''.join(body)}</body></html>")

@@ -51,7 +51,7 @@ from isal import isal_zlib
 from .. import threads
 from ..atomic import atomic_path, publish
 from ..errors import StoreError, system_error
-from ..fingerprint import file_fingerprint  # noqa: F401  (part of this module's API)
+from ..fingerprint import DIGEST, file_fingerprint  # noqa: F401  (file_fingerprint: part of this module's API)
 from ..outputs import check_output_path
 from ..scene import scene_to_dict
 from .schema import TABLES, UNITS, UNKNOWN, UNKNOWN_COLUMNS, Table, canonical_table, to_dataframe
@@ -82,14 +82,15 @@ MIN_CHUNK_ROWS = 1024
 LIBVER = ("v110", "v110")
 """HDF5 file-format bounds: the 1.10 format (which SWMR needs), readable by
 every HDF5 library since 1.10.0 (2016)."""
-WORK_VERSION = 3
-"""Layout of an interrupted run's work directory (3: a store written in SWMR
-mode plus a commit record; 2 and 1 were per-frame parts). Other layouts are
+WORK_VERSION = 4
+"""Layout of an interrupted run's work directory (4: a store written in SWMR
+mode plus a commit record, inputs identified by BLAKE3; 3 identified them by
+sha256; 2 and 1 were per-frame parts). Other layouts are
 not resumed."""
 
 RESUME_KEYS = ("inputs", "options", "scene", "model", "demsplit_version")
 """Provenance entries that must be equal for a run to be resumed; ``inputs``
-is compared by the sha256 of each input file."""
+is compared by the digest (BLAKE3) of each input file."""
 
 _STORE = "store.h5"
 _COMMIT = "commit.npys"
@@ -127,7 +128,7 @@ def build_provenance(inputs: Iterable[str | Path], *, scene=None, options: dict 
 def resume_identity(provenance: Mapping) -> dict:
     """What must not change between an interrupted run and its resumption."""
     ident = {key: provenance.get(key) for key in RESUME_KEYS}
-    ident["inputs"] = sorted(str(f.get("sha256")) for f in provenance.get("inputs") or [])
+    ident["inputs"] = sorted(str(f.get(DIGEST)) for f in provenance.get("inputs") or [])
     return json.loads(_to_json(ident, "provenance"))
 
 
@@ -282,7 +283,7 @@ class ResultWriter:
             diff = [k for k in manifest["identity"] if manifest["identity"][k] != old["identity"].get(k)]
             raise StoreError(
                 f"cannot resume: the interrupted run had different {', '.join(diff)} "
-                f"(input files are compared by sha256).",
+                f"(input files are compared by their BLAKE3 digest).",
                 file=self.path,
                 fix=f"rerun with the same inputs and options, or delete {self.work_dir} to start over.",
             )
