@@ -11,6 +11,7 @@ from pathlib import Path
 
 import demsplit
 import pytest
+from demsplit.fingerprint import file_digest
 
 SAMPLES = Path(__file__).resolve().parent.parent / "sample_dumps"
 PACKING = SAMPLES / "liggghts" / "packing"
@@ -106,6 +107,27 @@ def test_info_on_a_result_store(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert "demsplit result store" in proc.stdout and "frames:   3" in proc.stdout
     assert "particles        900 rows" in proc.stdout and "in.packing" in proc.stdout
+    script = (PACKING / "in.packing").resolve()
+    assert f"{script}  ({script.stat().st_size} bytes, blake3 {file_digest(script)[:12]}...)" in proc.stdout
+
+
+def test_info_shows_the_sha256_of_a_store_written_before_blake3(tmp_path):
+    """Stores written before the provenance moved to BLAKE3 name their inputs' sha256: info shows that."""
+    import json
+
+    import h5py
+
+    out = tmp_path / "r.h5"
+    assert demsplit_cli("run", PACKING / "in.packing", "-o", out, "-q").returncode == 0
+    with h5py.File(out, "r+") as h5:
+        prov = json.loads(h5.attrs["provenance"])
+        for f in prov["inputs"]:
+            f["sha256"] = "ab" * 32
+            del f["blake3"]
+        h5.attrs["provenance"] = json.dumps(prov)
+    proc = demsplit_cli("info", out)
+    assert proc.returncode == 0, proc.stderr
+    assert "bytes, sha256 abababababab..." in proc.stdout and "blake3" not in proc.stdout
 
 
 def test_info_on_a_missing_file(tmp_path):
