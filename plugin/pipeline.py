@@ -214,8 +214,8 @@ def _accuracy(contacts: Table, ratios: tuple[np.ndarray, np.ndarray], bodies: Co
     err = np.empty(x1.shape)
 
     def piece(lo: int, hi: int) -> None:  # numpy releases the GIL: pieces of the contacts on every core
-        per_contact = (v[lo:hi] if np.ndim(v) else v for v in (bodies.nu1, bodies.nu2, bodies.E1, bodies.E2))
-        err[lo:hi] = expected_share_error(x1[lo:hi], x2[lo:hi], *per_contact)
+        E1, nu1, E2, nu2 = bodies.constants(lo, hi)
+        err[lo:hi] = expected_share_error(x1[lo:hi], x2[lo:hi], nu1, nu2, E1, E2)
     threads.map_ranges(piece, len(err), max_rows=ACCURACY_ROWS)
     from .kernels import signed_particle_sums  # compiled, lazily
 

@@ -103,6 +103,10 @@ def check_against_reference(contacts, scene, particles, n_walls=0):
     bodies = ContactBodies.build(contacts, scene, particles, index)
     energies = contact_energies(contacts, scene, particles, bodies, index)
     constants = reference_constants(contacts, scene, particles)
+    n = len(contacts["delta"])
+    for lo, hi in ((0, n), (n // 3, n // 2)):  # a range's constants, as the accuracy columns take them
+        for got, want in zip(bodies.constants(lo, hi), constants):
+            same(np.broadcast_to(got, (hi - lo,)), want[lo:hi])
     if scene.model == ds.ContactModel("liggghts:hertz") and "shearx" in contacts:
         own = np.array([w.model is not None and w.model != scene.model for w in scene.walls] + [False])
         pair_law = ~own[contacts["wall"]]  # contacts under the pair model (wall -1: the last entry)

@@ -71,6 +71,20 @@ class ContactBodies:
     E2 = property(lambda self: self._constant(2), doc="Young's modulus of body 2 (Pa)")
     nu2 = property(lambda self: self._constant(3), doc="Poisson's ratio of body 2")
 
+    def constants(self, lo: int, hi: int) -> tuple:
+        """``(E1, nu1, E2, nu2)`` of contacts ``lo:hi`` (Pa, -, Pa, -): scalars in a single-material
+        scene, else arrays of that range gathered from the types, without building the frame's
+        per-contact arrays (4 float64 per contact) that the properties keep once asked for. Safe to call
+        from several threads on disjoint ranges."""
+        if self._constants[0] is not None or self.scene is None:
+            return tuple(v[lo:hi] if np.ndim(v) else v for v in self._constants)
+        E, nu = self.scene.material_tables()
+        if self._types[0] is not None:
+            t1, t2 = self._types[0][lo:hi], self._types[1][lo:hi]
+        else:
+            t1, t2 = _types_of_codes(self._pairs[0][lo:hi], self.scene)
+        return E.take(t1), nu.take(t1), E.take(t2), nu.take(t2)
+
     def _pair_codes(self) -> tuple[np.ndarray, np.ndarray]:
         """Code type1 * n_types + type2 of every contact, and the codes present."""
         if self._pairs is None:
