@@ -9,6 +9,8 @@ Prints, each the best of ``--repeat`` fresh processes (interleaved):
   (its ``plugin/`` and ``readers/`` copied into a temporary directory as ``demsplit``), alternating;
 * ``scan``: the index scan of each dump alone (``lammps_dump._scan``), best of three in one process;
 * ``parse``: each frame of each dump parsed with the columns ``demsplit run`` reads, GB/s (two threads);
+* ``digest``: the contact dump's BLAKE3 digest (``fingerprint.file_digest``) and its sha256 (``hashlib``),
+  one thread each, best of three;
 * ``run``, ``run, sha256`` and ``run, no hash``: ``demsplit run`` with the provenance's BLAKE3 digests of
   the inputs, with sha256 digests instead (``fingerprint.file_digest`` patched: what the provenance held
   before), and with the digest replaced by a constant (``file_digest`` and the pipeline's background
@@ -67,6 +69,10 @@ sys.exit(rc)
 STAGES = """
 import sys, time
 import numpy as np
+def _timed(f, *args):
+    t = time.perf_counter()
+    f(*args)
+    return time.perf_counter() - t
 from demsplit.readers import lammps_dump, open_run
 run = open_run(sys.argv[1])
 for dump, names in ((run.atoms, None), (run.pairs, run._pair_names)):
@@ -87,6 +93,16 @@ for dump, names in ((run.atoms, None), (run.pairs, run._pair_names)):
     print(f"{dump.path.split(chr(47))[-1]:10s} scan {min(scans):.3f} s "
           f"({size / min(scans) / 1e9:.1f} GB/s)   parse of {len(cols)} columns {min(parse):.3f} s "
           f"({size / min(parse) / 1e9:.2f} GB/s, {len(dump)} frames)")
+import hashlib, os
+from demsplit.fingerprint import file_digest
+def sha256(path):
+    with open(path, "rb") as f:
+        return hashlib.file_digest(f, "sha256").hexdigest()
+size = os.path.getsize(run.pairs.path)
+for name, digest in (("BLAKE3", file_digest), ("sha256", sha256)):
+    best = min(_timed(digest, run.pairs.path) for _ in range(3))
+    print(f"{name:10s} digest of {run.pairs.path.split(chr(47))[-1]} on one thread {best:.3f} s "
+          f"({size / best / 1e9:.2f} GB/s)")
 """
 
 

@@ -1,12 +1,12 @@
 """Fingerprints (size and BLAKE3 digest) of input files, for provenance.
 
 The digest is BLAKE3's (256 bits, the ``blake3`` package): a cryptographic
-hash that anyone can check with Debian's ``b3sum FILE``, and 3.4 times as
-fast as sha256 on this machine (1 MiB reads of the benchmark's 2.57 GB
-contact dump, one core: 0.50 s against sha256's 1.50 s with SHA-NI;
-``docs/performance.md``, "The inputs' fingerprint"). Hashing a multi-GB dump
-still costs a full read of it. A pipeline that will need the fingerprints starts them
-early with :func:`hash_in_background`: one daemon thread hashes the files
+hash that anyone can check with Debian's ``b3sum FILE``, and three times as
+fast as sha256 here (the benchmark's 2.57 GB contact dump on one core: 0.50 s
+against hashlib's sha256 with SHA-NI 1.50 s; ``benchmarks/read_stages.py``,
+its "digest" lines). Hashing a multi-GB dump still costs a full read of it.
+A pipeline that will need the fingerprints starts them early with
+:func:`hash_in_background`: one daemon thread hashes the files
 while the first frame is read and computed, and :func:`file_fingerprint`
 waits for that thread's result (a digest is reused as long as the file's
 size, modification time, inode and inode change time are unchanged; a changed or replaced file is

@@ -23,8 +23,8 @@ for bit. The laws' own energy functions are then
 recorded for validation as in a run.
 
 Converted states are cached (``state_cache``, default ``$XDG_CACHE_HOME/demsplit/yade-states``),
-keyed by the state file's BLAKE3 digest (its provenance fingerprint) and the snapshot format, so a second run does
-not start YADE. A state saved by ``yade-mpfr150`` or ``yade-float128`` is
+keyed by the state file's BLAKE3 digest (its provenance fingerprint) and the snapshot format, so a
+second run does not start YADE. A state saved by ``yade-mpfr150`` or ``yade-float128`` is
 converted by the YADE that reads it: ``yade`` is tried first, then the
 high-precision builds (``yade=`` names one). Frames are ordered by iteration.
 """
