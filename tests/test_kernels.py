@@ -38,14 +38,20 @@ def reference_rows(particles, ids):
     return order[pos]
 
 
-def reference_constants(contacts, scene, particles):
-    """E, nu of both bodies of every contact, by plain numpy gathers."""
+def reference_types(contacts, scene, particles):
+    """Material types of both bodies of every contact, by plain numpy gathers."""
     ptype = np.asarray(particles["type"], dtype=np.int64)
     pair = contacts["wall"] < 0
     type1 = ptype[reference_rows(particles, contacts["id1"])]
     type2 = np.empty_like(type1)
     type2[pair] = ptype[reference_rows(particles, contacts["id2"][pair])]
     type2[~pair] = scene.wall_types()[contacts["wall"][~pair]]
+    return type1, type2
+
+
+def reference_constants(contacts, scene, particles):
+    """E, nu of both bodies of every contact, by plain numpy gathers."""
+    type1, type2 = reference_types(contacts, scene, particles)
     E1, nu1 = scene.lookup(type1)
     E2, nu2 = scene.lookup(type2)
     return E1, nu1, E2, nu2
@@ -187,6 +193,24 @@ def random_scene(rng, n_types, n_walls, normal, rigid_walls):
     model = ds.ContactModel(f"liggghts:{normal}", {"tangential": "history", **params})
     walls = [ds.Wall(f"w{k}", "plane", type=wall_type) for k in range(n_walls)]
     return ds.Scene(materials, model=model, walls=walls)
+
+
+def test_a_ranges_constants_from_the_contacts_own_types_and_once_the_frames_arrays_exist():
+    """ContactBodies.constants when the contacts carry their types (YADE's contacts do), and after the
+    properties built the frame's per-contact arrays: the range of those."""
+    rng = np.random.default_rng(5)
+    contacts, particles = random_frame(rng, 30, 80, 2, 3, True, hard=True)
+    scene = random_scene(rng, 3, 2, "hertz", False)
+    t1, t2 = reference_types(contacts, scene, particles)
+    bodies = ContactBodies.build({**contacts, "type1": t1, "type2": t2}, scene, particles)
+    want = (*scene.lookup(t1), *scene.lookup(t2))
+    n = len(t1)
+    for lo, hi in ((0, n), (n // 4, 3 * n // 4)):
+        for got, w in zip(bodies.constants(lo, hi), want):
+            same(got, w[lo:hi])
+    same(bodies.E1, want[0])
+    for got, w in zip(bodies.constants(3, 9), want):
+        same(got, w[3:9])
 
 
 @settings(max_examples=60, deadline=None)
