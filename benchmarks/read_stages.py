@@ -45,14 +45,18 @@ u = resource.getrusage(resource.RUSAGE_SELF)
 print(t2 - t0, t1 - t0, u.ru_utime, u.ru_stime, u.ru_maxrss / 1024)
 """
 
-RUN = """
+SHA256 = """
+import hashlib
+def sha256(path):
+    with open(path, "rb") as f:
+        return hashlib.file_digest(f, "sha256").hexdigest()
+"""
+"""The sha256 of a file, as the provenance held it before BLAKE3 (defined in the children below)."""
+
+RUN = SHA256 + """
 import os, sys, time
 import demsplit.fingerprint as fp
 if sys.argv[2] == "sha256":
-    import hashlib
-    def sha256(path):
-        with open(path, "rb") as f:
-            return hashlib.file_digest(f, "sha256").hexdigest()
     fp.file_digest = sha256
 elif sys.argv[2] == "nohash":
     import demsplit.pipeline as pl
@@ -66,7 +70,7 @@ os.unlink(sys.argv[3])
 sys.exit(rc)
 """
 
-STAGES = """
+STAGES = SHA256 + """
 import sys, time
 import numpy as np
 def _timed(f, *args):
@@ -93,11 +97,8 @@ for dump, names in ((run.atoms, None), (run.pairs, run._pair_names)):
     print(f"{dump.path.split(chr(47))[-1]:10s} scan {min(scans):.3f} s "
           f"({size / min(scans) / 1e9:.1f} GB/s)   parse of {len(cols)} columns {min(parse):.3f} s "
           f"({size / min(parse) / 1e9:.2f} GB/s, {len(dump)} frames)")
-import hashlib, os
+import os
 from demsplit.fingerprint import file_digest
-def sha256(path):
-    with open(path, "rb") as f:
-        return hashlib.file_digest(f, "sha256").hexdigest()
 size = os.path.getsize(run.pairs.path)
 for name, digest in (("BLAKE3", file_digest), ("sha256", sha256)):
     best = min(_timed(digest, run.pairs.path) for _ in range(3))
