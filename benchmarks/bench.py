@@ -111,6 +111,7 @@ def child(name: str, d: Path, work: Path, index_file: str) -> dict:
         import h5py  # noqa: F401
         return {}
     if name == "warm-up":
+        sys.argv[0] = "demsplit"
         from demsplit.cli import main
 
         sample = Path(__file__).resolve().parents[1] / "sample_dumps" / "liggghts" / "packing" / "in.packing"
@@ -119,6 +120,7 @@ def child(name: str, d: Path, work: Path, index_file: str) -> dict:
         out.unlink(missing_ok=True)
         return {"rc": rc}
     if name.startswith("demsplit-run"):
+        sys.argv[0] = "demsplit"  # as the console script: this process is the command (demsplit.command)
         from demsplit.cli import main
 
         out = work / f"{name}.h5"

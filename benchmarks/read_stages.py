@@ -55,6 +55,7 @@ def sha256(path):
 
 RUN = SHA256 + """
 import os, sys, time
+sys.argv[0] = "demsplit"  # as the console script: this process is the command (demsplit.command)
 import demsplit.fingerprint as fp
 if sys.argv[2] == "sha256":
     fp.file_digest = sha256

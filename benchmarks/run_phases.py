@@ -25,6 +25,7 @@ from pathlib import Path
 
 CHILD = r"""
 import json, os, sys, time
+sys.argv[0] = "demsplit"  # as the console script: this process is the command (demsplit.command)
 phases = {}
 
 def timed(owner, name, label):

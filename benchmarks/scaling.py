@@ -52,6 +52,7 @@ GRID = [(10_000, 1), (10_000, 10), (10_000, 100), (100_000, 1), (100_000, 10), (
         (1_000_000, 1), (1_000_000, 3)]
 BIG = [(10_000_000, 1)]
 CHILD = ("import sys, pathlib\n"
+         "sys.argv[0] = 'demsplit'\n"  # as the console script: this process is the command (demsplit.command)
          "from demsplit.cli import main\n"
          "rc = main(sys.argv[1:])\n"
          "hwm = [l for l in pathlib.Path('/proc/self/status').read_text().splitlines() if l.startswith('VmHWM:')]\n"

@@ -2,7 +2,8 @@
 
 Two runs of ``benchmarks/generate.py`` that differ only in their number of
 frames (same particles, same contacts per frame) go through ``demsplit run``
-in fresh processes; each reports its peak resident memory (``VmHWM``). A
+in fresh processes set up as the command is (its allocator keeps freed memory
+for the next frame: :mod:`demsplit.command`); each reports its peak resident memory (``VmHWM``). A
 pipeline that kept every frame (or every frame's results) until the end would
 need about one frame's arrays more per extra frame; streaming needs the same
 peak for 2 frames as for 6. The tolerance is one frame's arrays, a quarter of
@@ -24,8 +25,10 @@ PARTICLES, CONTACTS = 30_000, 60_000
 CHILD = r"""
 import json, sys
 from pathlib import Path
+script, out = sys.argv[1:3]
+sys.argv[0] = "demsplit"  # as the console script: the command's process settings (demsplit.command) apply
 from demsplit.cli import main
-rc = main(["run", sys.argv[1], "-o", sys.argv[2], "-q"])
+rc = main(["run", script, "-o", out, "-q"])
 hwm = [l for l in Path("/proc/self/status").read_text().splitlines() if l.startswith("VmHWM:")][0]
 print(json.dumps({"rc": rc, "peak": int(hwm.split()[1]) * 1024}))
 """

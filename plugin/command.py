@@ -1,0 +1,82 @@
+"""Settings of the ``demsplit`` command's own process, which a library must never make.
+
+Imported first by the package's ``__init__``, before numpy, and applied on import (:func:`settle`) only when the
+process is the command (:func:`is_command`): the ``demsplit`` console script, or
+``python -m demsplit.cli``. A program that imports demsplit keeps its own
+settings. Both settings below were measured on the benchmark run (3 GB of dumps,
+3 frames; ``python benchmarks/bench.py``, docs/performance.md, "Process
+settings of the command"):
+
+OpenBLAS threads
+    ``OPENBLAS_NUM_THREADS=1`` unless the user set it. The command calls no BLAS,
+    but OpenBLAS starts its threads when numpy (and numba's scipy) load it, and
+    each spins on a core for about 0.1 s before it sleeps: 0.17 CPU seconds taken
+    from the parse at start-up (``python -c "import numpy, scipy.linalg"``:
+    0.31 s of user time, 0.13 s with one thread). Read when the library loads,
+    so it is set before numpy is imported.
+Freed memory kept for the next frame
+    glibc returns a large block to the system when it is freed (``munmap``), so
+    every frame's arrays are fresh pages that the kernel zero-fills again: 13 %
+    of the command's CPU samples in ``perf record`` (``clear_page_erms``). Allocations
+    up to :data:`MMAP_THRESHOLD` come from the heap instead, and the heap is not
+    trimmed below :data:`TRIM_THRESHOLD`, so the next frame reuses the pages of
+    the last. The peak is the same (the frames are the same size); a run's
+    memory stays at its peak until it ends.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+NAMES = frozenset({"demsplit", "demsplit.exe"})
+"""Names of the console script (``[project.scripts]`` in pyproject.toml)."""
+
+MMAP_THRESHOLD = 1 << 30
+"""Bytes above which an allocation is still mapped on its own (``M_MMAP_THRESHOLD``): 1 GiB, more than
+any column of a frame of 10 million contacts."""
+TRIM_THRESHOLD = (1 << 31) - 1
+"""Free bytes at the top of the heap before glibc gives them back (``M_TRIM_THRESHOLD``; the largest
+value ``mallopt`` takes)."""
+TOP_PAD = 1 << 28
+"""Bytes the heap grows by beyond what a request needs (``M_TOP_PAD``), so that a frame's arrays grow the
+heap a few times rather than once per array; address space only until touched."""
+_M_TRIM_THRESHOLD, _M_TOP_PAD, _M_MMAP_THRESHOLD = -1, -2, -3  # glibc's <malloc.h>
+
+
+def is_command() -> bool:
+    """Whether this process is the ``demsplit`` command: started as the console script, or as
+    ``python -m demsplit.cli`` (while the package is imported, ``sys.argv[0]`` is then ``-m``;
+    ``sys.orig_argv`` keeps the module's name)."""
+    argv = getattr(sys, "argv", None) or [""]
+    if os.path.basename(argv[0] or "") in NAMES:
+        return True
+    orig = getattr(sys, "orig_argv", [])
+    return any(a == "-m" and b == "demsplit.cli" for a, b in zip(orig, orig[1:]))
+
+
+def keep_freed_memory() -> bool:
+    """Have glibc keep freed blocks for reuse (:data:`MMAP_THRESHOLD`, :data:`TRIM_THRESHOLD`,
+    :data:`TOP_PAD`); False where the C library has no ``mallopt`` (not glibc) or refuses a value."""
+    import ctypes
+
+    try:
+        mallopt = ctypes.CDLL(None).mallopt  # the C library the interpreter runs on
+    except (OSError, AttributeError):
+        return False
+    mallopt.argtypes, mallopt.restype = (ctypes.c_int, ctypes.c_int), ctypes.c_int
+    return all(mallopt(option, value) == 1 for option, value in (
+        (_M_MMAP_THRESHOLD, MMAP_THRESHOLD), (_M_TRIM_THRESHOLD, TRIM_THRESHOLD), (_M_TOP_PAD, TOP_PAD)))
+
+
+def settle() -> None:
+    """Apply the module's settings when this process is the command (:func:`is_command`); nothing otherwise.
+    Called before numpy is imported."""
+    if not is_command():
+        return
+    if "numpy" not in sys.modules:
+        os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+    keep_freed_memory()
+
+
+settle()

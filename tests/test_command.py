@@ -1,0 +1,62 @@
+"""The ``demsplit`` command's own process settings (:mod:`demsplit.command`): made when the process is the
+command, never in a program that imports demsplit, and with the effect they are made for."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+from demsplit import command
+
+PROBE = r"""
+import json, os, resource, sys
+sys.argv[0] = sys.argv[1]  # the name the process was started under: "demsplit" is the console script
+import demsplit
+import numpy as np
+
+def faults():
+    return resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+
+a = np.ones(1 << 23)  # 64 MiB, touched, then freed
+del a
+before = faults()
+b = np.ones(1 << 23)  # the same size again: fresh pages unless the freed ones were kept
+print(json.dumps({"blas": os.environ.get("OPENBLAS_NUM_THREADS"), "faults": faults() - before}))
+"""
+
+
+def _probe(name: str, **env: str) -> dict:
+    import os
+
+    environ = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"} | env
+    proc = subprocess.run([sys.executable, "-c", PROBE, name], capture_output=True, text=True, check=True,
+                          env=environ)
+    return json.loads(proc.stdout)
+
+
+@pytest.mark.parametrize(("argv0", "orig", "expected"), [
+    ("/usr/local/bin/demsplit", ["/usr/bin/python3", "/usr/local/bin/demsplit", "run"], True),
+    ("-m", ["/usr/bin/python3", "-X", "utf8", "-m", "demsplit.cli", "run"], True),
+    ("-c", ["/usr/bin/python3", "-c", "import demsplit"], False),
+    ("/home/u/analysis.py", ["/usr/bin/python3", "/home/u/analysis.py"], False),
+    ("-m", ["/usr/bin/python3", "-m", "pytest"], False),
+])
+def test_is_command_only_for_the_console_script_and_the_cli_module(monkeypatch, argv0, orig, expected):
+    monkeypatch.setattr(sys, "argv", [argv0])
+    monkeypatch.setattr(sys, "orig_argv", orig)
+    assert command.is_command() is expected
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc's mallopt and ru_minflt")
+def test_the_command_keeps_freed_memory_and_one_blas_thread():
+    as_command, as_library = _probe("demsplit"), _probe("analysis.py")
+    assert as_command["blas"] == "1" and as_library["blas"] is None
+    # freed pages reused: a 64 MiB array faults in 16384 small pages or 32 huge ones when it is fresh
+    assert as_command["faults"] < 8 <= as_library["faults"]
+
+
+def test_a_blas_thread_count_the_user_set_is_kept():
+    assert _probe("demsplit", OPENBLAS_NUM_THREADS="2")["blas"] == "2"
+
