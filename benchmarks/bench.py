@@ -27,15 +27,21 @@ of each measurement kept (the machine is shared). Measurements:
     after an install does); its time is printed, and every later process loads
     the cached machine code.
 ``demsplit run`` / ``--compression gzip|lzf|none`` / ``--no-compare`` / ``--no-contacts``
-    end to end: read, partition, aggregate, write the HDF5 store (the store's
+    the command's process (``sys.argv[0]`` is ``demsplit``, so :mod:`demsplit.command`'s settings apply
+    as they do to the console script), end to end: read, partition, aggregate, write the HDF5 store (the store's
     default ``auto`` compression: gzip on the columns whose first chunk
     compresses, none on the others; ``--no-contacts`` leaves out the
     per-contact table, by far the largest).
 ``pipeline (no store)``
     not a command: the pipeline of ``demsplit run`` without the store: every frame's tables computed
     (``demsplit.pipeline.process_run``) and dropped.
+``demsplit dumps``
+    the dump reader alone on both dumps, every frame, the columns ``demsplit run`` reads (by name, as
+    ``polars-needed`` reads them by index), every row checked and every real correctly rounded: the
+    like-for-like of ``polars-needed`` (what issue 19's reader goal compares).
 ``demsplit read``
-    the reader alone: every Frame of the run (atoms + contacts joined).
+    the run's reader: every Frame of the run, which is the dump reader plus the join of atoms and
+    contacts, the pair geometry and the checks against it (more work than a parse).
 ``demsplit atoms``
     the reader alone on the atom dump (the like-for-like of MDAnalysis).
 ``polars`` / ``pandas-c``
@@ -87,7 +93,7 @@ from pathlib import Path
 CHILDREN = ("warm-up", "imports", "demsplit-run", "demsplit-run-gzip", "demsplit-run-lzf", "demsplit-run-nocompress",
             "demsplit-run-nocompare",
             "demsplit-run-nocontacts", "pipeline-nostore",
-            "demsplit-read", "demsplit-atoms", "polars", "polars-needed",
+            "demsplit-read", "demsplit-dumps", "demsplit-atoms", "polars", "polars-needed",
             "pandas-c", "limits", "ovito", "mdanalysis", "convert", "cache-read", "kernel")
 KERNEL_REPEAT = 7  # timings of each in-memory kernel measurement, the best kept
 
@@ -115,10 +121,7 @@ def child(name: str, d: Path, work: Path, index_file: str) -> dict:
         from demsplit.cli import main
 
         sample = Path(__file__).resolve().parents[1] / "sample_dumps" / "liggghts" / "packing" / "in.packing"
-        out = work / "warm-up.h5"
-        rc = main(["run", str(sample), "-o", str(out), "-q"])
-        out.unlink(missing_ok=True)
-        return {"rc": rc}
+        return {"rc": main(["run", str(sample), "-o", str(work / "warm-up.h5"), "-q"])}
     if name.startswith("demsplit-run"):
         sys.argv[0] = "demsplit"  # as the console script: this process is the command (demsplit.command)
         from demsplit.cli import main
@@ -128,9 +131,7 @@ def child(name: str, d: Path, work: Path, index_file: str) -> dict:
                  "demsplit-run-lzf": ["--compression", "lzf"],
                  "demsplit-run-nocompress": ["--compression", "none"], "demsplit-run-nocompare": ["--no-compare"],
                  "demsplit-run-nocontacts": ["--no-contacts"]}[name]
-        rc = main(["run", str(script), "-o", str(out), "-q", *extra])
-        out.unlink(missing_ok=True)
-        return {"rc": rc}
+        return {"rc": main(["run", str(script), "-o", str(out), "-q", *extra])}  # deleted by the parent, untimed
     if name == "pipeline-nostore":
         from demsplit.pipeline import process_run
         from demsplit.readers import open_run
@@ -150,6 +151,12 @@ def child(name: str, d: Path, work: Path, index_file: str) -> dict:
             n += len(frame.contacts["delta"])
             del frame  # one frame alive at a time
         return {"contacts": n}
+    if name == "demsplit-dumps":
+        from demsplit.readers.lammps_dump import open_dump
+
+        names = json.loads(Path(index_file).read_text())["needed_names"]
+        n = sum(f.n_rows for dump in ("atoms", "pairs") for f in open_dump(d / f"{dump}.txt").frames(names[dump]))
+        return {"rows": n}
     if name == "demsplit-atoms":
         from demsplit.readers.lammps_dump import open_dump
 
@@ -333,13 +340,16 @@ def measure(name: str, d: Path, work: Path, index_file: str) -> dict:
     The dirty pages earlier children left (their stores) are written back
     first, untimed (``os.sync``): otherwise the kernel's write-back of one
     child's output would be charged to whichever child runs next. Then the
-    child's inputs are read into the page cache (:func:`warm`, untimed)."""
+    child's inputs are read into the page cache (:func:`warm`, untimed). The stores a ``demsplit run``
+    child wrote are deleted after its time is taken."""
     cmd = [sys.executable, __file__, "--child", name, str(d), "--work", str(work), "--index", index_file]
     os.sync()
     warm(inputs(name, d, work))
     t = time.perf_counter()
     proc = subprocess.run(cmd, capture_output=True)
     seconds = time.perf_counter() - t
+    for store in [*work.glob("demsplit-run*.h5"), work / "warm-up.h5"]:
+        store.unlink(missing_ok=True)  # here, untimed: deleting an 860 MB store takes 0.16 s
     if proc.returncode != 0:
         return {"name": name, "error": proc.stderr.decode(errors="replace").strip().splitlines()[-1:] or ["failed"]}
     report = json.loads(proc.stdout.decode().strip().splitlines()[-1])
@@ -377,7 +387,8 @@ def _vm_hwm_mb() -> float:
 
 def frame_ranges(d: Path) -> dict:
     """Byte range of every frame's rows in both dumps (demsplit's index), and ``needed``: per dump, the
-    indices of the columns demsplit's reader reads (for ``polars-needed``)."""
+    indices of the columns demsplit's reader reads (for ``polars-needed``; ``needed_names``: their names,
+    for ``demsplit-dumps``)."""
     from demsplit.readers import open_run
     from demsplit.readers.lammps_dump import open_dump
 
@@ -387,8 +398,10 @@ def frame_ranges(d: Path) -> dict:
         out[name] = [(e.data_start, e.data_end) for e in dump._index()]
     run = open_run(d / "in.bench")
     try:
-        out["needed"] = {"atoms": sorted(run.atoms.columns.index(c) for c in run._atom_columns()),
-                         "pairs": sorted(run.pairs.columns.index(c) for c in run._wanted(run._pair_names))}
+        names = {"atoms": run._atom_columns(), "pairs": run._wanted(run._pair_names)}
+        out["needed_names"] = names
+        out["needed"] = {"atoms": sorted(run.atoms.columns.index(c) for c in names["atoms"]),
+                         "pairs": sorted(run.pairs.columns.index(c) for c in names["pairs"])}
     finally:
         run.close()
     return out
@@ -476,6 +489,8 @@ def report(m: dict, d: Path, load0, load1, repeat: int) -> None:
     ratio("demsplit run --no-compare vs polars bare parse", "demsplit-run-nocompare", "polars")
     ratio("demsplit run --no-contacts vs polars bare parse", "demsplit-run-nocontacts", "polars")
     ratio("pipeline (no store) vs polars bare parse", "pipeline-nostore", "polars")
+    ratio("demsplit dump reader (needed columns) vs polars, the same columns", "demsplit-dumps", "polars-needed")
+    ratio("demsplit dump reader (needed columns) vs polars bare parse", "demsplit-dumps", "polars")
     ratio("demsplit reader (every Frame) vs polars bare parse", "demsplit-read", "polars")
     ratio("demsplit reader (every Frame) vs polars, only the needed columns", "demsplit-read", "polars-needed")
     ratio("demsplit run vs polars, only the needed columns", "demsplit-run", "polars-needed")
@@ -489,7 +504,7 @@ def report(m: dict, d: Path, load0, load1, repeat: int) -> None:
         print(f"\nthroughput over both files ({gb:.2f} GB), GB/s, and demsplit's read as a fraction of each limit")
         print(f"  page-cache read (readinto)           {gb / lim['page_cache_read']:6.2f}")
         print(f"  newline count, 8 bytes a step        {gb / lim['newline_count']:6.2f}")
-        for n in ("demsplit-read", "polars-needed", "polars"):
+        for n in ("demsplit-dumps", "demsplit-read", "polars-needed", "polars"):
             if t(n):
                 print(f"  {n:36s} {gb / t(n):6.2f}   ({lim['page_cache_read'] / t(n):.0%} of the page-cache read, "
                       f"{lim['newline_count'] / t(n):.0%} of the newline count; process start and imports "
