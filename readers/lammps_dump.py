@@ -17,8 +17,8 @@ a time and reports bad input precisely.
 
 Index
     The first access to ``n_frames``/``steps``/``frame(k)`` scans the
-    (decompressed) file once: a plain file in 16 MiB windows mapped into
-    memory and scanned on every core (:func:`_scan_mapped`), a compressed one
+    (decompressed) file once: a plain file in 16 MiB windows read into each
+    thread's buffer and scanned on every core (:func:`_scan_read`), a compressed one
     through a reused buffer (:func:`_windows`); one compiled pass per 1 MiB
     (:func:`~demsplit.readers.fastparse.scan_chunk`, numba) counts the
     newlines and finds the ``ITEM: TIMESTEP`` markers; no per-line Python.
@@ -97,7 +97,6 @@ import bz2
 import gzip
 import io
 import lzma
-import mmap
 import os
 import struct
 import threading
@@ -875,15 +874,15 @@ def _scan(f: BinaryIO) -> tuple[list[int], list[bytes], list[int], int, int, byt
     can be cut into slices whose first row number is known: :meth:`TextDump._parse_slices`).
     Newlines are counted and markers found by one compiled pass per
     ``CHECKPOINT`` bytes (:func:`~demsplit.readers.fastparse.scan_chunk`). A
-    plain file is scanned through memory maps, one per window of ``CHUNK``
-    bytes, the windows on every core (:func:`_scan_mapped`); a compressed
+    plain file is read window by window (``CHUNK`` bytes) into each thread's
+    buffer, the windows on every core (:func:`_scan_read`); a compressed
     stream through one reused buffer (:func:`_windows`). (The provenance's
     digest of the file is not taken here: :mod:`demsplit.fingerprint` hashes
     the inputs in the background while the first frame is computed.)
     """
     if isinstance(f, (io.BufferedReader, io.FileIO)) and (size := os.fstat(f.fileno()).st_size):
         fd = f.fileno()
-        pieces = threads.pool().map(lambda start: _scan_mapped(fd, start, size), range(0, size, CHUNK))
+        pieces = threads.pool().map(lambda start: _scan_read(fd, start, size), range(0, size, CHUNK))
     else:  # (an empty file cannot be mapped: it takes the buffered path, which reads nothing)
         pieces = (_scan_window(start, window, limit) for start, window, limit in _windows(f))
     markers: list[int] = []
@@ -928,22 +927,15 @@ def _scan_window(start: int, window: np.ndarray, limit: int) -> tuple[list, int,
     return found, newlines, marks, start + window.size, window[-1:].tobytes()
 
 
-def _scan_mapped(fd: int, start: int, size: int) -> tuple[list, int, np.ndarray, int, bytes]:
-    """:func:`_scan_window` of the window of a plain file of ``size`` bytes that starts at ``start``:
-    a memory map of it (``CHUNK`` bytes and ``HEADER_MAX`` more, so that a header starting in it is
-    whole), unmapped before returning. No copy out of the page cache, which is most of a scan's
-    time with ``read()`` (docs/performance.md, "Parser and index")."""
-    base = start - start % mmap.ALLOCATIONGRANULARITY  # a map starts on a page
-    mapped = mmap.mmap(fd, min(start + CHUNK + HEADER_MAX, size) - base, access=mmap.ACCESS_READ, offset=base)
-    try:
-        if hasattr(mapped, "madvise"):
-            mapped.madvise(mmap.MADV_SEQUENTIAL)
-        window = np.frombuffer(mapped, dtype=np.uint8)[start - base:]
-        result = _scan_window(start, window, min(CHUNK, size - start))
-        del window
-    finally:
-        mapped.close()
-    return result
+def _scan_read(fd: int, start: int, size: int) -> tuple[list, int, np.ndarray, int, bytes]:
+    """:func:`_scan_window` of the window of a plain file of ``size`` bytes that starts at ``start``
+    (``CHUNK`` bytes and ``HEADER_MAX`` more, so that a header starting in it is whole), read with
+    ``os.preadv`` into this thread's reused buffer (the one its parses use, :func:`_thread_buffer`).
+    Copying the window out of the page cache into memory that stays mapped costs less than mapping
+    the window's pages each time (docs/performance.md, "Parser and index")."""
+    window = _thread_buffer(min(start + CHUNK + HEADER_MAX, size) - start)
+    window = window[: _read_at(fd, window, start)]  # shorter only when the file shrank since its size was taken
+    return _scan_window(start, window, min(CHUNK, size - start, window.size))
 
 
 def _windows(f: BinaryIO) -> Iterator[tuple[int, np.ndarray, int]]:
