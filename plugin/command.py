@@ -3,9 +3,11 @@
 Imported first by the package's ``__init__``, before numpy, and applied on import (:func:`settle`) only when the
 process is the command (:func:`is_command`): the ``demsplit`` console script, or
 ``python -m demsplit.cli``. A program that imports demsplit keeps its own
-settings. Both settings below were measured on the benchmark run (3 GB of dumps,
-3 frames; ``python benchmarks/bench.py``, docs/performance.md, "Process
-settings of the command"):
+settings. Together they take ``demsplit run`` on the benchmark run (3 GB of
+dumps, 3 frames) from a median of 4.09 s to 3.93 s (six interleaved rounds,
+``python benchmarks/command_settings.py /tmp/bench_big``, which also times each
+setting alone: each alone is within the rounds' spread; docs/performance.md,
+"The command's process settings"):
 
 OpenBLAS threads
     ``OPENBLAS_NUM_THREADS=1`` unless the user set it. The command calls no BLAS,
@@ -22,10 +24,18 @@ Freed memory kept for the next frame
     trimmed below :data:`TRIM_THRESHOLD`, so the next frame reuses the pages of
     the last. The peak is the same (the frames are the same size); a run's
     memory stays at its peak until it ends.
+Rare cyclic garbage collections
+    :data:`GC_THRESHOLDS` instead of Python's (700, 10, 10). A collection holds
+    the GIL, which the parse and compression threads need to hand back their
+    pieces, and the command's data are numpy arrays, which make no reference
+    cycles: a whole ``demsplit run`` with the collector off left 1702
+    unreachable objects at its end, the same for 3 frames of 10^6 particles
+    and for 100 frames of 2000 (``gc.collect()`` after the run).
 """
 
 from __future__ import annotations
 
+import gc
 import os
 import sys
 
@@ -41,6 +51,8 @@ value ``mallopt`` takes)."""
 TOP_PAD = 1 << 28
 """Bytes the heap grows by beyond what a request needs (``M_TOP_PAD``), so that a frame's arrays grow the
 heap a few times rather than once per array; address space only until touched."""
+GC_THRESHOLDS = (100_000, 50, 100)
+"""``gc.set_threshold``: a young collection per 100,000 new container objects, an old one rarely."""
 _M_TRIM_THRESHOLD, _M_TOP_PAD, _M_MMAP_THRESHOLD = -1, -2, -3  # glibc's <malloc.h>
 
 
@@ -77,6 +89,7 @@ def settle() -> None:
     if "numpy" not in sys.modules:
         os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     keep_freed_memory()
+    gc.set_threshold(*GC_THRESHOLDS)
 
 
 settle()

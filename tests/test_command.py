@@ -11,7 +11,7 @@ import pytest
 from demsplit import command
 
 PROBE = r"""
-import json, os, resource, sys
+import gc, json, os, resource, sys
 sys.argv[0] = sys.argv[1]  # the name the process was started under: "demsplit" is the console script
 import demsplit
 import numpy as np
@@ -23,7 +23,8 @@ a = np.ones(1 << 23)  # 64 MiB, touched, then freed
 del a
 before = faults()
 b = np.ones(1 << 23)  # the same size again: fresh pages unless the freed ones were kept
-print(json.dumps({"blas": os.environ.get("OPENBLAS_NUM_THREADS"), "faults": faults() - before}))
+print(json.dumps({"blas": os.environ.get("OPENBLAS_NUM_THREADS"), "faults": faults() - before,
+                  "gc": gc.get_threshold()}))
 """
 
 
@@ -50,9 +51,10 @@ def test_is_command_only_for_the_console_script_and_the_cli_module(monkeypatch, 
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc's mallopt and ru_minflt")
-def test_the_command_keeps_freed_memory_and_one_blas_thread():
+def test_the_command_keeps_freed_memory_one_blas_thread_and_rare_collections():
     as_command, as_library = _probe("demsplit"), _probe("analysis.py")
     assert as_command["blas"] == "1" and as_library["blas"] is None
+    assert tuple(as_command["gc"]) == command.GC_THRESHOLDS and tuple(as_library["gc"]) != command.GC_THRESHOLDS
     # freed pages reused: a 64 MiB array faults in 16384 small pages or 32 huge ones when it is fresh
     assert as_command["faults"] < 8 <= as_library["faults"]
 
