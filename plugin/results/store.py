@@ -40,7 +40,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from concurrent.futures import Executor
 from pathlib import Path
@@ -565,14 +565,21 @@ class _TableSink:
         return ds
 
     def append(self, table: Mapping[str, np.ndarray] | None) -> int:
-        """Write the whole chunks that ``table`` (one frame) completes, one
-        column at a time, and return its row count."""
+        """Write the whole chunks that ``table`` (one frame) completes and return its row count. The
+        chunks of every gzip column go to the pool first, so that the columns stored as they are get
+        written while the pool compresses; each column's blobs are then written in order as they come."""
         if not table or not self.schema:
             return 0
         n = len(next(iter(table.values())))
+        chunks = {}
         for col in self.schema:
-            chunks, self.carry[col] = _whole_chunks(self.carry[col], table[col], self.chunk_rows)
-            self._write(col, chunks)
+            chunks[col], self.carry[col] = _whole_chunks(self.carry[col], table[col], self.chunk_rows)
+        blobs = {col: self._compressed(chunks[col]) for col in self.schema if self.filters[col] == "gzip"}
+        for col in self.schema:
+            if col not in blobs:
+                self._write(col, chunks[col])
+        for col, compressed in blobs.items():
+            self._write(col, chunks[col], compressed)
         self.written = self.datasets[next(iter(self.schema))].shape[0]
         return n
 
@@ -596,8 +603,13 @@ class _TableSink:
             self._write(col, [rows] if len(rows) else [])
             self.carry[col] = rows[:0]
 
-    def _write(self, col: str, chunks: list[np.ndarray]) -> None:
-        """Append the chunks of one column (all whole but possibly the table's last one)."""
+    def _compressed(self, chunks: list[np.ndarray]) -> Iterator[bytes]:
+        """The chunks (padded) shuffled and deflated on the pool, every one submitted now; in order."""
+        return self.pool.map(_shuffle_deflate, [_padded(c, self.chunk_rows) for c in chunks])
+
+    def _write(self, col: str, chunks: list[np.ndarray], blobs: Iterable[bytes] | None = None) -> None:
+        """Append the chunks of one column (all whole but possibly the table's last one); ``blobs``:
+        their compressed bytes when already asked of the pool (:meth:`_compressed`)."""
         if not chunks:
             return
         ds = self.datasets[col]
@@ -607,8 +619,9 @@ class _TableSink:
             for k, c in enumerate(chunks):
                 ds[start + k * self.chunk_rows: start + k * self.chunk_rows + len(c)] = c
             return
-        padded = (_padded(c, self.chunk_rows) for c in chunks)
-        blobs = self.pool.map(_shuffle_deflate, padded) if self.filters[col] == "gzip" else padded
+        if blobs is None:
+            blobs = self._compressed(chunks) if self.filters[col] == "gzip" else \
+                (_padded(c, self.chunk_rows) for c in chunks)
         for k, blob in enumerate(blobs):
             ds.id.write_direct_chunk((start + k * self.chunk_rows,), blob)
 
