@@ -75,10 +75,24 @@ def _stride(values):
 def contact_rows(row_of_id, id1, id2, wall):
     """Particle rows of both bodies of every contact from a dense id -> row table
     (-1: no particle), in the table's integer type. For a wall contact rows2 is
-    -1 - wall (< 0). Returns (rows1, rows2, first contact naming an unknown id or -1)."""
+    -1 - wall (< 0). Returns (rows1, rows2, first contact naming an unknown id or -1);
+    pieces of the contacts on every core."""
     rows1 = np.empty(len(id1), row_of_id.dtype)
     rows2 = np.empty(len(id1), row_of_id.dtype)
-    return rows1, rows2, _contact_rows(row_of_id, id1, id2, wall, rows1, rows2)
+
+    def piece(lo: int, hi: int) -> int:
+        return _offset(_contact_rows(row_of_id, id1[lo:hi], id2[lo:hi], wall[lo:hi], rows1[lo:hi], rows2[lo:hi]), lo)
+    return rows1, rows2, _first_found(threads.map_ranges(piece, len(id1)))
+
+
+def _offset(found: int, lo: int) -> int:
+    """A piece's first contact found (-1: none) as a contact of the whole range, the piece starting at ``lo``."""
+    return found if found < 0 else lo + found
+
+
+def _first_found(found: list[int]) -> int:
+    """The first contact found by the pieces, in order (-1: none)."""
+    return next((f for f in found if f >= 0), -1)
 
 
 @kernel
@@ -141,11 +155,20 @@ def hertz_history_energies(delta, r1, r2, E_eff, G_eff, code, shearx, sheary, sh
     u_n = (8/15) E* sqrt(R* d) d^2 and, with shear, u_t = kt |shear|^2 / 2 with
     kt = 8 G* sqrt(R* d) where delta > 0 (0 elsewhere); R* = 1/(1/r1 + 1/r2),
     d = max(delta, 0). E_eff, G_eff: values for ``code`` (module docstring).
-    Returns (u_n, u_t, first contact with 1/r1 + 1/r2 <= 0 or -1)."""
-    u_n = np.empty(len(delta))
-    u_t = np.empty(len(delta))
-    return u_n, u_t, _hertz_history_energies(delta, r1, r2, E_eff, G_eff, code, shearx, sheary, shearz,
-                                             with_shear, u_n, u_t)
+    Returns (u_n, u_t, first contact with 1/r1 + 1/r2 <= 0 or -1); pieces of the contacts on every core."""
+    n = len(delta)
+    u_n = np.empty(n)
+    u_t = np.empty(n)
+    per_contact = len(code) == 0   # E_eff, G_eff: one value per contact (cut with them) or one for all
+
+    def moduli(values, lo: int, hi: int):
+        return values[lo:hi] if per_contact and len(values) > 1 else values
+
+    def piece(lo: int, hi: int) -> int:
+        return _offset(_hertz_history_energies(delta[lo:hi], r1[lo:hi], r2[lo:hi], moduli(E_eff, lo, hi),
+                                               moduli(G_eff, lo, hi), code[lo:hi], shearx[lo:hi], sheary[lo:hi],
+                                               shearz[lo:hi], with_shear, u_n[lo:hi], u_t[lo:hi]), lo)
+    return u_n, u_t, _first_found(threads.map_ranges(piece, n))
 
 
 @kernel

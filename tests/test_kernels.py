@@ -347,6 +347,26 @@ def test_hertz_from_codes_equals_per_contact_values():
     assert bad == 0
 
 
+@pytest.mark.parametrize("pieces", [1, 3])
+def test_the_first_bad_contact_is_found_in_any_piece(pieces, monkeypatch):
+    """contact_rows and hertz_history_energies report the first contact naming an unknown id or with
+    1/r1 + 1/r2 <= 0, as a contact of the whole list, when the loops run in pieces too."""
+    from demsplit import threads
+
+    monkeypatch.setattr(threads, "MIN_RANGE", 1 if pieces > 1 else 1 << 16)
+    monkeypatch.setattr(threads, "THREADS", pieces)
+    n = 30
+    id1, id2, wall = np.arange(n), (np.arange(n) + 1) % n, np.full(n, -1)
+    id2[25], id1[27] = 10 * n, -5  # unknown ids, both in the last third
+    assert kernels.contact_rows(np.arange(n, dtype=np.int64), id1, id2, wall)[2] == 25
+    d, r1, r2 = np.full(n, 1e-5), np.full(n, 1e-3), np.full(n, np.inf)
+    r1[[21, 28]] = -1e-3
+    E = np.array([1e9])  # one value for all
+    assert kernels.hertz_history_energies(d, r1, r2, E, E, kernels.NO_CODE, d, d, d, True)[2] == 21
+    assert kernels.hertz_history_energies(d, r1, r2, np.full(n, 1e9), np.full(n, 1e9), kernels.NO_CODE,
+                                          d, d, d, True)[2] == 21
+
+
 # --- sample runs -----------------------------------------------------------------------------
 
 @pytest.mark.parametrize("name", ["packing", "periodic", "analytic"])
