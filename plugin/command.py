@@ -22,15 +22,16 @@ Freed memory kept for the next frame
     of the command's CPU samples in ``perf record`` (``clear_page_erms``). Allocations
     up to :data:`MMAP_THRESHOLD` come from the heap instead, and the heap is not
     trimmed below :data:`TRIM_THRESHOLD`, so the next frame reuses the pages of
-    the last. The peak is the same (the frames are the same size); a run's
-    memory stays at its peak until it ends.
+    the last. The peak is about the same (877 MB against 860 MB on the
+    benchmark: pages the heap keeps); a run's memory stays at its peak until
+    it ends.
 Rare cyclic garbage collections
     :data:`GC_THRESHOLDS` instead of Python's (700, 10, 10). A collection holds
     the GIL, which the parse and compression threads need to hand back their
     pieces, and the command's data are numpy arrays, which make no reference
-    cycles: a whole ``demsplit run`` with the collector off left 1702
+    cycles: a whole ``demsplit run`` with the collector off leaves 1734
     unreachable objects at its end, the same for 3 frames of 10^6 particles
-    and for 100 frames of 2000 (``gc.collect()`` after the run).
+    and for 100 frames of 2000 (the command in docs/performance.md).
 """
 
 from __future__ import annotations
