@@ -554,25 +554,13 @@ def run_to_store(path: str | Path, out: str | Path, *, options: Options = Option
         sources = run.sources
         check_output_path(out, run.named_files())  # before anything is written: never over a file of the run
         report = RunReport()
-        hash_in_background(sources)
-        # A new run computes its first frame while the inputs are hashed, then opens the store (its
-        # provenance holds their digests); a resumed run opens the store first, to skip its frames.
-        def frames_after(done: set[int]):
-            return process_run(run, options, jobs=jobs, dask=dask, on_bad_frame=on_bad_frame,
-                               skip_steps=done, progress=progress, report=report)
-
-        frames = None if resume else frames_after(set())
-        first = None if frames is None else next(frames, None)
+        hash_in_background(sources)  # on idle cores; the writer fills the digests in when they are known
         provenance = build_provenance(sources, scene=run.scene, options=asdict(options), run=run.describe(),
-                                      type_names=_type_names(type_names))
+                                      type_names=_type_names(type_names), wait=False)
         with ResultWriter(out, provenance, resume=resume, walls_meta=walls_meta_from_scene(run.scene),
                           compression=compression) as writer:
-            if frames is None:
-                frames = frames_after(writer.done_steps)
-            if first is not None:
-                writer.append(first)
-                first = None  # stored: free it before the next frame is computed
-            for tables in frames:
+            for tables in process_run(run, options, jobs=jobs, dask=dask, on_bad_frame=on_bad_frame,
+                                      skip_steps=writer.done_steps, progress=progress, report=report):
                 writer.append(tables)
                 del tables  # stored: free it before the next frame is computed
             if report.bad_frames and not writer.done_steps:  # nothing to store: a failed run, with or without -q

@@ -46,20 +46,87 @@ def test_background_digest_is_the_files_and_a_change_invalidates_it(tmp_path):
 
 
 def test_an_error_of_the_background_hash_is_named_with_the_file(tmp_path):
-    """The hashing thread hands its error to whoever waits for the digest."""
-    from concurrent.futures import Future
-
-    path = tmp_path / "unreadable.txt"
-    path.write_bytes(b"x" * 100)
-    failed: Future = Future()
-    failed.set_exception(PermissionError(13, "Permission denied"))
-    fingerprint._PENDING[fingerprint._key(path)] = (os.getpid(), failed)  # as _hash_all leaves it
-    with pytest.raises(StoreError, match="cannot read input file to fingerprint it: Permission denied") as err:
-        fingerprint.file_fingerprint(path)
-    assert str(path) in str(err.value)
+    """The hashing thread gives up on a file it cannot read; whoever needs the digest reads it again and
+    reports the error with the file."""
+    unreadable = tmp_path / "a-directory"
+    unreadable.mkdir()  # stat works, reading does not (as root, a file's permissions would not stop it)
+    job = fingerprint._Digest(unreadable)
+    fingerprint._PENDING[fingerprint._key(unreadable)] = (os.getpid(), job)
+    job.hash_in_background()  # as the thread runs it: the error ends the attempt
+    assert job.digest is None
+    with pytest.raises(StoreError, match="cannot read input file to fingerprint it: Is a directory") as err:
+        fingerprint.file_fingerprint(unreadable)
+    assert str(unreadable) in str(err.value)
     fingerprint.hash_in_background([tmp_path / "never-existed.txt"])  # left for file_fingerprint to report
     with pytest.raises(StoreError, match="cannot read input file"):
         fingerprint.file_fingerprint(tmp_path / "never-existed.txt")
+
+
+class _Stalled:
+    """A file for the background thread's hashing that gives ``blocks`` blocks and then fails: the thread
+    stops there, as one the scheduler keeps off the cores makes no more progress."""
+
+    def __init__(self, path, mode, buffering, blocks: int) -> None:
+        self.f, self.blocks = open(path, mode, buffering=buffering), blocks
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.f.close()
+
+    def seek(self, offset):
+        return self.f.seek(offset)
+
+    def readinto(self, buf):
+        if self.blocks == 0:
+            raise InterruptedError(4, "stalled")
+        self.blocks -= 1
+        return self.f.readinto(buf)
+
+
+@pytest.mark.parametrize("published", [0, 1, 2, 3])
+def test_a_waiter_takes_the_hashing_over_from_the_last_published_block(tmp_path, monkeypatch, published):
+    """The digest finished by the waiter, from where the background thread stopped (its start, a middle
+    block, the last full one), is the file's; a thread that comes back after the take-over changes
+    nothing."""
+    monkeypatch.setattr(fingerprint, "_BLOCK", 1024)
+    path = tmp_path / "dump.txt"
+    path.write_bytes(np.random.default_rng(published).integers(0, 256, 3 * 1024 + 100, dtype=np.uint8).tobytes())
+    job = fingerprint._Digest(path)
+    with monkeypatch.context() as m:
+        m.setattr(fingerprint, "open", lambda p, mode, buffering: _Stalled(p, mode, buffering, published),
+                  raising=False)
+        job.hash_in_background()
+    assert job._offset == published * 1024 and job.digest is None
+    assert job.take_over() == b3sum(path) == job.digest
+    job.hash_in_background()  # a thread that comes back after the take-over leaves the digest alone
+    assert job.digest == b3sum(path)
+
+
+def test_the_hashing_thread_runs_on_idle_cores_and_a_waiter_does_not_wait_for_it(tmp_path, monkeypatch):
+    """The thread asks for SCHED_IDLE (Linux); while it is held up, file_fingerprint finishes the digest
+    itself; wait=False reports it as not known yet."""
+    if not hasattr(os, "SCHED_IDLE"):
+        pytest.skip("SCHED_IDLE is Linux's")
+    import threading
+
+    gate, policies = threading.Event(), []
+    real = fingerprint._Digest.hash_in_background
+
+    def held_up(job):
+        policies.append(os.sched_getscheduler(0))
+        gate.wait(60)
+        real(job)
+
+    monkeypatch.setattr(fingerprint._Digest, "hash_in_background", held_up)
+    path = tmp_path / "pairs.txt"
+    shutil.copy(SAMPLES / "liggghts" / "packing" / "pairs.txt", path)
+    fingerprint.hash_in_background([path])
+    assert fingerprint.file_fingerprint(path, wait=False)["blake3"] is None
+    assert fingerprint.file_fingerprint(path)["blake3"] == b3sum(path)  # with the thread still held up
+    assert policies == [os.SCHED_IDLE]
+    gate.set()
 
 
 def test_a_run_stores_the_digest_of_every_input(tmp_path):

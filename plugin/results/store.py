@@ -110,12 +110,15 @@ def demsplit_version() -> str:
         return "unknown"
 
 
-def build_provenance(inputs: Iterable[str | Path], *, scene=None, options: dict | None = None, **extra) -> dict:
+def build_provenance(inputs: Iterable[str | Path], *, scene=None, options: dict | None = None, wait: bool = True,
+                     **extra) -> dict:
     """A provenance dict: ``inputs`` (fingerprints), ``scene`` (materials per type,
     walls) and ``model`` (contact model) from a :class:`demsplit.scene.Scene`,
     ``options``, ``demsplit_version``, plus any ``extra`` entries (e.g.
-    ``overlap_source``, ``skipped``, ``bad_frames``). Must be JSON-serialisable."""
-    prov: dict = {"inputs": [file_fingerprint(p) for p in inputs], "options": dict(options or {}),
+    ``overlap_source``, ``skipped``, ``bad_frames``). Must be JSON-serialisable.
+    ``wait=False``: an input whose digest is still being computed has digest None
+    (:func:`~demsplit.fingerprint.file_fingerprint`), which a :class:`ResultWriter` fills in."""
+    prov: dict = {"inputs": [file_fingerprint(p, wait=wait) for p in inputs], "options": dict(options or {}),
                   "demsplit_version": demsplit_version()}
     if scene is not None:
         prov["scene"] = scene_to_dict(scene)
@@ -211,6 +214,12 @@ class ResultWriter:
     Entries added to ``writer.provenance`` before ``close()`` (skipped frames,
     notes) are stored. ``compression`` is one of :data:`COMPRESSIONS`
     (``None`` means ``"none"``).
+
+    An input whose digest is None in the provenance (``build_provenance(..., wait=False)``: still
+    being hashed in the background) is filled in as soon as its digest is known; a resumed run waits
+    for it (the interrupted run's inputs are compared by it). Until then frames are stored but not
+    committed: the run's manifest names its inputs by their digests, so a run killed before them has
+    nothing to resume and starts over.
     """
 
     def __init__(self, path: str | Path, provenance: Mapping, *, resume: bool = False,
@@ -230,20 +239,20 @@ class ResultWriter:
         self._steps: list[int] = []  # in append order
         self._rows: dict[str, list[int]] = {name: [0] for name in TABLES}  # row offsets, in append order
         self._closed = False
-        manifest = {"format": FORMAT, "format_version": FORMAT_VERSION, "work_version": WORK_VERSION,
-                    "identity": resume_identity(self.provenance), "provenance": self.provenance,
-                    "walls_meta": self.walls_meta, "compression": self.compression}
+        self._manifest_written = False
         resuming = self.work_dir.exists()
         try:
             with self._system_errors():
                 if resuming:
                     self._lock()
-                    self._resume(manifest)
+                    self._fill_digests(wait=True)
+                    self._resume(self._manifest())
+                    self._write_manifest()
                 else:
                     self.work_dir.mkdir()
                     self._lock()
-                _write_atomic(self.work_dir / _MANIFEST,
-                              lambda f: f.write(_to_json(manifest, "provenance").encode()))
+                    if self._fill_digests(wait=False):
+                        self._write_manifest()
         except BaseException:
             self._closed = True
             self._release(quiet=True)
@@ -254,6 +263,26 @@ class ResultWriter:
             raise
 
     # -- lifecycle -------------------------------------------------------
+    def _fill_digests(self, wait: bool) -> bool:
+        """Fill in the provenance's input digests that are None (being computed); ``wait``: finish them
+        now (:func:`~demsplit.fingerprint.file_fingerprint`). Whether every digest is known."""
+        known = True
+        for entry in self.provenance.get("inputs") or []:
+            if DIGEST in entry and entry[DIGEST] is None:
+                entry.update(file_fingerprint(entry["path"], wait=wait))
+                known &= entry[DIGEST] is not None
+        return known
+
+    def _manifest(self) -> dict:
+        return {"format": FORMAT, "format_version": FORMAT_VERSION, "work_version": WORK_VERSION,
+                "identity": resume_identity(self.provenance), "provenance": self.provenance,
+                "walls_meta": self.walls_meta, "compression": self.compression}
+
+    def _write_manifest(self) -> None:
+        manifest = self._manifest()
+        _write_atomic(self.work_dir / _MANIFEST, lambda f: f.write(_to_json(manifest, "provenance").encode()))
+        self._manifest_written = True
+
     def _lock(self) -> None:
         lock = self.work_dir / _LOCK
         try:
@@ -429,7 +458,12 @@ class ResultWriter:
 
     def _commit(self) -> None:
         """Flush the store and record what it holds (renamed into place: a
-        killed run leaves the previous record or this one, never a part)."""
+        killed run leaves the previous record or this one, never a part); not
+        before the run's manifest, which waits for the inputs' digests."""
+        if not self._manifest_written:
+            if not self._fill_digests(wait=False):
+                return
+            self._write_manifest()
         self._h5.flush()
         header = {"steps": self._steps, "rows": self._rows, "compression": self.compression,
                   "filters": {name: sink.filters for name, sink in self._sinks.items()},
@@ -455,6 +489,7 @@ class ResultWriter:
                     self._open(self._store, {}, {}, {})
                 for sink in self._sinks.values():
                     sink.finish()
+                self._fill_digests(wait=True)  # for the provenance the store's attributes hold
                 final = self._store
                 order = np.argsort(np.array(self._steps, dtype=np.int64), kind="stable")
                 if np.any(order != np.arange(len(order))):
