@@ -30,6 +30,7 @@ from pathlib import Path
 import blake3
 
 from .errors import StoreError
+from .threads import run_on_idle_cores
 
 DIGEST = "blake3"
 """The provenance's name for the digest of an input file (the key beside ``path`` and ``size``)."""
@@ -112,17 +113,8 @@ def file_digest(path: Path) -> str:
     return _Digest(path).take_over()
 
 
-def _run_only_on_idle_cores() -> None:
-    """Ask the scheduler to run the calling thread only on a core no other thread wants (Linux's
-    ``SCHED_IDLE``: ``sched_setscheduler`` with pid 0 is the calling thread); elsewhere nothing."""
-    try:
-        os.sched_setscheduler(0, os.SCHED_IDLE, os.sched_param(0))
-    except (AttributeError, OSError):
-        pass
-
-
 def _hash_all(jobs: list[_Digest]) -> None:
-    _run_only_on_idle_cores()
+    run_on_idle_cores()
     for job in jobs:
         job.hash_in_background()
 

@@ -52,6 +52,17 @@ def pool() -> ThreadPoolExecutor:
     return _pool[1]
 
 
+def run_on_idle_cores() -> None:
+    """Ask the scheduler to run the calling thread only on a core no other thread wants (Linux's
+    ``SCHED_IDLE``; ``sched_setscheduler`` with pid 0 is the calling thread); elsewhere nothing. For
+    background work nobody waits for (the inputs' digests, the store's write-back): it fills the moments a
+    core would idle instead of taking cores from the frames' work."""
+    try:
+        os.sched_setscheduler(0, os.SCHED_IDLE, os.sched_param(0))
+    except (AttributeError, OSError):
+        pass
+
+
 MIN_RANGE = 1 << 16
 """Rows below which :func:`map_ranges` does not split: a task costs about 23 us to hand over and collect
 (``list(pool().map(f, range(2)))`` with a trivial ``f``, 10,000 times, 2 cores: 23.0-24.1 us a task),

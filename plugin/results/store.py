@@ -49,7 +49,7 @@ import numpy as np
 from isal import isal_zlib
 
 from .. import threads
-from ..atomic import atomic_path, publish
+from ..atomic import WriteBack, atomic_path, publish
 from ..errors import StoreError, system_error
 from ..fingerprint import DIGEST, file_fingerprint  # noqa: F401  (file_fingerprint: part of this module's API)
 from ..outputs import check_output_path
@@ -240,6 +240,7 @@ class ResultWriter:
         self._rows: dict[str, list[int]] = {name: [0] for name in TABLES}  # row offsets, in append order
         self._closed = False
         self._manifest_written = False
+        self._write_back = WriteBack()  # the store's pages on their way to disk before close()'s fsync
         resuming = self.work_dir.exists()
         try:
             with self._system_errors():
@@ -368,6 +369,7 @@ class ResultWriter:
         nothing to resume, and nothing is left behind)."""
         if not self._closed:
             self._closed = True
+            self._write_back.stop()
             self._release(quiet=True)
             if _resumable(self.work_dir):
                 (self.work_dir / _LOCK).unlink(missing_ok=True)
@@ -455,6 +457,7 @@ class ResultWriter:
             self._rows[name].append(self._rows[name][-1] + sink.append(canon.get(name)))
         self._steps.append(step)
         self._commit()
+        self._write_back.request(self._store)
 
     def _commit(self) -> None:
         """Flush the store and record what it holds (renamed into place: a
@@ -483,6 +486,7 @@ class ResultWriter:
         resume, which the next run removes)."""
         if self._closed:
             return
+        self._write_back.stop()  # what it started goes on; the rest is fsynced below
         try:
             with self._system_errors():
                 if self._h5 is None:  # no frame: a store with empty tables
