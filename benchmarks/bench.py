@@ -28,7 +28,8 @@ of each measurement kept (the machine is shared). Measurements:
     the cached machine code.
 ``demsplit run`` / ``--compression gzip|lzf|none`` / ``--no-compare`` / ``--no-contacts``
     the command's process (``sys.argv[0]`` is ``demsplit``, so :mod:`demsplit.command`'s settings apply
-    as they do to the console script), end to end: read, partition, aggregate, write the HDF5 store (the store's
+    as they do to the console script, and it ends as the console script does, without the interpreter's
+    teardown: ``demsplit.command.exit_now``), end to end: read, partition, aggregate, write the HDF5 store (the store's
     default ``auto`` compression: gzip on the columns whose first chunk
     compresses, none on the others; ``--no-contacts`` leaves out the
     per-contact table, by far the largest).
@@ -432,6 +433,10 @@ def main(argv: list[str] | None = None) -> None:
     if a.child:
         out = child(a.child, a.dir, a.work, a.index)
         print(json.dumps({**out, "peak_rss_mb": _vm_hwm_mb()}))
+        if a.child.startswith("demsplit-run"):  # ends as the console script does (cli.command)
+            from demsplit.command import exit_now
+
+            exit_now(0)
         return
     skip = set(filter(None, a.skip.split(",")))
     names = [n for n in CHILDREN if n not in skip]

@@ -430,5 +430,13 @@ def main(argv: list[str] | None = None) -> int:
         signal.signal(signal.SIGTERM, previous)
 
 
+def command() -> None:
+    """The ``demsplit`` console script (and ``python -m demsplit.cli``): :func:`main` on the command
+    line, then the process ends with its exit status at once (:func:`demsplit.command.exit_now`)."""
+    from .command import exit_now
+
+    exit_now(main())
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    command()

@@ -62,3 +62,35 @@ def test_the_command_keeps_freed_memory_one_blas_thread_and_rare_collections():
 def test_a_blas_thread_count_the_user_set_is_kept():
     assert _probe("demsplit", OPENBLAS_NUM_THREADS="2")["blas"] == "2"
 
+
+
+EXIT = r"""
+import atexit, sys
+sys.argv = ["demsplit", "info", sys.argv[1]]
+
+class Teardown:
+    def __del__(self):
+        print("torn down", flush=True)
+
+keep = Teardown()  # a module global: freed by the interpreter's teardown, which the command skips
+atexit.register(lambda: print("atexit ran"))  # block-buffered into a pipe: printed only if flushed
+from demsplit.cli import command
+command()
+"""
+
+
+def test_the_command_ends_without_teardown_but_runs_atexit_and_flushes(tmp_path):
+    """The console script's end (cli.command, command.exit_now): its output complete when stdout is a pipe,
+    the atexit handlers run, the interpreter's finalization (a module global's __del__) skipped, the
+    exit status main's."""
+    from conftest import SAMPLES
+
+    script = SAMPLES / "liggghts" / "packing" / "in.packing"
+    proc = subprocess.run([sys.executable, "-c", EXIT, str(script)], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert "atexit ran" in proc.stdout and "torn down" not in proc.stdout
+    assert "in.packing" in proc.stdout  # demsplit info's report, all of it before the atexit line
+    assert proc.stdout.rstrip().endswith("atexit ran")
+    missing = subprocess.run([sys.executable, "-c", EXIT, str(tmp_path / "none.in")], capture_output=True,
+                             text=True)
+    assert missing.returncode == 2 and "demsplit: error:" in missing.stderr

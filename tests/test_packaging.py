@@ -21,7 +21,7 @@ def test_wheel_installs_only_demsplit(tmp_path):
                    "demsplit/readers/liggghts.py"):
         assert module in names
     entry = zipfile.ZipFile(wheel).read(next(n for n in names if n.endswith("entry_points.txt"))).decode()
-    assert "demsplit = demsplit.cli:main" in entry
+    assert "demsplit = demsplit.cli:command" in entry
 
 
 def test_import_is_light():
