@@ -61,7 +61,7 @@ if sys.argv[2] == "sha256":
     fp.file_digest = sha256
 elif sys.argv[2] == "nohash":
     import demsplit.pipeline as pl
-    pl.hash_in_background = lambda paths: None
+    pl.hash_in_background = fp.hash_in_background = lambda paths: None
     fp.file_digest = lambda path: "0" * 64
 from demsplit.cli import main
 t = time.perf_counter()
