@@ -4,12 +4,13 @@
 
 Each repeat is ``demsplit run DIR/in.bench -q`` in a fresh process whose phases are timed by wrapping, in that
 process only: ``open_run`` (script, index scans), ``read frame`` (``LiggghtsRun.frame``: parse and join),
-``frame_tables`` (validation, energies, split, tables), ``append`` (the store's compression and writes) and
-``close`` (the store's ``fsync`` and rename). For each phase: wall seconds, CPU seconds of the whole process
-while it ran (user + system, every thread: the background fingerprint thread included) and their ratio, the
-cores in use (the totals run from ``main``: the interpreter's start and the imports are not in them). On a
-2-core machine ``2 - cores`` is the share of a phase in which a core had nothing to do:
-where running more work alongside would pay. The repeat with the shortest total is printed; the load average
+``frame_tables`` (validation, energies, split, tables), ``append`` (the store's compression and writes),
+``close`` (the store's ``fsync`` and rename), and "after main", from ``main``'s return to the process's end
+(the interpreter's teardown, or the command's ``exit_now``). For each phase: wall seconds, CPU seconds of the
+whole process while it ran (user + system, every thread: the background fingerprint thread included) and
+their ratio, the cores in use (the totals run from ``main``: the interpreter's start and the imports are not
+in them). On a 2-core machine ``2 - cores`` is the share of a phase in which a core had nothing to do: where
+running more work alongside would pay. The repeat with the shortest total is printed; the load average
 before and after. With ``--rev REV`` the same for that git revision's package, the two alternating, and the
 median of each one's whole process (interpreter start, imports and the process's end included: what
 ``bench.py`` times) for the change between them.
@@ -61,7 +62,7 @@ rc = main(["run", sys.argv[1], "-o", sys.argv[2], "-q"])
 c1 = os.times()
 total = (time.perf_counter() - t0, c1.user - c0.user + c1.system - c0.system)
 os.unlink(sys.argv[2])
-print(json.dumps({"rc": rc, "total": total, "phases": phases}), flush=True)
+print(json.dumps({"rc": rc, "total": total, "phases": phases, "main_end": time.time()}), flush=True)
 try:  # the process ends as this revision's console script ends it
     from demsplit.command import exit_now
 except ImportError:  # a revision from before exit_now: the interpreter's teardown
@@ -77,7 +78,9 @@ def phases(script: Path, out: Path, pythonpath: str | None) -> dict:
     t = time.perf_counter()
     proc = subprocess.run([sys.executable, "-c", CHILD, str(script), str(out)], capture_output=True, text=True,
                           check=True, env=env)
-    return {**json.loads(proc.stdout.strip().splitlines()[-1]), "process": time.perf_counter() - t}
+    end = time.time()
+    report = json.loads(proc.stdout.strip().splitlines()[-1])
+    return {**report, "process": time.perf_counter() - t, "exit": end - report["main_end"]}
 
 
 def report(label: str, runs: list[dict]) -> None:
@@ -90,6 +93,7 @@ def report(label: str, runs: list[dict]) -> None:
         print(f"  {name:14s} wall {w:5.2f} s   CPU {c:5.2f} s   {c / w if w else 0:4.2f} cores")
         rest_wall, rest_cpu = rest_wall - w, rest_cpu - c
     print(f"  {'the rest':14s} wall {rest_wall:5.2f} s   CPU {rest_cpu:5.2f} s")
+    print(f"  {'after main':14s} wall {best['exit']:5.2f} s   (the process's end: teardown, or exit_now)")
 
 
 def main(argv: list[str] | None = None) -> None:
