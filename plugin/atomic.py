@@ -86,8 +86,9 @@ class WriteBack:
     runs only on idle cores (:func:`~demsplit.threads.run_on_idle_cores`).
 
     Without it the result store's pages stay in memory until :func:`publish`'s fsync, which writes them
-    all while both cores idle: 0.22 s for the benchmark's 860 MB store (docs/performance.md, "The
-    store's write-back"). :meth:`request` after each frame; the writer never waits for the thread,
+    all while both cores idle: the store's ``close`` took 0.23 s for the benchmark's 860 MB store, 0.08 s
+    with it (``python benchmarks/run_phases.py /tmp/bench_big --rev 4b2240f``; docs/performance.md, "The
+    goals of issue 19 at the fifth stop"). :meth:`request` after each frame; the writer never waits for the thread,
     which opens the file by its path each time (a file renamed or removed meanwhile is skipped)."""
 
     def __init__(self) -> None:
