@@ -96,8 +96,8 @@ def keep_freed_memory() -> bool:
 def exit_now(code: int) -> NoReturn:
     """End the command's process with exit status ``code`` without tearing the interpreter down: the
     ``atexit`` handlers run (the worker threads' shutdown, h5py's, temporary directories'), the standard
-    streams are flushed, and then ``os._exit``. Only for the command (:func:`is_command`), once all its
-    files are closed."""
+    streams are flushed, and then ``os._exit``. Called by the console script (``cli.command``) once
+    ``main`` has returned, every file it wrote closed; never by the library."""
     atexit._run_exitfuncs()
     for stream in (sys.stdout, sys.stderr):
         try:
