@@ -53,7 +53,8 @@ class _Digest:
     """One file's BLAKE3 digest in the making, which one thread starts and another may finish.
 
     The background thread (:meth:`hash_in_background`) publishes its progress, the offset and a copy of
-    the hash state (0.15 us), after every block; :meth:`take_over` continues from the last published
+    the hash state (0.13 us: ``python -m timeit -s "import blake3; h = blake3.blake3(b'x' * 1000)"
+    "h.copy()"``), after every 1 MiB block; :meth:`take_over` continues from the last published
     block in the calling thread, and the background thread drops its block in flight when it sees
     that. So a waiter never depends on a thread the scheduler may be keeping off the cores."""
 
