@@ -27,7 +27,7 @@ Index
     the newlines before every 1 MiB (the checkpoints), which is where a
     frame's rows are cut for the threads. (The digest for the provenance is
     not taken here but by :mod:`demsplit.fingerprint`, in the background
-    while the first frame is computed.) The index is cached on the object.
+    on idle cores while the frames are computed.) The index is cached on the object.
     Binary files are indexed by hopping from header to header.
 
 Reading a frame
@@ -878,12 +878,12 @@ def _scan(f: BinaryIO) -> tuple[list[int], list[bytes], list[int], int, int, byt
     buffer, the windows on every core (:func:`_scan_read`); a compressed
     stream through one reused buffer (:func:`_windows`). (The provenance's
     digest of the file is not taken here: :mod:`demsplit.fingerprint` hashes
-    the inputs in the background while the first frame is computed.)
+    the inputs in the background, on idle cores, while the frames are computed.)
     """
     if isinstance(f, (io.BufferedReader, io.FileIO)) and (size := os.fstat(f.fileno()).st_size):
         fd = f.fileno()
         pieces = threads.pool().map(lambda start: _scan_read(fd, start, size), range(0, size, CHUNK))
-    else:  # (an empty file cannot be mapped: it takes the buffered path, which reads nothing)
+    else:  # a compressed stream, or an empty file (the buffered path, which reads nothing)
         pieces = (_scan_window(start, window, limit) for start, window, limit in _windows(f))
     markers: list[int] = []
     headers: list[bytes] = []
