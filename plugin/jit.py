@@ -29,8 +29,11 @@ embedded interpreters.
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable
 from typing import TypeVar
+
+from .command import is_command
 
 try:
     import numba
@@ -38,6 +41,35 @@ except ImportError:  # an embedded interpreter without numba: see the module doc
     numba = None
 
 F = TypeVar("F", bound=Callable)
+BLAS_PROBE = "scipy.linalg.cython_blas"
+"""The module numba imports to learn whether BLAS is there (``numba.np.linalg.ensure_blas``)."""
+
+
+def load_registries_without_blas_probe() -> None:
+    """Load numba's registries now, with its BLAS probe answered "no BLAS" at once: what the ``demsplit``
+    command's process does when it imports this module (:func:`demsplit.command.is_command`).
+
+    A kernel's first call, compiled or loaded from the cache, makes numba load its registries, and one of
+    them (``numba.np.arraymath``) probes for BLAS by importing ``scipy.linalg.cython_blas``, which imports
+    all of ``scipy.linalg`` (and, through it, ``numpy.f2py``). That is 0.13 s of the command's start-up,
+    while the second core has nothing to do (the import chain of ``python -X importtime``), and
+    ``demsplit run`` on the benchmark run ends 0.09 s sooner without it (``python
+    benchmarks/run_phases.py /tmp/bench_big --rev REV``, docs/performance.md, "The goals of issue 19 at the
+    sixth stop"). No kernel calls BLAS: ``np.dot`` or ``np.linalg`` in a kernel would then fail to compile,
+    with numba's "scipy 0.16+ is required for linear algebra", never run without it. The probe's module is
+    answered by a ``None`` in ``sys.modules`` (an import of it raises ``ImportError`` at once) only while
+    the registries load, so ``scipy.linalg`` imports as usual afterwards; nothing is done when it is
+    already imported."""
+    if numba is None or BLAS_PROBE in sys.modules:
+        return
+    from numba.core.registry import cpu_target
+
+    sys.modules[BLAS_PROBE] = None
+    try:
+        cpu_target.target_context.refresh()  # what a kernel's first call does: every registry, typing included
+    finally:
+        if sys.modules.get(BLAS_PROBE, False) is None:
+            del sys.modules[BLAS_PROBE]
 
 
 def kernel(fn: F) -> F:
@@ -83,3 +115,5 @@ def _word_intrinsics():
 
 
 load_word, trailing_zeros = _word_intrinsics()
+if is_command():
+    load_registries_without_blas_probe()

@@ -94,3 +94,32 @@ def test_the_command_ends_without_teardown_but_runs_atexit_and_flushes(tmp_path)
     missing = subprocess.run([sys.executable, "-c", EXIT, str(tmp_path / "none.in")], capture_output=True,
                              text=True)
     assert missing.returncode == 2 and "demsplit: error:" in missing.stderr
+
+
+NUMBA_START = r"""
+import json, sys
+sys.argv[0] = sys.argv[1]
+import numpy as np
+from demsplit.readers.fastparse import count_newlines  # a kernel module: imports demsplit.jit and numba
+loaded = "numba.np.arraymath" in sys.modules  # numba's registries, loaded at import by the command only
+count_newlines(np.frombuffer(b"a\nb\n", np.uint8), 0, 4)  # a kernel's first call loads them otherwise
+from numba.np import arraymath
+scipy_linalg_before = "scipy.linalg" in sys.modules
+import scipy.linalg  # imports as usual afterwards: the stand-in is gone
+print(json.dumps({"loaded_at_import": loaded, "blas": arraymath._HAVE_BLAS,
+                  "scipy_linalg": scipy_linalg_before, "dot": float(scipy.linalg.blas.ddot([1.0], [2.0]))}))
+"""
+
+
+def test_the_command_loads_numba_without_its_blas_probe_and_scipy_imports_after():
+    """demsplit.jit.load_registries_without_blas_probe: in the command's process numba's registries load
+    when demsplit.jit is imported, without importing scipy.linalg; scipy.linalg still imports and works
+    afterwards; a program that imports demsplit keeps numba's own lazy loading and its BLAS probe."""
+    def probe(name: str) -> dict:
+        proc = subprocess.run([sys.executable, "-c", NUMBA_START, name], capture_output=True, text=True,
+                              check=True)
+        return json.loads(proc.stdout)
+
+    as_command, as_library = probe("demsplit"), probe("analysis.py")
+    assert as_command == {"loaded_at_import": True, "blas": False, "scipy_linalg": False, "dot": 2.0}
+    assert as_library == {"loaded_at_import": False, "blas": True, "scipy_linalg": True, "dot": 2.0}
