@@ -51,15 +51,16 @@ def load_registries_without_blas_probe() -> None:
 
     A kernel's first call, compiled or loaded from the cache, makes numba load its registries, and one of
     them (``numba.np.arraymath``) probes for BLAS by importing ``scipy.linalg.cython_blas``, which imports
-    all of ``scipy.linalg`` (and, through it, ``numpy.f2py``). That is 0.13 s of the command's start-up,
-    while the second core has nothing to do (the import chain of ``python -X importtime``), and
-    ``demsplit run`` on the benchmark run ends 0.09 s sooner without it (``python
-    benchmarks/run_phases.py /tmp/bench_big --rev REV``, docs/performance.md, "The goals of issue 19 at the
-    sixth stop"). No kernel calls BLAS: ``np.dot`` or ``np.linalg`` in a kernel would then fail to compile,
-    with numba's "scipy 0.16+ is required for linear algebra", never run without it. The probe's module is
-    answered by a ``None`` in ``sys.modules`` (an import of it raises ``ImportError`` at once) only while
-    the registries load, so ``scipy.linalg`` imports as usual afterwards; nothing is done when it is
-    already imported."""
+    all of ``scipy.linalg`` and, through it, ``numpy.f2py``: 124 modules (56 ms of self time in ``python
+    -X importtime``, plus their shared libraries) in the command's single-threaded start-up. Without them
+    ``demsplit run`` on the benchmark run ends 0.09 s sooner, ``open_run`` 0.50 s against 0.56 s
+    (``python benchmarks/run_phases.py /tmp/bench_big --repeat 5 --rev e81a480``, medians of the whole
+    process; docs/performance.md, "The goals of issue 19 at the sixth stop"). The answer changes one thing
+    in numba: ``np.correlate`` and ``np.convolve`` in a kernel would sum with a plain loop instead of BLAS
+    (``numba.np.arraymath._HAVE_BLAS``), which no kernel here calls. The probe's module is answered by a
+    ``None`` in ``sys.modules`` (an import of it raises ``ImportError`` at once) only while the registries
+    load, so ``scipy.linalg`` imports as usual afterwards, and ``np.dot`` or ``np.linalg`` in a kernel
+    finds scipy's BLAS when it compiles; nothing is done when the module is already imported."""
     if numba is None or BLAS_PROBE in sys.modules:
         return
     from numba.core.registry import cpu_target
