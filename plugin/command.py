@@ -34,6 +34,9 @@ An exit without teardown
     benchmarks/run_phases.py /tmp/bench_big --rev ffe0c7d``, "after main"); the
     kernel frees the process's memory at once. Every file the command
     writes is closed (and the store fsynced) before ``main`` returns.
+numba's BLAS probe skipped
+    Applied by :mod:`demsplit.jit` when it is imported in the command's process (it belongs to the moment
+    numba loads): :func:`demsplit.jit.load_registries_without_blas_probe`.
 Rare cyclic garbage collections
     :data:`GC_THRESHOLDS` instead of Python's (700, 10, 10). A collection holds
     the GIL, which the parse and compression threads need to hand back their
