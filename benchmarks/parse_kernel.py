@@ -4,8 +4,9 @@ Reads the first ``--mb`` MB of rows of frame 0 of a benchmark's ``pairs.txt``
 (``benchmarks/generate.py``), requests the columns ``demsplit run`` reads, and
 times ``parse_rows`` on one thread (best of ``--repeat``) for the working
 tree's ``readers/fastparse.py`` and, with ``--rev REV``, for that git
-revision's copy of it, loaded side by side in this process; the converted
-columns of the two must be identical (checked and printed).
+revision's copy of it (with that revision's ``plugin/jit.py``, which holds the
+kernel primitives), loaded side by side in this process; the converted columns
+of the two must be identical (checked and printed).
 
     python benchmarks/parse_kernel.py /tmp/bench_big [--rev 2961f7b] [--mb 120] [--repeat 5]
 """
@@ -16,6 +17,7 @@ import argparse
 import importlib.util
 import os
 import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -23,12 +25,20 @@ from pathlib import Path
 import numpy as np
 
 REPO = Path(__file__).resolve().parent.parent
+PATHS = ("readers/fastparse.py", "plugin/jit.py")  # the kernel and its primitives, taken from one revision
 
 
-def load_fastparse(source: str, name: str, directory: Path):
-    """``source`` (a fastparse.py) loaded as module ``name`` from ``directory``."""
+def load_fastparse(source: str, jit_source: str, name: str, directory: Path):
+    """``source`` (a fastparse.py) loaded as module ``name`` from ``directory``, with the kernel primitives of
+    ``jit_source`` (the same revision's plugin/jit.py, loaded as ``demsplit._<name>_jit``)."""
+    jit_name = f"demsplit._{name}_jit"
+    jit_path = directory / f"{name}_jit.py"
+    jit_path.write_text(jit_source)
+    spec = importlib.util.spec_from_file_location(jit_name, jit_path)
+    jit = sys.modules[jit_name] = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(jit)
     path = directory / f"{name}.py"
-    path.write_text(source)
+    path.write_text(source.replace("from demsplit.jit import", f"from {jit_name} import"))
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
@@ -61,14 +71,14 @@ def main(argv: list[str] | None = None) -> None:
         slot[entry.names.index(token)] = k
     rows = data.count(b"\n")
     trailing = data[: data.find(b"\n")].endswith(b" ")
-    sources = {"working tree": (REPO / "readers" / "fastparse.py").read_text()}
+    sources = {"working tree": tuple((REPO / path).read_text() for path in PATHS)}
     if a.rev:
-        sources[a.rev] = subprocess.run(["git", "-C", str(REPO), "show", f"{a.rev}:readers/fastparse.py"],
-                                        capture_output=True, text=True, check=True).stdout
+        sources[a.rev] = tuple(subprocess.run(["git", "-C", str(REPO), "show", f"{a.rev}:{path}"], capture_output=True,
+                                              text=True, check=True).stdout for path in PATHS)
     results = {}
     with tempfile.TemporaryDirectory(prefix="demsplit-parse-") as tmp:
         for k, (label, source) in enumerate(sources.items()):
-            fp = load_fastparse(source, f"fastparse_{k}", Path(tmp))
+            fp = load_fastparse(*source, f"fastparse_{k}", Path(tmp))
             times = []
             for _ in range(a.repeat + 1):  # the first call compiles
                 reals, ints = np.zeros((len(wanted), rows)), np.zeros((len(wanted), rows), np.int64)

@@ -1,7 +1,8 @@
 """Tried and dropped: skipping unread fields with a 64-bit separator mask per 64 bytes (simdjson style).
 
-The parser steps over the columns it does not read with :func:`demsplit.readers.fastparse._field_end`,
-8 bytes at a time. The alternative builds, per 64 bytes, a mask of the separator bytes (<= 32) and finds
+When this was measured the parser stepped over each column it does not read with
+:func:`demsplit.readers.fastparse._field_end`, 8 bytes at a time (a run of them is now counted off 8 bytes at
+a time by ``_skip_fields``). The alternative builds, per 64 bytes, a mask of the separator bytes (<= 32) and finds
 each field's end as the next set bit (one trailing-zero count). This script measures what the mask alone
 costs against the parse kernel stepping over every field and converting none, on the first ``--mb`` MB
 of rows of a benchmark's ``pairs.txt``, one thread: the masks of consecutive blocks in one loop (which LLVM

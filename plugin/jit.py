@@ -83,30 +83,78 @@ def kernel(fn: F) -> F:
     return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
 
 
-def _word_intrinsics():
-    """``load_word(a, i)``: the 8 bytes ``a[i:i+8]`` of a uint8 array as one little-endian uint64
-    (an unaligned load; the caller keeps ``i + 8 <= a.size``), and ``trailing_zeros(x)`` of a nonzero
-    uint64: the word-at-a-time primitives of the dump parser. Compiled as LLVM intrinsics; plain
-    Python where numba is absent."""
+def inlined(fn: F) -> F:
+    """``fn`` as :func:`kernel` compiles it, but copied into each kernel that calls it (numba's
+    ``inline="always"``) instead of called: for the small steps of a hot loop, where a call's
+    cost (its arguments and tuple result through memory) is as large as the step. A function
+    inlined this way takes no arrays (each would be reference-counted at every use): it reads
+    memory through :func:`byte_at` and :func:`word_at`."""
     if numba is None:
-        def load_word(a, i):
-            return int.from_bytes(bytes(a[i:i + 8]), "little")
+        return fn
+    return numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")(fn)
+
+
+def _word_intrinsics():
+    """The word-at-a-time primitives of the dump parser, compiled as LLVM intrinsics (plain Python,
+    through ``ctypes``, where numba is absent):
+
+    ``address(a)``
+        the address of a contiguous array's first element (int64), for the two loads below; the
+        caller keeps ``a`` alive while it is used;
+    ``byte_at(base, i)``
+        the byte at ``base + i`` (int64);
+    ``word_at(base, i)``
+        the 8 bytes from ``base + i`` as one little-endian uint64 (an unaligned load);
+    ``trailing_zeros(x)``
+        of a nonzero uint64;
+    ``popcount(x)``
+        the set bits of a uint64.
+
+    The loads check no bounds: the caller keeps ``i`` (``i + 8`` for a word) within the array."""
+    if numba is None:
+        import ctypes
+
+        def address(a):
+            return a.ctypes.data
+
+        def byte_at(base, i):
+            return ctypes.c_uint8.from_address(base + i).value
+
+        def word_at(base, i):
+            return int.from_bytes(ctypes.string_at(base + i, 8), "little")
 
         def trailing_zeros(x):
             return (int(x) & -int(x)).bit_length() - 1
 
-        return load_word, trailing_zeros
+        def popcount(x):
+            return int(x).bit_count()
+
+        return address, byte_at, word_at, trailing_zeros, popcount
     from llvmlite import ir
     from numba import types
     from numba.extending import intrinsic
 
+    def _pointer(builder, base, i, bits):
+        return builder.inttoptr(builder.add(base, i), ir.IntType(bits).as_pointer())
+
     @intrinsic
-    def load_word(typingctx, arr, idx):
+    def address(typingctx, arr):
         def codegen(context, builder, signature, args):
             data = context.make_array(signature.args[0])(context, builder, args[0]).data
-            pointer = builder.bitcast(builder.gep(data, [args[1]]), ir.IntType(64).as_pointer())
-            return builder.load(pointer, align=1)
-        return types.uint64(arr, types.int64), codegen
+            return builder.ptrtoint(data, ir.IntType(64))
+        return types.int64(arr), codegen
+
+    @intrinsic
+    def byte_at(typingctx, base, i):
+        def codegen(context, builder, signature, args):
+            return builder.zext(builder.load(_pointer(builder, *args, 8), align=1), ir.IntType(64))
+        return types.int64(types.int64, types.int64), codegen
+
+    @intrinsic
+    def word_at(typingctx, base, i):
+        def codegen(context, builder, signature, args):
+            return builder.load(_pointer(builder, *args, 64), align=1)
+        return types.uint64(types.int64, types.int64), codegen
 
     @intrinsic
     def trailing_zeros(typingctx, x):
@@ -114,9 +162,15 @@ def _word_intrinsics():
             return builder.cttz(args[0], ir.Constant(ir.IntType(1), 0))
         return types.uint64(types.uint64), codegen
 
-    return load_word, trailing_zeros
+    @intrinsic
+    def popcount(typingctx, x):
+        def codegen(context, builder, signature, args):
+            return builder.ctpop(args[0])
+        return types.uint64(types.uint64), codegen
+
+    return address, byte_at, word_at, trailing_zeros, popcount
 
 
-load_word, trailing_zeros = _word_intrinsics()
+address, byte_at, word_at, trailing_zeros, popcount = _word_intrinsics()
 if is_command():
     load_registries_without_blas_probe()

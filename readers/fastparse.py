@@ -29,12 +29,24 @@ column) is not converted: the kernel reports the row, and the caller parses
 that block with its general (slower) parser, which also produces the located
 error messages. So the fast path never decides what is an error, and never
 produces a different number.
+
+Speed. ``parse_rows`` steps over a run of two or more columns it does not read
+with :func:`_skip_fields`, which counts the separators of 8 bytes at a time
+(one branch per word, not one per field), and over a single one with
+:func:`_field_end`. The steps of one token (:func:`_real`, :func:`_integer`,
+:func:`_field_end`, ...) are compiled into ``parse_rows`` (:func:`demsplit.jit.inlined`)
+rather than called, and read the text through its address
+(:func:`demsplit.jit.byte_at`, :func:`demsplit.jit.word_at`): a call's
+arguments, tuple result and, for an array argument, reference counting cost as
+much as the step itself. Together: 2.44 GB/s against 1.71 GB/s on one thread
+(``python benchmarks/parse_kernel.py /tmp/bench_big --rev c4cbded --mb 300``,
+the benchmark's contact rows, 9 of 41 columns read; docs/performance.md).
 """
 
 from __future__ import annotations
 
 import numpy as np
-from demsplit.jit import kernel, load_word, trailing_zeros
+from demsplit.jit import address, byte_at, inlined, kernel, popcount, trailing_zeros, word_at
 
 __all__ = ["scan_chunk", "count_newlines", "next_newline", "parse_rows", "OK", "SHAPE", "FALLBACK"]
 
@@ -58,6 +70,7 @@ _U = np.uint64
 _EACH_21, _EACH_30, _EACH_06 = _U(0x2121212121212121), _U(0x3030303030303030), _U(0x0606060606060606)
 _EACH_0F, _EACH_F0 = _U(0x0F0F0F0F0F0F0F0F), _U(0xF0F0F0F0F0F0F0F0)
 _EACH_7F, _EACH_80 = _U(0x7F7F7F7F7F7F7F7F), _U(0x8080808080808080)
+_EACH_5F, _EACH_60 = _U(0x5F5F5F5F5F5F5F5F), _U(0x6060606060606060)
 _POW10_INT = np.array([10 ** k for k in range(20)], dtype=np.uint64)   # 10**0 .. 10**19, exact
 _MAX_EXACT_U = _U(1 << 53)
 _WORD_TOKEN = 24    # a real is read word-wise when this many bytes follow its start (else byte by byte)
@@ -123,7 +136,7 @@ def _marker_at(a: np.ndarray, j: int, m: int) -> bool:
     return True
 
 
-@kernel
+@inlined
 def _digit_run(x: np.uint64) -> int:
     """How many of the word's bytes, from its first, are ASCII digits (0-8). A byte b is a digit when
     its high nibble is 3 and that of b + 6 too; a carry out of a byte (b >= 0xFA, not a digit) only
@@ -135,7 +148,7 @@ def _digit_run(x: np.uint64) -> int:
     return np.int64(trailing_zeros(nonzero) >> _U(3))
 
 
-@kernel
+@inlined
 def _digits_value(x: np.uint64, n: int) -> np.uint64:
     """Value of the first ``n`` (1-8) bytes of the word, ASCII digits, the first the most significant:
     the digits are moved to the top of the word (the bytes below read as leading zeros) and combined
@@ -146,37 +159,36 @@ def _digits_value(x: np.uint64, n: int) -> np.uint64:
     return ((v & _U(0x0000FFFF0000FFFF)) * _U(42949672960001)) >> _U(32)     # all eight
 
 
-@kernel
-def _real(a: np.ndarray, p: int, end: int) -> tuple[int, float, int]:
-    """The decimal literal ``[+-]digits[.digits][(e|E)[+-]digits]`` at ``a[p]``, as
+@inlined
+def _real(base: int, p: int, end: int) -> tuple[int, float, int]:
+    """The decimal literal ``[+-]digits[.digits][(e|E)[+-]digits]`` at offset ``p``, as
     :func:`_real_bytewise` returns it, reading the digits 8 bytes at a time: the mantissa m (every
     digit; at most 19, which fit a uint64) is exact, and m has more than 18 significant digits
     exactly when m >= 10**18 > 2**53, so the fast-path test is the same. A literal with 8 or more
     integer digits, more than 19 digits or fewer than ``_WORD_TOKEN`` bytes before ``end`` is read
     by :func:`_real_bytewise`."""
     start = p
-    neg = False
-    if p < end and (a[p] == 45 or a[p] == 43):
-        neg = a[p] == 45
-        p += 1
+    sign = byte_at(base, p) if p < end else 0
+    neg = sign == 45
+    p += (sign == 45) | (sign == 43)       # no branch: a sign is as likely as none
     if p + _WORD_TOKEN > end:
-        return _real_bytewise(a, start, end)
-    x = load_word(a, p)
+        return _real_bytewise(base, start, end)
+    x = word_at(base, p)
     n = _digit_run(x)
     if n == 8:
-        return _real_bytewise(a, start, end)
+        return _real_bytewise(base, start, end)
     m = _digits_value(x, n) if n > 0 else _U(0)
     p += n
     total = n
     e10 = 0
-    if a[p] == 46:
+    if byte_at(base, p) == 46:
         p += 1
         while True:
-            x = load_word(a, p)
+            x = word_at(base, p)
             k = _digit_run(x)
             if k > 0:
                 if total + k > 19:
-                    return _real_bytewise(a, start, end)
+                    return _real_bytewise(base, start, end)
                 m = m * _POW10_INT[k] + _digits_value(x, k)
                 total += k
                 e10 -= k
@@ -184,11 +196,11 @@ def _real(a: np.ndarray, p: int, end: int) -> tuple[int, float, int]:
             if k < 8:
                 break
             if p + 8 > end:
-                return _real_bytewise(a, start, end)
+                return _real_bytewise(base, start, end)
     if total == 0:
         return _NOT_DECIMAL, 0.0, p
-    if p < end and (a[p] == 101 or a[p] == 69):
-        p, ok, ex = _exponent(a, p + 1, end)
+    if p < end and (byte_at(base, p) | 32) == 101:                # e or E
+        p, ok, ex = _exponent(base, p + 1, end)
         if not ok:
             return _NOT_DECIMAL, 0.0, p
         e10 += ex
@@ -200,27 +212,26 @@ def _real(a: np.ndarray, p: int, end: int) -> tuple[int, float, int]:
     return _FAST, (-v if neg else v), p
 
 
-@kernel
-def _exponent(a: np.ndarray, p: int, end: int) -> tuple[int, bool, int]:
-    """The exponent ``[+-]digits`` after an ``e``/``E`` at ``a[p]``: (offset after it, any digit,
+@inlined
+def _exponent(base: int, p: int, end: int) -> tuple[int, bool, int]:
+    """The exponent ``[+-]digits`` after an ``e``/``E``, at offset ``p``: (offset after it, any digit,
     value), the value saturating beyond 100000 (past +-22 only a zero mantissa is fast anyway)."""
-    neg = False
-    if p < end and (a[p] == 45 or a[p] == 43):
-        neg = a[p] == 45
-        p += 1
+    sign = byte_at(base, p) if p < end else 0
+    neg = sign == 45
+    p += (sign == 45) | (sign == 43)       # no branch: a sign is as likely as none
     ex = 0
     digits = 0
-    while p < end and 48 <= a[p] <= 57:
+    while p < end and 48 <= byte_at(base, p) <= 57:
         if ex < 100000:
-            ex = ex * 10 + (int(a[p]) - 48)
+            ex = ex * 10 + (byte_at(base, p) - 48)
         digits += 1
         p += 1
     return p, digits > 0, (-ex if neg else ex)
 
 
 @kernel
-def _real_bytewise(a: np.ndarray, p: int, end: int) -> tuple[int, float, int]:
-    """The decimal literal ``[+-]digits[.digits][(e|E)[+-]digits]`` at ``a[p]``, byte by byte.
+def _real_bytewise(base: int, p: int, end: int) -> tuple[int, float, int]:
+    """The decimal literal ``[+-]digits[.digits][(e|E)[+-]digits]`` at offset ``p``, byte by byte.
 
     Returns (status, value, q), ``q`` the offset after the literal's grammar:
     status ``_FAST`` with its value by Clinger's fast path (module docstring),
@@ -228,18 +239,17 @@ def _real_bytewise(a: np.ndarray, p: int, end: int) -> tuple[int, float, int]:
     m > 2**53 or |e| > 22; value 0), ``_NOT_DECIMAL`` when the bytes at ``p``
     do not start such a literal (``q`` then says nothing).
     """
-    neg = False
-    if p < end and (a[p] == 45 or a[p] == 43):
-        neg = a[p] == 45
-        p += 1
+    sign = byte_at(base, p) if p < end else 0
+    neg = sign == 45
+    p += (sign == 45) | (sign == 43)       # no branch: a sign is as likely as none
     m = 0
     digits = 0          # significant digits (from the first nonzero one); m holds the first 18
     seen = False        # any mantissa digit at all
     e10 = 0
     point = False       # past the decimal point: each digit lowers the exponent
     while p < end:
-        if 48 <= a[p] <= 57:
-            d = int(a[p]) - 48
+        if 48 <= byte_at(base, p) <= 57:
+            d = byte_at(base, p) - 48
             seen = True
             if digits > 0 or d != 0:
                 digits += 1
@@ -247,15 +257,15 @@ def _real_bytewise(a: np.ndarray, p: int, end: int) -> tuple[int, float, int]:
                     m = m * 10 + d
             if point:
                 e10 -= 1
-        elif a[p] == 46 and not point:
+        elif byte_at(base, p) == 46 and not point:
             point = True
         else:
             break
         p += 1
     if not seen:
         return _NOT_DECIMAL, 0.0, p
-    if p < end and (a[p] == 101 or a[p] == 69):
-        p, ok, ex = _exponent(a, p + 1, end)
+    if p < end and (byte_at(base, p) | 32) == 101:                # e or E
+        p, ok, ex = _exponent(base, p + 1, end)
         if not ok:
             return _NOT_DECIMAL, 0.0, p
         e10 += ex
@@ -267,18 +277,18 @@ def _real_bytewise(a: np.ndarray, p: int, end: int) -> tuple[int, float, int]:
     return _FAST, (-v if neg else v), p
 
 
-@kernel
-def _integer(a: np.ndarray, p: int, end: int) -> tuple[bool, int, int]:
+@inlined
+def _integer(base: int, p: int, end: int) -> tuple[bool, int, int]:
     """Value of the integer literal ``[-]digits`` (at most 18 digits) at
-    ``a[p]``: (converted, value, offset after its grammar)."""
+    offset ``p``: (converted, value, offset after its grammar)."""
     neg = False
-    if p < end and a[p] == 45:
+    if p < end and byte_at(base, p) == 45:
         neg = True
         p += 1
     v = 0
     n = 0
-    while p < end and 48 <= a[p] <= 57:
-        v = v * 10 + (int(a[p]) - 48)
+    while p < end and 48 <= byte_at(base, p) <= 57:
+        v = v * 10 + (byte_at(base, p) - 48)
         n += 1
         p += 1
     if n == 0 or n > 18:
@@ -286,21 +296,56 @@ def _integer(a: np.ndarray, p: int, end: int) -> tuple[bool, int, int]:
     return True, (-v if neg else v), p
 
 
-@kernel
-def _field_end(a: np.ndarray, q: int, end: int) -> int:
-    """Offset of the first separator (byte <= 32) at or after ``a[q]``, or ``end``; this runs over
+@inlined
+def _field_end(base: int, q: int, end: int) -> int:
+    """Offset of the first separator (byte <= 32) at or after offset ``q``, or ``end``; this runs over
     every byte of the columns not read. Eight bytes at a time: (x - 0x21..21) & ~x & 0x80..80 flags
     each byte below 0x21 exactly up to the first one (a borrow starts only there), and the lowest
     flag is the first such byte; the last bytes one by one."""
     while q + 8 <= end:
-        x = load_word(a, q)
+        x = word_at(base, q)
         below = (x - _EACH_21) & ~x & _EACH_80
         if below != 0:
             return q + np.int64(trailing_zeros(below) >> _U(3))
         q += 8
-    while q < end and a[q] > _SEP:
+    while q < end and byte_at(base, q) > _SEP:
         q += 1
     return q
+
+
+@inlined
+def _skip_fields(base: int, p: int, end: int, n: int) -> int:
+    """Offset after the ``n`` fields starting at offset ``p`` (just after a separator, or at a row's start) and
+    the single space after each, stepped over 8 bytes at a time: per word, the separators (bytes
+    <= 32) are flagged exactly (with b7 = b & 0x7F, b7 + 0x5F reaches 0x80 exactly when b7 >= 0x21; a
+    byte with its high bit set is no separator) and counted, and in the word holding the n-th the
+    lower ones are cleared to find it. Checked as the field-by-field loop checks: no separator but
+    spaces (a newline before the n-th means a short row) and no two in a row (an empty field).
+    Returns -1 for a row of the wrong shape, -2 when the n-th space is not found 8 bytes or more before
+    ``end`` (the caller then goes field by field)."""
+    before = _U(0x80)       # a separator just before the word: one at its first byte ends an empty field
+    left = n
+    while p + 8 <= end:
+        x = word_at(base, p)
+        low = x & _EACH_7F
+        sep = ~((low + _EACH_5F) | x) & _EACH_80
+        other = ~((low + _EACH_60) | x) & _EACH_80     # bytes < 32: a separator but not a space
+        k = np.int64(popcount(sep))
+        if k >= left:
+            m = sep
+            for _ in range(left - 1):
+                m &= m - _U(1)
+            upto = m ^ (m - _U(1))                      # the bytes up to the n-th separator
+            sep &= upto
+            if (other & upto) != 0 or (sep & ((sep << _U(8)) | before)) != 0:
+                return -1
+            return p + np.int64(trailing_zeros(m) >> _U(3)) + 1
+        if other != 0 or (sep & ((sep << _U(8)) | before)) != 0:
+            return -1
+        before = sep >> _U(56)
+        left -= k
+        p += 8
+    return -2
 
 
 @kernel
@@ -325,19 +370,33 @@ def parse_rows(a: np.ndarray, start: int, end: int, ncols: int, trailing: bool, 
     requested token that is neither converted nor listed (conversion stops
     there; the shape check goes on to the end, so the rows are well formed).
     """
+    base = address(a)
     p = start
     r = 0
     n_slow = 0
     convert = True
     first_fallback = -1
+    skip = np.zeros(ncols, np.int64)    # columns not requested from c on, before the last column
+    for c in range(ncols - 2, -1, -1):
+        skip[c] = skip[c + 1] + 1 if kind[c] == 0 else 0
     while p < end:
         if r >= max_rows:
             return SHAPE, r, r, n_slow
-        for c in range(ncols):
+        c = 0
+        while c < ncols:
+            n_skip = skip[c] if convert else ncols - 1 - c
+            if n_skip > 1:
+                q = _skip_fields(base, p, end, n_skip)
+                if q == -1:
+                    return SHAPE, r, r, n_slow
+                if q >= 0:
+                    p = q
+                    c += n_skip
+                    continue
             k = kind[c] if convert else 0
             q = p
             if k == 1:
-                found, v, q = _real(a, p, end)
+                found, v, q = _real(base, p, end)
                 if q < end and a[q] > _SEP:
                     found = _NOT_DECIMAL
                 if found == _FAST:
@@ -352,13 +411,13 @@ def parse_rows(a: np.ndarray, start: int, end: int, ncols: int, trailing: bool, 
                     convert = False
                     first_fallback = r
             elif k == 2:
-                ok, iv, q = _integer(a, p, end)
+                ok, iv, q = _integer(base, p, end)
                 if ok and (q == end or a[q] <= _SEP):
                     ints[slot[c], row0 + r] = iv
                 else:
                     convert = False
                     first_fallback = r
-            q = _field_end(a, q, end)
+            q = _field_end(base, q, end)
             if q == p or q == end:          # empty field, or no newline at the end
                 return SHAPE, r, r, n_slow
             if c < ncols - 1:
@@ -373,6 +432,7 @@ def parse_rows(a: np.ndarray, start: int, end: int, ncols: int, trailing: bool, 
                 if a[q] != 10:
                     return SHAPE, r, r, n_slow
                 p = q + 1
+            c += 1
         r += 1
     if first_fallback >= 0:
         return FALLBACK, first_fallback, r, n_slow

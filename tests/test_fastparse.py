@@ -117,7 +117,8 @@ def test_word_wise_real_equals_byte_wise(token):
     """The word-at-a-time reader of a real returns what the byte-by-byte one does, bit for bit (where the
     bytes are not a decimal literal, only that)."""
     a = np.frombuffer((token + " " + "x" * 30).encode(), dtype=np.uint8)
-    words, byte = fp._real(a, 0, a.size), fp._real_bytewise(a, 0, a.size)
+    base = a.ctypes.data  # the address the kernels read from (a stays alive meanwhile)
+    words, byte = fp._real(base, 0, a.size), fp._real_bytewise(base, 0, a.size)
     assert words[0] == byte[0], token
     if byte[0] != 2:  # _NOT_DECIMAL: the offset says nothing
         assert words[2] == byte[2] and bits(words[1]) == bits(byte[1]), token
