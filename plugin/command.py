@@ -3,11 +3,11 @@
 Imported first by the package's ``__init__``, before numpy, and applied on import (:func:`settle`) only when the
 process is the command (:func:`is_command`): the ``demsplit`` console script, or
 ``python -m demsplit.cli``. A program that imports demsplit keeps its own
-settings. Together they take ``demsplit run`` on the benchmark run (3 GB of
-dumps, 3 frames) from a median of 4.09 s to 3.93 s (six interleaved rounds,
+settings. One OpenBLAS thread, freed memory kept and rare collections together took ``demsplit run`` on the benchmark run (3 GB
+of dumps, 3 frames) from a median of 4.09 s to 3.93 s (six interleaved rounds,
 ``python benchmarks/command_settings.py /tmp/bench_big``, which also times each
 setting alone: each alone is within the rounds' spread; docs/performance.md,
-"The command's process settings"):
+"The command's process settings"); the huge-page setting is measured on its own below:
 
 OpenBLAS threads
     ``OPENBLAS_NUM_THREADS=1`` unless the user set it. The command calls no BLAS,
@@ -25,6 +25,19 @@ Freed memory kept for the next frame
     the last. The peak is about the same (877 MB against 860 MB on the
     benchmark: pages the heap keeps); a run's memory stays at its peak until
     it ends.
+No huge pages asked for on a guest that hands free memory back to its host
+    numpy asks the kernel for transparent huge pages (2 MiB) for every array of 4 MiB or more
+    (``madvise``), unless ``NUMPY_MADVISE_HUGEPAGE=0``. A virtual machine's guest that reports its free
+    memory to the host (Linux's ``page_reporting``, virtio-balloon free page reporting:
+    :func:`guest_reports_free_memory`) reports free blocks of 2 MiB, and the host takes them back. A
+    huge page is such a block, and its first write then waits for the host to map it again: 2.1 s per
+    GB after a 10 s pause against 0.06 s right after another process freed memory, while small pages
+    cost 0.35 s per GB either way (``python benchmarks/fresh_memory.py --pause 10``). On this project's
+    machine ``demsplit run`` on the benchmark took a median of 3.28 s without the advice against
+    3.86 s with it when each run started 10 s after the last, and 3.23 s against 3.48 s back to back
+    (``python benchmarks/command_settings.py /tmp/bench_big --only all,no-pages --pause 10``, then
+    ``--pause 0``; docs/performance.md, "Fresh memory on this machine"). Set only on such a guest,
+    unless the user set the variable; read when numpy loads.
 An exit without teardown
     When the work is done, :func:`exit_now` runs the ``atexit`` handlers, flushes
     the standard streams and ends the process (``os._exit``): Python's own
@@ -69,6 +82,21 @@ heap a few times rather than once per array; address space only until touched.""
 GC_THRESHOLDS = (100_000, 50, 100)
 """``gc.set_threshold``: a young collection per 100,000 new container objects, an old one rarely."""
 _M_TRIM_THRESHOLD, _M_TOP_PAD, _M_MMAP_THRESHOLD = -1, -2, -3  # glibc's <malloc.h>
+
+
+REPORTED_KIB = "/sys/module/page_reporting/parameters/reported_kib"
+"""Linux's count of the KiB of free memory this guest has reported to its host (absent on a machine
+without free page reporting)."""
+
+
+def guest_reports_free_memory() -> bool:
+    """Whether this machine is a virtual-machine guest that has handed free memory back to its host
+    (free page reporting: :data:`REPORTED_KIB` is above zero)."""
+    try:
+        with open(REPORTED_KIB) as f:
+            return int(f.read()) > 0
+    except (OSError, ValueError):
+        return False
 
 
 def is_command() -> bool:
@@ -117,6 +145,8 @@ def settle() -> None:
         return
     if "numpy" not in sys.modules:
         os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+        if guest_reports_free_memory():
+            os.environ.setdefault("NUMPY_MADVISE_HUGEPAGE", "0")
     keep_freed_memory()
     gc.set_threshold(*GC_THRESHOLDS)
 

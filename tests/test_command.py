@@ -24,14 +24,14 @@ del a
 before = faults()
 b = np.ones(1 << 23)  # the same size again: fresh pages unless the freed ones were kept
 print(json.dumps({"blas": os.environ.get("OPENBLAS_NUM_THREADS"), "faults": faults() - before,
-                  "gc": gc.get_threshold()}))
+                  "gc": gc.get_threshold(), "pages": os.environ.get("NUMPY_MADVISE_HUGEPAGE")}))
 """
 
 
 def _probe(name: str, **env: str) -> dict:
     import os
 
-    environ = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"} | env
+    environ = {k: v for k, v in os.environ.items() if k not in ("OPENBLAS_NUM_THREADS", "NUMPY_MADVISE_HUGEPAGE")} | env
     proc = subprocess.run([sys.executable, "-c", PROBE, name], capture_output=True, text=True, check=True,
                           env=environ)
     return json.loads(proc.stdout)
@@ -61,6 +61,22 @@ def test_the_command_keeps_freed_memory_one_blas_thread_and_rare_collections():
 
 def test_a_blas_thread_count_the_user_set_is_kept():
     assert _probe("demsplit", OPENBLAS_NUM_THREADS="2")["blas"] == "2"
+
+
+def test_the_command_asks_for_no_huge_pages_only_on_a_guest_that_reports_free_memory():
+    as_command, as_library = _probe("demsplit"), _probe("analysis.py")
+    assert as_command["pages"] == ("0" if command.guest_reports_free_memory() else None)
+    assert as_library["pages"] is None
+    assert _probe("demsplit", NUMPY_MADVISE_HUGEPAGE="1")["pages"] == "1"  # the user's choice is kept
+
+
+@pytest.mark.parametrize(("content", "expected"), [("0\n", False), ("913260108\n", True), ("", False), (None, False)])
+def test_a_guest_reports_free_memory_when_its_count_is_above_zero(tmp_path, monkeypatch, content, expected):
+    path = tmp_path / "reported_kib"
+    if content is not None:
+        path.write_text(content)
+    monkeypatch.setattr(command, "REPORTED_KIB", str(path))
+    assert command.guest_reports_free_memory() is expected
 
 
 
