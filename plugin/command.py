@@ -3,11 +3,13 @@
 Imported first by the package's ``__init__``, before numpy, and applied on import (:func:`settle`) only when the
 process is the command (:func:`is_command`): the ``demsplit`` console script, or
 ``python -m demsplit.cli``. A program that imports demsplit keeps its own
-settings. One OpenBLAS thread, freed memory kept and rare collections together took ``demsplit run`` on the benchmark run (3 GB
-of dumps, 3 frames) from a median of 4.09 s to 3.93 s (six interleaved rounds,
-``python benchmarks/command_settings.py /tmp/bench_big``, which also times each
-setting alone: each alone is within the rounds' spread; docs/performance.md,
-"The command's process settings"); the huge-page setting is measured on its own below:
+settings. One OpenBLAS thread, freed memory kept and rare collections together
+took ``demsplit run`` on the benchmark run (3 GB of dumps, 3 frames) from a
+median of 4.09 s to 3.93 s (six interleaved rounds, ``python
+benchmarks/command_settings.py /tmp/bench_big``, which also times each setting
+alone: each alone is within the rounds' spread; docs/performance.md, "The
+command's process settings"); the huge-page setting is measured on its own
+below:
 
 OpenBLAS threads
     ``OPENBLAS_NUM_THREADS=1`` unless the user set it. The command calls no BLAS,
