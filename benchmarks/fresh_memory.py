@@ -15,12 +15,12 @@ A guest that reports its free memory to its host (Linux's ``page_reporting``, vi
 reporting; ``reported_kib`` in the module's parameters counts what it has given back) reports only
 free blocks of ``2**page_reporting_order`` pages (order 9 here: 2 MiB), and the host takes them back.
 A huge page is such a block: the first write to one the host took back waits for the host to map it
-again. Small pages can also come from the free pieces smaller than a block, which are never reported. The script prints, for each
-measurement, the seconds per GB and the KiB the guest reported during the pause or the other process
-(when ``/sys/module/page_reporting`` exists), and the load average before and after. On this
-project's machine (docs/performance.md, "Fresh memory on this machine"): small pages cost the same in
-both conditions, huge pages forty times more after a pause than right after a free. This is why
-``demsplit`` asks for no huge pages on such a guest (:mod:`demsplit.command`), and why a benchmark's
+again. Small pages can also come from the free pieces smaller than a block, which are never reported.
+The script prints, for each measurement, the seconds per GB and the KiB the guest reported during the
+pause or the other process (when ``/sys/module/page_reporting`` exists), and the load average before and
+after. On this project's machine (docs/performance.md, "Fresh memory on this machine"): small pages cost
+the same in both conditions, huge pages forty times more after a pause than right after a free. This is
+why ``demsplit`` asks for no huge pages on such a guest (:mod:`demsplit.command`), and why a benchmark's
 time moves with what ran just before it.
 """
 
