@@ -298,10 +298,10 @@ def _integer(base: int, p: int, end: int) -> tuple[bool, int, int]:
 
 @inlined
 def _field_end(base: int, q: int, end: int) -> int:
-    """Offset of the first separator (byte <= 32) at or after offset ``q``, or ``end``; this runs over
-    every byte of the columns not read. Eight bytes at a time: (x - 0x21..21) & ~x & 0x80..80 flags
-    each byte below 0x21 exactly up to the first one (a borrow starts only there), and the lowest
-    flag is the first such byte; the last bytes one by one."""
+    """Offset of the first separator (byte <= 32) at or after offset ``q``, or ``end``: the end of a
+    field, read or not (a run of unread fields is stepped over by :func:`_skip_fields`). Eight bytes at
+    a time: (x - 0x21..21) & ~x & 0x80..80 flags each byte below 0x21 exactly up to the first one (a
+    borrow starts only there), and the lowest flag is the first such byte; the last bytes one by one."""
     while q + 8 <= end:
         x = word_at(base, q)
         below = (x - _EACH_21) & ~x & _EACH_80
