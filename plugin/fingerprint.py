@@ -11,11 +11,11 @@ A pipeline that will need the fingerprints starts them early with
 frames are read and computed, on a core the run leaves idle. The thread asks
 the scheduler to run it only then (Linux's ``SCHED_IDLE``): the frames' own
 threads keep both cores, and the 0.6 CPU-seconds of the benchmark's 3 GB
-fill the moments one of them waits: the digests cost ``demsplit run`` 0.21 s
-(3.13 s against 2.92 s unhashed), where they cost 0.56 s at the run's
+fill the moments one of them waits: the digests cost ``demsplit run`` 0.19 s
+(3.01 s against 2.82 s unhashed), where they cost 0.56 s at the run's
 priority (``python benchmarks/read_stages.py /tmp/bench_big``, its "run" and
-"run, no hash" lines; docs/performance.md, "The goals of issue 19 at the
-fifth stop"). Whoever needs a digest sooner does not wait for that thread:
+"run, no hash" lines; docs/performance.md, "The goals of issue 19" at the
+seventh and the fifth stop). Whoever needs a digest sooner does not wait for that thread:
 :func:`file_fingerprint` takes the hashing over from the last block the thread
 finished (:class:`_Digest`) and completes it at its own priority. A digest is
 reused as long as the file's size, modification time, inode and inode change
