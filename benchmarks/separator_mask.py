@@ -1,19 +1,19 @@
-"""Tried and dropped: skipping unread fields with a 64-bit separator mask per 64 bytes (simdjson style).
+"""Skipping unread fields with a 64-bit separator mask per 64 bytes (simdjson style): what the mask costs.
 
-When this was measured the parser stepped over each column it does not read with
-:func:`demsplit.readers.fastparse._field_end`, 8 bytes at a time (a run of them is now counted off 8 bytes at
-a time by ``_skip_fields``). The alternative builds, per 64 bytes, a mask of the separator bytes (<= 32) and finds
-each field's end as the next set bit (one trailing-zero count). This script measures what the mask alone
-costs against the parse kernel stepping over every field and converting none, on the first ``--mb`` MB
-of rows of a benchmark's ``pairs.txt``, one thread: the masks of consecutive blocks in one loop (which LLVM
-vectorises), and the mask of one block per call, as the parse would need it (where it does not):
+The parser steps over a run of columns it does not read with
+:func:`demsplit.readers.fastparse._skip_fields`, which builds, per 64 bytes, a mask of the separator bytes
+(<= 32) and counts them. This script measures what the mask alone costs against the parse kernel stepping
+over every field and converting none, on the first ``--mb`` MB of rows of a benchmark's ``pairs.txt``, one
+thread: the masks of consecutive blocks in one loop (which LLVM vectorises), the mask of one block per call
+written as a numba loop (which it does not vectorise), and the mask of one block per call by
+:func:`demsplit.jit.bytes_below` (one vector compare emitted as LLVM IR), as the parse now asks for it:
 
     python benchmarks/separator_mask.py /tmp/bench_big [--mb 100]
 
-A mask per call costs more per row than the whole word-at-a-time skip, so the parse cannot gain from it:
-``parse_rows`` with the mask of the 64 bytes from each unread field's start (rebuilt when a field ends past
-them) measured 0.92 GB/s against 1.77 for the word-at-a-time skip (``benchmarks/parse_kernel.py --rev HEAD``
-on that change, 2026-11-26, load 1.1), and was not kept.
+History: with the numba-loop mask per call, ``parse_rows`` measured 0.92 GB/s against 1.77 for the 8-byte
+word-at-a-time skip of the time (``benchmarks/parse_kernel.py``, 2026-11-26, load 1.1), and the mask was
+dropped; with ``bytes_below`` the parse reads 3.30 GB/s against 2.45 GB/s for the word-at-a-time skip
+(``benchmarks/parse_kernel.py /tmp/bench_big --rev 2a2c648 --mb 300``), and the mask is kept.
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("dir", type=Path, help="directory written by benchmarks/generate.py")
     ap.add_argument("--mb", type=int, default=100)
     a = ap.parse_args(argv)
-    from demsplit.jit import kernel
+    from demsplit.jit import address, bytes_below, kernel
     from demsplit.readers import fastparse
     from demsplit.readers.lammps_dump import open_dump
 
@@ -55,6 +55,12 @@ def main(argv: list[str] | None = None) -> None:
         for b in range(out.size):
             out[b] = one_mask(text, b * 64)
 
+    @kernel
+    def vector_mask_per_call(text: np.ndarray, out: np.ndarray) -> None:
+        base = address(text)
+        for b in range(out.size):
+            out[b] = bytes_below(base, b * 64, 33)
+
     entry = open_dump(a.dir / "pairs.txt")._index()[0]
     with open(a.dir / "pairs.txt", "rb") as f:
         f.seek(entry.data_start)
@@ -71,7 +77,9 @@ def main(argv: list[str] | None = None) -> None:
                              np.empty((1, 4), np.int64))
 
     for name, fn in (("masks, one loop", lambda: separator_masks(text, masks)),
-                     ("masks, one per call", lambda: mask_per_call(text, masks)), ("word-at-a-time skip", skip)):
+                     ("masks, one per call", lambda: mask_per_call(text, masks)),
+                     ("bytes_below, per call", lambda: vector_mask_per_call(text, masks)),
+                     ("the parse's skip", skip)):
         fn()  # compile
         best = min(_timed(fn) for _ in range(5))
         print(f"{name:22s} {text.size / best / 1e9:5.2f} GB/s  {best / rows * 1e9:6.1f} ns per row (one thread)")

@@ -108,9 +108,14 @@ def _word_intrinsics():
     ``trailing_zeros(x)``
         of a nonzero uint64;
     ``popcount(x)``
-        the set bits of a uint64.
+        the set bits of a uint64;
+    ``bytes_below(base, i, bound)``
+        the 64 bytes from ``base + i`` compared with ``bound`` (0-255) at once: a uint64 whose bit j is
+        set when byte ``i + j`` is below ``bound`` (one vector compare and its mask: two on AVX2, one on
+        AVX-512).
 
-    The loads check no bounds: the caller keeps ``i`` (``i + 8`` for a word) within the array."""
+    The loads check no bounds: the caller keeps ``i`` (``i + 8`` for a word, ``i + 64`` for
+    ``bytes_below``) within the array."""
     if numba is None:
         import ctypes
 
@@ -129,7 +134,10 @@ def _word_intrinsics():
         def popcount(x):
             return int(x).bit_count()
 
-        return address, byte_at, word_at, trailing_zeros, popcount
+        def bytes_below(base, i, bound):
+            return sum(1 << j for j, b in enumerate(ctypes.string_at(base + i, 64)) if b < bound)
+
+        return address, byte_at, word_at, trailing_zeros, popcount, bytes_below
     from llvmlite import ir
     from numba import types
     from numba.extending import intrinsic
@@ -168,9 +176,21 @@ def _word_intrinsics():
             return builder.ctpop(args[0])
         return types.uint64(types.uint64), codegen
 
-    return address, byte_at, word_at, trailing_zeros, popcount
+    @intrinsic
+    def bytes_below(typingctx, base, i, bound):
+        def codegen(context, builder, signature, args):
+            vector = ir.VectorType(ir.IntType(8), 64)
+            text = builder.load(builder.bitcast(_pointer(builder, *args[:2], 8), vector.as_pointer()), align=1)
+            one = builder.insert_element(ir.Constant(vector, None), builder.trunc(args[2], ir.IntType(8)),
+                                         ir.Constant(ir.IntType(32), 0))
+            bounds = builder.shuffle_vector(one, ir.Constant(vector, None),
+                                            ir.Constant(ir.VectorType(ir.IntType(32), 64), [0] * 64))
+            return builder.bitcast(builder.icmp_unsigned("<", text, bounds), ir.IntType(64))
+        return types.uint64(types.int64, types.int64, types.int64), codegen
+
+    return address, byte_at, word_at, trailing_zeros, popcount, bytes_below
 
 
-address, byte_at, word_at, trailing_zeros, popcount = _word_intrinsics()
+address, byte_at, word_at, trailing_zeros, popcount, bytes_below = _word_intrinsics()
 if is_command():
     load_registries_without_blas_probe()

@@ -31,22 +31,25 @@ error messages. So the fast path never decides what is an error, and never
 produces a different number.
 
 Speed. ``parse_rows`` steps over a run of two or more columns it does not read
-with :func:`_skip_fields`, which counts the separators of 8 bytes at a time
-(one branch per word, not one per field), and over a single one with
-:func:`_field_end`. The steps of one token (:func:`_real`, :func:`_integer`,
-:func:`_field_end`, ...) are compiled into ``parse_rows`` (:func:`demsplit.jit.inlined`)
-rather than called, and read the text through its address
-(:func:`demsplit.jit.byte_at`, :func:`demsplit.jit.word_at`): a call's
-arguments, tuple result and, for an array argument, reference counting cost as
-much as the step itself. Together: 2.44 GB/s against 1.71 GB/s on one thread
-(``python benchmarks/parse_kernel.py /tmp/bench_big --rev c4cbded --mb 300``,
-the benchmark's contact rows, 9 of 41 columns read; docs/performance.md).
+with :func:`_skip_fields`, which flags and counts the separators of 64 bytes at a
+time (:func:`demsplit.jit.bytes_below`, one vector compare; one branch per 64
+bytes, not one per field), and over a single one with :func:`_field_end`. The
+steps of one token (:func:`_real`, :func:`_integer`, :func:`_field_end`, ...)
+are compiled into ``parse_rows`` (:func:`demsplit.jit.inlined`) rather than
+called, and read the text through its address (:func:`demsplit.jit.byte_at`,
+:func:`demsplit.jit.word_at`): a call's arguments, tuple result and, for an
+array argument, reference counting cost as much as the step itself. On the
+benchmark's contact rows (9 of 41 columns read), one thread: 3.30 GB/s with the
+64-byte steps against 2.45 GB/s with 8-byte ones (``python
+benchmarks/parse_kernel.py /tmp/bench_big --rev 2a2c648 --mb 300``), which had
+brought it from 1.71 GB/s when the steps were calls (``--rev c4cbded``;
+docs/performance.md).
 """
 
 from __future__ import annotations
 
 import numpy as np
-from demsplit.jit import address, byte_at, inlined, kernel, popcount, trailing_zeros, word_at
+from demsplit.jit import address, byte_at, bytes_below, inlined, kernel, popcount, trailing_zeros, word_at
 
 __all__ = ["scan_chunk", "count_newlines", "next_newline", "parse_rows", "OK", "SHAPE", "FALLBACK"]
 
@@ -316,15 +319,34 @@ def _field_end(base: int, q: int, end: int) -> int:
 @inlined
 def _skip_fields(base: int, p: int, end: int, n: int) -> int:
     """Offset after the ``n`` fields starting at offset ``p`` (just after a separator, or at a row's start) and
-    the single space after each, stepped over 8 bytes at a time: per word, the separators (bytes
-    <= 32) are flagged exactly (with b7 = b & 0x7F, b7 + 0x5F reaches 0x80 exactly when b7 >= 0x21; a
-    byte with its high bit set is no separator) and counted, and in the word holding the n-th the
-    lower ones are cleared to find it. Checked as the field-by-field loop checks: no separator but
-    spaces (a newline before the n-th means a short row) and no two in a row (an empty field).
-    Returns -1 for a row of the wrong shape, -2 when the n-th space is not found 8 bytes or more before
-    ``end`` (the caller then goes field by field)."""
-    before = _U(0x80)       # a separator just before the word: one at its first byte ends an empty field
+    the single space after each, stepped over 64 bytes at a time, then 8: per step, the separators (bytes
+    <= 32) are flagged and counted, and in the step holding the n-th the lower ones are cleared to find it.
+    Checked as the field-by-field loop checks: no separator but spaces (a newline before the n-th means a
+    short row) and no two in a row (an empty field). Returns -1 for a row of the wrong shape, -2 when the
+    n-th space is not found 8 bytes or more before ``end`` (the caller then goes field by field).
+
+    64 bytes: :func:`~demsplit.jit.bytes_below` gives one bit per byte, bit j for byte p + j. 8 bytes
+    (the last ones before ``end``): one flag per byte, its bit 7 (with b7 = b & 0x7F, b7 + 0x5F reaches
+    0x80 exactly when b7 >= 0x21; a byte with its high bit set is no separator)."""
+    before = _U(1)          # a separator just before the step: one at its first byte ends an empty field
     left = n
+    while p + 64 <= end:
+        sep = bytes_below(base, p, _SEP + 1)
+        other = bytes_below(base, p, _SEP)              # bytes < 32: a separator but not a space
+        k = np.int64(popcount(sep))
+        if k >= left:
+            m = _nth_lowest(sep, left)
+            upto = m ^ (m - _U(1))                      # the bytes up to the n-th separator
+            sep &= upto
+            if (other & upto) != 0 or (sep & ((sep << _U(1)) | before)) != 0:
+                return -1
+            return p + np.int64(trailing_zeros(m)) + 1
+        if other != 0 or (sep & ((sep << _U(1)) | before)) != 0:
+            return -1
+        before = sep >> _U(63)
+        left -= k
+        p += 64
+    before <<= _U(7)        # the same flag, as the 8-byte steps place it: bit 7 of byte 0
     while p + 8 <= end:
         x = word_at(base, p)
         low = x & _EACH_7F
@@ -332,9 +354,7 @@ def _skip_fields(base: int, p: int, end: int, n: int) -> int:
         other = ~((low + _EACH_60) | x) & _EACH_80     # bytes < 32: a separator but not a space
         k = np.int64(popcount(sep))
         if k >= left:
-            m = sep
-            for _ in range(left - 1):
-                m &= m - _U(1)
+            m = _nth_lowest(sep, left)
             upto = m ^ (m - _U(1))                      # the bytes up to the n-th separator
             sep &= upto
             if (other & upto) != 0 or (sep & ((sep << _U(8)) | before)) != 0:
@@ -346,6 +366,14 @@ def _skip_fields(base: int, p: int, end: int, n: int) -> int:
         left -= k
         p += 8
     return -2
+
+
+@inlined
+def _nth_lowest(bits: np.uint64, n: int) -> np.uint64:
+    """The ``n``-th lowest set bit of ``bits`` (1-based; ``bits`` has at least ``n``) alone."""
+    for _ in range(n - 1):
+        bits &= bits - _U(1)
+    return bits & ~(bits - _U(1))
 
 
 @kernel

@@ -190,11 +190,12 @@ def reference_shape(text: bytes, ncols: int, trailing: bool, max_rows: int) -> t
 
 
 @settings(max_examples=600, deadline=None)
-@given(data=st.data(), ncols=st.integers(1, 14), trailing=st.booleans())
+@given(data=st.data(), ncols=st.integers(1, 40), trailing=st.booleans())
 def test_kernel_shape_check_equals_the_rule(data, ncols, trailing):
     """Rows of digit tokens with now and then a damaged separator (two spaces, a tab, a CR, a newline,
     an empty field, a missing or extra field), any columns requested: parse_rows finds the first
-    malformed row the plain rule finds, whether it steps over columns several at a time or not."""
+    malformed row the plain rule finds, whether it steps over columns several at a time or not (runs of
+    unread columns longer than 64 bytes are stepped over 64 bytes at a time, the rest 8 at a time)."""
     token = st.text("0123456789", min_size=1, max_size=12)
     sep = st.sampled_from([b" "] * 30 + [b"  ", b"\t", b"\r", b"\n", b""])
     lines = []
@@ -217,6 +218,45 @@ def test_kernel_shape_check_equals_the_rule(data, ncols, trailing):
         assert status in (fp.OK, fp.FALLBACK) and n == expected, text
     else:
         assert (status, where) == (fp.SHAPE, expected), text
+
+
+@pytest.mark.parametrize("damage", [b"  ", b"\t", b"\n", b" \x00", b"\x1f"])
+def test_long_runs_of_unread_columns_are_checked_everywhere(damage):
+    """A row of 40 unread columns (about 300 bytes, stepped over 64 bytes at a time) with one separator
+    damaged, or one value empty, at each of its places in turn: refused at that row, wherever the damage
+    falls in a step."""
+    fields = [str(10 ** (k % 9) + k).encode() for k in range(40)]
+    good = b" ".join(fields) + b"\n"
+    kind, slot = np.zeros(40, np.int64), np.zeros(40, np.int64)
+    kind[0] = kind[-1] = slot[-1] = 1       # the first and last read: the run between starts after a space
+    for k in range(39):
+        bad = b" ".join(fields[: k + 1]) + damage + b" ".join(fields[k + 1:]) + b"\n"
+        if damage == b"  ":  # an empty field in place of a value: the row still has 40 fields
+            bad = b" ".join(fields[: k + 1]) + damage + b" ".join(fields[k + 2:]) + b"\n"
+        a = np.frombuffer(good + bad + good, dtype=np.uint8)
+        status, where, _, _ = fp.parse_rows(a, 0, a.size, 40, False, kind, slot, np.zeros((2, 3)),
+                                            np.zeros((1, 3), np.int64), 0, 3, np.empty((1, 4), np.int64))
+        assert (status, where) == (fp.SHAPE, 1), (k, damage)
+    a = np.frombuffer(good * 3, dtype=np.uint8)
+    reals = np.zeros((2, 3))
+    status, _, rows, _ = fp.parse_rows(a, 0, a.size, 40, False, kind, slot, reals, np.zeros((1, 3), np.int64), 0,
+                                       3, np.empty((1, 4), np.int64))
+    assert (status, rows, reals.tolist()) == (fp.OK, 3, [[float(fields[0])] * 3, [float(fields[-1])] * 3])
+
+
+def test_bytes_below_flags_each_byte():
+    """demsplit.jit.bytes_below against numpy, on every byte value and at unaligned offsets."""
+    from demsplit.jit import address, bytes_below, kernel
+
+    @kernel
+    def below(a, i, bound):
+        return bytes_below(address(a), i, bound)
+
+    a = np.concatenate([np.arange(256, dtype=np.uint8), np.random.default_rng(5).integers(0, 256, 300, np.uint8)])
+    for i in (0, 1, 63, 200, a.size - 64):
+        for bound in (0, 1, 32, 33, 128, 255):
+            bits = (a[i: i + 64] < bound).astype(np.uint64) << np.arange(64, dtype=np.uint64)
+            assert int(below(a, i, bound)) == int(np.bitwise_or.reduce(bits)), (i, bound)
 
 
 def test_scan_chunk_finds_markers_and_newlines():
