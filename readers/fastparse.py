@@ -81,11 +81,16 @@ _WORD_TOKEN = 24    # a real is read word-wise when this many bytes follow its s
 
 @kernel
 def count_newlines(a: np.ndarray, start: int, end: int) -> int:
-    """Number of ``\\n`` bytes in ``a[start:end]``."""
-    s = a[start:end]    # indexed from 0: no negative-index wraparound, so the loop is vectorised
+    """Number of ``\\n`` bytes in ``a[start:end]``, 64 bytes a step (:func:`_bytes_equal`)."""
+    base = address(a)
     n = 0
-    for j in range(s.size):
-        n += s[j] == 10
+    p = start
+    while p + _BLOCK <= end:
+        n += np.int64(popcount(_bytes_equal(base, p, 10)))
+        p += _BLOCK
+    while p < end:
+        n += a[p] == 10
+        p += 1
     return n
 
 
@@ -97,21 +102,18 @@ def scan_chunk(a: np.ndarray, limit: int, pos_out: np.ndarray, nl_out: np.ndarra
     into the rest of ``a``). Its offset goes to ``pos_out[k]`` and the number
     of newlines before it (from ``a[0]``) to ``nl_out[k]``; both must hold one
     slot per ``len(MARKER)`` bytes of ``limit``. Returns (markers found,
-    newlines in ``a[:limit]``). Counted in 64-byte steps without branches,
-    which the compiler vectorises; a step holding an ``I`` (a letter no number
-    contains) is then searched byte by byte.
+    newlines in ``a[:limit]``). Counted in 64-byte steps
+    (:func:`_bytes_equal`: a mask of the newlines and one of the ``I``, a letter
+    no number contains); a step holding an ``I`` is then searched byte by byte.
     """
+    base = address(a)
     m = _MARKER.size
     newlines = 0
     found = 0
     stop = limit - limit % _BLOCK
     for b in range(0, stop, _BLOCK):
-        nl = 0
-        has_i = 0
-        for j in range(b, b + _BLOCK):
-            nl += a[j] == 10
-            has_i |= a[j] == 73
-        if has_i:
+        nl = np.int64(popcount(_bytes_equal(base, b, 10)))
+        if _bytes_equal(base, b, 73) != 0:
             before = newlines
             for j in range(b, b + _BLOCK):
                 if a[j] == 73 and _marker_at(a, j, m):
@@ -127,6 +129,13 @@ def scan_chunk(a: np.ndarray, limit: int, pos_out: np.ndarray, nl_out: np.ndarra
             found += 1
         newlines += a[j] == 10
     return found, newlines
+
+
+@inlined
+def _bytes_equal(base: int, p: int, byte: int) -> np.uint64:
+    """Bit j set where the byte at offset ``p + j`` (j < 64) is ``byte`` (0-254): the bytes below
+    ``byte + 1`` but not below ``byte`` (two vector compares, :func:`demsplit.jit.bytes_below`)."""
+    return bytes_below(base, p, byte + 1) ^ bytes_below(base, p, byte)
 
 
 @kernel

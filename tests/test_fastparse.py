@@ -269,6 +269,8 @@ def test_scan_chunk_finds_markers_and_newlines():
         assert pos[:found].tolist() == expect
         assert nl[:found].tolist() == [text[:p].count(b"\n") for p in expect]
         assert newlines == text[:limit].count(b"\n")
+    for start, end in ((0, a.size), (3, a.size - 1), (70, 140), (64, 128), (5, 6), (9, 9)):
+        assert fp.count_newlines(a, start, end) == text[start:end].count(b"\n")
 
 
 def index_of(path: Path) -> tuple:
