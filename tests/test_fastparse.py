@@ -244,6 +244,21 @@ def test_long_runs_of_unread_columns_are_checked_everywhere(damage):
     assert (status, rows, reals.tolist()) == (fp.OK, 3, [[float(fields[0])] * 3, [float(fields[-1])] * 3])
 
 
+def test_fields_longer_than_a_step():
+    """A field of 70 bytes (more than one 64-byte step to its end), read and not read: its end is found, and
+    a read one is listed as outside the fast path with its exact byte range."""
+    long = b"1" * 70
+    text = b"7 " + long + b" 8\n" + b"9 " + long + b" 10\n"
+    a = np.frombuffer(text, dtype=np.uint8)
+    for kind in ([1, 0, 1], [1, 1, 1]):
+        reals, slow = np.zeros((3, 2)), np.zeros((4, 4), np.int64)
+        status, _, rows, n_slow = fp.parse_rows(a, 0, a.size, 3, False, np.array(kind), np.array([0, 1, 2]), reals,
+                                                np.zeros((3, 2), np.int64), 0, 2, slow)
+        assert (status, rows) == (fp.OK, 2)
+        assert reals[0].tolist() == [7, 9] and reals[2].tolist() == [8, 10]
+        assert slow[:n_slow].tolist() == ([[1, 0, 2, 72], [1, 1, 77, 147]] if kind[1] else [])
+
+
 def test_bytes_below_flags_each_byte():
     """demsplit.jit.bytes_below against numpy, on every byte value and at unaligned offsets."""
     from demsplit.jit import address, bytes_below, kernel
