@@ -38,12 +38,14 @@ steps of one token (:func:`_real`, :func:`_integer`, :func:`_field_end`, ...)
 are compiled into ``parse_rows`` (:func:`demsplit.jit.inlined`) rather than
 called, and read the text through its address (:func:`demsplit.jit.byte_at`,
 :func:`demsplit.jit.word_at`): a call's arguments, tuple result and, for an
-array argument, reference counting cost as much as the step itself. On the
-benchmark's contact rows (9 of 41 columns read), one thread: 3.30 GB/s with the
-64-byte steps against 2.45 GB/s with 8-byte ones (``python
-benchmarks/parse_kernel.py /tmp/bench_big --rev 2a2c648 --mb 300``), which had
-brought it from 1.71 GB/s when the steps were calls (``--rev c4cbded``;
-docs/performance.md).
+array argument, reference counting cost as much as the step itself. A read
+field's end is found (64 bytes a step) before the field is converted, so that
+the next field's start does not wait for the conversion and the conversions of
+a row overlap in the processor. On the benchmark's contact rows (9 of 41
+columns read), one thread: 3.91 GB/s against 2.48 GB/s with 8-byte steps and
+ends found after the conversion (``python benchmarks/parse_kernel.py
+/tmp/bench_big --rev 2a2c648 --mb 300``), which had brought it from 1.71 GB/s
+when the steps were calls (``--rev c4cbded``; docs/performance.md).
 """
 
 from __future__ import annotations
