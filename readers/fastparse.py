@@ -347,7 +347,10 @@ def _skip_fields(base: int, p: int, end: int, n: int) -> int:
 
     64 bytes: :func:`~demsplit.jit.bytes_below` gives one bit per byte, bit j for byte p + j. 8 bytes
     (the last ones before ``end``): one flag per byte, its bit 7 (with b7 = b & 0x7F, b7 + 0x5F reaches
-    0x80 exactly when b7 >= 0x21; a byte with its high bit set is no separator)."""
+    0x80 exactly when b7 >= 0x21; a byte with its high bit set is no separator). The two loops are the
+    same steps on the two layouts of flags, written out twice on purpose: one loop over both (the 8-byte
+    flags gathered into a bit per byte) or none for the last bytes (-2 within 64 bytes of ``end``) made
+    the kernel 5 % slower (``benchmarks/parse_kernel.py --rev HEAD``, twice each, 18:45-18:50)."""
     before = _U(1)          # a separator just before the step: one at its first byte ends an empty field
     left = n
     while p + 64 <= end:
