@@ -68,7 +68,7 @@ _FAST, _SLOW, _NOT_DECIMAL = 0, 1, 2                # what _real found
 _POW10 = np.array([10.0 ** k for k in range(23)])   # 1e0 .. 1e22, each an exact double
 _MAX_EXACT = 1 << 53                                # largest mantissa that is an exact double
 _SEP = 32                                           # bytes <= 32 separate fields (LAMMPS writes ' ' and '\n')
-_BLOCK = 64                                         # bytes counted per step of the scan
+_BLOCK = 64                                         # bytes per step of a mask (jit.bytes_below: one bit each)
 
 # Word-at-a-time constants (8 bytes in a uint64, the first byte of the text the lowest)
 _U = np.uint64
@@ -350,10 +350,10 @@ def _skip_fields(base: int, p: int, end: int, n: int) -> int:
     0x80 exactly when b7 >= 0x21; a byte with its high bit set is no separator). The two loops are the
     same steps on the two layouts of flags, written out twice on purpose: one loop over both (the 8-byte
     flags gathered into a bit per byte) or none for the last bytes (-2 within 64 bytes of ``end``) made
-    the kernel 5 % slower (``benchmarks/parse_kernel.py --rev HEAD``, twice each, 18:45-18:50)."""
+    the kernel 5-10 % slower (``benchmarks/parse_kernel.py --rev HEAD``, two or three times each)."""
     before = _U(1)          # a separator just before the step: one at its first byte ends an empty field
     left = n
-    while p + 64 <= end:
+    while p + _BLOCK <= end:
         sep = bytes_below(base, p, _SEP + 1)
         other = bytes_below(base, p, _SEP)              # bytes < 32: a separator but not a space
         k = np.int64(popcount(sep))
@@ -368,7 +368,7 @@ def _skip_fields(base: int, p: int, end: int, n: int) -> int:
             return -1
         before = sep >> _U(63)
         left -= k
-        p += 64
+        p += _BLOCK
     before <<= _U(7)        # the same flag, as the 8-byte steps place it: bit 7 of byte 0
     while p + 8 <= end:
         x = word_at(base, p)
