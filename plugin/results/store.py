@@ -40,7 +40,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from concurrent.futures import Executor
 from pathlib import Path
@@ -416,7 +416,8 @@ class ResultWriter:
         # HDF5 filters itself, the cache held ~100 MB more at the peak on the medium benchmark run)
         self._h5 = h5py.File(path, "w", libver=LIBVER, rdcc_nbytes=0)
         self._sinks = {name: _TableSink(self._h5, name, dict(schema.get(name, {})), dict(filters.get(name, {})),
-                                        chunks.get(name, CHUNK_ROWS), threads.pool()) for name in TABLES}
+                                        chunks.get(name, CHUNK_ROWS), threads.pool(),
+                                        on_written=lambda: self._write_back.request(path)) for name in TABLES}
         self._h5.swmr_mode = True
 
     def append(self, tables: Mapping[str, Mapping[str, np.ndarray]]) -> None:
@@ -578,12 +579,16 @@ class _TableSink:
     HDF5 reader decodes them as usual. Rows that do not fill a chunk are
     carried (a copy, less than one chunk per column) to the next frame and
     kept in the commit record; :meth:`finish` writes the last, partial chunk
-    (zero-padded, outside the dataset's shape). ``written``: rows in the file.
+    (zero-padded, outside the dataset's shape). ``written``: rows in the file. ``on_written()`` is
+    called after each column's chunks are written: the writer has their pages sent to disk at once
+    (:class:`~demsplit.atomic.WriteBack`), so that the last frame's are not all left to ``close``'s
+    fsync.
     """
 
     def __init__(self, h5, name: str, schema: dict[str, str], filters: dict[str, str], chunk_rows: int,
-                 pool: Executor) -> None:
+                 pool: Executor, on_written: Callable[[], None]) -> None:
         self.name, self.schema, self.filters, self.pool = name, schema, filters, pool
+        self.on_written = on_written
         self.chunk_rows = chunk_rows
         self.group = h5.create_group(name)
         self.group.attrs["columns"] = json.dumps(list(schema))
@@ -657,12 +662,13 @@ class _TableSink:
         if self.filters[col] == "lzf":  # h5py's own filter: HDF5 applies it to the chunk-aligned slices
             for k, c in enumerate(chunks):
                 ds[start + k * self.chunk_rows: start + k * self.chunk_rows + len(c)] = c
-            return
-        if blobs is None:
-            blobs = self._compressed(chunks) if self.filters[col] == "gzip" else \
-                (_padded(c, self.chunk_rows) for c in chunks)
-        for k, blob in enumerate(blobs):
-            ds.id.write_direct_chunk((start + k * self.chunk_rows,), blob)
+        else:
+            if blobs is None:
+                blobs = self._compressed(chunks) if self.filters[col] == "gzip" else \
+                    (_padded(c, self.chunk_rows) for c in chunks)
+            for k, blob in enumerate(blobs):
+                ds.id.write_direct_chunk((start + k * self.chunk_rows,), blob)
+        self.on_written()
 
 
 def _choose_filters(tables: Mapping[str, Table], compression: str,
