@@ -140,16 +140,22 @@ def exit_now(code: int) -> NoReturn:
     os._exit(code)
 
 
+FREED_MEMORY_KEPT = False
+"""Whether :func:`settle` had glibc keep freed memory for reuse (:func:`keep_freed_memory`): this process is
+the command, on glibc."""
+
+
 def settle() -> None:
     """Apply the module's settings when this process is the command (:func:`is_command`); nothing otherwise.
     Called before numpy is imported."""
+    global FREED_MEMORY_KEPT
     if not is_command():
         return
     if "numpy" not in sys.modules:
         os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
         if guest_reports_free_memory():
             os.environ.setdefault("NUMPY_MADVISE_HUGEPAGE", "0")
-    keep_freed_memory()
+    FREED_MEMORY_KEPT = keep_freed_memory()
     gc.set_threshold(*GC_THRESHOLDS)
 
 

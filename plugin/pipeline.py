@@ -19,10 +19,11 @@ from pathlib import Path
 
 import numpy as np
 
-from . import threads
+from . import command, threads
 from .errors import DemsplitError, IncompleteRunError, InputFormatError
 from .fingerprint import hash_in_background
 from .outputs import check_output_path
+from .prefault import first_frame_prefaulted
 from .validate import check_finite_energies, validated_frame
 from .frame import CONTACT_REQUIRED, PARTICLE_REQUIRED, Frame, ParticleIndex, Table, require_columns
 from .physics.accuracy import contact_radius_ratios, corrected_share, expected_share_error
@@ -549,7 +550,9 @@ def run_to_store(path: str | Path, out: str | Path, *, options: Options = Option
     from .results.store import ResultWriter, build_provenance, check_output
 
     check_output(out, resume=resume)  # before any work: no output directory, or an unresumed interrupted run
-    run = open_run(path, **reader_options)
+    in_process = command.FREED_MEMORY_KEPT and not dask and worker_processes(jobs) == 1  # frames computed here
+    with first_frame_prefaulted(in_process):  # the first frame's pages mapped while the run opens
+        run = open_run(path, **reader_options)
     try:
         sources = run.sources
         check_output_path(out, run.named_files())  # before anything is written: never over a file of the run

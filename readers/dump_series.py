@@ -55,7 +55,7 @@ class DumpSeries(DumpFile):
                                    fix="check the dump's file name and that the run wrote it.")
         self._dumps = [open_dump(f, columns) for f in files]
         first = self._dumps[0]
-        self.kind, self.label, self.columns = first.kind, first.label, first.columns
+        self.kind, self.label, self.columns, self.head_rows = first.kind, first.label, first.columns, first.head_rows
         self._compression = first.compression
 
     @property

@@ -314,13 +314,16 @@ class DumpFile(ABC):
 
     Attributes: ``path`` (str), ``kind`` (``'atoms'`` or ``'local'``),
     ``label`` (``'ATOMS'``, ``'ENTRIES'``, ...), ``columns`` (header names of
-    the first frame; for binary the names given to :func:`open_dump`).
+    the first frame; for binary the names given to :func:`open_dump`),
+    ``head_rows`` (the rows the first frame's header announces: read when the
+    file is opened, before it is indexed).
     """
 
     path: str
     kind: str
     label: str
     columns: list[str] | None
+    head_rows: int
 
     def __init__(self, path: Path) -> None:
         self.path = str(path)
@@ -436,6 +439,7 @@ class TextDump(DumpFile):
         self.label = first["label"]
         self.kind = "atoms" if self.label == "ATOMS" else "local"
         self.columns = list(first["names"])
+        self.head_rows = first["n"]
         if columns is not None and list(columns) != self.columns:
             raise InputFormatError(f"columns {list(columns)} given, but the header names {self.columns}",
                                    file=self.path, line=HEADER_LINES,
@@ -1144,6 +1148,7 @@ class BinaryDump(DumpFile):
                                    f"{entry.n_cols} columns", file=path, step=entry.step,
                                    fix="pass one name per keyword of the dump custom line, in order")
         self.columns = self._given or [f"col{k + 1}" for k in range(entry.n_cols)]
+        self.head_rows = entry.n_rows
 
     def _header(self, f: BinaryIO, offset: int, size: int) -> tuple[_BinaryEntry, int]:
         """Parse the frame header at ``offset``; return it and the next frame's offset."""

@@ -42,7 +42,7 @@ from ..errors import ContactError, InputFormatError, MaterialError, PrecisionErr
 from ..frame import Box, Frame, ParticleIndex, Table, describe_steps
 from ..physics.shares import contact_point
 from ..scene import Material, Scene
-from .base import Run
+from .base import Run, announce_first_frame
 from .dump_series import DumpSeries, series_files
 from .lammps_dump import HEADER_LINES, DumpFile, DumpFrame, open_dump
 from .liggghts_script import read_script
@@ -202,6 +202,8 @@ class LiggghtsRun(Run):
         self.atoms = self._open_atoms(atoms)
         self.pairs = self._open_local(contacts, "pair")
         self.walls = self._open_local(walls, "wall")
+        announce_first_frame(self.atoms.head_rows,  # before the dumps are indexed below
+                             sum(d.head_rows for d in (self.pairs, self.walls) if d is not None))
         self._pair_names = self._local_names(self.pairs, "pair")
         self._wall_names = self._local_names(self.walls, "wall")
         self._refuse_wall_columns_apart()

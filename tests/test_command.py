@@ -24,7 +24,8 @@ del a
 before = faults()
 b = np.ones(1 << 23)  # the same size again: fresh pages unless the freed ones were kept
 print(json.dumps({"blas": os.environ.get("OPENBLAS_NUM_THREADS"), "faults": faults() - before,
-                  "gc": gc.get_threshold(), "pages": os.environ.get("NUMPY_MADVISE_HUGEPAGE")}))
+                  "gc": gc.get_threshold(), "pages": os.environ.get("NUMPY_MADVISE_HUGEPAGE"),
+                  "kept": demsplit.command.FREED_MEMORY_KEPT}))
 """
 
 
@@ -57,6 +58,7 @@ def test_the_command_keeps_freed_memory_one_blas_thread_and_rare_collections():
     assert tuple(as_command["gc"]) == command.GC_THRESHOLDS and tuple(as_library["gc"]) != command.GC_THRESHOLDS
     # freed pages reused: a 64 MiB array faults in 16384 small pages or 32 huge ones when it is fresh
     assert as_command["faults"] < 8 <= as_library["faults"]
+    assert as_command["kept"] and not as_library["kept"]  # what the first frame's warm-up asks of the process
 
 
 def test_a_blas_thread_count_the_user_set_is_kept():

@@ -1,0 +1,115 @@
+"""The first frame's memory, mapped while the run is opened, on the core the opening leaves idle.
+
+A frame's arrays are fresh memory the first time: the kernel maps and zero-fills each 4 KiB page on its
+first write (a page fault). Later frames reuse the pages of the first (:mod:`demsplit.command`, "Freed memory
+kept for the next frame"), so the first frame pays for all of them. On the benchmark run (10^6 particles,
+2*10^6 contacts) that is 183,000 faults, 715 MB, and the first frame's read and tables take about 0.2 s more
+than each later frame's (docs/performance.md, "The goals of issue 19 at the ninth stop"). The run's opening
+before it (numba's import and registries, the script, then the index scans) keeps one core busy for about
+0.2 s and leaves the other idle.
+
+:func:`first_frame_prefaulted`, around ``open_run`` in :func:`demsplit.pipeline.run_to_store`, listens for
+the first frame's size, which the LIGGGHTS reader reads from its dumps' first headers before it indexes them
+(:func:`demsplit.readers.base.first_frame_size`). It then allocates :func:`first_frame_bytes` from the heap
+(:class:`Prefault`) and a thread maps its pages, a piece at a time, with ``madvise(MADV_POPULATE_WRITE)``
+(Linux 5.14; elsewhere by writing zeros). When the run is open the thread stops after its current piece
+and the block is freed: the first frame's arrays are carved from pages already mapped.
+
+Only in the command's process with glibc keeping freed memory (:data:`demsplit.command.FREED_MEMORY_KEPT`;
+elsewhere a freed block this large goes back to the system at once) and only when the frames are computed in
+this process. The thread runs at normal priority, not on idle cores only as the digests do: it holds the
+address space's lock while it maps a piece, which the main thread's allocations wait for. The estimate stays
+below what the first frame touches (``benchmarks/first_frame_memory.py`` measures both), so the pages mapped
+are pages the first frame would have mapped, and the run's peak memory is unchanged.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import functools
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+from .readers.base import first_frame_size
+from .threads import run_on_idle_cores
+
+BYTES_PER_PARTICLE = 170
+"""Fresh memory the first frame is taken to touch per particle (bytes): about 90 % of the 194 bytes
+``python benchmarks/first_frame_memory.py`` fits over three generated runs."""
+BYTES_PER_CONTACT = 250
+"""Fresh memory the first frame is taken to touch per contact (bytes): about 90 % of the 277 bytes fitted
+by the same command."""
+PIECE = 16 << 20
+"""Bytes written per call (about 5 ms here): how long :meth:`Prefault.release` waits for the thread at most."""
+
+
+def first_frame_bytes(particles: int, contacts: int) -> int:
+    """The memory (bytes) mapped ahead for a first frame of ``particles`` and ``contacts`` rows:
+    ``BYTES_PER_PARTICLE * particles + BYTES_PER_CONTACT * contacts``."""
+    return BYTES_PER_PARTICLE * max(0, particles) + BYTES_PER_CONTACT * max(0, contacts)
+
+
+@functools.cache
+def _libc() -> ctypes.CDLL:
+    libc = ctypes.CDLL(None)  # the C library the interpreter runs on
+    libc.malloc.argtypes, libc.malloc.restype = (ctypes.c_size_t,), ctypes.c_void_p
+    libc.free.argtypes, libc.free.restype = (ctypes.c_void_p,), None
+    return libc
+
+
+class Prefault:
+    """``nbytes`` allocated with ``malloc`` and written with zeros by a thread of their own that runs on idle
+    cores only, :data:`PIECE` bytes at a time, until :meth:`release` frees them (see the module docstring).
+    ``mapped``: bytes written so far."""
+
+    def __init__(self, nbytes: int) -> None:
+        self.nbytes = max(0, int(nbytes))
+        self.mapped = 0
+        self._stop = threading.Event()
+        self._block = _libc().malloc(self.nbytes) if self.nbytes else None  # None: nothing, or no memory
+        self._thread = None
+        if self._block:
+            self._thread = threading.Thread(target=self._map, name="demsplit-prefault", daemon=True)
+            self._thread.start()
+
+    def _map(self) -> None:
+        run_on_idle_cores()
+        for at in range(0, self.nbytes, PIECE):
+            if self._stop.is_set():
+                return
+            n = min(PIECE, self.nbytes - at)
+            ctypes.memset(self._block + at, 0, n)  # a foreign call: the GIL is released while it runs
+            self.mapped = at + n
+
+    def release(self) -> None:
+        """Stop the thread after its current piece and free the block (its pages stay with the heap)."""
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join()
+            self._thread = None
+        if self._block:
+            _libc().free(self._block)
+            self._block = None
+
+
+@contextmanager
+def first_frame_prefaulted(enabled: bool) -> Iterator[None]:
+    """Around a run's opening: when ``enabled``, the first frame's memory (:func:`first_frame_bytes` of the
+    size a reader announces) is mapped while the run opens, and freed for the frame when the context ends;
+    otherwise nothing."""
+    if not enabled:
+        yield
+        return
+    blocks: list[Prefault] = []
+
+    def listener(particles: int, contacts: int) -> None:
+        if not blocks:  # one run: its first frame
+            blocks.append(Prefault(first_frame_bytes(particles, contacts)))
+
+    try:
+        with first_frame_size(listener):
+            yield
+    finally:
+        for block in blocks:
+            block.release()

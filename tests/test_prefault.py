@@ -1,0 +1,111 @@
+"""The first frame's memory mapped while the run opens (:mod:`demsplit.prefault`): the LIGGGHTS reader
+announces the first frame's size before it indexes its dumps, the block is written and freed, and
+nothing happens where it is not enabled or nobody listens."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import demsplit.prefault as prefault
+import pytest
+from demsplit.readers import open_run
+from demsplit.readers.base import announce_first_frame, first_frame_size
+from demsplit.readers.lammps_dump import TextDump
+
+
+def resident_bytes() -> int:
+    """The process's resident memory (``/proc/self/statm``, Linux)."""
+    return int(Path("/proc/self/statm").read_text().split()[1]) * 4096
+
+
+@pytest.mark.skipif(not Path("/proc/self/statm").exists(), reason="resident memory is read from Linux's /proc")
+def test_a_block_is_written_page_by_page_then_freed():
+    n = 6 * prefault.PIECE + 12345  # whole pieces and a part
+    before = resident_bytes()
+    block = prefault.Prefault(n)
+    deadline = time.monotonic() + 60
+    while block.mapped < n and time.monotonic() < deadline:  # the thread runs on idle cores: this one idles
+        time.sleep(0.01)
+    assert block.mapped == n
+    assert resident_bytes() - before > 0.9 * n  # its pages are mapped, not just reserved
+    block.release()
+    assert block._block is None and block._thread is None
+    block.release()  # twice: nothing
+
+
+def test_release_stops_the_thread_before_the_block_is_written_whole():
+    n = 1 << 33  # 8 GiB of address space, of which a piece or two get written before the stop
+    block = prefault.Prefault(n)
+    block.release()
+    assert block._thread is None and block.mapped < n
+
+
+def test_nothing_is_allocated_for_no_rows():
+    block = prefault.Prefault(prefault.first_frame_bytes(0, 0))
+    assert block._block is None and block._thread is None
+    block.release()
+
+
+def test_first_frame_bytes_is_the_documented_sum():
+    assert prefault.first_frame_bytes(10, 20) == 10 * prefault.BYTES_PER_PARTICLE + 20 * prefault.BYTES_PER_CONTACT
+    assert prefault.first_frame_bytes(-1, 5) == 5 * prefault.BYTES_PER_CONTACT
+
+
+@pytest.mark.parametrize("enabled", [True, False])
+def test_the_context_maps_the_first_announced_frame_only_when_enabled(monkeypatch, enabled):
+    made: list[Recorder] = []
+
+    class Recorder:
+        def __init__(self, nbytes: int) -> None:
+            self.nbytes, self.released = nbytes, False
+            made.append(self)
+
+        def release(self) -> None:
+            self.released = True
+
+    monkeypatch.setattr(prefault, "Prefault", Recorder)
+    with prefault.first_frame_prefaulted(enabled):
+        announce_first_frame(10, 20)
+        announce_first_frame(1000, 2000)  # a second run opened in the same context: not its memory too
+        assert all(not r.released for r in made)
+    assert [(r.nbytes, r.released) for r in made] == ([(prefault.first_frame_bytes(10, 20), True)] if enabled else [])
+    announce_first_frame(10, 20)  # outside any context: nobody listens
+    assert len(made) == (1 if enabled else 0)
+
+
+def test_the_block_is_freed_when_the_opening_fails(monkeypatch):
+    events = []
+
+    class Recorder:
+        def __init__(self, nbytes: int) -> None:
+            events.append("mapped")
+
+        def release(self) -> None:
+            events.append("freed")
+
+    monkeypatch.setattr(prefault, "Prefault", Recorder)
+    with pytest.raises(RuntimeError), prefault.first_frame_prefaulted(True):
+        announce_first_frame(10, 20)
+        raise RuntimeError("the run cannot be opened")
+    assert events == ["mapped", "freed"]
+
+
+def test_the_liggghts_reader_announces_its_first_frame_before_indexing(samples, monkeypatch):
+    """(particles, contacts) of frame 0 as the dumps' headers say, walls' contacts included, told before
+    any dump is indexed (the warm-up's window is the indexing)."""
+    events = []
+    build = TextDump._build_index
+
+    def indexing(self):
+        events.append("index")
+        return build(self)
+
+    monkeypatch.setattr(TextDump, "_build_index", indexing)
+    with first_frame_size(lambda particles, contacts: events.append((particles, contacts))):
+        run = open_run(samples / "liggghts" / "packing" / "in.packing")
+    with run:
+        walls = int(run.walls.rows[0])
+        assert walls > 0  # the sample has wall contacts: they are counted
+        assert events[0] == (int(run.atoms.rows[0]), int(run.pairs.rows[0]) + walls)
+        assert events[1:] == ["index"] * 3  # atoms, pairs, walls: all after
