@@ -2,25 +2,27 @@
 
 A frame's arrays are fresh memory the first time: the kernel maps and zero-fills each 4 KiB page on its
 first write (a page fault). Later frames reuse the pages of the first (:mod:`demsplit.command`, "Freed memory
-kept for the next frame"), so the first frame pays for all of them. On the benchmark run (10^6 particles,
-2*10^6 contacts) that is 183,000 faults, 715 MB, and the first frame's read and tables take about 0.2 s more
-than each later frame's (docs/performance.md, "The goals of issue 19 at the ninth stop"). The run's opening
-before it (numba's import and registries, the script, then the index scans) keeps one core busy for about
-0.2 s and leaves the other idle.
+kept for the next frame"), so the first frame pays for all of them: on the benchmark run (10^6 particles,
+2*10^6 contacts) 768 MB of fresh pages in its read, tables and store append
+(``python benchmarks/first_frame_memory.py``), and its read and tables took about 0.2 s longer than each
+later frame's. The run's opening before it (numba's import and registries, then the index scans) leaves
+one core idle for about 0.2 s.
 
 :func:`first_frame_prefaulted`, around ``open_run`` in :func:`demsplit.pipeline.run_to_store`, listens for
 the first frame's size, which the LIGGGHTS reader reads from its dumps' first headers before it indexes them
-(:func:`demsplit.readers.base.first_frame_size`). It then allocates :func:`first_frame_bytes` from the heap
-(:class:`Prefault`) and a thread maps its pages, a piece at a time, with ``madvise(MADV_POPULATE_WRITE)``
-(Linux 5.14; elsewhere by writing zeros). When the run is open the thread stops after its current piece
-and the block is freed: the first frame's arrays are carved from pages already mapped.
+(:func:`demsplit.readers.base.first_frame_size`). It allocates :func:`first_frame_bytes` from the heap
+(:class:`Prefault`), and a thread that runs on idle cores only writes zeros over it, a piece at a time. When
+the run is open the thread stops after its current piece and the block is freed: the first frame's arrays
+are carved from pages already mapped. ``madvise(MADV_POPULATE_WRITE)`` maps pages without writing them, but
+it holds the address space's lock while it maps a piece, which the imports' own mappings wait for:
+``open_run`` took 0.15 s longer with it, and no longer with the writes (docs/performance.md, "The goals
+of issue 19 at the ninth stop").
 
 Only in the command's process with glibc keeping freed memory (:data:`demsplit.command.FREED_MEMORY_KEPT`;
 elsewhere a freed block this large goes back to the system at once) and only when the frames are computed in
-this process. The thread runs at normal priority, not on idle cores only as the digests do: it holds the
-address space's lock while it maps a piece, which the main thread's allocations wait for. The estimate stays
-below what the first frame touches (``benchmarks/first_frame_memory.py`` measures both), so the pages mapped
-are pages the first frame would have mapped, and the run's peak memory is unchanged.
+this process. The estimate stays below what the first frame touches (``benchmarks/first_frame_memory.py``
+measures both), so the pages mapped are pages the first frame would have mapped, and the run's peak memory
+is unchanged.
 """
 
 from __future__ import annotations
@@ -35,10 +37,10 @@ from .readers.base import first_frame_size
 from .threads import run_on_idle_cores
 
 BYTES_PER_PARTICLE = 170
-"""Fresh memory the first frame is taken to touch per particle (bytes): about 90 % of the 194 bytes
+"""Fresh memory the first frame is taken to touch per particle (bytes): about 83 % of the 206 bytes
 ``python benchmarks/first_frame_memory.py`` fits over three generated runs."""
 BYTES_PER_CONTACT = 250
-"""Fresh memory the first frame is taken to touch per contact (bytes): about 90 % of the 277 bytes fitted
+"""Fresh memory the first frame is taken to touch per contact (bytes): about 86 % of the 292 bytes fitted
 by the same command."""
 PIECE = 16 << 20
 """Bytes written per call (about 5 ms here): how long :meth:`Prefault.release` waits for the thread at most."""
