@@ -9,9 +9,12 @@ for the first time) of the first frame's read, tables and store append, once wit
 mapped ahead (:func:`demsplit.prefault.first_frame_prefaulted`) and once without. It prints the frame's
 particles and contacts, the fresh memory without the warm-up, the estimate the warm-up maps
 (:func:`demsplit.prefault.first_frame_bytes`) and their ratio (below 1: the pages mapped ahead are pages
-the frame would have mapped, so the peak is unchanged), the fresh memory left with the warm-up, and the
-least-squares fit of the fresh memory as ``a * particles + b * contacts``: where
-``BYTES_PER_PARTICLE`` and ``BYTES_PER_CONTACT`` come from.
+the frame would have mapped), the fresh memory left with the warm-up, the peak resident memory
+(``VmHWM``) without and with the warm-up (the largest of ``--repeat`` processes each: the warm-up must not
+raise it), and the least-squares fit of the fresh memory as ``a * particles + b * contacts``. The fresh
+memory counts the worker threads' own heaps too, which the warm-up does not serve; an estimate near
+the fit raised the benchmark run's peak by about 40 MB, which is why ``BYTES_PER_PARTICLE`` and
+``BYTES_PER_CONTACT`` are about two thirds of the fit.
 """
 
 from __future__ import annotations
@@ -64,8 +67,9 @@ first_call(pipeline, "frame_tables")
 first_call(ResultWriter, "append")
 rc = main(["run", sys.argv[1], "-o", sys.argv[2], "-q"])
 os.unlink(sys.argv[2])
+hwm = [line for line in open("/proc/self/status") if line.startswith("VmHWM:")][0]
 print(json.dumps({"rc": rc, "size": seen["size"], "fresh": seen["faults"] * resource.getpagesize(),
-                  "estimate": first_frame_bytes(*seen["size"])}))
+                  "estimate": first_frame_bytes(*seen["size"]), "peak": int(hwm.split()[1]) * 1024}))
 """
 
 
@@ -79,6 +83,7 @@ def first_frame(script: Path, out: Path, warm: bool) -> dict:
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("dirs", nargs="*", type=Path, help="runs written by benchmarks/generate.py")
+    ap.add_argument("--repeat", type=int, default=3, help="processes of each kind per run (peaks: the largest)")
     a = ap.parse_args(argv)
     with tempfile.TemporaryDirectory(prefix="demsplit-first-frame-") as tmp:
         dirs = a.dirs
@@ -89,14 +94,16 @@ def main(argv: list[str] | None = None) -> None:
                                 "--contacts", str(contacts), "--frames", "1"], check=True, capture_output=True)
         rows = []
         print(f"{'particles':>10} {'contacts':>10} {'fresh MB':>9} {'estimate MB':>12} {'ratio':>6} "
-              f"{'fresh MB, warmed':>17}")
+              f"{'fresh MB, warmed':>17} {'peak MB':>8} {'peak MB, warmed':>16}")
         for d in dirs:
-            off = first_frame(d / "in.bench", Path(tmp) / "o.h5", warm=False)
-            on = first_frame(d / "in.bench", Path(tmp) / "o.h5", warm=True)
-            particles, contacts = off["size"]
-            rows.append((particles, contacts, off["fresh"]))
-            print(f"{particles:10d} {contacts:10d} {off['fresh'] / 1e6:9.1f} {off['estimate'] / 1e6:12.1f} "
-                  f"{off['estimate'] / off['fresh']:6.2f} {on['fresh'] / 1e6:17.1f}")
+            off = [first_frame(d / "in.bench", Path(tmp) / "o.h5", warm=False) for _ in range(a.repeat)]
+            on = [first_frame(d / "in.bench", Path(tmp) / "o.h5", warm=True) for _ in range(a.repeat)]
+            particles, contacts = off[0]["size"]
+            fresh, estimate = off[0]["fresh"], off[0]["estimate"]
+            rows.append((particles, contacts, fresh))
+            print(f"{particles:10d} {contacts:10d} {fresh / 1e6:9.1f} {estimate / 1e6:12.1f} "
+                  f"{estimate / fresh:6.2f} {min(r['fresh'] for r in on) / 1e6:17.1f} "
+                  f"{max(r['peak'] for r in off) / 1e6:8.1f} {max(r['peak'] for r in on) / 1e6:16.1f}")
     x = np.array([[p, c] for p, c, _ in rows], dtype=float)
     y = np.array([f for _, _, f in rows], dtype=float)
     (a_fit, b_fit), *_ = np.linalg.lstsq(x, y, rcond=None)

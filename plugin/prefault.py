@@ -20,9 +20,11 @@ of issue 19 at the ninth stop").
 
 Only in the command's process with glibc keeping freed memory (:data:`demsplit.command.FREED_MEMORY_KEPT`;
 elsewhere a freed block this large goes back to the system at once) and only when the frames are computed in
-this process. The estimate stays below what the first frame touches (``benchmarks/first_frame_memory.py``
-measures both), so the pages mapped are pages the first frame would have mapped, and the run's peak memory
-is unchanged.
+this process. The estimate is about two thirds of what the first frame touches, so that the pages mapped
+are pages the frame would have mapped from the main heap: the run's peak memory is unchanged
+(``python benchmarks/first_frame_memory.py`` measures the frame's fresh memory and the peak with and
+without the warm-up; an estimate near the frame's whole fresh memory raised the benchmark run's peak by
+about 40 MB, as part of that memory is the worker threads' own heaps).
 """
 
 from __future__ import annotations
@@ -36,12 +38,13 @@ from contextlib import contextmanager
 from .readers.base import first_frame_size
 from .threads import run_on_idle_cores
 
-BYTES_PER_PARTICLE = 170
-"""Fresh memory the first frame is taken to touch per particle (bytes): about 83 % of the 206 bytes
-``python benchmarks/first_frame_memory.py`` fits over three generated runs."""
-BYTES_PER_CONTACT = 250
-"""Fresh memory the first frame is taken to touch per contact (bytes): about 86 % of the 292 bytes fitted
-by the same command."""
+BYTES_PER_PARTICLE = 140
+"""Memory mapped ahead per particle of the first frame (bytes): about two thirds of the 206 bytes of fresh
+memory per particle that ``python benchmarks/first_frame_memory.py`` fits over three generated runs (that
+fit counts the worker threads' heaps too; 170 and 250 bytes raised the benchmark run's peak)."""
+BYTES_PER_CONTACT = 200
+"""Memory mapped ahead per contact of the first frame (bytes): about two thirds of the 292 bytes fitted by
+the same command."""
 PIECE = 16 << 20
 """Bytes written per call (about 5 ms here): how long :meth:`Prefault.release` waits for the thread at most."""
 
