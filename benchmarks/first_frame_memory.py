@@ -13,7 +13,7 @@ the frame would have mapped), the fresh memory left with the warm-up, the peak r
 (``VmHWM``) without and with the warm-up (the largest of ``--repeat`` processes each: the warm-up must not
 raise it), and the least-squares fit of the fresh memory as ``a * particles + b * contacts``. The fresh
 memory counts the worker threads' own heaps too, which the warm-up does not serve; an estimate near
-the fit raised the benchmark run's peak by about 40 MB, which is why ``BYTES_PER_PARTICLE`` and
+the fit raised the benchmark run's peak, which is why ``BYTES_PER_PARTICLE`` and
 ``BYTES_PER_CONTACT`` are about two thirds of the fit.
 """
 

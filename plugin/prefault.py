@@ -23,8 +23,8 @@ elsewhere a freed block this large goes back to the system at once) and only whe
 this process. The estimate is about two thirds of what the first frame touches, so that the pages mapped
 are pages the frame would have mapped from the main heap: the run's peak memory is unchanged
 (``python benchmarks/first_frame_memory.py`` measures the frame's fresh memory and the peak with and
-without the warm-up; an estimate near the frame's whole fresh memory raised the benchmark run's peak by
-about 40 MB, as part of that memory is the worker threads' own heaps).
+without the warm-up; an estimate near the frame's whole fresh memory raised the benchmark run's peak, as
+part of that memory is the worker threads' own heaps).
 """
 
 from __future__ import annotations
