@@ -6,7 +6,8 @@ Each repeat is ``demsplit run DIR/in.bench -q`` in a fresh process whose phases 
 process only: ``open_run`` (script, index scans), ``read frame`` (``LiggghtsRun.frame``: parse and join),
 ``frame_tables`` (validation, energies, split, tables), ``append`` (the store's compression and writes),
 ``close`` (the store's ``fsync`` and rename), and "after main", from ``main``'s return to the process's end
-(the interpreter's teardown, or the command's ``exit_now``). For each phase: wall seconds, CPU seconds of the
+(the interpreter's teardown, or the command's ``exit_now``). For each phase: wall seconds (for a phase run once per
+frame, the first frame's call and the mean of the later ones too), CPU seconds of the
 whole process while it ran (user + system, every thread: the background fingerprint thread included) and
 their ratio, the cores in use (the totals run from ``main``: the interpreter's start and the imports are not
 in them). On a 2-core machine ``2 - cores`` is the share of a phase in which a core had nothing to do: where
@@ -33,7 +34,7 @@ from read_stages import package_of
 CHILD = r"""
 import json, os, sys, time
 sys.argv[0] = "demsplit"  # as the console script: this process is the command (demsplit.command)
-phases = {}
+phases, calls = {}, {}
 
 def timed(owner, name, label):
     f = getattr(owner, name)
@@ -45,6 +46,7 @@ def timed(owner, name, label):
             c1 = os.times()
             wall, cpu = phases.get(label, (0.0, 0.0))
             phases[label] = (wall + time.perf_counter() - t0, cpu + c1.user - c0.user + c1.system - c0.system)
+            calls.setdefault(label, []).append(time.perf_counter() - t0)
     setattr(owner, name, wrapper)
 
 import demsplit.pipeline as pipeline
@@ -62,7 +64,7 @@ rc = main(["run", sys.argv[1], "-o", sys.argv[2], "-q"])
 c1 = os.times()
 total = (time.perf_counter() - t0, c1.user - c0.user + c1.system - c0.system)
 os.unlink(sys.argv[2])
-print(json.dumps({"rc": rc, "total": total, "phases": phases, "main_end": time.time()}), flush=True)
+print(json.dumps({"rc": rc, "total": total, "phases": phases, "calls": calls, "main_end": time.time()}), flush=True)
 try:  # the process ends as this revision's console script ends it
     from demsplit.command import exit_now
 except ImportError:  # a revision from before exit_now: the interpreter's teardown
@@ -90,7 +92,10 @@ def report(label: str, runs: list[dict]) -> None:
     print(f"demsplit run ({label}): wall {wall:.2f} s, CPU {cpu:.2f} s, {cpu / wall:.2f} cores (all totals: {totals})")
     rest_wall, rest_cpu = wall, cpu
     for name, (w, c) in best["phases"].items():
-        print(f"  {name:14s} wall {w:5.2f} s   CPU {c:5.2f} s   {c / w if w else 0:4.2f} cores")
+        calls = best.get("calls", {}).get(name, [])
+        frames = (f"   first frame {calls[0]:.3f} s, later {statistics.mean(calls[1:]):.3f} s each"
+                  if len(calls) > 1 else "")
+        print(f"  {name:14s} wall {w:5.2f} s   CPU {c:5.2f} s   {c / w if w else 0:4.2f} cores{frames}")
         rest_wall, rest_cpu = rest_wall - w, rest_cpu - c
     print(f"  {'the rest':14s} wall {rest_wall:5.2f} s   CPU {rest_cpu:5.2f} s")
     print(f"  {'after main':14s} wall {best['exit']:5.2f} s   (the process's end: teardown, or exit_now)")

@@ -3,10 +3,12 @@
 A frame's arrays are fresh memory the first time: the kernel maps and zero-fills each 4 KiB page on its
 first write (a page fault). Later frames reuse the pages of the first (:mod:`demsplit.command`, "Freed memory
 kept for the next frame"), so the first frame pays for all of them: on the benchmark run (10^6 particles,
-2*10^6 contacts) 768 MB of fresh pages in its read, tables and store append
-(``python benchmarks/first_frame_memory.py``), and its read and tables took about 0.2 s longer than each
-later frame's. The run's opening before it (numba's import and registries, then the index scans) leaves
-one core idle for about 0.2 s.
+2*10^6 contacts) 765 MB of fresh pages in its read, tables and store append
+(``python benchmarks/first_frame_memory.py /tmp/bench_big``), and its read and tables took 0.404 s and
+0.217 s against 0.270 s and 0.134 s for each later frame (``python benchmarks/run_phases.py /tmp/bench_big
+--rev 624eafb``, the revision before this module; 0.322 s and 0.196 s with it). The run's opening before it
+leaves a core idle while numba loads on one thread: ``open_run`` kept 1.41 of the 2 cores busy over its
+0.41 s in the same run, 0.24 core-seconds idle (1.82 cores with this module).
 
 :func:`first_frame_prefaulted`, around ``open_run`` in :func:`demsplit.pipeline.run_to_store`, listens for
 the first frame's size, which the LIGGGHTS reader reads from its dumps' first headers before it indexes them
@@ -15,8 +17,7 @@ the first frame's size, which the LIGGGHTS reader reads from its dumps' first he
 the run is open the thread stops after its current piece and the block is freed: the first frame's arrays
 are carved from pages already mapped. ``madvise(MADV_POPULATE_WRITE)`` maps pages without writing them, but
 it holds the address space's lock while it maps a piece, which the imports' own mappings wait for:
-``open_run`` took 0.15 s longer with it, and no longer with the writes (docs/performance.md, "The goals
-of issue 19 at the ninth stop").
+``open_run`` took longer than without any warm-up (a one-off variant).
 
 Only in the command's process with glibc keeping freed memory (:data:`demsplit.command.FREED_MEMORY_KEPT`;
 elsewhere a freed block this large goes back to the system at once) and only when the frames are computed in
