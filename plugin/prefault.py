@@ -36,6 +36,7 @@ import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 
+from .command import MMAP_THRESHOLD
 from .readers.base import first_frame_size
 from .threads import run_on_idle_cores
 
@@ -46,6 +47,9 @@ fit counts the worker threads' heaps too; 170 and 250 bytes raised the benchmark
 BYTES_PER_CONTACT = 200
 """Memory mapped ahead per contact of the first frame (bytes): about two thirds of the 292 bytes fitted by
 the same command."""
+LARGEST = MMAP_THRESHOLD - (1 << 20)
+"""The largest block (bytes): glibc serves a larger one from a mapping of its own, which ``free`` unmaps, so
+its pages would not stay with the heap (:data:`demsplit.command.MMAP_THRESHOLD`)."""
 PIECE = 16 << 20
 """Bytes written per call (about 5 ms here): how long :meth:`Prefault.release` waits for the thread at most."""
 
@@ -53,7 +57,7 @@ PIECE = 16 << 20
 def first_frame_bytes(particles: int, contacts: int) -> int:
     """The memory (bytes) mapped ahead for a first frame of ``particles`` and ``contacts`` rows:
     ``BYTES_PER_PARTICLE * particles + BYTES_PER_CONTACT * contacts``."""
-    return BYTES_PER_PARTICLE * max(0, particles) + BYTES_PER_CONTACT * max(0, contacts)
+    return BYTES_PER_PARTICLE * particles + BYTES_PER_CONTACT * contacts
 
 
 @functools.cache
@@ -102,8 +106,8 @@ class Prefault:
 @contextmanager
 def first_frame_prefaulted(enabled: bool) -> Iterator[None]:
     """Around a run's opening: when ``enabled``, the first frame's memory (:func:`first_frame_bytes` of the
-    size a reader announces) is mapped while the run opens, and freed for the frame when the context ends;
-    otherwise nothing."""
+    size a reader announces, at most :data:`LARGEST`) is mapped while the run opens, and freed for the frame
+    when the context ends; otherwise nothing."""
     if not enabled:
         yield
         return
@@ -111,7 +115,7 @@ def first_frame_prefaulted(enabled: bool) -> Iterator[None]:
 
     def listener(particles: int, contacts: int) -> None:
         if not blocks:  # one run: its first frame
-            blocks.append(Prefault(first_frame_bytes(particles, contacts)))
+            blocks.append(Prefault(min(first_frame_bytes(particles, contacts), LARGEST)))
 
     try:
         with first_frame_size(listener):

@@ -8,6 +8,7 @@ import time
 from pathlib import Path
 
 import demsplit.prefault as prefault
+from demsplit import command
 import pytest
 from demsplit.readers import open_run
 from demsplit.readers.base import announce_first_frame, first_frame_size
@@ -49,46 +50,50 @@ def test_nothing_is_allocated_for_no_rows():
 
 def test_first_frame_bytes_is_the_documented_sum():
     assert prefault.first_frame_bytes(10, 20) == 10 * prefault.BYTES_PER_PARTICLE + 20 * prefault.BYTES_PER_CONTACT
-    assert prefault.first_frame_bytes(-1, 5) == 5 * prefault.BYTES_PER_CONTACT
+
+
+@pytest.fixture
+def blocks(monkeypatch) -> list:
+    """The blocks :func:`demsplit.prefault.first_frame_prefaulted` makes, recorded instead of allocated:
+    ``[nbytes, released]`` each."""
+    made: list[list] = []
+
+    class Recorder:
+        def __init__(self, nbytes: int) -> None:
+            self.entry = [nbytes, False]
+            made.append(self.entry)
+
+        def release(self) -> None:
+            self.entry[1] = True
+
+    monkeypatch.setattr(prefault, "Prefault", Recorder)
+    return made
 
 
 @pytest.mark.parametrize("enabled", [True, False])
-def test_the_context_maps_the_first_announced_frame_only_when_enabled(monkeypatch, enabled):
-    made: list[Recorder] = []
-
-    class Recorder:
-        def __init__(self, nbytes: int) -> None:
-            self.nbytes, self.released = nbytes, False
-            made.append(self)
-
-        def release(self) -> None:
-            self.released = True
-
-    monkeypatch.setattr(prefault, "Prefault", Recorder)
+def test_the_context_maps_the_first_announced_frame_only_when_enabled(blocks, enabled):
     with prefault.first_frame_prefaulted(enabled):
         announce_first_frame(10, 20)
         announce_first_frame(1000, 2000)  # a second run opened in the same context: not its memory too
-        assert all(not r.released for r in made)
-    assert [(r.nbytes, r.released) for r in made] == ([(prefault.first_frame_bytes(10, 20), True)] if enabled else [])
+        assert all(not released for _, released in blocks)
+    assert blocks == ([[prefault.first_frame_bytes(10, 20), True]] if enabled else [])
     announce_first_frame(10, 20)  # outside any context: nobody listens
-    assert len(made) == (1 if enabled else 0)
+    assert len(blocks) == (1 if enabled else 0)
 
 
-def test_the_block_is_freed_when_the_opening_fails(monkeypatch):
-    events = []
+def test_a_frame_larger_than_the_heap_serves_gets_the_largest_block(blocks):
+    """Above glibc's mapping threshold a block would be a mapping of its own, unmapped when freed."""
+    with prefault.first_frame_prefaulted(True):
+        announce_first_frame(10**7, 3 * 10**7)
+    assert prefault.first_frame_bytes(10**7, 3 * 10**7) > command.MMAP_THRESHOLD
+    assert blocks == [[prefault.LARGEST, True]] and prefault.LARGEST < command.MMAP_THRESHOLD
 
-    class Recorder:
-        def __init__(self, nbytes: int) -> None:
-            events.append("mapped")
 
-        def release(self) -> None:
-            events.append("freed")
-
-    monkeypatch.setattr(prefault, "Prefault", Recorder)
+def test_the_block_is_freed_when_the_opening_fails(blocks):
     with pytest.raises(RuntimeError), prefault.first_frame_prefaulted(True):
         announce_first_frame(10, 20)
         raise RuntimeError("the run cannot be opened")
-    assert events == ["mapped", "freed"]
+    assert blocks == [[prefault.first_frame_bytes(10, 20), True]]
 
 
 def test_the_liggghts_reader_announces_its_first_frame_before_indexing(samples, monkeypatch):
