@@ -8,8 +8,8 @@ import time
 from pathlib import Path
 
 import demsplit.prefault as prefault
-from demsplit import command
 import pytest
+from demsplit import command
 from demsplit.readers import open_run
 from demsplit.readers.base import announce_first_frame, first_frame_size
 from demsplit.readers.lammps_dump import TextDump
