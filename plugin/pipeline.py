@@ -561,7 +561,7 @@ def run_to_store(path: str | Path, out: str | Path, *, options: Options = Option
         provenance = build_provenance(sources, scene=run.scene, options=asdict(options), run=run.describe(),
                                       type_names=_type_names(type_names), wait=False)
         with ResultWriter(out, provenance, resume=resume, walls_meta=walls_meta_from_scene(run.scene),
-                          compression=compression) as writer:
+                          compression=compression, final_step=int(run.steps[-1]) if len(run.steps) else None) as writer:
             for tables in process_run(run, options, jobs=jobs, dask=dask, on_bad_frame=on_bad_frame,
                                       skip_steps=writer.done_steps, progress=progress, report=report):
                 writer.append(tables)

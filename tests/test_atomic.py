@@ -69,15 +69,17 @@ def test_a_failing_write_back_does_not_stop_the_store(tmp_path, monkeypatch):
     assert len(load_results(out).frames) == 1
 
 
-def test_each_column_written_asks_for_a_write_back(tmp_path, monkeypatch):
-    """Within a frame, the write-back is asked for after each column's chunks are written, so that the
-    last frame's pages are on their way to disk before ``close``'s fsync."""
+@pytest.mark.parametrize("final", [True, False])
+def test_the_final_frame_asks_for_a_write_back_after_each_column(tmp_path, monkeypatch, final):
+    """The frame at ``final_step`` asks for the write-back after each column's chunks are written, so that
+    its pages are on their way to disk before ``close``'s fsync; any other frame once, after the frame."""
     asked = []
     monkeypatch.setattr(atomic.WriteBack, "request", lambda self, path: asked.append(os.path.basename(path)))
-    with ResultWriter(tmp_path / "out.h5", PROVENANCE, walls_meta=WALLS_META) as w:
+    with ResultWriter(tmp_path / "out.h5", PROVENANCE, walls_meta=WALLS_META,
+                      final_step=1000 if final else 2000) as w:
         w.append(synthetic_frame(0, n_particles=1500, n_pairs=1500))  # fewer rows than a chunk: carried
-        first = len(asked)
+        assert len(asked) == 1
         w.append(synthetic_frame(1000, n_particles=1500, n_pairs=1500))  # completes a chunk of two tables
         columns = sum(len(sink.schema) for sink in w._sinks.values() if sink.written)
-        assert columns > 0 and len(asked) - first >= columns + 1  # each column's, then the frame's
+        assert columns > 0 and len(asked) - 1 == (columns + 1 if final else 1)  # each column's, the frame's
     assert set(asked) == {"store.h5"}

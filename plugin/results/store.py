@@ -220,11 +220,19 @@ class ResultWriter:
     for it (the interrupted run's inputs are compared by it). Until then frames are stored but not
     committed: the run's manifest names its inputs by their digests, so a run killed before them has
     nothing to resume and starts over.
+
+    The store's pages are sent to disk while the run goes on (:class:`~demsplit.atomic.WriteBack`): a
+    frame's after the frame, while the next one is computed, and the frame at ``final_step`` (the run's
+    last timestep, when the caller knows it) column by column as it is written, since nothing follows it
+    to hide its write-back behind: ``close()``'s fsync then finds little left to write.
     """
 
     def __init__(self, path: str | Path, provenance: Mapping, *, resume: bool = False,
-                 walls_meta: list[dict] | None = None, compression: str | None = COMPRESSION) -> None:
+                 walls_meta: list[dict] | None = None, compression: str | None = COMPRESSION,
+                 final_step: int | None = None) -> None:
         self.path = Path(path)
+        self.final_step = final_step
+        self._final_frame = False  # the frame being appended is the one at final_step
         self.provenance = dict(provenance)
         self.walls_meta = list(walls_meta or [])
         self.compression = "none" if compression is None else compression
@@ -417,7 +425,7 @@ class ResultWriter:
         self._h5 = h5py.File(path, "w", libver=LIBVER, rdcc_nbytes=0)
         self._sinks = {name: _TableSink(self._h5, name, dict(schema.get(name, {})), dict(filters.get(name, {})),
                                         chunks.get(name, CHUNK_ROWS), threads.pool(),
-                                        on_written=lambda: self._write_back.request(path)) for name in TABLES}
+                                        on_written=self._column_written) for name in TABLES}
         self._h5.swmr_mode = True
 
     def append(self, tables: Mapping[str, Mapping[str, np.ndarray]]) -> None:
@@ -454,11 +462,19 @@ class ResultWriter:
                     step=step, fix="give every frame the same columns (fill what is unknown with NaN; "
                                    "a table absent from the first frame must stay absent, or be empty there).",
                 )
+        self._final_frame = step == self.final_step
         for name, sink in self._sinks.items():
             self._rows[name].append(self._rows[name][-1] + sink.append(canon.get(name)))
         self._steps.append(step)
         self._commit()
         self._write_back.request(self._store)
+
+    def _column_written(self) -> None:
+        """A column's chunks are in the file: the final frame's go to disk at once (class docstring). An
+        earlier frame's wait for the request after the frame: asked for column by column they are written
+        while the next columns are appended, and the appends were slower by more than ``close()`` gained."""
+        if self._final_frame:
+            self._write_back.request(self._store)
 
     def _commit(self) -> None:
         """Flush the store and record what it holds (renamed into place: a
@@ -580,9 +596,7 @@ class _TableSink:
     carried (a copy, less than one chunk per column) to the next frame and
     kept in the commit record; :meth:`finish` writes the last, partial chunk
     (zero-padded, outside the dataset's shape). ``written``: rows in the file. ``on_written()`` is
-    called after each column's chunks are written: the writer has their pages sent to disk at once
-    (:class:`~demsplit.atomic.WriteBack`), so that the last frame's are not all left to ``close``'s
-    fsync.
+    called after each column's chunks are written (the writer's write-back, :class:`ResultWriter`).
     """
 
     def __init__(self, h5, name: str, schema: dict[str, str], filters: dict[str, str], chunk_rows: int,
