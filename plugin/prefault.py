@@ -4,11 +4,12 @@ A frame's arrays are fresh memory the first time: the kernel maps and zero-fills
 first write (a page fault). Later frames reuse the pages of the first (:mod:`demsplit.command`, "Freed memory
 kept for the next frame"), so the first frame pays for all of them: on the benchmark run (10^6 particles,
 2*10^6 contacts) 765 MB of fresh pages in its read, tables and store append
-(``python benchmarks/first_frame_memory.py /tmp/bench_big``), and its read and tables took 0.404 s and
-0.217 s against 0.270 s and 0.134 s for each later frame (``python benchmarks/run_phases.py /tmp/bench_big
---rev 624eafb``, the revision before this module; 0.322 s and 0.196 s with it). The run's opening before it
-leaves a core idle while numba loads on one thread: ``open_run`` kept 1.41 of the 2 cores busy over its
-0.41 s in the same run, 0.24 core-seconds idle (1.82 cores with this module).
+(``python benchmarks/first_frame_memory.py /tmp/bench_big``), and its read and tables took 0.415 s and
+0.218 s against 0.280 s and 0.130 s for each later frame (``python benchmarks/run_phases.py /tmp/bench_big
+--repeat 6 --rev 624eafb``, the revision before this module; 0.309 s and 0.206 s with it; docs/performance.md,
+"The goals of issue 19 at the ninth stop"). The run's opening before it leaves a core idle while numba loads
+on one thread: ``open_run`` kept 1.46 of the 2 cores busy over its 0.45 s in the same run, 0.24 core-seconds
+idle (1.85 cores with this module).
 
 :func:`first_frame_prefaulted`, around ``open_run`` in :func:`demsplit.pipeline.run_to_store`, listens for
 the first frame's size, which the LIGGGHTS reader reads from its dumps' first headers before it indexes them
@@ -51,7 +52,7 @@ LARGEST = MMAP_THRESHOLD - (1 << 20)
 """The largest block (bytes): glibc serves a larger one from a mapping of its own, which ``free`` unmaps, so
 its pages would not stay with the heap (:data:`demsplit.command.MMAP_THRESHOLD`)."""
 PIECE = 16 << 20
-"""Bytes written per call (about 5 ms here): how long :meth:`Prefault.release` waits for the thread at most."""
+"""Bytes written per call: :meth:`Prefault.release` waits for the thread to finish at most one piece."""
 
 
 def first_frame_bytes(particles: int, contacts: int) -> int:
