@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from importlib import import_module
 
-from . import command  # noqa: F401 (first: sets the demsplit command's process up before numpy loads)
+from .runtime import command  # noqa: F401 (first: sets the demsplit command's process up before numpy loads)
 from .errors import (
     ContactError, DemsplitError, InputFormatError, MaterialError, PrecisionError, ScriptError, StoreError,
     TruncatedFileError, UnsupportedModelError,

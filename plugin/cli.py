@@ -256,7 +256,7 @@ def cmd_prepare(args: argparse.Namespace) -> int:
         print("\n".join(note for part in parts for note in part.notes))
     if not prepared.added:
         return 0
-    from .atomic import atomic_path
+    from .outputs import atomic_path
 
     written = []
     try:
@@ -432,8 +432,8 @@ def main(argv: list[str] | None = None) -> int:
 
 def command() -> None:
     """The ``demsplit`` console script (and ``python -m demsplit.cli``): :func:`main` on the command
-    line, then the process ends with its exit status at once (:func:`demsplit.command.exit_now`)."""
-    from .command import exit_now
+    line, then the process ends with its exit status at once (:func:`demsplit.runtime.command.exit_now`)."""
+    from .runtime.command import exit_now
 
     exit_now(main())
 

@@ -1,172 +1,29 @@
 """Fingerprints (size and BLAKE3 digest) of input files, for provenance.
 
-The digest is BLAKE3's (256 bits, the ``blake3`` package): a cryptographic
-hash that anyone can check with Debian's ``b3sum FILE``, and three times as
-fast as sha256 here (the benchmark's 2.57 GB contact dump on one core: 0.50 s
-against hashlib's sha256 with SHA-NI 1.50 s; ``benchmarks/read_stages.py``,
-its "digest" lines). Hashing a multi-GB dump still costs a full read of it.
-
-A pipeline that will need the fingerprints starts them early with
-:func:`hash_in_background`: one daemon thread hashes the files while the
-frames are read and computed, on a core the run leaves idle. The thread asks
-the scheduler to run it only then (Linux's ``SCHED_IDLE``): the frames' own
-threads keep both cores, and the 0.6 CPU-seconds of the benchmark's 3 GB
-fill the moments one of them waits: the digests cost ``demsplit run`` 0.19 s
-(3.01 s against 2.82 s unhashed), where they cost 0.56 s at the run's
-priority (``python benchmarks/read_stages.py /tmp/bench_big``, its "run" and
-"run, no hash" lines; docs/performance.md, "The goals of issue 19" at the
-seventh and the fifth stop). Whoever needs a digest sooner does not wait for that thread:
-:func:`file_fingerprint` takes the hashing over from the last block the thread
-finished (:class:`_Digest`) and completes it at its own priority. A digest is
-reused as long as the file's size, modification time, inode and inode change
-time are unchanged; a changed or replaced file is read again.
+The digest is BLAKE3's (256 bits, the ``blake3`` package): a cryptographic hash that anyone can check with
+Debian's ``b3sum FILE``, and several times as fast as sha256. Hashing a multi-GB dump still costs a full
+read of it, so a pipeline that will need the fingerprints starts them early on idle cores
+(:func:`demsplit.runtime.hashing.hash_in_background`) and takes over whatever is left when it needs them.
 """
 
 from __future__ import annotations
 
-import os
-import threading
-from collections.abc import Iterable
 from pathlib import Path
 
-import blake3
-
 from .errors import StoreError
-from .threads import run_on_idle_cores
+from .runtime.hashing import digest
 
 DIGEST = "blake3"
 """The provenance's name for the digest of an input file (the key beside ``path`` and ``size``)."""
-_BLOCK = 1 << 20  # bytes read and hashed at a time: in L2 cache between the copy and the hash
-_KNOWN: dict[tuple[str, int, int, int, int], str] = {}
-_PENDING: dict[tuple[str, int, int, int, int], tuple[int, _Digest]] = {}  # key -> (process id, the digest to come)
-
-
-def _key(path: Path) -> tuple[str, int, int, int, int]:
-    """The file as the digests know it: its path, size, modification time, inode and inode change time (a
-    file replaced by another of the same size and time, a copy that kept its times, is another file, even
-    on the inode the replaced one freed: a new file's change time is its creation)."""
-    st = os.stat(path)
-    return (str(path.resolve()), st.st_size, st.st_mtime_ns, st.st_ino, st.st_ctime_ns)
-
-
-class _Digest:
-    """One file's BLAKE3 digest in the making, which one thread starts and another may finish.
-
-    The background thread (:meth:`hash_in_background`) publishes its progress, the offset and a copy of
-    the hash state (0.13 us: ``python -m timeit -s "import blake3; h = blake3.blake3(b'x' * 1000)"
-    "h.copy()"``), after every 1 MiB block; :meth:`take_over` continues from the last published
-    block in the calling thread, and the background thread drops its block in flight when it sees
-    that. So a waiter never depends on a thread the scheduler may be keeping off the cores."""
-
-    def __init__(self, path: Path) -> None:
-        self.path = path
-        self._lock = threading.Lock()
-        self._offset = 0
-        self._state = blake3.blake3()
-        self._digest: str | None = None
-        self._taken = False
-
-    @property
-    def digest(self) -> str | None:
-        """The hex digest, or None while it is being computed."""
-        with self._lock:
-            return self._digest
-
-    def hash_in_background(self) -> None:
-        """Hash the file from the last published block on (nothing if it is taken over). An error reading
-        it ends the attempt: :meth:`take_over` meets it again and reports it."""
-        try:
-            self._hash(background=True)
-        except OSError:
-            pass
-
-    def take_over(self) -> str:
-        """The digest: finished here from the last block the background thread completed (or from the
-        file's start); raises ``OSError`` when the file cannot be read."""
-        return self._hash(background=False)
-
-    def _hash(self, background: bool) -> str | None:
-        with self._lock:
-            if self._digest is not None or (background and self._taken):
-                return self._digest
-            self._taken |= not background
-            offset, state = self._offset, self._state.copy()
-        buf = bytearray(_BLOCK)
-        view = memoryview(buf)
-        with open(self.path, "rb", buffering=0) as f:
-            f.seek(offset)
-            while n := f.readinto(buf):  # ``blake3`` releases the GIL while it hashes a block
-                state.update(view[:n])
-                offset += n
-                if background:
-                    with self._lock:
-                        if self._taken:
-                            return None
-                        self._offset, self._state = offset, state.copy()
-        digest = state.hexdigest()
-        with self._lock:
-            if background and self._taken:
-                return None
-            self._digest = digest
-        return digest
-
-
-def file_digest(path: Path) -> str:
-    """BLAKE3 digest (hex, 256 bits; what ``b3sum`` prints) of the file's bytes, hashed now."""
-    return _Digest(path).take_over()
-
-
-def _hash_all(jobs: list[_Digest]) -> None:
-    run_on_idle_cores()
-    for job in jobs:
-        job.hash_in_background()
-
-
-def hash_in_background(paths: Iterable[str | Path]) -> None:
-    """Start hashing ``paths`` in one daemon thread that runs on idle cores (files already hashed or
-    being hashed are skipped; a file that cannot be stat'ed is left for :func:`file_fingerprint` to
-    report)."""
-    jobs = []
-    for p in paths:
-        path = Path(p)
-        try:
-            key = _key(path)
-        except OSError:
-            continue
-        pending = _PENDING.get(key)
-        if key in _KNOWN or (pending is not None and pending[0] == os.getpid()):
-            continue
-        job = _Digest(path)
-        _PENDING[key] = (os.getpid(), job)
-        jobs.append(job)
-    if jobs:
-        threading.Thread(target=_hash_all, args=(jobs,), name="demsplit-fingerprint", daemon=True).start()
 
 
 def file_fingerprint(path: str | Path, *, wait: bool = True) -> dict:
-    """``{"path", "size" (bytes), "blake3"}`` of an input file: the digest :func:`hash_in_background`
-    computed, or its hashing taken over and finished now (:class:`_Digest`), or the file hashed now.
-
-    ``wait=False`` never hashes here: the digest is None while it is still being computed (a file not
-    yet being hashed is handed to :func:`hash_in_background`)."""
+    """``{"path", "size" (bytes), "blake3"}`` of an input file (:func:`demsplit.runtime.hashing.digest`);
+    ``wait=False`` gives None as the digest while it is still being computed in the background."""
     path = Path(path)
     try:
-        key = _key(path)
-        digest = _KNOWN.get(key)
-        if digest is None:
-            pid, job = _PENDING.get(key, (None, None))
-            if pid != os.getpid():  # none, or a forked process's copy without its parent's hashing thread
-                job = None
-            if not wait:
-                if job is None:
-                    hash_in_background([path])
-                digest = job.digest if job is not None else None
-            else:
-                digest = job.take_over() if job is not None else file_digest(path)
-            if digest is not None:
-                _PENDING.pop(key, None)
-                _KNOWN[key] = digest
+        key, value = digest(path, wait=wait)
     except OSError as exc:
         raise StoreError(f"cannot read input file to fingerprint it: {exc.strerror}.", file=path,
                          fix="check that the file exists and is readable.") from exc
-    return {"path": key[0], "size": key[1], DIGEST: digest}
+    return {"path": key[0], "size": key[1], DIGEST: value}

@@ -4,7 +4,7 @@ Numpy evaluates an expression one operation at a time over whole arrays, so
 the per-contact work (gather both bodies, the law, the split, the contact
 point, the sums per body) made some 40 passes over millions of contacts.
 Here each stage is one loop over the contacts, compiled by numba
-(:func:`demsplit.jit.kernel`: cached, GIL released, numpy error model).
+(:func:`demsplit.runtime.jit.kernel`: cached, GIL released, numpy error model).
 
 No second copy of the physics: the loops call the formulas of
 :mod:`demsplit.physics.formulas` (``hertz_energy_formula``,
@@ -43,8 +43,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import threads
-from .jit import kernel
+from .runtime import threads
+from .runtime.jit import kernel
 from .physics import formulas
 
 _clamped_overlap = kernel(formulas.clamped_overlap)

@@ -1,18 +1,26 @@
-"""The output-path policy: an output never replaces one of the run's inputs, a directory or a device.
+"""The output policy: where an output may be written, and how it is written so that no half of it is left.
 
 Every command that writes (``run``, ``convert``, ``report -o``, ``export``)
 checks each path it will write with :func:`check_output_path` before anything
-is written. The path is compared with the inputs as files, not as names, so a
+is written: an output never replaces one of the run's inputs, a directory or a
+device. The path is compared with the inputs as files, not as names, so a
 symbolic link, a hard link or a ``..`` that leads to an input is refused like
 the input itself; an existing path must be a regular file (it is replaced
 whole, atomically); its directory must exist.
+
+Every output is then written through :func:`atomic_path`: to a temporary name
+in the target directory, flushed to disk, and renamed over the final path only
+when complete; on an error the temporary file is removed. The result store,
+written over a whole run in its own work directory, is given its final name by
+:func:`publish`, the same fsync and rename.
 """
 
 from __future__ import annotations
 
 import os
 import stat
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 from .errors import StoreError
@@ -54,3 +62,30 @@ def check_output_path(path: str | os.PathLike, inputs: Iterable[str | os.PathLik
         raise StoreError("the output directory does not exist.", file=out.parent,
                          fix="create it, or choose another output path.")
     return out
+
+
+@contextmanager
+def atomic_path(path: str | Path, *, durable: bool = True) -> Iterator[Path]:
+    """Yield ``path.tmp`` (same directory) to write; on success fsync it and
+    rename it to ``path``, on an exception remove it.
+
+    ``durable=False`` skips the fsync: the file then survives a killed process
+    (the kernel's page cache outlives it) but not a power cut, which may
+    leave it empty or short under its final name; for the store's commit
+    record, whose reader names a short one (see :mod:`demsplit.results.writer`)."""
+    path = Path(path)
+    tmp = path.with_name(path.name + ".tmp")
+    try:
+        yield tmp
+        publish(tmp, path, durable=durable)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+def publish(tmp: str | Path, path: str | Path, *, durable: bool = True) -> None:
+    """Give the complete file ``tmp`` its final name ``path`` (same file system):
+    fsync it (unless ``durable=False``), then rename it over ``path``."""
+    if durable:
+        with open(tmp, "rb") as f:
+            os.fsync(f.fileno())
+    os.replace(tmp, path)

@@ -19,11 +19,11 @@ from pathlib import Path
 
 import numpy as np
 
-from . import command, threads
+from .runtime import command, threads
 from .errors import DemsplitError, IncompleteRunError, InputFormatError
-from .fingerprint import hash_in_background
+from .runtime.hashing import hash_in_background
 from .outputs import check_output_path
-from .prefault import first_frame_prefaulted
+from .runtime.prefault import first_frame_prefaulted
 from .validate import check_finite_energies, validated_frame
 from .frame import CONTACT_REQUIRED, PARTICLE_REQUIRED, Frame, ParticleIndex, Table, require_columns
 from .physics.accuracy import contact_radius_ratios, corrected_share, expected_share_error
@@ -366,14 +366,14 @@ def worker_processes(jobs: int) -> int:
     (``python benchmarks/scaling.py``, docs/performance.md), as the workers' start, their
     thread pools competing for the same cores and the frames' transfer to the writing process
     cost more than the per-frame physics they share out."""
-    from . import threads
+    from .runtime import threads
 
     return max(1, min(jobs, threads.THREADS // MIN_THREADS_PER_WORKER))
 
 
 def _worker_init(parent: int, threads_per_worker: int) -> None:
     """Worker initializer: its share of the cores, and an end with its parent (:func:`_exit_with_parent`)."""
-    from . import threads
+    from .runtime import threads
 
     threads.limit(threads_per_worker)
     _exit_with_parent(parent)
@@ -383,7 +383,7 @@ def _processes(run: Run, indices: list[int], options: Options, jobs: int) -> Ite
     import multiprocessing as mp
     from concurrent.futures import ProcessPoolExecutor
 
-    from . import threads
+    from .runtime import threads
 
     spec = run.spec
     key = _spec_key(spec)
@@ -451,7 +451,7 @@ def process_run(run: Run, options: Options = Options(), *, jobs: int = 1, dask: 
     report.frames_resumed = len(skip_steps or ())
     workers = worker_processes(jobs)
     if workers < jobs and not dask:
-        from . import threads
+        from .runtime import threads
 
         used = "the frames computed in this process" if workers == 1 else f"{workers} worker processes"
         report.notes.append(f"--jobs {jobs} on {threads.THREADS} cores: {used}; a worker process needs "
@@ -531,6 +531,19 @@ def _report_provenance(run: Run, report: RunReport) -> dict:
     return {"run": run.describe(), "bad_frames": report.bad_frames, "notes": report.notes}
 
 
+def _first_frame_rows(path: str | Path | list | None, options: Mapping) -> tuple[int, int] | None:
+    """The first frame's rows as the run's reader tells them before it opens the run
+    (:meth:`~demsplit.readers.base.Run.first_frame_rows`), for the memory warm-up; None when it cannot."""
+    from .readers import reader_for
+
+    if isinstance(path, (list, tuple)):
+        return None
+    try:
+        return reader_for(path).first_frame_rows(None if path is None else Path(path), **options)
+    except DemsplitError:  # the opening that follows reports it
+        return None
+
+
 def run_to_store(path: str | Path, out: str | Path, *, options: Options = Options(), jobs: int = 1,
                  dask: str | None = None, resume: bool = False, on_bad_frame: str = "stop",
                  progress: bool | None = None, compression: str | None = "auto",
@@ -551,7 +564,7 @@ def run_to_store(path: str | Path, out: str | Path, *, options: Options = Option
 
     check_output(out, resume=resume)  # before any work: no output directory, or an unresumed interrupted run
     in_process = command.FREED_MEMORY_KEPT and not dask and worker_processes(jobs) == 1  # frames computed here
-    with first_frame_prefaulted(in_process):  # the first frame's pages mapped while the run opens
+    with first_frame_prefaulted(_first_frame_rows(path, reader_options) if in_process else None):
         run = open_run(path, **reader_options)
     try:
         sources = run.sources

@@ -18,9 +18,7 @@ from __future__ import annotations
 
 import inspect
 from abc import ABC, abstractmethod
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
-from contextvars import ContextVar
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -32,31 +30,6 @@ from ..scene import Scene
 
 REGISTRY: dict[str, type[Run]] = {}
 """``format_name`` -> reader class, in registration order."""
-
-_first_frame_listener: ContextVar[Callable[[int, int], None] | None] = ContextVar("first_frame_listener",
-                                                                                   default=None)
-
-
-@contextmanager
-def first_frame_size(listener: Callable[[int, int], None]) -> Iterator[None]:
-    """While in this context, a reader that learns the size of a run's first frame from the first lines of
-    its files, before it indexes them, calls ``listener(particles, contacts)`` (:func:`announce_first_frame`):
-    the command's process uses the moments of the opening to prepare that frame's memory
-    (:mod:`demsplit.prefault`). Readers that cannot tell that cheaply say nothing."""
-    token = _first_frame_listener.set(listener)
-    try:
-        yield
-    finally:
-        _first_frame_listener.reset(token)
-
-
-def announce_first_frame(particles: int, contacts: int) -> None:
-    """What a reader calls with its run's first frame's rows (particles; contacts, walls' included), read from
-    the frames' headers before the files are indexed; nothing outside :func:`first_frame_size`."""
-    listener = _first_frame_listener.get()
-    if listener is not None:
-        listener(int(particles), int(contacts))
-
 
 class Run(ABC):
     """A run opened for reading (see the module docstring).
@@ -118,6 +91,14 @@ class Run(ABC):
                                                  for t, m in sorted(scene.materials.items())),
                      f"  walls:    {len(scene.walls)}"]
         return "\n".join(lines)
+
+    @classmethod
+    def first_frame_rows(cls, path: Path | None, **options: Any) -> tuple[int, int] | None:
+        """The rows of the run's first frame, ``(particles, contacts)`` (walls' contacts included), read from
+        the first lines of its files without opening the run, or None where that is not cheap (the
+        default). A hint: the command prepares that frame's memory while the run opens
+        (:mod:`demsplit.runtime.prefault`); the opening reports any problem of the files."""
+        return None
 
     @abstractmethod
     def __len__(self) -> int:

@@ -26,7 +26,7 @@ Reading: h5py serialises every HDF5 call on one lock, so reading a frame's
 columns through it copies them one at a time. A contiguous dataset's bytes
 lie at one offset in the file (``DatasetID.get_offset``), so :class:`CacheRun`
 reads each column with ``os.preadv`` straight into its array, the columns
-spread over :func:`demsplit.threads.pool` (``preadv`` releases the GIL). A
+spread over :func:`demsplit.runtime.threads.pool` (``preadv`` releases the GIL). A
 dataset that is not contiguous, native-endian and unfiltered (a cache someone
 repacked with ``h5repack``, say) is read through h5py, into native byte
 order (what it saves: ``docs/performance.md``).
@@ -47,12 +47,12 @@ import h5py
 import numpy as np
 
 from .. import errors
-from ..atomic import atomic_path
+from ..outputs import atomic_path
 from ..errors import DemsplitError, InputFormatError, plain
 from ..frame import Box, Frame
 from ..outputs import check_output_path
 from ..scene import scene_from_dict, scene_to_dict
-from ..threads import pool
+from ..runtime.threads import pool
 from .base import Run
 from .hdf5_inputs import refuse_foreign_storage
 

@@ -1,7 +1,7 @@
 """Compiled kernels of the text-dump reader (:mod:`demsplit.readers.lammps_dump`).
 
 Two jobs, each one pass over bytes in memory, compiled by numba
-(:func:`demsplit.jit.kernel`: cached, GIL released, so threads run them on
+(:func:`demsplit.runtime.jit.kernel`: cached, GIL released, so threads run them on
 disjoint slices):
 
 ``scan_chunk``
@@ -32,12 +32,12 @@ produces a different number.
 
 Speed. ``parse_rows`` steps over a run of two or more columns it does not read
 with :func:`_skip_fields`, which flags and counts the separators of 64 bytes at a
-time (:func:`demsplit.jit.bytes_below`, one vector compare; one branch per 64
+time (:func:`demsplit.runtime.jit.bytes_below`, one vector compare; one branch per 64
 bytes, not one per field), and over a single one with :func:`_field_end`. The
 steps of one token (:func:`_real`, :func:`_integer`, :func:`_field_end`, ...)
-are compiled into ``parse_rows`` (:func:`demsplit.jit.inlined`) rather than
-called, and read the text through its address (:func:`demsplit.jit.byte_at`,
-:func:`demsplit.jit.word_at`): a call's arguments, tuple result and, for an
+are compiled into ``parse_rows`` (:func:`demsplit.runtime.jit.inlined`) rather than
+called, and read the text through its address (:func:`demsplit.runtime.jit.byte_at`,
+:func:`demsplit.runtime.jit.word_at`): a call's arguments, tuple result and, for an
 array argument, reference counting cost as much as the step itself. A read
 field's end is found (64 bytes a step) before the field is converted, so that
 the next field's start does not wait for the conversion and the conversions of
@@ -51,7 +51,7 @@ when the steps were calls (``--rev c4cbded``; docs/performance.md).
 from __future__ import annotations
 
 import numpy as np
-from demsplit.jit import address, byte_at, bytes_below, inlined, kernel, popcount, trailing_zeros, word_at
+from demsplit.runtime.jit import address, byte_at, bytes_below, inlined, kernel, popcount, trailing_zeros, word_at
 
 __all__ = ["scan_chunk", "count_newlines", "next_newline", "parse_rows", "OK", "SHAPE", "FALLBACK"]
 
@@ -136,7 +136,7 @@ def scan_chunk(a: np.ndarray, limit: int, pos_out: np.ndarray, nl_out: np.ndarra
 @inlined
 def _bytes_equal(base: int, p: int, byte: int) -> np.uint64:
     """Bit j set where the byte at offset ``p + j`` (j < 64) is ``byte`` (0-254): the bytes below
-    ``byte + 1`` but not below ``byte`` (two vector compares, :func:`demsplit.jit.bytes_below`)."""
+    ``byte + 1`` but not below ``byte`` (two vector compares, :func:`demsplit.runtime.jit.bytes_below`)."""
     return bytes_below(base, p, byte + 1) ^ bytes_below(base, p, byte)
 
 
@@ -314,7 +314,7 @@ def _integer(base: int, p: int, end: int) -> tuple[bool, int, int]:
 def _field_end(base: int, q: int, end: int) -> int:
     """Offset of the first separator (byte <= 32) at or after offset ``q``, or ``end``: the end of a
     field, read or not (a run of unread fields is stepped over by :func:`_skip_fields`). The 64 bytes
-    from ``q`` in one step (:func:`demsplit.jit.bytes_below`: a field is found whole, however long its
+    from ``q`` in one step (:func:`demsplit.runtime.jit.bytes_below`: a field is found whole, however long its
     digits, without the conversion's result); past them, or within 64 bytes of ``end``, eight bytes at
     a time: (x - 0x21..21) & ~x & 0x80..80 flags each byte below 0x21 exactly up to the first one (a
     borrow starts only there), and the lowest flag is the first such byte; the last bytes one by one.
@@ -345,7 +345,7 @@ def _skip_fields(base: int, p: int, end: int, n: int) -> int:
     short row) and no two in a row (an empty field). Returns -1 for a row of the wrong shape, -2 when the
     n-th space is not found 8 bytes or more before ``end`` (the caller then goes field by field).
 
-    64 bytes: :func:`~demsplit.jit.bytes_below` gives one bit per byte, bit j for byte p + j. 8 bytes
+    64 bytes: :func:`~demsplit.runtime.jit.bytes_below` gives one bit per byte, bit j for byte p + j. 8 bytes
     (the last ones before ``end``): one flag per byte, its bit 7 (with b7 = b & 0x7F, b7 + 0x5F reaches
     0x80 exactly when b7 >= 0x21; a byte with its high bit set is no separator). The two loops are the
     same steps on the two layouts of flags, written out twice on purpose: one loop over both (the 8-byte

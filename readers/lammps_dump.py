@@ -110,7 +110,7 @@ from typing import TYPE_CHECKING, BinaryIO
 import numpy as np
 from demsplit.errors import DemsplitError, InputFormatError, PrecisionError, TruncatedFileError
 from demsplit.frame import Box, describe_steps
-from demsplit import threads
+from demsplit.runtime import threads
 
 if TYPE_CHECKING:  # polars is imported where the fallback parse needs it
     import polars as pl

@@ -79,7 +79,7 @@ def test_a_column_past_the_end_of_the_cache_is_refused_with_its_name(samples, tm
 
 
 def test_cache_results_equal_text_results_and_work_in_workers(samples, tmp_path, monkeypatch):
-    from demsplit import threads
+    from demsplit.runtime import threads
 
     monkeypatch.setattr(threads, "THREADS", 4)  # as on 4 cores: --jobs 2 starts two worker processes
     script = samples / "liggghts" / "packing" / "in.packing"

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import demsplit
 import pytest
-from demsplit.fingerprint import file_digest
+from demsplit.runtime.hashing import file_digest
 
 SAMPLES = Path(__file__).resolve().parent.parent / "sample_dumps"
 PACKING = SAMPLES / "liggghts" / "packing"

@@ -1,4 +1,4 @@
-"""The ``demsplit`` command's own process settings (:mod:`demsplit.command`): made when the process is the
+"""The ``demsplit`` command's own process settings (:mod:`demsplit.runtime.command`): made when the process is the
 command, never in a program that imports demsplit, and with the effect they are made for."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import subprocess
 import sys
 
 import pytest
-from demsplit import command
+from demsplit.runtime import command
 
 PROBE = r"""
 import gc, json, os, resource, sys
@@ -25,7 +25,7 @@ before = faults()
 b = np.ones(1 << 23)  # the same size again: fresh pages unless the freed ones were kept
 print(json.dumps({"blas": os.environ.get("OPENBLAS_NUM_THREADS"), "faults": faults() - before,
                   "gc": gc.get_threshold(), "pages": os.environ.get("NUMPY_MADVISE_HUGEPAGE"),
-                  "kept": demsplit.command.FREED_MEMORY_KEPT}))
+                  "kept": demsplit.runtime.command.FREED_MEMORY_KEPT}))
 """
 
 
@@ -118,7 +118,7 @@ NUMBA_START = r"""
 import json, sys
 sys.argv[0] = sys.argv[1]
 import numpy as np
-from demsplit.readers.fastparse import count_newlines  # a kernel module: imports demsplit.jit and numba
+from demsplit.readers.fastparse import count_newlines  # a kernel module: imports demsplit.runtime.jit and numba
 loaded = "numba.np.arraymath" in sys.modules  # numba's registries, loaded at import by the command only
 count_newlines(np.frombuffer(b"a\nb\n", np.uint8), 0, 4)  # a kernel's first call loads them otherwise
 from numba.np import arraymath
@@ -130,8 +130,8 @@ print(json.dumps({"loaded_at_import": loaded, "blas": arraymath._HAVE_BLAS,
 
 
 def test_the_command_loads_numba_without_its_blas_probe_and_scipy_imports_after():
-    """demsplit.jit.load_registries_without_blas_probe: in the command's process numba's registries load
-    when demsplit.jit is imported, without importing scipy.linalg; scipy.linalg still imports and works
+    """demsplit.runtime.jit.load_registries_without_blas_probe: in the command's process numba's registries load
+    when demsplit.runtime.jit is imported, without importing scipy.linalg; scipy.linalg still imports and works
     afterwards; a program that imports demsplit keeps numba's own lazy loading and its BLAS probe."""
     def probe(name: str) -> dict:
         proc = subprocess.run([sys.executable, "-c", NUMBA_START, name], capture_output=True, text=True,

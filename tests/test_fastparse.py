@@ -260,8 +260,8 @@ def test_fields_longer_than_a_step():
 
 
 def test_bytes_below_flags_each_byte():
-    """demsplit.jit.bytes_below against numpy, on every byte value and at unaligned offsets."""
-    from demsplit.jit import address, bytes_below, kernel
+    """demsplit.runtime.jit.bytes_below against numpy, on every byte value and at unaligned offsets."""
+    from demsplit.runtime.jit import address, bytes_below, kernel
 
     @kernel
     def below(a, i, bound):
@@ -506,7 +506,7 @@ def test_threaded_parse_equals_serial(generated, monkeypatch, block):
     monkeypatch.setattr(ld, "BLOCK", block)
     monkeypatch.setattr(ld, "CHECKPOINT", min(block, 1 << 20))
     monkeypatch.setattr(ld, "_SLICE_MIN", 1)
-    from demsplit import threads
+    from demsplit.runtime import threads
 
     monkeypatch.setattr(threads, "THREADS", 1)  # slices per block
     serial, _ = read_all(path)
@@ -526,7 +526,7 @@ def test_slices_equal_blocks(generated, monkeypatch, margin):
     monkeypatch.setattr(ld, "CHECKPOINT", 64)
     monkeypatch.setattr(ld, "BLOCK", 64)
     monkeypatch.setattr(ld, "ROW_MAX", margin)
-    from demsplit import threads
+    from demsplit.runtime import threads
 
     monkeypatch.setattr(threads, "THREADS", 3)
     block_reads = []

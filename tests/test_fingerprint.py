@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from conftest import SAMPLES, require_program
 from demsplit import fingerprint
+from demsplit.runtime import hashing
 from demsplit.errors import StoreError
 
 
@@ -22,23 +23,23 @@ def b3sum(path) -> str:
     return out.stdout.split()[0]
 
 
-@pytest.mark.parametrize("size", [0, 3, 1024, 1025, fingerprint._BLOCK - 1, fingerprint._BLOCK,
-                                  3 * fingerprint._BLOCK + 17])
+@pytest.mark.parametrize("size", [0, 3, 1024, 1025, hashing._BLOCK - 1, hashing._BLOCK,
+                                  3 * hashing._BLOCK + 17])
 def test_the_digest_is_what_b3sum_prints(tmp_path, size):
     """Sizes around BLAKE3's 1 KiB chunk and the 1 MiB blocks the file is read in."""
     path = tmp_path / "f.bin"
     path.write_bytes(np.random.default_rng(size).integers(0, 256, size, dtype=np.uint8).tobytes())
-    assert fingerprint.file_digest(path) == b3sum(path)
+    assert hashing.file_digest(path) == b3sum(path)
 
 
 def test_background_digest_is_the_files_and_a_change_invalidates_it(tmp_path):
     path = tmp_path / "pairs.txt"
     shutil.copy(SAMPLES / "liggghts" / "packing" / "pairs.txt", path)
-    fingerprint.hash_in_background([path])
-    key = fingerprint._key(path)
-    assert key in fingerprint._PENDING
+    hashing.hash_in_background([path])
+    key = hashing._key(path)
+    assert key in hashing._PENDING
     assert fingerprint.file_fingerprint(path)["blake3"] == b3sum(path)
-    assert key in fingerprint._KNOWN and key not in fingerprint._PENDING  # waited for, then remembered
+    assert key in hashing._KNOWN and key not in hashing._PENDING  # waited for, then remembered
     with open(path, "ab") as f:  # the file changes: the digest no longer applies
         f.write(b"\n")
     os.utime(path, ns=(1, 1))
@@ -50,14 +51,14 @@ def test_an_error_of_the_background_hash_is_named_with_the_file(tmp_path):
     reports the error with the file."""
     unreadable = tmp_path / "a-directory"
     unreadable.mkdir()  # stat works, reading does not (as root, a file's permissions would not stop it)
-    job = fingerprint._Digest(unreadable)
-    fingerprint._PENDING[fingerprint._key(unreadable)] = (os.getpid(), job)
+    job = hashing._Digest(unreadable)
+    hashing._PENDING[hashing._key(unreadable)] = (os.getpid(), job)
     job.hash_in_background()  # as the thread runs it: the error ends the attempt
     assert job.digest is None
     with pytest.raises(StoreError, match="cannot read input file to fingerprint it: Is a directory") as err:
         fingerprint.file_fingerprint(unreadable)
     assert str(unreadable) in str(err.value)
-    fingerprint.hash_in_background([tmp_path / "never-existed.txt"])  # left for file_fingerprint to report
+    hashing.hash_in_background([tmp_path / "never-existed.txt"])  # left for file_fingerprint to report
     with pytest.raises(StoreError, match="cannot read input file"):
         fingerprint.file_fingerprint(tmp_path / "never-existed.txt")
 
@@ -90,12 +91,12 @@ def test_a_waiter_takes_the_hashing_over_from_the_last_published_block(tmp_path,
     """The digest finished by the waiter, from where the background thread stopped (its start, a middle
     block, the last full one), is the file's; a thread that comes back after the take-over changes
     nothing."""
-    monkeypatch.setattr(fingerprint, "_BLOCK", 1024)
+    monkeypatch.setattr(hashing, "_BLOCK", 1024)
     path = tmp_path / "dump.txt"
     path.write_bytes(np.random.default_rng(published).integers(0, 256, 3 * 1024 + 100, dtype=np.uint8).tobytes())
-    job = fingerprint._Digest(path)
+    job = hashing._Digest(path)
     with monkeypatch.context() as m:
-        m.setattr(fingerprint, "open", lambda p, mode, buffering: _Stalled(p, mode, buffering, published),
+        m.setattr(hashing, "open", lambda p, mode, buffering: _Stalled(p, mode, buffering, published),
                   raising=False)
         job.hash_in_background()
     assert job._offset == published * 1024 and job.digest is None
@@ -112,17 +113,17 @@ def test_the_hashing_thread_runs_on_idle_cores_and_a_waiter_does_not_wait_for_it
     import threading
 
     gate, policies = threading.Event(), []
-    real = fingerprint._Digest.hash_in_background
+    real = hashing._Digest.hash_in_background
 
     def held_up(job):
         policies.append(os.sched_getscheduler(0))
         gate.wait(60)
         real(job)
 
-    monkeypatch.setattr(fingerprint._Digest, "hash_in_background", held_up)
+    monkeypatch.setattr(hashing._Digest, "hash_in_background", held_up)
     path = tmp_path / "pairs.txt"
     shutil.copy(SAMPLES / "liggghts" / "packing" / "pairs.txt", path)
-    fingerprint.hash_in_background([path])
+    hashing.hash_in_background([path])
     assert fingerprint.file_fingerprint(path, wait=False)["blake3"] is None
     assert fingerprint.file_fingerprint(path)["blake3"] == b3sum(path)  # with the thread still held up
     assert policies == [os.SCHED_IDLE]

@@ -193,11 +193,11 @@ def test_sigkill_of_a_parallel_run_leaves_no_process_behind(tmp_path):
 CLOSE_KILLER = r"""
 import json, os, random, signal, sys, time
 sys.path.insert(0, sys.argv[1])
-import demsplit.atomic, demsplit.results.store as store
+import demsplit.outputs, demsplit.results.store as store
 from result_frames import PROVENANCE, WALLS_META, synthetic_frame
 
 root, steps, random_kills = sys.argv[2], [int(s) for s in sys.argv[3].split(",")], int(sys.argv[4])
-watched = {store.__file__, demsplit.atomic.__file__}
+watched = {store.__file__, demsplit.outputs.__file__}
 for k in range(random_kills):  # SIGKILL at a random instant of close(), inside HDF5's own calls included
     out = os.path.join(root, f"r{k}", "out.h5")
     os.makedirs(os.path.dirname(out))

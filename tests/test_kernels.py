@@ -351,7 +351,7 @@ def test_hertz_from_codes_equals_per_contact_values():
 def test_the_first_bad_contact_is_found_in_any_piece(pieces, monkeypatch):
     """contact_rows and hertz_history_energies report the first contact naming an unknown id or with
     1/r1 + 1/r2 <= 0, as a contact of the whole list, when the loops run in pieces too."""
-    from demsplit import threads
+    from demsplit.runtime import threads
 
     monkeypatch.setattr(threads, "MIN_RANGE", 1 if pieces > 1 else 1 << 16)
     monkeypatch.setattr(threads, "THREADS", pieces)
@@ -415,7 +415,7 @@ def test_repeated_pair_matches_lexsort(seed, n, m, no_self):
 @pytest.mark.parametrize("periodic", [(False, False, False), (True, True, True), (True, False, True)])
 def test_pair_geometry_matches_numpy(periodic, pieces, monkeypatch):
     """One piece, or pieces of the list on the pool's threads (threads.map_ranges): the same numbers."""
-    from demsplit import threads
+    from demsplit.runtime import threads
 
     monkeypatch.setattr(threads, "MIN_RANGE", 1 if pieces > 1 else 1 << 16)
     monkeypatch.setattr(threads, "THREADS", pieces)
@@ -475,7 +475,7 @@ def test_walls_with_their_own_model():
 
 @pytest.mark.parametrize("n, threads_, expect", [(10, 4, 1), (1 << 17, 1, 1), (1 << 17, 2, 2), (3 << 16, 8, 3)])
 def test_map_ranges_tiles_the_rows_in_order(n, threads_, expect, monkeypatch):
-    from demsplit import threads
+    from demsplit.runtime import threads
 
     monkeypatch.setattr(threads, "THREADS", threads_)
     monkeypatch.setattr(threads, "_pool", None)

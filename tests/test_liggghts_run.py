@@ -671,7 +671,7 @@ def test_cli_info(capsys):
 def test_a_frame_assembled_in_pieces_is_the_frame_in_one(monkeypatch):
     """The join, the printed steps and the overlap check run in pieces of the contacts on the pool's
     threads (threads.map_ranges): the frame is the same, bit for bit."""
-    from demsplit import threads
+    from demsplit.runtime import threads
 
     script = SAMPLES / "packing" / "in.packing"
     whole = open_run(script).frame(-1)

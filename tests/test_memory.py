@@ -3,7 +3,7 @@
 Two runs of ``benchmarks/generate.py`` that differ only in their number of
 frames (same particles, same contacts per frame) go through ``demsplit run``
 in fresh processes set up as the command is (its allocator keeps freed memory
-for the next frame: :mod:`demsplit.command`); each reports its peak resident memory (``VmHWM``). A
+for the next frame: :mod:`demsplit.runtime.command`); each reports its peak resident memory (``VmHWM``). A
 pipeline that kept every frame (or every frame's results) until the end would
 need about one frame's arrays more per extra frame; streaming needs the same
 peak for 2 frames as for 6. The tolerance is one frame's arrays, a quarter of
@@ -26,7 +26,7 @@ CHILD = r"""
 import json, sys
 from pathlib import Path
 script, out = sys.argv[1:3]
-sys.argv[0] = "demsplit"  # as the console script: the command's process settings (demsplit.command) apply
+sys.argv[0] = "demsplit"  # as the console script: the command's process settings (demsplit.runtime.command) apply
 from demsplit.cli import main
 rc = main(["run", script, "-o", out, "-q"])
 hwm = [l for l in Path("/proc/self/status").read_text().splitlines() if l.startswith("VmHWM:")][0]

@@ -43,14 +43,14 @@ def serial(request):
 @pytest.fixture
 def four_cores(monkeypatch):
     """A machine of 4 cores as demsplit sees it, so that --jobs 2 starts two worker processes."""
-    from demsplit import threads
+    from demsplit.runtime import threads
 
     monkeypatch.setattr(threads, "THREADS", 4)
     monkeypatch.setenv("DEMSPLIT_THREADS", "4")
 
 
 def test_worker_processes_need_two_cores_each(monkeypatch):
-    from demsplit import threads
+    from demsplit.runtime import threads
     from demsplit.pipeline import worker_processes
 
     for cores, jobs, used in ((2, 2, 1), (2, 8, 1), (3, 2, 1), (4, 2, 2), (4, 8, 2), (16, 4, 4), (16, 1, 1)):
@@ -60,7 +60,7 @@ def test_worker_processes_need_two_cores_each(monkeypatch):
 
 def test_jobs_beyond_the_cores_run_serially_with_a_note(samples, monkeypatch):
     import demsplit.pipeline as pipeline
-    from demsplit import threads
+    from demsplit.runtime import threads
 
     monkeypatch.setattr(threads, "THREADS", 2)
     monkeypatch.setattr(pipeline, "_processes", lambda *a: pytest.fail("no worker process on 2 cores"))

@@ -1,17 +1,17 @@
-"""The first frame's memory mapped while the run opens (:mod:`demsplit.prefault`): the LIGGGHTS reader
-announces the first frame's size before it indexes its dumps, the block is written and freed, and
-nothing happens where it is not enabled or nobody listens."""
+"""The first frame's memory mapped while the run opens (:mod:`demsplit.runtime.prefault`): the LIGGGHTS reader
+tells the first frame's size without indexing its dumps, the block is written and freed, and nothing
+happens without a size."""
 
 from __future__ import annotations
 
 import time
 from pathlib import Path
 
-import demsplit.prefault as prefault
+import demsplit.runtime.prefault as prefault
 import pytest
-from demsplit import command
+from demsplit.runtime import command
 from demsplit.readers import open_run
-from demsplit.readers.base import announce_first_frame, first_frame_size
+from demsplit.readers.liggghts import LiggghtsRun
 from demsplit.readers.lammps_dump import TextDump
 
 
@@ -54,7 +54,7 @@ def test_first_frame_bytes_is_the_documented_sum():
 
 @pytest.fixture
 def blocks(monkeypatch) -> list:
-    """The blocks :func:`demsplit.prefault.first_frame_prefaulted` makes, recorded instead of allocated:
+    """The blocks :func:`demsplit.runtime.prefault.first_frame_prefaulted` makes, recorded instead of allocated:
     ``[nbytes, released]`` each."""
     made: list[list] = []
 
@@ -70,47 +70,48 @@ def blocks(monkeypatch) -> list:
     return made
 
 
-@pytest.mark.parametrize("enabled", [True, False])
-def test_the_context_maps_the_first_announced_frame_only_when_enabled(blocks, enabled):
-    with prefault.first_frame_prefaulted(enabled):
-        announce_first_frame(10, 20)
-        announce_first_frame(1000, 2000)  # a second run opened in the same context: not its memory too
+@pytest.mark.parametrize("rows", [(10, 20), None])
+def test_the_context_maps_the_first_frame_only_when_its_size_is_given(blocks, rows):
+    with prefault.first_frame_prefaulted(rows):
         assert all(not released for _, released in blocks)
-    assert blocks == ([[prefault.first_frame_bytes(10, 20), True]] if enabled else [])
-    announce_first_frame(10, 20)  # outside any context: nobody listens
-    assert len(blocks) == (1 if enabled else 0)
+    assert blocks == ([[prefault.first_frame_bytes(10, 20), True]] if rows else [])
 
 
 def test_a_frame_larger_than_the_heap_serves_gets_the_largest_block(blocks):
     """Above glibc's mapping threshold a block would be a mapping of its own, unmapped when freed."""
-    with prefault.first_frame_prefaulted(True):
-        announce_first_frame(10**7, 3 * 10**7)
+    with prefault.first_frame_prefaulted((10**7, 3 * 10**7)):
+        pass
     assert prefault.first_frame_bytes(10**7, 3 * 10**7) > command.MMAP_THRESHOLD
     assert blocks == [[prefault.LARGEST, True]] and prefault.LARGEST < command.MMAP_THRESHOLD
 
 
 def test_the_block_is_freed_when_the_opening_fails(blocks):
-    with pytest.raises(RuntimeError), prefault.first_frame_prefaulted(True):
-        announce_first_frame(10, 20)
+    with pytest.raises(RuntimeError), prefault.first_frame_prefaulted((10, 20)):
         raise RuntimeError("the run cannot be opened")
     assert blocks == [[prefault.first_frame_bytes(10, 20), True]]
 
 
-def test_the_liggghts_reader_announces_its_first_frame_before_indexing(samples, monkeypatch):
-    """(particles, contacts) of frame 0 as the dumps' headers say, walls' contacts included, told before
-    any dump is indexed (the warm-up's window is the indexing)."""
-    events = []
+def test_the_liggghts_reader_tells_its_first_frame_without_indexing(samples, monkeypatch):
+    """(particles, contacts) of frame 0 as the dumps' headers say, walls' contacts included, without any
+    dump indexed (the warm-up's window is the opening that indexes them)."""
+    script = samples / "liggghts" / "packing" / "in.packing"
+    indexed = []
     build = TextDump._build_index
 
     def indexing(self):
-        events.append("index")
+        indexed.append(self.path)
         return build(self)
 
     monkeypatch.setattr(TextDump, "_build_index", indexing)
-    with first_frame_size(lambda particles, contacts: events.append((particles, contacts))):
-        run = open_run(samples / "liggghts" / "packing" / "in.packing")
-    with run:
+    rows = LiggghtsRun.first_frame_rows(script)
+    assert indexed == []
+    with open_run(script) as run:
         walls = int(run.walls.rows[0])
         assert walls > 0  # the sample has wall contacts: they are counted
-        assert events[0] == (int(run.atoms.rows[0]), int(run.pairs.rows[0]) + walls)
-        assert events[1:] == ["index"] * 3  # atoms, pairs, walls: all after
+        assert rows == (int(run.atoms.rows[0]), int(run.pairs.rows[0]) + walls)
+
+
+def test_a_run_whose_files_are_missing_tells_no_size(tmp_path):
+    script = tmp_path / "in.nothing"
+    script.write_text("units si\n")
+    assert LiggghtsRun.first_frame_rows(script) is None

@@ -180,13 +180,13 @@ def test_frames_are_committed_once_the_inputs_digests_are_known(tmp_path):
     """A provenance built while its inputs are still being hashed (digest None): the writer stores frames
     but commits none (a run killed then has nothing to resume, and starts over) until the digest is
     known; then the manifest names the input by it, and so does the finished store."""
-    from demsplit import fingerprint
+    from demsplit.runtime import hashing
     from demsplit.results.store import build_provenance, work_dir_of
 
     dump = tmp_path / "pairs.txt"
     dump.write_bytes(b"ITEM: TIMESTEP\n0\n" * 1000)
-    job = fingerprint._Digest(dump)  # hashing in the background, held up
-    fingerprint._PENDING[fingerprint._key(dump)] = (os.getpid(), job)
+    job = hashing._Digest(dump)  # hashing in the background, held up
+    hashing._PENDING[hashing._key(dump)] = (os.getpid(), job)
     prov = build_provenance([dump], wait=False)
     assert prov["inputs"][0]["blake3"] is None
     out = tmp_path / "out.h5"
@@ -199,25 +199,25 @@ def test_frames_are_committed_once_the_inputs_digests_are_known(tmp_path):
         w.append(synthetic_frame(1000))
         assert store._resumable(work) and w.done_steps == {0, 1000}
         manifest = json.loads((work / "run.json").read_text())
-        assert manifest["identity"]["inputs"] == [fingerprint.file_digest(dump)]
+        assert manifest["identity"]["inputs"] == [hashing.file_digest(dump)]
     with h5py.File(out) as h5:
         stored = json.loads(h5.attrs["provenance"])["inputs"]
     assert stored == [{"path": str(dump.resolve()), "size": dump.stat().st_size,
-                       "blake3": fingerprint.file_digest(dump)}]
+                       "blake3": hashing.file_digest(dump)}]
 
 
 def test_a_store_closed_before_the_digests_are_known_waits_for_them(tmp_path):
-    from demsplit import fingerprint
+    from demsplit.runtime import hashing
     from demsplit.results.store import build_provenance
 
     dump = tmp_path / "atoms.txt"
     dump.write_bytes(b"1 2 3\n" * 5000)
-    fingerprint._PENDING[fingerprint._key(dump)] = (os.getpid(), fingerprint._Digest(dump))  # never run
+    hashing._PENDING[hashing._key(dump)] = (os.getpid(), hashing._Digest(dump))  # never run
     out = tmp_path / "out.h5"
     with ResultWriter(out, build_provenance([dump], wait=False), walls_meta=WALLS_META) as w:
         w.append(synthetic_frame(0))
     with h5py.File(out) as h5:
-        assert json.loads(h5.attrs["provenance"])["inputs"][0]["blake3"] == fingerprint.file_digest(dump)
+        assert json.loads(h5.attrs["provenance"])["inputs"][0]["blake3"] == hashing.file_digest(dump)
 
 
 def test_file_fingerprint(tmp_path):

@@ -382,7 +382,7 @@ def test_a_dumped_overlap_that_the_positions_do_not_give_is_refused(run_dir, tmp
     """Half a contact's dumped delta passes the radius check and halved its energy with exit 0. The dumped
     overlap must be r1 + r2 - |x2 - x1| within the printing (the samples agree to 4e-18 m); checked in
     one piece or in pieces on the pool's threads."""
-    from demsplit import threads
+    from demsplit.runtime import threads
 
     monkeypatch.setattr(threads, "MIN_RANGE", 1 if pieces > 1 else 1 << 16)
     monkeypatch.setattr(threads, "THREADS", pieces)

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..atomic import atomic_path
+from ..outputs import atomic_path
 from ..outputs import check_output_path
 from .tables import Results, with_not_computed_as_nan
 

@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..atomic import atomic_path
+from ..outputs import atomic_path
 from ..errors import StoreError
 from .aggregate import elastic_columns
 from .schema import UNBOUNDED, known

@@ -48,8 +48,9 @@ from pathlib import Path
 import numpy as np
 from isal import isal_zlib
 
-from .. import threads
-from ..atomic import WriteBack, atomic_path, publish
+from ..runtime import threads
+from ..outputs import atomic_path, publish
+from ..runtime.writeback import WriteBack
 from ..errors import StoreError, system_error
 from ..fingerprint import DIGEST, file_fingerprint  # noqa: F401  (file_fingerprint: part of this module's API)
 from ..outputs import check_output_path
@@ -192,7 +193,7 @@ def _to_json(obj, what: str) -> str:
 
 def _write_atomic(path: Path, write, *, durable: bool = True) -> None:
     """Call ``write(file)`` on a temporary file renamed to ``path`` when complete
-    (fsynced first unless ``durable=False``, see :func:`~demsplit.atomic.atomic_path`)."""
+    (fsynced first unless ``durable=False``, see :func:`~demsplit.outputs.atomic_path`)."""
     with atomic_path(path, durable=durable) as tmp, open(tmp, "wb") as f:
         write(f)
 
@@ -221,7 +222,7 @@ class ResultWriter:
     committed: the run's manifest names its inputs by their digests, so a run killed before them has
     nothing to resume and starts over.
 
-    The store's pages are sent to disk while the run goes on (:class:`~demsplit.atomic.WriteBack`): a
+    The store's pages are sent to disk while the run goes on (:class:`~demsplit.outputs.WriteBack`): a
     frame's after the frame, while the next one is computed, and the frame at ``final_step`` (the run's
     last timestep, when the caller knows it) column by column as it is written, since nothing follows it
     to hide its write-back behind: ``close()``'s fsync then finds little left to write.

@@ -24,7 +24,7 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
-from ..atomic import atomic_path
+from ..outputs import atomic_path
 from ..errors import StoreError
 from ..outputs import check_output_path
 from .tables import Results, with_not_computed_as_nan

@@ -47,22 +47,15 @@ BLAS_PROBE = "scipy.linalg.cython_blas"
 
 def load_registries_without_blas_probe() -> None:
     """Load numba's registries now, with its BLAS probe answered "no BLAS" at once: what the ``demsplit``
-    command's process does when it imports this module (:func:`demsplit.command.is_command`).
+    command's process does when it imports this module (:func:`demsplit.runtime.command.is_command`).
 
-    A kernel's first call, compiled or loaded from the cache, makes numba load its registries, and one of
-    them (``numba.np.arraymath``) probes for BLAS by importing ``scipy.linalg.cython_blas``, which imports
-    all of ``scipy.linalg`` and, through it, ``numpy.f2py``: 133 modules and 0.077 s once numpy and numba
-    are loaded (``python -c "import sys, time, numpy, numba; b = set(sys.modules); t = time.perf_counter();
-    import scipy.linalg.cython_blas; print(len(set(sys.modules) - b), time.perf_counter() - t)"``), in the
-    command's single-threaded start-up. Without them
-    ``demsplit run`` on the benchmark run ends 0.09 s sooner, ``open_run`` 0.50 s against 0.56 s
-    (``python benchmarks/run_phases.py /tmp/bench_big --repeat 5 --rev e81a480``, medians of the whole
-    process; docs/performance.md, "The goals of issue 19 at the sixth stop"). The answer changes one thing
-    in numba: ``np.correlate`` and ``np.convolve`` in a kernel would sum with a plain loop instead of BLAS
-    (``numba.np.arraymath._HAVE_BLAS``), which no kernel here calls. The probe's module is answered by a
-    ``None`` in ``sys.modules`` (an import of it raises ``ImportError`` at once) only while the registries
-    load, so ``scipy.linalg`` imports as usual afterwards, and ``np.dot`` or ``np.linalg`` in a kernel
-    finds scipy's BLAS when it compiles; nothing is done when the module is already imported."""
+    A kernel's first call makes numba load its registries, and one of them (``numba.np.arraymath``) probes
+    for BLAS by importing ``scipy.linalg.cython_blas``, which imports all of ``scipy.linalg`` and
+    ``numpy.f2py`` in the command's single-threaded start-up. The answer changes one thing in numba:
+    ``np.correlate`` and ``np.convolve`` in a kernel would sum with a plain loop instead of BLAS, which no
+    kernel here calls. The probe's module is answered by a ``None`` in ``sys.modules`` only while the
+    registries load, so ``scipy.linalg`` imports as usual afterwards; nothing is done when it is already
+    imported. A workaround of numba's start-up: if numba drops the probe, this can go."""
     if numba is None or BLAS_PROBE in sys.modules:
         return
     from numba.core.registry import cpu_target

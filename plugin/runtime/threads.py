@@ -64,9 +64,8 @@ def run_on_idle_cores() -> None:
 
 
 MIN_RANGE = 1 << 16
-"""Rows below which :func:`map_ranges` does not split: a task costs about 23 us to hand over and collect
-(``list(pool().map(f, range(2)))`` with a trivial ``f``, 10,000 times, 2 cores: 23.0-24.1 us a task),
-where the join ``pair_geometry`` takes about 1.2 ms for 2^16 contacts (36 ms for 2e6, docs/performance.md)."""
+"""Rows below which :func:`map_ranges` does not split: handing a task to the pool and collecting it costs as
+much as a few thousand rows of the cheapest per-row work, so smaller pieces would gain nothing."""
 
 
 def map_ranges(fn: Callable[[int, int], T], n: int, max_rows: int | None = None) -> list[T]:

@@ -1,64 +1,35 @@
 """Settings of the ``demsplit`` command's own process, which a library must never make.
 
 Imported first by the package's ``__init__``, before numpy, and applied on import (:func:`settle`) only when the
-process is the command (:func:`is_command`): the ``demsplit`` console script, or
-``python -m demsplit.cli``. A program that imports demsplit keeps its own
-settings. One OpenBLAS thread, freed memory kept and rare collections together
-took ``demsplit run`` on the benchmark run (3 GB of dumps, 3 frames) from a
-median of 4.09 s to 3.93 s (six interleaved rounds, ``python
-benchmarks/command_settings.py /tmp/bench_big``, which also times each setting
-alone: each alone is within the rounds' spread; docs/performance.md, "The
-command's process settings"); the huge-page setting is measured on its own
-below:
+process is the command (:func:`is_command`): the ``demsplit`` console script, or ``python -m demsplit.cli``.
+A program that imports demsplit keeps its own settings. What each gains is measured by the command's phase
+profile (docs/performance.md, "The command's process settings").
 
 OpenBLAS threads
-    ``OPENBLAS_NUM_THREADS=1`` unless the user set it. The command calls no BLAS,
-    but OpenBLAS starts its threads when numpy (and numba's scipy) load it, and
-    each spins on a core for about 0.1 s before it sleeps: 0.17 CPU seconds taken
-    from the parse at start-up (``python -c "import numpy, scipy.linalg"``:
-    0.31 s of user time, 0.13 s with one thread). Read when the library loads,
-    so it is set before numpy is imported.
+    ``OPENBLAS_NUM_THREADS=1`` unless the user set it: the command calls no BLAS, but OpenBLAS starts its
+    threads when numpy loads it, and each spins on a core before it sleeps. Read when the library loads, so
+    it is set before numpy is imported.
 Freed memory kept for the next frame
-    glibc returns a large block to the system when it is freed (``munmap``), so
-    every frame's arrays are fresh pages that the kernel zero-fills again: 13 %
-    of the command's CPU samples in ``perf record`` (``clear_page_erms``). Allocations
-    up to :data:`MMAP_THRESHOLD` come from the heap instead, and the heap is not
-    trimmed below :data:`TRIM_THRESHOLD`, so the next frame reuses the pages of
-    the last. The peak is about the same (877 MB against 860 MB on the
-    benchmark: pages the heap keeps); a run's memory stays at its peak until
-    it ends.
-No huge pages asked for on a guest that hands free memory back to its host
-    numpy asks the kernel for transparent huge pages (2 MiB) for every array of 4 MiB or more
-    (``madvise``), unless ``NUMPY_MADVISE_HUGEPAGE=0``. A virtual machine's guest that reports its free
-    memory to the host (Linux's ``page_reporting``, virtio-balloon free page reporting:
-    :func:`guest_reports_free_memory`) reports free blocks of 2 MiB, and the host takes them back. A
-    huge page is such a block, and its first write then waits for the host to map it again: 2.1 s per
-    GB after a 10 s pause against 0.06 s right after another process freed memory, while small pages
-    cost 0.35 s per GB either way (``python benchmarks/fresh_memory.py --pause 10``). On this project's
-    machine ``demsplit run`` on the benchmark took a median of 3.28 s without the advice against
-    3.86 s with it when each run started 10 s after the last, and 3.23 s against 3.48 s back to back
-    (``python benchmarks/command_settings.py /tmp/bench_big --only all,no-pages --pause 10``, then
-    ``--pause 0``; docs/performance.md, "Fresh memory on this machine"). Set only on such a guest,
-    unless the user set the variable; read when numpy loads.
+    glibc returns a large freed block to the system (``munmap``), so every frame's arrays would be fresh
+    pages the kernel zero-fills again. Allocations up to :data:`MMAP_THRESHOLD` come from the heap instead,
+    and the heap is not trimmed below :data:`TRIM_THRESHOLD`, so the next frame reuses the pages of the
+    last; a run's memory stays at its peak until it ends.
+No huge pages on a guest that hands free memory back to its host
+    numpy asks for transparent huge pages for arrays of 4 MiB or more. A virtual-machine guest that reports
+    its free memory to the host (:func:`guest_reports_free_memory`) hands back free blocks of 2 MiB, and the
+    first write to such a huge page waits for the host to map it again, while small pages cost the same
+    either way. ``NUMPY_MADVISE_HUGEPAGE=0`` is set only on such a guest, unless the user set it.
 An exit without teardown
-    When the work is done, :func:`exit_now` runs the ``atexit`` handlers, flushes
-    the standard streams and ends the process (``os._exit``): Python's own
-    finalization would free every object one by one (numba's type registries,
-    the last frame's arrays): 0.15 s from ``main``'s return to the process's
-    end on the benchmark run, 0.03 s with ``exit_now`` (``python
-    benchmarks/run_phases.py /tmp/bench_big --rev ffe0c7d``, "after main"); the
-    kernel frees the process's memory at once. Every file the command
+    When the work is done, :func:`exit_now` runs the ``atexit`` handlers, flushes the standard streams and
+    ends the process (``os._exit``) instead of freeing every object one by one; every file the command
     writes is closed (and the store fsynced) before ``main`` returns.
 numba's BLAS probe skipped
-    Applied by :mod:`demsplit.jit` when it is imported in the command's process (it belongs to the moment
-    numba loads): :func:`demsplit.jit.load_registries_without_blas_probe`.
+    Applied by :mod:`demsplit.runtime.jit` when it is imported in the command's process:
+    :func:`demsplit.runtime.jit.load_registries_without_blas_probe`.
 Rare cyclic garbage collections
-    :data:`GC_THRESHOLDS` instead of Python's (700, 10, 10). A collection holds
-    the GIL, which the parse and compression threads need to hand back their
-    pieces, and the command's data are numpy arrays, which make no reference
-    cycles: a whole ``demsplit run`` with the collector off leaves 1734
-    unreachable objects at its end, the same for 3 frames of 10^6 particles
-    and for 100 frames of 2000 (the command in docs/performance.md).
+    :data:`GC_THRESHOLDS` instead of Python's (700, 10, 10): a collection holds the GIL, which the parse and
+    compression threads need to hand back their pieces, and the command's data (numpy arrays) make no
+    reference cycles.
 """
 
 from __future__ import annotations

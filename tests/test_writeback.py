@@ -1,4 +1,4 @@
-"""Writing outputs: the store's write-back runs on idle cores, asks the kernel to start writing the
+"""The store's write-back runs on idle cores, asks the kernel to start writing the
 whole file, and never holds up or breaks the writer."""
 
 from __future__ import annotations
@@ -7,26 +7,26 @@ import os
 import threading
 
 import pytest
-from demsplit import atomic
+from demsplit.runtime import writeback
 from demsplit.results.store import ResultWriter, load_results
 from result_frames import PROVENANCE, WALLS_META, synthetic_frame
 
 
-@pytest.mark.skipif(atomic._sync_file_range() is None, reason="sync_file_range is Linux's")
+@pytest.mark.skipif(writeback._sync_file_range() is None, reason="sync_file_range is Linux's")
 def test_start_write_back_asks_the_kernel_for_the_whole_file(tmp_path, monkeypatch):
     calls = []
-    real = atomic._sync_file_range()
+    real = writeback._sync_file_range()
 
     def recorder(fd, offset, nbytes, flags):
         calls.append((os.fstat(fd).st_ino, offset, nbytes, flags))
         return real(fd, offset, nbytes, flags)
 
-    monkeypatch.setattr(atomic, "_sync_file_range", lambda: recorder)
+    monkeypatch.setattr(writeback, "_sync_file_range", lambda: recorder)
     path = tmp_path / "store.h5"
     path.write_bytes(b"x" * 100_000)
-    atomic.start_write_back(path)
-    assert calls == [(path.stat().st_ino, 0, 0, atomic.SYNC_FILE_RANGE_WRITE)]
-    atomic.start_write_back(tmp_path / "renamed-meanwhile.h5")  # gone: skipped, no error
+    writeback.start_write_back(path)
+    assert calls == [(path.stat().st_ino, 0, 0, writeback.SYNC_FILE_RANGE_WRITE)]
+    writeback.start_write_back(tmp_path / "renamed-meanwhile.h5")  # gone: skipped, no error
     assert len(calls) == 1
 
 
@@ -40,7 +40,7 @@ def test_the_store_requests_a_write_back_after_every_frame_on_an_idle_core(tmp_p
         seen.append(os.path.basename(path))
         started.release()
 
-    monkeypatch.setattr(atomic, "start_write_back", recorder)
+    monkeypatch.setattr(writeback, "start_write_back", recorder)
     out = tmp_path / "out.h5"
     w = ResultWriter(out, PROVENANCE, walls_meta=WALLS_META)
     for step in (0, 1000, 2000):
@@ -52,7 +52,7 @@ def test_the_store_requests_a_write_back_after_every_frame_on_an_idle_core(tmp_p
     assert set(seen) == {"store.h5"} and len(seen) >= 3 and not thread.is_alive()
     assert set(policies) == ({os.SCHED_IDLE} if hasattr(os, "SCHED_IDLE") else {None})
     plain = tmp_path / "plain.h5"
-    monkeypatch.setattr(atomic, "start_write_back", lambda path: None)
+    monkeypatch.setattr(writeback, "start_write_back", lambda path: None)
     with ResultWriter(plain, PROVENANCE, walls_meta=WALLS_META) as w:
         for step in (0, 1000, 2000):
             w.append(synthetic_frame(step))
@@ -62,7 +62,7 @@ def test_the_store_requests_a_write_back_after_every_frame_on_an_idle_core(tmp_p
 
 def test_a_failing_write_back_does_not_stop_the_store(tmp_path, monkeypatch):
     """The write-back is a hint: a call that fails (here a file system that refuses it) is ignored."""
-    monkeypatch.setattr(atomic, "_sync_file_range", lambda: lambda fd, offset, nbytes, flags: -1)
+    monkeypatch.setattr(writeback, "_sync_file_range", lambda: lambda fd, offset, nbytes, flags: -1)
     out = tmp_path / "out.h5"
     with ResultWriter(out, PROVENANCE, walls_meta=WALLS_META) as w:
         w.append(synthetic_frame(0))
@@ -74,7 +74,7 @@ def test_the_final_frame_asks_for_a_write_back_after_each_column(tmp_path, monke
     """The frame at ``final_step`` asks for the write-back after each column's chunks are written, so that
     its pages are on their way to disk before ``close``'s fsync; any other frame once, after the frame."""
     asked = []
-    monkeypatch.setattr(atomic.WriteBack, "request", lambda self, path: asked.append(os.path.basename(path)))
+    monkeypatch.setattr(writeback.WriteBack, "request", lambda self, path: asked.append(os.path.basename(path)))
     with ResultWriter(tmp_path / "out.h5", PROVENANCE, walls_meta=WALLS_META,
                       final_step=1000 if final else 2000) as w:
         w.append(synthetic_frame(0, n_particles=1500, n_pairs=1500))  # fewer rows than a chunk: carried
