@@ -210,10 +210,10 @@ def _type_name(text: str) -> tuple[int, str]:
 
 def cmd_export(args: argparse.Namespace) -> int:
     from .results import load_results
-    from .results.store import export_tables
+    from .results.exports.tables import export_tables
 
-    from .results.dump import export_dump
-    from .results.vtk import export_vtk
+    from .results.exports.dump import export_dump
+    from .results.exports.vtk import export_vtk
 
     if not (args.parquet or args.csv or args.vtk or args.dump):
         raise DemsplitError("nothing to export to.", fix="give --parquet DIR, --csv DIR, --vtk DIR or --dump FILE.")

@@ -19,9 +19,10 @@ from __future__ import annotations
 
 import os
 import stat
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import BinaryIO
 
 from .errors import StoreError
 
@@ -89,3 +90,10 @@ def publish(tmp: str | Path, path: str | Path, *, durable: bool = True) -> None:
         with open(tmp, "rb") as f:
             os.fsync(f.fileno())
     os.replace(tmp, path)
+
+
+def write_atomic(path: str | Path, write: Callable[[BinaryIO], object], *, durable: bool = True) -> None:
+    """Call ``write(file)`` on a temporary binary file that is renamed to ``path`` when complete
+    (:func:`atomic_path`)."""
+    with atomic_path(path, durable=durable) as tmp, open(tmp, "wb") as f:
+        write(f)

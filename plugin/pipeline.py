@@ -560,7 +560,8 @@ def run_to_store(path: str | Path, out: str | Path, *, options: Options = Option
     """
     from .readers import open_run
     from .results import walls_meta_from_scene
-    from .results.store import ResultWriter, build_provenance, check_output
+    from .results.store import build_provenance
+    from .results.writer import ResultWriter, check_output
 
     check_output(out, resume=resume)  # before any work: no output directory, or an unresumed interrupted run
     in_process = command.FREED_MEMORY_KEPT and not dask and worker_processes(jobs) == 1  # frames computed here

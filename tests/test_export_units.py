@@ -12,7 +12,7 @@ import pytest
 from demsplit.errors import StoreError
 from demsplit.results import Results
 from demsplit.results.schema import TABLES
-from demsplit.results.store import export_tables
+from demsplit.results.exports.tables import export_tables
 from result_frames import PROVENANCE, WALLS_META, synthetic_frame
 
 

@@ -23,6 +23,7 @@ from pathlib import Path
 
 import demsplit
 import demsplit.results.store
+import demsplit.results.writer
 import h5py
 import numpy as np
 import pandas as pd
@@ -74,7 +75,7 @@ def work_of(out: Path) -> Path:
 
 def done_steps(out: Path) -> list[int]:
     """The frames the interrupted store holds (its commit record; a record being written is a .tmp)."""
-    return demsplit.results.store.committed_steps(out)
+    return demsplit.results.writer.committed_steps(out)
 
 
 def wait_for_frames(proc: subprocess.Popen, out: Path, n: int) -> None:
@@ -193,11 +194,11 @@ def test_sigkill_of_a_parallel_run_leaves_no_process_behind(tmp_path):
 CLOSE_KILLER = r"""
 import json, os, random, signal, sys, time
 sys.path.insert(0, sys.argv[1])
-import demsplit.outputs, demsplit.results.store as store
+import demsplit.outputs, demsplit.results.writer as writer
 from result_frames import PROVENANCE, WALLS_META, synthetic_frame
 
 root, steps, random_kills = sys.argv[2], [int(s) for s in sys.argv[3].split(",")], int(sys.argv[4])
-watched = {store.__file__, demsplit.outputs.__file__}
+watched = {writer.__file__, demsplit.outputs.__file__}
 for k in range(random_kills):  # SIGKILL at a random instant of close(), inside HDF5's own calls included
     out = os.path.join(root, f"r{k}", "out.h5")
     os.makedirs(os.path.dirname(out))
@@ -261,7 +262,8 @@ def test_sigkill_at_every_stage_of_close_leaves_a_resumable_run_or_a_complete_st
     only while committed frames wait for --resume."""
     from demsplit.errors import StoreError
     from demsplit.results import Results
-    from demsplit.results.store import ResultWriter, check_output, committed_steps, work_dir_of
+    from demsplit.results.store import work_dir_of
+    from demsplit.results.writer import ResultWriter, check_output, committed_steps
     from result_frames import PROVENANCE, WALLS_META, synthetic_frame
 
     tests = Path(__file__).resolve().parent

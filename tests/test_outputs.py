@@ -141,9 +141,9 @@ def test_a_full_disk_is_one_message_with_the_path_and_a_rerun_works(packing, tmp
     """ENOSPC inside HDF5 at the first frame's commit: exit 2 naming the output and the cause, nothing left
     behind, and a plain rerun works (it was refused as 'interrupted'). At a later commit: the committed frames
     are kept for --resume, said so, and --resume completes."""
-    from demsplit.results import store
+    from demsplit.results import store, writer
 
-    real, calls = store.ResultWriter._commit, []
+    real, calls = writer.ResultWriter._commit, []
 
     def full(self):
         calls.append(1)
@@ -152,12 +152,12 @@ def test_a_full_disk_is_one_message_with_the_path_and_a_rerun_works(packing, tmp
         return real(self)
 
     out = tmp_path / "out.h5"
-    monkeypatch.setattr(store.ResultWriter, "_commit", full)
+    monkeypatch.setattr(writer.ResultWriter, "_commit", full)
     assert main(["run", str(packing / "in.packing"), "-o", str(out), "-q"]) == 2
     err = capsys.readouterr().err
     assert err.startswith(f"demsplit: error: {out}: cannot write the store: No space left on device")
     assert err.count("\n") == 1 and "internal error" not in err
-    monkeypatch.setattr(store.ResultWriter, "_commit", real)
+    monkeypatch.setattr(writer.ResultWriter, "_commit", real)
     if failing_commit == 1:
         assert sorted(p.name for p in tmp_path.iterdir()) == ["packing"]  # nothing left behind
         assert main(["run", str(packing / "in.packing"), "-o", str(out), "-q"]) == 0

@@ -9,7 +9,8 @@ import sys
 import textwrap
 from pathlib import Path
 
-import demsplit.results.store as store
+import demsplit.results.chunks as chunks
+import demsplit.results.writer as writer
 import h5py
 import numpy as np
 import pandas as pd
@@ -17,7 +18,10 @@ import pandas.testing as pdt
 import pytest
 from demsplit.errors import StoreError
 from demsplit.results import TABLES, Results, load_results
-from demsplit.results.store import ResultWriter, export_tables, file_fingerprint, read_store
+from demsplit.fingerprint import file_fingerprint
+from demsplit.results.exports.tables import export_tables
+from demsplit.results.store import read_store
+from demsplit.results.writer import ResultWriter
 from result_frames import PROVENANCE, WALLS_META, synthetic_frame
 
 STEPS = (2000, 0, 1000)  # appended out of order: the store is in step order
@@ -58,7 +62,7 @@ def test_layout_and_frame_index(tmp_path):
         assert json.loads(h5.attrs["provenance"]) == PROVENANCE
         ds = h5["particles/u"]
         assert ds.maxshape == (None,) and ds.chunks is not None
-        assert h5.attrs["compression"] == store.COMPRESSION == "auto" and ds.compression in (None, "gzip")
+        assert h5.attrs["compression"] == chunks.COMPRESSION == "auto" and ds.compression in (None, "gzip")
         assert ds.attrs["unit"] == "J"
         np.testing.assert_array_equal(h5["index/step"][()], sorted(STEPS))
         off = h5["index/contacts"][()]
@@ -99,7 +103,7 @@ def test_sigkill_mid_run_then_resume(tmp_path):
         import os, signal, sys
         sys.path.insert(0, {os.path.dirname(__file__)!r})
         from result_frames import synthetic_frame, PROVENANCE, WALLS_META
-        from demsplit.results.store import ResultWriter
+        from demsplit.results.writer import ResultWriter
         w = ResultWriter({str(out)!r}, PROVENANCE, walls_meta=WALLS_META)
         for s in {STEPS[:2]!r}:
             w.append(synthetic_frame(s))
@@ -194,10 +198,10 @@ def test_frames_are_committed_once_the_inputs_digests_are_known(tmp_path):
     with ResultWriter(out, prov, walls_meta=WALLS_META) as w:
         w.append(synthetic_frame(0))
         assert not (work / "commit.npys").exists() and not (work / "run.json").exists()
-        assert not store._resumable(work)
+        assert not writer._resumable(work)
         job.hash_in_background()  # the thread gets a core
         w.append(synthetic_frame(1000))
-        assert store._resumable(work) and w.done_steps == {0, 1000}
+        assert writer._resumable(work) and w.done_steps == {0, 1000}
         manifest = json.loads((work / "run.json").read_text())
         assert manifest["identity"]["inputs"] == [hashing.file_digest(dump)]
     with h5py.File(out) as h5:
@@ -236,7 +240,7 @@ def test_writing_memory_does_not_grow_with_frames(tmp_path, monkeypatch):
     appending and closing is the same for 3 and 12 frames."""
     import tracemalloc
 
-    monkeypatch.setattr(store, "CHUNK_ROWS", 512)
+    monkeypatch.setattr(chunks, "CHUNK_ROWS", 512)
     peaks = []
     for n in (3, 12):
         frames_n = [synthetic_frame(s, n_particles=300, n_pairs=1000) for s in range(n)]
@@ -255,7 +259,7 @@ def test_writing_memory_does_not_grow_with_frames(tmp_path, monkeypatch):
 def test_gzip_chunks_compressed_in_threads_decode_as_ordinary_hdf5(tmp_path, monkeypatch):
     """The gzip store writes pre-filtered chunks (shuffle + zlib, in a thread pool):
     HDF5 itself must decode them to the same values, across whole and partial chunks."""
-    monkeypatch.setattr(store, "CHUNK_ROWS", 512)
+    monkeypatch.setattr(chunks, "CHUNK_ROWS", 512)
     frames = [synthetic_frame(s, n_particles=700, n_pairs=1300) for s in range(3)]
     w = ResultWriter(tmp_path / "o.h5", PROVENANCE, compression="gzip")
     for f in frames:
@@ -287,7 +291,7 @@ def stored_columns(path) -> dict[str, h5py.Dataset]:
 def test_auto_compression_gzips_only_what_compresses(tmp_path, monkeypatch):
     """auto: gzip (+ shuffle) for constant, integer and low-variety columns, no
     filter for random floats; decided from the first chunk, values exact."""
-    monkeypatch.setattr(store, "CHUNK_ROWS", 512)
+    monkeypatch.setattr(chunks, "CHUNK_ROWS", 512)
     frames = [low_variety_frame(s, n_particles=700, n_pairs=1300) for s in (0, 1000, 2000)]
     with ResultWriter(tmp_path / "o.h5", PROVENANCE, walls_meta=WALLS_META) as w:  # the default: auto
         for f in frames:
@@ -300,7 +304,7 @@ def test_auto_compression_gzips_only_what_compresses(tmp_path, monkeypatch):
     for name in ("particles/u", "contacts/delta", "contacts/u_n", "contacts/u_t", "contacts/u1"):
         assert filters[name] is None, name
     with h5py.File(tmp_path / "o.h5") as h5:
-        assert h5["contacts/step"].shuffle and h5["contacts/step"].compression_opts == store.GZIP_LEVEL
+        assert h5["contacts/step"].shuffle and h5["contacts/step"].compression_opts == chunks.GZIP_LEVEL
         assert not h5["contacts/u_n"].shuffle
     for name, (values, _) in columns.items():
         table, col = name.split("/")
@@ -310,7 +314,7 @@ def test_auto_compression_gzips_only_what_compresses(tmp_path, monkeypatch):
 
 def test_auto_store_equals_uncompressed_store(tmp_path, monkeypatch):
     """auto and none hold the same values; only the filters differ."""
-    monkeypatch.setattr(store, "CHUNK_ROWS", 512)
+    monkeypatch.setattr(chunks, "CHUNK_ROWS", 512)
     frames = [low_variety_frame(s, n_particles=900, n_pairs=2000) for s in (0, 1000, 2000, 3000)]
     for comp in ("auto", "none"):
         with ResultWriter(tmp_path / f"{comp}.h5", PROVENANCE, walls_meta=WALLS_META, compression=comp) as w:
@@ -330,7 +334,7 @@ def test_auto_store_equals_uncompressed_store(tmp_path, monkeypatch):
 def test_every_compression_round_trips_across_chunk_boundaries(tmp_path, monkeypatch, compression):
     """Frames of 1 to 3 chunks' worth of rows, not aligned to chunks, and an empty
     walls table: every column reads back exactly, by read_store and by h5py."""
-    monkeypatch.setattr(store, "CHUNK_ROWS", 512)
+    monkeypatch.setattr(chunks, "CHUNK_ROWS", 512)
     frames = [synthetic_frame(s, n_particles=n, n_pairs=n + 9) for s, n in ((0, 300), (1, 1100), (2, 77), (3, 1500))]
     for f in frames:
         f["walls"] = {k: v[:0] for k, v in f["walls"].items()}
@@ -350,7 +354,7 @@ def test_h5dump_reads_an_auto_store(tmp_path, monkeypatch):
 
     if sh.which("h5dump") is None:
         pytest.skip("h5dump not installed (apt-get install hdf5-tools)")
-    monkeypatch.setattr(store, "CHUNK_ROWS", 512)
+    monkeypatch.setattr(chunks, "CHUNK_ROWS", 512)
     f = low_variety_frame(0, n_particles=700, n_pairs=1300)
     with ResultWriter(tmp_path / "o.h5", PROVENANCE) as w:
         w.append(f)
@@ -358,7 +362,7 @@ def test_h5dump_reads_an_auto_store(tmp_path, monkeypatch):
         assert stored_columns(tmp_path / "o.h5")[f"contacts/{col}"][1] == comp
         header = subprocess.run(["h5dump", "-p", "-H", "-d", f"/contacts/{col}", str(tmp_path / "o.h5")],
                                 capture_output=True, text=True, check=True).stdout
-        assert (f"COMPRESSION DEFLATE {{ LEVEL {store.GZIP_LEVEL} }}" in header) == (comp == "gzip"), header
+        assert (f"COMPRESSION DEFLATE {{ LEVEL {chunks.GZIP_LEVEL} }}" in header) == (comp == "gzip"), header
         raw = tmp_path / f"{col}.bin"  # the values as h5dump decodes them, little-endian binary
         subprocess.run(["h5dump", "-d", f"/contacts/{col}", "-b", "LE", "-o", str(raw), str(tmp_path / "o.h5")],
                        capture_output=True, check=True)
@@ -370,14 +374,14 @@ def test_work_directory_holds_a_readable_store_and_its_commit_record(tmp_path, m
     """Mid-run, .out.h5.partial/ holds the store written so far (a valid HDF5
     file, in SWMR mode) and the commit record: the frames' steps and offsets
     and the rows not yet in a whole chunk. Other layouts are not resumed."""
-    monkeypatch.setattr(store, "CHUNK_ROWS", 128)
+    monkeypatch.setattr(chunks, "CHUNK_ROWS", 128)
     out = tmp_path / "out.h5"
     w = ResultWriter(out, PROVENANCE)
     for s in (7, 8):
         w.append(synthetic_frame(s, n_particles=300, n_pairs=500))
     work = tmp_path / ".out.h5.partial"
-    assert store.committed_steps(out) == [7, 8]
-    header, carry = store._read_records(work / "commit.npys")
+    assert writer.committed_steps(out) == [7, 8]
+    header, carry = writer._read_records(work / "commit.npys")
     expected = np.concatenate([synthetic_frame(s, n_particles=300, n_pairs=500)["contacts"]["u_n"] for s in (7, 8)])
     n = len(expected) // 2
     assert header["rows"]["contacts"] == [0, n, 2 * n] and header["written"]["contacts"] == 2 * n // 128 * 128
@@ -402,10 +406,10 @@ KILL_SCRIPT = """
 import os, signal, sys
 sys.path.insert(0, {tests!r})
 from result_frames import synthetic_frame, PROVENANCE, WALLS_META
-import demsplit.results.store as store
-store.CHUNK_ROWS = 128
+import demsplit.results.chunks as chunks, demsplit.results.writer as writer
+chunks.CHUNK_ROWS = 128
 calls = {{"n": 0}}
-real = getattr(store, {target!r}) if {target!r} != "_TableSink._write" else store._TableSink._write
+real = getattr(writer, {target!r}) if {target!r} != "TableSink._write" else chunks.TableSink._write
 
 def dying(*args, **kwargs):
     calls["n"] += 1
@@ -416,22 +420,22 @@ def dying(*args, **kwargs):
         os.kill(os.getpid(), signal.SIGKILL)
     return real(*args, **kwargs)
 
-if {target!r} == "_TableSink._write":
-    store._TableSink._write = dying
+if {target!r} == "TableSink._write":
+    chunks.TableSink._write = dying
 else:
-    setattr(store, {target!r}, dying)
-w = store.ResultWriter({out!r}, PROVENANCE, walls_meta=WALLS_META)
+    setattr(writer, {target!r}, dying)
+w = writer.ResultWriter({out!r}, PROVENANCE, walls_meta=WALLS_META)
 for s in range(6):
     w.append(synthetic_frame(s, n_particles=300, n_pairs=500))
 w.close()
 """
 
 
-# _TableSink._write is called once per column per frame: 42 calls a frame (particles 1-10,
+# TableSink._write is called once per column per frame: 42 calls a frame (particles 1-10,
 # contacts 11-28, walls 29-34, frames 35-42), so call 54 is frame 1's contacts, 99 frame 2's
 # contacts and 131 frame 3's particles, each with chunks written past the last commit.
-@pytest.mark.parametrize("target, at", [("_TableSink._write", 5), ("_TableSink._write", 54), ("_TableSink._write", 99),
-                                        ("_TableSink._write", 131), ("_write_records", 1), ("_write_records", 4)])
+@pytest.mark.parametrize("target, at", [("TableSink._write", 5), ("TableSink._write", 54), ("TableSink._write", 99),
+                                        ("TableSink._write", 131), ("_write_records", 1), ("_write_records", 4)])
 def test_killed_at_any_point_of_a_frame_resumes_to_the_same_store(tmp_path, target, at):
     """SIGKILL inside a frame (between chunk writes, or with the commit record
     half written): the resumed run equals an uninterrupted one."""
@@ -441,11 +445,11 @@ def test_killed_at_any_point_of_a_frame_resumes_to_the_same_store(tmp_path, targ
     proc = subprocess.run([sys.executable, "-c", script], capture_output=True)
     assert proc.returncode == -9, proc.stderr.decode()
     assert not out.exists()
-    done = store.committed_steps(out)
+    done = writer.committed_steps(out)
     assert done == list(range(len(done))) and len(done) < 6
     import unittest.mock
 
-    with unittest.mock.patch.object(store, "CHUNK_ROWS", 128), \
+    with unittest.mock.patch.object(chunks, "CHUNK_ROWS", 128), \
             ResultWriter(out, PROVENANCE, walls_meta=WALLS_META, resume=True) as w:
         assert w.done_steps == set(done)
         for f in frames6[len(done):]:
@@ -478,7 +482,7 @@ def test_demsplit_run_defaults_to_auto_and_equals_none(tmp_path):
 def test_auto_decides_once_from_the_first_chunk(tmp_path, monkeypatch):
     """A column constant over its first chunk stays gzip when later rows are random;
     a random first chunk leaves the column unfiltered when later rows are constant."""
-    monkeypatch.setattr(store, "CHUNK_ROWS", 512)
+    monkeypatch.setattr(chunks, "CHUNK_ROWS", 512)
     frames = [synthetic_frame(s, n_particles=300, n_pairs=700) for s in (0, 1)]
     frames[0]["contacts"]["u_n"] = np.full(710, 1e-6)  # first chunk constant, second frame random
     frames[1]["contacts"]["u_t"] = np.full(710, 1e-6)  # first chunk random (frame 0), then constant
@@ -495,7 +499,7 @@ def test_auto_decides_once_from_the_first_chunk(tmp_path, monkeypatch):
 def test_small_tables_get_small_chunks(tmp_path):
     """A table's chunks hold its first frame's rows rounded up to a power of two
     (1024 to CHUNK_ROWS), so that a small run is not stored as mostly padding."""
-    assert [store.chunk_rows(n) for n in (0, 1, 300, 1024, 1025, 40_000, 10**7)] == \
+    assert [chunks.chunk_rows(n) for n in (0, 1, 300, 1024, 1025, 40_000, 10**7)] == \
         [1024, 1024, 1024, 1024, 2048, 65536, 65536]
     frames_small = [synthetic_frame(s, n_particles=300, n_pairs=700) for s in range(3)]
     with ResultWriter(tmp_path / "o.h5", PROVENANCE, walls_meta=WALLS_META, compression="none") as w:
@@ -517,20 +521,20 @@ def test_a_commit_record_replaced_while_it_is_read_is_read_whole(tmp_path):
     path = tmp_path / "commit.npys"
     records = [({"steps": list(range(n))}, {"t": {"a": np.arange(n, dtype=np.float64), "b": np.arange(2 * n)}})
                for n in (3, 3000)]
-    store._write_records(path, *records[0])
+    writer._write_records(path, *records[0])
     stop = threading.Event()
 
-    def writer():
+    def rewrite():
         k = 0
         while not stop.is_set():
             k += 1
-            store._write_records(path, *records[k % 2])
+            writer._write_records(path, *records[k % 2])
 
-    thread = threading.Thread(target=writer)
+    thread = threading.Thread(target=rewrite)
     thread.start()
     try:
         for _ in range(400):
-            header, tables = store._read_records(path)
+            header, tables = writer._read_records(path)
             n = len(header["steps"])
             assert tables["t"]["a"].tolist() == list(range(n)) and len(tables["t"]["b"]) == 2 * n
     finally:

@@ -8,7 +8,8 @@ import threading
 
 import pytest
 from demsplit.runtime import writeback
-from demsplit.results.store import ResultWriter, load_results
+from demsplit.results.store import load_results
+from demsplit.results.writer import ResultWriter
 from result_frames import PROVENANCE, WALLS_META, synthetic_frame
 
 

@@ -129,7 +129,7 @@ def test_clump_scene_normal_energy_matches_normElastEnergy(clump_run):
 @pytest.mark.simulator
 def test_the_clump_table_is_exported_next_to_the_spheres(clump_run, tmp_path):
     import pandas as pd
-    from demsplit.results.store import export_tables
+    from demsplit.results.exports.tables import export_tables
 
     res = demsplit.analyze(clump_run[0])
     written = export_tables(res, tmp_path / "csv", fmt="csv")

@@ -58,7 +58,7 @@ class Results:
 
     Build it with :meth:`from_frames` (per-frame tables from the pipeline),
     :meth:`from_tables` (tables already holding every frame) or
-    :func:`load_results` (a store written by :class:`demsplit.results.store.ResultWriter`).
+    :func:`load_results` (a store written by :class:`demsplit.results.writer.ResultWriter`).
     """
 
     particles: pd.DataFrame
@@ -94,7 +94,7 @@ class Results:
         walls_meta: list[dict] | None = None,
     ) -> Results:
         """Results from per-frame tables (the dicts the pipeline hands to
-        :meth:`demsplit.results.store.ResultWriter.append`), concatenated in step order.
+        :meth:`demsplit.results.writer.ResultWriter.append`), concatenated in step order.
 
         Every frame must give a table the same columns (an absent table counts
         as an empty one).

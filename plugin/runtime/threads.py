@@ -1,7 +1,7 @@
 """The process's worker threads, for work that releases the GIL.
 
 The compiled parser (:mod:`demsplit.readers.fastparse`), the store's chunk
-compression (:mod:`demsplit.results.store`) and the ingest cache's reads
+compression (:mod:`demsplit.results.chunks`) and the ingest cache's reads
 (:mod:`demsplit.readers.cache`) each cut their work into pieces and run them
 on :func:`pool`: numba kernels compiled ``nogil``, ISA-L/zlib compression and
 ``os.preadv`` all release the GIL, so the pieces run on every core. Tasks on

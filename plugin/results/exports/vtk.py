@@ -24,10 +24,9 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
-from ..outputs import atomic_path
-from ..errors import StoreError
-from ..outputs import check_output_path
-from .tables import Results, with_not_computed_as_nan
+from ...errors import StoreError
+from ...outputs import atomic_path, check_output_path
+from ..tables import Results, with_not_computed_as_nan
 
 POSITIONS = {"particles": ("x", "y", "z"), "contacts": ("cpx", "cpy", "cpz")}
 """Where each table's rows are drawn: the particle centre, the contact point (m)."""

@@ -18,9 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..outputs import atomic_path
-from ..outputs import check_output_path
-from .tables import Results, with_not_computed_as_nan
+from ...outputs import atomic_path, check_output_path
+from ..tables import Results, with_not_computed_as_nan
 
 LEADING = ("id", "type", "x", "y", "z", "radius")
 """The columns every frame starts with, in OVITO's and LAMMPS' names."""
