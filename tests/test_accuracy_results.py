@@ -10,7 +10,7 @@ from conftest import SAMPLES
 from demsplit import analyze
 from demsplit.cli import main
 from demsplit.physics.accuracy import corrected_share, expected_share_error
-from demsplit.pipeline import Options
+from demsplit.compute import Options
 
 PACKING = SAMPLES / "liggghts" / "packing" / "in.packing"
 

@@ -16,10 +16,10 @@ import numpy as np
 import pytest
 from demsplit.frame import ParticleIndex
 from demsplit.physics import elastic, formulas, moduli
-from demsplit.physics.bodies import ContactBodies
-from demsplit.physics.partition import contact_energies, particle_energy
+from demsplit.physics.bodies import FrameContacts
+from demsplit.physics.partition import body_tables, law_energies, particle_energy, split_energies
 from demsplit.physics.shares import contact_point, normal_share, radius_share, tangential_share
-from demsplit.pipeline import Options, frame_tables
+from demsplit.compute import Options, frame_tables
 from demsplit.readers import open_run
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -105,9 +105,9 @@ def same(a, b, rtol=0.0):
 
 def check_against_reference(contacts, scene, particles, n_walls=0):
     """partition + per_particle + the comparison splits vs the numpy reference."""
-    index = ParticleIndex(particles["id"])
-    bodies = ContactBodies.build(contacts, scene, particles, index)
-    energies = contact_energies(contacts, scene, particles, bodies, index)
+    frame = FrameContacts(contacts, scene, particles)
+    bodies = frame.bodies
+    energies = law_energies(frame)
     constants = reference_constants(contacts, scene, particles)
     n = len(contacts["delta"])
     for lo, hi in ((0, n), (n // 3, n // 2)):  # a range's constants, as the accuracy columns take them
@@ -120,7 +120,7 @@ def check_against_reference(contacts, scene, particles, n_walls=0):
         same(energies.u_n[pair_law], u_n[pair_law])
         same(energies.u_t[pair_law], u_t[pair_law], rtol=1e-13)  # |shear|^2 in order; einsum's may differ
     u_n, u_t = energies.u_n, energies.u_t
-    e = ds.partition(contacts, scene, particles, energies=energies, bodies=bodies, index=index)
+    e = split_energies(frame, energies)
     s_n = np.broadcast_to(normal_share(*constants), u_n.shape)
     s_t = np.broadcast_to(tangential_share(*constants), u_n.shape)
     same(e.share_n1, s_n)
@@ -128,7 +128,7 @@ def check_against_reference(contacts, scene, particles, n_walls=0):
     for k, v in reference_split(contacts, s_n, s_t, u_n, u_t).items():
         same(getattr(e, k), v)
     same(e.separated, np.asarray(contacts["delta"]) < 0)
-    pt, wt = ds.per_particle(contacts, e, particles, n_walls=n_walls, index=index)
+    pt, wt = body_tables(frame, e, n_walls=n_walls)
     ref_p, ref_w = reference_sums(contacts, particles, s_n, s_t, u_n, u_t, len(wt["wall"]))
     for k in ("u_n", "u_t", "n_contacts"):
         same(pt[k], ref_p[k])
@@ -145,7 +145,7 @@ def check_against_reference(contacts, scene, particles, n_walls=0):
         n = len(particles["id"])
         expected = (np.bincount(rows1, weights=u1, minlength=n)
                     + np.bincount(rows2, weights=(u_n + u_t - u1)[pair], minlength=n))
-        same(particle_energy(contacts, energies, bodies, particles, split=split, index=index), expected)
+        same(particle_energy(frame, energies, split), expected)
     return e
 
 
@@ -202,7 +202,7 @@ def test_a_ranges_constants_from_the_contacts_own_types_and_once_the_frames_arra
     contacts, particles = random_frame(rng, 30, 80, 2, 3, True, hard=True)
     scene = random_scene(rng, 3, 2, "hertz", False)
     t1, t2 = reference_types(contacts, scene, particles)
-    bodies = ContactBodies.build({**contacts, "type1": t1, "type2": t2}, scene, particles)
+    bodies = FrameContacts({**contacts, "type1": t1, "type2": t2}, scene, particles).bodies
     want = (*scene.lookup(t1), *scene.lookup(t2))
     n = len(t1)
     for lo, hi in ((0, n), (n // 4, 3 * n // 4)):
@@ -228,7 +228,8 @@ def test_random_frames_match_numpy(seed, n_particles, n_contacts, n_walls, n_typ
 def test_frames_computed_in_pieces_are_the_frames_in_one(seed, monkeypatch):
     """The per-contact loops and the accuracy columns run in pieces on the pool's threads
     (threads.map_ranges): three pieces give the tables of one, bit for bit."""
-    from demsplit import pipeline, threads
+    from demsplit import compute
+    from demsplit.runtime import threads
 
     rng = np.random.default_rng(seed)
     contacts, particles = random_frame(rng, 30, 100, 2, 3, dense_ids=bool(seed % 2), hard=False)
@@ -238,7 +239,7 @@ def test_frames_computed_in_pieces_are_the_frames_in_one(seed, monkeypatch):
     monkeypatch.setattr(threads, "MIN_RANGE", 1)
     monkeypatch.setattr(threads, "THREADS", 3)
     monkeypatch.setattr(threads, "_pool", None)
-    monkeypatch.setattr(pipeline, "ACCURACY_ROWS", 7)
+    monkeypatch.setattr(compute, "ACCURACY_ROWS", 7)
     pieces = frame_tables(frame, scene, Options())
     assert list(whole) == list(pieces)
     for name, table in whole.items():

@@ -17,7 +17,7 @@ import pytest
 from demsplit.errors import UnsupportedModelError
 from demsplit.frame import ParticleIndex
 from demsplit.physics import laws
-from demsplit.physics.bodies import ContactBodies, LawRows
+from demsplit.physics.bodies import FrameContacts, LawRows
 from demsplit.physics.modes import ADHESION_COLUMN, MODE_COLUMNS
 from demsplit.physics.partition import contact_energies
 from demsplit.scene import scene_from_dict, scene_to_dict
@@ -71,9 +71,7 @@ def frame_of(key: str, seed: int = 0, delta: np.ndarray | None = None) -> tuple[
 
 def law_rows(key: str, particles: dict, contacts: dict) -> tuple[laws.ContactLaw, LawRows]:
     scene = scene_of(key)
-    index = ParticleIndex(particles["id"])
-    bodies = ContactBodies.build(contacts, scene, particles, index)
-    return scene.model.contact_law, LawRows(contacts, slice(None), bodies, key, particles, index)
+    return scene.model.contact_law, LawRows(FrameContacts(contacts, scene, particles), slice(None), key)
 
 
 def test_registry_lists_every_law_file():

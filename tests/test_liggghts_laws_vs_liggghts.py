@@ -43,8 +43,7 @@ from conftest import SAMPLES
 from liggghts_bridges import BRIDGE_MODELS, liggghts_capillary
 import liggghts_reference
 from liggghts_reference import has_reference, submodels
-from demsplit.frame import ParticleIndex
-from demsplit.physics.bodies import ContactBodies, LawRows
+from demsplit.physics.bodies import FrameContacts, LawRows
 from demsplit.readers import open_run
 from demsplit.readers.lammps_dump import open_dump
 
@@ -126,8 +125,7 @@ def test_forces_and_torques_are_liggghts_own(model_run):
     for k in range(len(run)):
         frame = run.frame(k)
         c, p = frame.contacts, frame.particles
-        index = ParticleIndex(p["id"])
-        rows = LawRows(c, slice(None), ContactBodies.build(c, run.scene, p, index), law.key, p, index)
+        rows = LawRows(FrameContacts(c, run.scene, p), slice(None), law.key)
         theirs = dumped(run, k, ["fnx", "fny", "fnz", "tqx", "tqy", "tqz", "tqtx", "tqty", "tqtz"])
         normal = np.stack([c["nx"], c["ny"], c["nz"]], -1)
         force = law.normal_force(rows)
@@ -192,9 +190,8 @@ def aligned(run, k: int, names: list[str]) -> tuple[dict, LawRows, np.ndarray, n
     history (pairs and mesh walls, not primitive walls) and LIGGGHTS' values of the named columns for them."""
     frame = run.frame(k)
     c, p = frame.contacts, frame.particles
-    index = ParticleIndex(p["id"])
     law = run.scene.model.contact_law
-    rows = LawRows(c, slice(None), ContactBodies.build(c, run.scene, p, index), law.key, p, index)
+    rows = LawRows(FrameContacts(c, run.scene, p), slice(None), law.key)
     theirs = dumped(run, k, names)
     keys = contact_keys(c)
     has_history = history_known(c)

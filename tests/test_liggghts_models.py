@@ -74,7 +74,7 @@ def test_hertz_kt_reproduces_liggghts_tangential_force():
     cap of sliding contacts, so most contacts agree to well under 1 %; a kt off
     by any constant factor (the paper's (1-2nu)/G instead of (2-nu)/G in G*,
     say) would be off by tens of percent everywhere."""
-    from demsplit.physics.bodies import ContactBodies
+    from demsplit.physics.bodies import FrameContacts
     from demsplit.physics.elastic import overlap
     from demsplit.physics.formulas import hertz_kt_formula
     from demsplit.physics.moduli import effective_radius, effective_shear_modulus
@@ -86,7 +86,7 @@ def test_hertz_kt_reproduces_liggghts_tangential_force():
     f = open_dump(run.pairs.path).frame(0)
     names = run._pair_names
     ft = np.stack([f.columns[names[k]] for k in ("ftx", "fty", "ftz")], -1)
-    bodies = ContactBodies.build(c, run.scene, frame.particles)
+    bodies = FrameContacts(c, run.scene, frame.particles).bodies
     R = effective_radius(c["r1"][pair], c["r2"][pair])
     G = effective_shear_modulus(bodies.E1[pair], bodies.nu1[pair], bodies.E2[pair], bodies.nu2[pair])
     kt = hertz_kt_formula(overlap(c["delta"][pair]), R, G)

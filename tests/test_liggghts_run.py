@@ -36,7 +36,8 @@ import pytest
 from demsplit.cli import main as cli_main
 from demsplit.errors import InputFormatError, MaterialError, PrecisionError, TruncatedFileError
 from demsplit.frame import Frame, ParticleIndex
-from demsplit.pipeline import frame_tables, run_to_store
+from demsplit.compute import frame_tables
+from demsplit.pipeline import run_to_store
 from demsplit.readers import open_run
 from demsplit.readers.lammps_dump import open_dump
 from demsplit.readers.liggghts import LiggghtsRun

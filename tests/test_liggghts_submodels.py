@@ -13,8 +13,7 @@ from __future__ import annotations
 import mpmath
 import numpy as np
 import pytest
-from demsplit.frame import ParticleIndex
-from demsplit.physics.bodies import ContactBodies, LawRows
+from demsplit.physics.bodies import FrameContacts, LawRows
 from demsplit.physics.laws import law_class, make, supported
 from demsplit.physics.laws._liggghts import (rolling_spring_energy, sjkr2_area_integral, sjkr_area,
                                               sjkr_area_integral)
@@ -202,9 +201,7 @@ def thornton_ning(delta: np.ndarray, delta_h: np.ndarray, f_h: np.ndarray, **par
     sc = Scene(materials={1: Material(5e6, 0.45), 2: Material(7e7, 0.3)},
                model=ContactModel("liggghts:thornton_ning", params))
     e = contact_energies(contacts, sc, particles)
-    index = ParticleIndex(particles["id"])
-    rows = LawRows(contacts, slice(None), ContactBodies.build(contacts, sc, particles, index),
-                   sc.model.law, particles, index)
+    rows = LawRows(FrameContacts(contacts, sc, particles), slice(None), sc.model.law)
     return e.u_n, sc.model.contact_law.normal_force(rows)
 
 

@@ -63,7 +63,7 @@ def test_jobs_beyond_the_cores_run_serially_with_a_note(samples, monkeypatch):
     from demsplit.runtime import threads
 
     monkeypatch.setattr(threads, "THREADS", 2)
-    monkeypatch.setattr(pipeline, "_processes", lambda *a: pytest.fail("no worker process on 2 cores"))
+    monkeypatch.setattr(pipeline, "processes", lambda *a: pytest.fail("no worker process on 2 cores"))
     res = analyze(_runs(samples)["liggghts-packing"], jobs=2)
     notes = res.provenance["notes"]
     assert any(n.startswith("--jobs 2 on 2 cores: the frames computed in this process") for n in notes)
@@ -74,8 +74,8 @@ def test_worker_processes_equal_serial(name, serial, samples, four_cores, monkey
     import demsplit.pipeline as pipeline
 
     started = []
-    processes = pipeline._processes
-    monkeypatch.setattr(pipeline, "_processes", lambda *a: started.append(a[-1]) or processes(*a))
+    processes = pipeline.processes
+    monkeypatch.setattr(pipeline, "processes", lambda *a: started.append(a[-1]) or processes(*a))
     parallel = analyze(_runs(samples)[name], jobs=2)
     assert started == [2]  # two worker processes did the work
     assert len(parallel.frames) == len(serial[name].frames) > 0

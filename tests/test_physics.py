@@ -8,7 +8,8 @@ import demsplit as ds
 import mpmath
 import numpy as np
 import pytest
-from demsplit.physics.bodies import ContactBodies
+from demsplit.physics.bodies import ContactBodies, FrameContacts
+from demsplit.physics.partition import law_energies, split_energies
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -347,7 +348,9 @@ def test_single_material_skips_lookup_and_matches():
     n = len(contacts["delta"])
     looked_up = ContactBodies(None, None, np.full(n, m.E), np.full(n, m.nu), np.full(n, m.E), np.full(n, m.nu),
                               False)
-    slow = ds.partition(contacts, scene, particles, bodies=looked_up)
+    frame = FrameContacts(contacts, scene, particles)
+    frame.bodies = looked_up
+    slow = split_energies(frame, law_energies(frame))
     for name in ("u_n", "u_t", "u1", "u2", "depth1", "cp", "share_n1", "share_t1"):
         assert np.array_equal(getattr(fast, name), getattr(slow, name)), name
 

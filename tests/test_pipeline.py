@@ -6,7 +6,7 @@ import demsplit as ds
 import numpy as np
 import pytest
 from demsplit.frame import Box, Frame
-from demsplit.pipeline import Options, frame_tables
+from demsplit.compute import Options, frame_tables
 from demsplit.results import Results
 
 GPa = 1e9

@@ -1,6 +1,8 @@
-"""The two bodies of every contact: their material types and elastic constants, per contact.
+"""One frame's contacts and the two bodies of every contact: their rows, material types and elastic constants.
 
-:class:`ContactBodies` knows, for every contact of a frame, which material
+:class:`FrameContacts` is what every stage of the partition is given: the frame's contact table, its scene
+and its particles, with what the stages derive from them (the particle index, the two bodies' rows, their
+materials) computed once, on first use. :class:`ContactBodies` knows, for every contact of a frame, which material
 each side is made of, without a per-contact lookup where it can avoid one: a
 single-material scene has scalars, a multi-material scene codes every
 contact by its pair of types (``type1 * n_types + type2``) and evaluates
@@ -11,13 +13,54 @@ these contacts that a contact law gets (:class:`demsplit.physics.laws.ContactRow
 from __future__ import annotations
 
 from collections.abc import Sequence
+from functools import cached_property
 
 import numpy as np
 
 from ..errors import ContactError, InputFormatError
-from ..frame import ParticleIndex, Table
+from ..frame import ParticleIndex, Table, table_length
 from ..scene import Scene
 from .moduli import reduced_mass
+
+
+class FrameContacts:
+    """One frame's contacts (``contacts``, a table of :mod:`demsplit.frame`), the ``scene`` and the frame's
+    ``particles`` (None where the contacts carry their bodies' types and no stage needs a particle column),
+    with what the stages derive from them computed once: :attr:`index`, :attr:`rows`, :attr:`bodies`.
+    ``index`` may be given when the caller has built it already."""
+
+    def __init__(self, contacts: Table, scene: Scene, particles: Table | None = None,
+                 index: ParticleIndex | None = None) -> None:
+        self.contacts, self.scene, self.particles = contacts, scene, particles
+        if index is not None:
+            self.index = index
+
+    @cached_property
+    def index(self) -> ParticleIndex:
+        """Row of every particle id (:class:`demsplit.frame.ParticleIndex`)."""
+        if self.particles is None:
+            raise InputFormatError("contacts carry no material types and no particles table was given.",
+                                   fix="pass the frame's particles so types can be looked up by id.")
+        return ParticleIndex(self.particles["id"])
+
+    @cached_property
+    def rows(self) -> tuple[np.ndarray, np.ndarray]:
+        """The particle row of body 1 and of body 2 of every contact (body 2 of a wall contact: ``-1 - wall``,
+        :meth:`demsplit.frame.ParticleIndex.contact_rows`)."""
+        c = self.contacts
+        return self.index.contact_rows(c["id1"], c["id2"], c["wall"])
+
+    @cached_property
+    def bodies(self) -> ContactBodies:
+        """Material types and elastic constants of both bodies of every contact."""
+        return ContactBodies.build(self)
+
+    def __len__(self) -> int:
+        return table_length(self.contacts)
+
+    def without(self, columns: Sequence[str]) -> None:
+        """Drop contact ``columns`` nothing later reads (the caller's table keeps them: a new dict)."""
+        self.contacts = {c: v for c, v in self.contacts.items() if c not in columns}
 
 
 class ContactBodies:
@@ -39,12 +82,15 @@ class ContactBodies:
         self._pairs = pairs  # (code of every contact, codes present), see _pair_codes
 
     @classmethod
-    def build(cls, contacts: Table, scene: Scene, particles: Table | None = None,
-              index: ParticleIndex | None = None) -> ContactBodies:
+    def build(cls, frame: FrameContacts) -> ContactBodies:
+        """The bodies of ``frame``'s contacts: scalars in a single-material scene, else their types (the
+        contacts' ``type1 type2``, or gathered from the particles and the walls), checked against the
+        scene's materials once per pair of types present."""
+        scene = frame.scene
         if scene.single_material:
             m = next(iter(scene.materials.values()))
             return cls(None, None, m.E, m.nu, m.E, m.nu, True, scene)
-        type1, type2, pairs = _contact_pairs(contacts, scene, particles, index)
+        type1, type2, pairs = _contact_pairs(frame)
         bodies = cls(type1, type2, None, None, None, None, False, scene, pairs=pairs)
         code, pairs = bodies._pair_codes()
         n_types = len(scene.material_tables()[0])
@@ -147,20 +193,16 @@ def _code_dtype(n_types: int) -> type:
     return np.int8 if n_types**2 <= 127 else np.int16 if n_types**2 <= 32767 else np.int64
 
 
-def _contact_pairs(contacts: Table, scene: Scene, particles: Table | None,
-                   index: ParticleIndex | None) -> tuple[np.ndarray | None, np.ndarray | None, tuple | None]:
+def _contact_pairs(frame: FrameContacts) -> tuple[np.ndarray | None, np.ndarray | None, tuple | None]:
     """The bodies' material types as ``(type1, type2, None)`` when the contacts carry
     them, else ``(None, None, (pair code of every contact, codes present))``."""
+    contacts, scene, particles = frame.contacts, frame.scene, frame.particles
     if "type1" in contacts and "type2" in contacts:
         return contacts["type1"].astype(np.int64), contacts["type2"].astype(np.int64), None
-    if particles is None:
-        raise InputFormatError("contacts carry no material types and no particles table was given.",
-                               fix="pass the frame's particles so types can be looked up by id.")
     from ..kernels import contact_types as gather_types  # compiled: see the module docstring
 
-    index = index or ParticleIndex(particles["id"])
     wall = contacts["wall"]
-    rows1, rows2 = index.contact_rows(contacts["id1"], contacts["id2"], wall)
+    rows1, rows2 = frame.rows
     wall_types = scene.wall_types()
     n_types = len(scene.material_tables()[0])
     ptype = np.asarray(particles["type"])
@@ -183,10 +225,9 @@ class LawRows:
     (:class:`demsplit.physics.laws.ContactRows`): float64 columns of those rows, moduli per pair of
     types, reduced masses. ``law`` (its key) names the law in the errors of missing columns."""
 
-    def __init__(self, contacts: Table, rows: slice | np.ndarray, bodies: ContactBodies, law: str,
-                 particles: Table | None = None, index: ParticleIndex | None = None) -> None:
-        self.contacts, self.rows, self.bodies, self.law = contacts, rows, bodies, law
-        self.particles, self.index = particles, index
+    def __init__(self, frame: FrameContacts, rows: slice | np.ndarray, law: str) -> None:
+        self.frame, self.rows, self.law = frame, rows, law
+        self.contacts, self.bodies, self.particles = frame.contacts, frame.bodies, frame.particles
         self.delta = self.column("delta")
         self.r1 = self.column("r1")
         self.r2 = self.column("r2")
@@ -219,7 +260,7 @@ class LawRows:
             return float(values.flat[0])
         type1, type2 = self.bodies.type1, self.bodies.type2
         if type1 is None:  # a single-material scene: the types were not needed until now
-            type1, type2, pairs = _contact_pairs(self.contacts, self.bodies.scene, self.particles, self.index)
+            type1, type2, pairs = _contact_pairs(self.frame)
             if type1 is None:
                 type1, type2 = _types_of_codes(pairs[0], self.bodies.scene)
         t1, t2 = np.asarray(type1)[self.rows], np.asarray(type2)[self.rows]
@@ -242,7 +283,7 @@ class LawRows:
             raise InputFormatError(f"the contact law {self.law} needs the particle column {name!r}, which the atom "
                                    "dump does not have.", fix=f"add '{name}' to the dump custom columns.")
         c, rows = self.contacts, self.rows
-        index = self.index or ParticleIndex(self.particles["id"])
+        index = self.frame.index
         values = np.asarray(self.particles[name], dtype=np.float64)
         v1 = values[index.rows(c["id1"][rows])]
         v2 = np.full_like(v1, np.nan)

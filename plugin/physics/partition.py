@@ -23,9 +23,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import ContactError
-from ..frame import ParticleIndex, Table, table_length
+from ..frame import Table, table_length
 from ..scene import ContactModel, Scene
-from .bodies import ContactBodies, LawRows
+from .bodies import FrameContacts, LawRows
 from .modes import ADHESION_COLUMN, ADHESION_SHARE, ALWAYS, NOT_COMPUTED_BITS, Mode, scene_modes
 from .shares import SPLITS, radius_share, springs_share
 
@@ -132,9 +132,13 @@ def law_groups(contacts: Table, scene: Scene) -> list[tuple[ContactModel, slice 
     return [(m, np.flatnonzero(mask)) for m, mask in groups if mask.any()]
 
 
-def contact_energies(contacts: Table, scene: Scene, particles: Table | None = None,
-                     bodies: ContactBodies | None = None, index: ParticleIndex | None = None, *,
+def contact_energies(contacts: Table, scene: Scene, particles: Table | None = None, *,
                      compiled: bool = True) -> ContactLawEnergy:
+    """:func:`law_energies` of a contact table, its scene and its particles."""
+    return law_energies(FrameContacts(contacts, scene, particles), compiled=compiled)
+
+
+def law_energies(frame: FrameContacts, *, compiled: bool = True) -> ContactLawEnergy:
     """Elastic energy of every mode of every contact with the run's own law(s) (J), shape (modes, n).
 
     Each law computes the modes it has from the columns it declares
@@ -142,8 +146,9 @@ def contact_energies(contacts: Table, scene: Scene, particles: Table | None = No
     compute from the columns given, is 0 and named in ``skipped`` with the
     reason. Damping and friction work are never counted.
     """
-    n = table_length(contacts)
-    bodies = bodies or ContactBodies.build(contacts, scene, particles, index)
+    contacts, scene = frame.contacts, frame.scene
+    n = len(frame)
+    _refuse_rigid_pairs(frame)
     groups = [(model.contact_law, rows) for model, rows in law_groups(contacts, scene)]
     # the modes of every law of the scene, whether or not this frame has contacts it acts on: every frame
     # of a run has the same columns (a frame without contacts had only u_n and u_t)
@@ -157,7 +162,7 @@ def contact_energies(contacts: Table, scene: Scene, particles: Table | None = No
     unknown = np.asarray(contacts["history_unknown"]) != 0 if "history_unknown" in contacts else None
     not_computed = np.zeros(n, dtype=np.int32) if unknown is not None else None
     for law, rows in groups:
-        result = law.energies(LawRows(contacts, rows, bodies, law.key, particles, index), compiled=compiled)
+        result = law.energies(LawRows(frame, rows, law.key), compiled=compiled)
         for k, mode in enumerate(modes):
             if mode.column in result.modes:
                 u[k, rows] = result.modes[mode.column]
@@ -184,6 +189,20 @@ def contact_energies(contacts: Table, scene: Scene, particles: Table | None = No
     return ContactLawEnergy(u, skipped, modes, u_adh, missing, not_computed)
 
 
+def _refuse_rigid_pairs(frame: FrameContacts) -> None:
+    """A contact between two rigid bodies (E = inf both) is an error: neither can store energy."""
+    contacts = frame.contacts
+    rigid_pair = np.broadcast_to(frame.bodies.rigid_pairs(), (len(frame),))
+    if rigid_pair.any():
+        i = int(np.flatnonzero(rigid_pair)[0])
+        raise ContactError(
+            f"{int(np.count_nonzero(rigid_pair))} contact(s) between two rigid bodies, e.g. "
+            f"id1={int(contacts['id1'][i])}, id2={int(contacts['id2'][i])}, wall={int(contacts['wall'][i])}: "
+            "neither body can store elastic energy.",
+            fix="give one of the two materials a finite Young's modulus.",
+        )
+
+
 def _per_contact(x: ArrayLike) -> np.ndarray:
     """Per-contact values for a compiled loop as one row: the array itself, or its one value
     (length 1) when it is a constant broadcast to every contact."""
@@ -193,10 +212,11 @@ def _per_contact(x: ArrayLike) -> np.ndarray:
     return np.ascontiguousarray(np.atleast_1d(x))[None, :]
 
 
-def comparison_shares(contacts: Table, bodies: ContactBodies, split: str) -> np.ndarray:
+def comparison_shares(frame: FrameContacts, split: str) -> np.ndarray:
     """Share of body 1 under a comparison split, the same for every mode (shape (1, n) or (1, 1)):
     ``equal`` 1/2, ``radius`` r1/(r1 + r2), ``springs`` the series springs k_i = E_i r_i (see
     :data:`~demsplit.physics.shares.SPLITS`)."""
+    contacts, bodies = frame.contacts, frame.bodies
     if split == "equal":
         return np.full((1, 1), 0.5)
     if split == "radius":
@@ -208,7 +228,7 @@ def comparison_shares(contacts: Table, bodies: ContactBodies, split: str) -> np.
     raise ValueError(f"unknown split {split!r}; use one of {SPLITS}")
 
 
-def _material_shares(bodies: ContactBodies, n: int, tangential_rule: str,
+def _material_shares(bodies, n: int, tangential_rule: str,
                      modes: tuple[Mode, ...]) -> tuple[np.ndarray, np.ndarray]:
     """Shares of body 1 of every mode under the material law, as ``(values, code)`` for the loops:
     one value per pair of types present (coded) in a multi-material scene, 1/2 in a single-material one."""
@@ -224,35 +244,28 @@ def _material_shares(bodies: ContactBodies, n: int, tangential_rule: str,
                            for values, _ in rows]), NO_CODE
 
 
-def partition(contacts: Table, scene: Scene, particles: Table | None = None, *,
-              split: str = "material", tangential_rule: str = "mindlin",
-              energies: ContactLawEnergy | None = None, bodies: ContactBodies | None = None,
-              index: ParticleIndex | None = None, normal_shares: np.ndarray | None = None) -> ContactEnergy:
+def partition(contacts: Table, scene: Scene, particles: Table | None = None, *, split: str = "material",
+              tangential_rule: str = "mindlin") -> ContactEnergy:
+    """:func:`split_energies` of a contact table's :func:`law_energies`, with its scene and its particles."""
+    frame = FrameContacts(contacts, scene, particles)
+    return split_energies(frame, law_energies(frame), split=split, tangential_rule=tangential_rule)
+
+
+def split_energies(frame: FrameContacts, energies: ContactLawEnergy, *, split: str = "material",
+                   tangential_rule: str = "mindlin", normal_shares: np.ndarray | None = None) -> ContactEnergy:
     """Split every contact's elastic energy between its two bodies and place the contact point.
 
     u1 = sum_m s_m u_m,  u2 = sum_m (1 - s_m) u_m,  depth1 = s_n delta,  x_c = x1 + (r1 - depth1) n,
 
     with s_m the share of body 1 of mode m under ``split`` (the material law:
-    each mode's own rule; the comparison splits: one share for every mode).
-    ``energies`` and ``bodies`` may be passed in to reuse them across splits. ``normal_shares`` (material
+    each mode's own rule; the comparison splits: one share for every mode) and
+    ``energies`` the contacts' :func:`law_energies`. ``normal_shares`` (material
     split only): body 1's share of the normal mode per contact, replacing the law's c1/(c1 + c2) (the
     finite-body correction, :func:`~demsplit.physics.accuracy.corrected_share`); it also places the
     contact point.
     """
-    if index is None and particles is not None and not scene.single_material:
-        index = ParticleIndex(particles["id"])
-    bodies = bodies or ContactBodies.build(contacts, scene, particles, index)
-    n = table_length(contacts)
-    rigid_pair = np.broadcast_to(bodies.rigid_pairs(), (n,))
-    if rigid_pair.any():
-        i = int(np.flatnonzero(rigid_pair)[0])
-        raise ContactError(
-            f"{int(np.count_nonzero(rigid_pair))} contact(s) between two rigid bodies, e.g. "
-            f"id1={int(contacts['id1'][i])}, id2={int(contacts['id2'][i])}, wall={int(contacts['wall'][i])}: "
-            "neither body can store elastic energy.",
-            fix="give one of the two materials a finite Young's modulus.",
-        )
-    energies = energies or contact_energies(contacts, scene, particles, bodies, index)
+    contacts, bodies = frame.contacts, frame.bodies
+    n = len(frame)
     from ..kernels import NO_CODE, split_contacts  # compiled: see the module docstring
 
     if split == "material":
@@ -265,7 +278,7 @@ def partition(contacts: Table, scene: Scene, particles: Table | None = None, *,
             full[0] = normal_shares
             values, code = full, NO_CODE
     else:
-        values, code = comparison_shares(contacts, bodies, split), NO_CODE
+        values, code = comparison_shares(frame, split), NO_CODE
     delta = np.asarray(contacts["delta"], dtype=np.float64)
     shares, u1, u2, depth1, cp = split_contacts(
         values, code, energies.u, delta,
@@ -274,8 +287,12 @@ def partition(contacts: Table, scene: Scene, particles: Table | None = None, *,
                          energies.modes, energies.u_adh, dict(energies.missing), energies.not_computed)
 
 
-def per_particle(contacts: Table, energy: ContactEnergy, particles: Table, n_walls: int = 0,
-                 index: ParticleIndex | None = None) -> tuple[Table, Table]:
+def per_particle(contacts: Table, energy: ContactEnergy, particles: Table, n_walls: int = 0) -> tuple[Table, Table]:
+    """:func:`body_tables` of a contact table and its particles."""
+    return body_tables(FrameContacts(contacts, None, particles), energy, n_walls)
+
+
+def body_tables(frame: FrameContacts, energy: ContactEnergy, n_walls: int = 0) -> tuple[Table, Table]:
     """Sum each body's energy over its contacts (one compiled pass, :func:`demsplit.kernels.body_sums`).
 
     Returns ``(particle_table, wall_table)``: per particle ``id type x y z radius u``,
@@ -286,9 +303,8 @@ def per_particle(contacts: Table, energy: ContactEnergy, particles: Table, n_wal
     """
     from ..kernels import body_sums, max_wall  # compiled: see the module docstring
 
-    index = index or ParticleIndex(particles["id"])
-    wall = contacts["wall"]
-    rows1, rows2 = index.contact_rows(contacts["id1"], contacts["id2"], wall)
+    particles = frame.particles
+    rows1, rows2 = frame.rows
     n_walls = max(n_walls, int(max_wall(rows2)) + 1)
     pu, n_contacts, wu, w_contacts = body_sums(rows1, rows2, energy.shares, energy.u, table_length(particles),
                                                n_walls)
@@ -326,14 +342,10 @@ def _total(u: np.ndarray) -> np.ndarray:
     return total
 
 
-def particle_energy(contacts: Table, energies: ContactLawEnergy, bodies: ContactBodies, particles: Table, *,
-                    split: str, index: ParticleIndex | None = None) -> np.ndarray:
+def particle_energy(frame: FrameContacts, energies: ContactLawEnergy, split: str) -> np.ndarray:
     """Energy of every particle (J, particles' row order) under a comparison ``split``: the
-    ``u`` column of :func:`per_particle` without the per-contact table."""
+    ``u`` column of :func:`body_tables` without the per-contact table."""
     from ..kernels import particle_sums  # compiled: see the module docstring
 
-    index = index or ParticleIndex(particles["id"])
-    wall = contacts["wall"]
-    rows1, rows2 = index.contact_rows(contacts["id1"], contacts["id2"], wall)
-    return particle_sums(rows1, rows2, comparison_shares(contacts, bodies, split), energies.u,
-                         table_length(particles))
+    rows1, rows2 = frame.rows
+    return particle_sums(rows1, rows2, comparison_shares(frame, split), energies.u, table_length(frame.particles))
