@@ -5,21 +5,12 @@ Run (the dumps come from ``benchmarks/generate.py``)::
     python benchmarks/generate.py /tmp/bench_big          # 1e6 particles, 2e6 contacts, 3 frames
     python benchmarks/bench.py /tmp/bench_big [--repeat 1] [--skip ovito,mdanalysis]
 
-Every measurement runs in its own Python process, started fresh; its wall
-time (interpreter start and imports included: what a user waits for) is taken
-by this parent, and its peak RSS is the child's own ``VmHWM`` (high-water
-mark of its resident memory, from ``/proc/self/status``; ``ru_maxrss`` would
-carry the parent's high-water mark across fork and exec). Before each child
-the parent, untimed, writes back every dirty page (``os.sync``), so that no
-child pays for an earlier child's output, and reads the child's input files
-once (:func:`warm`), so that every child starts with them in the page cache:
-this machine's page cache loses pages a few tens of seconds after their last
-use (of the 2.4 GB contact dump read at t=0, 2.0 GB were cached at t=10 s and
-0.34 GB at t=60 s, with 20 GB of memory free; a cold read takes 3.0 s, a
-cached one 0.25 s), so without it a child's time depended on how long ago
-the previous child had read the same files. With ``--repeat N`` the rounds are
-interleaved, each in a rotated order (:func:`rotated`), and the best time
-of each measurement kept (the machine is shared). Measurements:
+Every measurement runs in its own Python process, started fresh by ``harness.fresh`` (the dirty pages of
+earlier children written back and the child's inputs read into the page cache first, untimed); its wall
+time, interpreter start and imports included (what a user waits for), is taken by this parent, its peak
+resident memory is the child's own ``VmHWM``. With ``--repeat N`` the rounds are interleaved, each in a
+rotated order (``harness.rounds``: warm-up and imports first), and the best time of each measurement is
+kept. Measurements:
 
 ``warm-up``
     runs first: ``demsplit run`` on the packing sample in a fresh process, so
@@ -74,29 +65,27 @@ of each measurement kept (the machine is shared). Measurements:
     RSS is subtracted to give the memory above the interpreter and libraries.
 ``kernel`` (in one process, after loading frame 0 into memory)
     ``partition`` + ``per_particle`` on the arrays, ``frame_tables`` without
-    and with the comparison splits: contacts per second, one core (numpy
-    runs these single-threaded), best of ``KERNEL_REPEAT`` (7: on this shared
-    machine the best of 3 moved between 0.077 and 0.103 s from one benchmark
-    run to the next; the minimum of more samples is nearer the uncontended time).
+    and with the comparison splits: contacts per second, one core (the pieces of the per-contact loops
+    run on one thread here), best of ``KERNEL_REPEAT``.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import os
-import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
+
+import harness
 
 CHILDREN = ("warm-up", "imports", "demsplit-run", "demsplit-run-gzip", "demsplit-run-lzf", "demsplit-run-nocompress",
             "demsplit-run-nocompare",
             "demsplit-run-nocontacts", "pipeline-nostore",
             "demsplit-read", "demsplit-dumps", "demsplit-atoms", "polars", "polars-needed",
             "pandas-c", "limits", "ovito", "mdanalysis", "convert", "cache-read", "kernel")
-KERNEL_REPEAT = 7  # timings of each in-memory kernel measurement, the best kept
+KERNEL_REPEAT = 7  # timings of each in-memory kernel measurement, the best kept (a shared machine: more samples,
+# a minimum nearer the uncontended time)
 
 
 # --------------------------------------------------------------------------- children
@@ -121,8 +110,7 @@ def child(name: str, d: Path, work: Path, index_file: str) -> dict:
         sys.argv[0] = "demsplit"
         from demsplit.cli import main
 
-        sample = Path(__file__).resolve().parents[1] / "sample_dumps" / "liggghts" / "packing" / "in.packing"
-        return {"rc": main(["run", str(sample), "-o", str(work / "warm-up.h5"), "-q"])}
+        return {"rc": main(["run", str(harness.SAMPLE), "-o", str(work / "warm-up.h5"), "-q"])}
     if name.startswith("demsplit-run"):
         sys.argv[0] = "demsplit"  # as the console script: this process is the command (demsplit.command)
         from demsplit.cli import main
@@ -258,12 +246,7 @@ def _limits(paths: list[Path]) -> dict:
     newlines(np.zeros(8, np.uint64))  # compiled before it is timed
     out = {"bytes": sum(p.stat().st_size for p in paths)}
     for label, f in (("page_cache_read", read_all), ("newline_count", count_all)):
-        times = []
-        for _ in range(3):
-            t = time.perf_counter()
-            f()
-            times.append(time.perf_counter() - t)
-        out[label] = min(times)
+        out[label] = harness.best_of(f, 3)
     return out
 
 
@@ -314,20 +297,12 @@ def _kernel(script: Path, work: Path) -> dict:
         e = partition(c, scene, p, energies=energies, bodies=bodies, index=index)
         per_particle(c, e, p, n_walls=len(scene.walls), index=index)
 
-    def best(f) -> float:
-        times = []
-        for _ in range(KERNEL_REPEAT):
-            t = time.perf_counter()
-            f()
-            times.append(time.perf_counter() - t)
-        return min(times)
-
     out = {"contacts": n, "particles": len(p["id"]), "frame_bytes": frame_bytes,
            "frame_columns": {"particles": list(p), "contacts": list(c)}}
     for label, f in (("partition+per_particle", kernels),
                      ("frame_tables --no-compare", lambda: frame_tables(frame, scene, Options(compare=False))),
                      ("frame_tables", lambda: frame_tables(frame, scene, Options()))):
-        t = best(f)
+        t = harness.best_of(f, KERNEL_REPEAT)
         out[label] = {"seconds": t, "contacts_per_s": n / t}
     np.seterr(all="ignore")
     return out
@@ -336,25 +311,15 @@ def _kernel(script: Path, work: Path) -> dict:
 # --------------------------------------------------------------------------- parent
 
 def measure(name: str, d: Path, work: Path, index_file: str) -> dict:
-    """Run child ``name`` in a fresh process: wall time, peak RSS, its report.
-
-    The dirty pages earlier children left (their stores) are written back
-    first, untimed (``os.sync``): otherwise the kernel's write-back of one
-    child's output would be charged to whichever child runs next. Then the
-    child's inputs are read into the page cache (:func:`warm`, untimed). The stores a ``demsplit run``
-    child wrote are deleted after its time is taken."""
+    """Run child ``name`` in a fresh process (``harness.fresh``): wall time, peak memory, its report. The
+    stores a ``demsplit run`` child wrote are deleted after its time is taken."""
     cmd = [sys.executable, __file__, "--child", name, str(d), "--work", str(work), "--index", index_file]
-    os.sync()
-    warm(inputs(name, d, work))
-    t = time.perf_counter()
-    proc = subprocess.run(cmd, capture_output=True)
-    seconds = time.perf_counter() - t
+    proc = harness.fresh(cmd, inputs=inputs(name, d, work), check=False)
     for store in [*work.glob("demsplit-run*.h5"), work / "warm-up.h5"]:
-        store.unlink(missing_ok=True)  # here, untimed: deleting an 860 MB store takes 0.16 s
+        store.unlink(missing_ok=True)  # here, untimed: deleting an 860 MB store takes a tenth of a second
     if proc.returncode != 0:
-        return {"name": name, "error": proc.stderr.decode(errors="replace").strip().splitlines()[-1:] or ["failed"]}
-    report = json.loads(proc.stdout.decode().strip().splitlines()[-1])
-    return {"name": name, "seconds": seconds, **report}
+        return {"name": name, "error": proc.stderr.strip().splitlines()[-1:] or ["failed"]}
+    return {"name": name, **proc.report, "seconds": proc.seconds}
 
 
 def inputs(name: str, d: Path, work: Path) -> list[Path]:
@@ -366,24 +331,6 @@ def inputs(name: str, d: Path, work: Path) -> list[Path]:
     if name in ("demsplit-atoms", "mdanalysis"):
         return [d / "atoms.txt"]
     return [d / "atoms.txt", d / "pairs.txt"]
-
-
-def warm(paths: list[Path]) -> None:
-    """Read ``paths`` once, into the page cache (what a child then reads comes from memory)."""
-    buf = bytearray(1 << 24)
-    for path in paths:
-        if path.exists():
-            with open(path, "rb", buffering=0) as f:
-                while f.readinto(buf):
-                    pass
-
-
-def _vm_hwm_mb() -> float:
-    """Peak resident memory of this process (MiB)."""
-    for line in Path("/proc/self/status").read_text().splitlines():
-        if line.startswith("VmHWM:"):
-            return int(line.split()[1]) / 1024
-    return float("nan")
 
 
 def frame_ranges(d: Path) -> dict:
@@ -408,18 +355,6 @@ def frame_ranges(d: Path) -> dict:
     return out
 
 
-def rotated(names: list[str], r: int, repeat: int) -> list[str]:
-    """The order of round ``r``: warm-up and imports first, the others rotated
-    by ``r`` times 1/``repeat`` of their number, so that no measurement always
-    runs in the same place (the first heavy child after a round's warm-up was
-    the slowest of its kind in every round of one run: machine state left by
-    the previous children, e.g. memory to compact for huge pages)."""
-    fixed = [n for n in names if n in ("warm-up", "imports")]
-    rest = [n for n in names if n not in fixed]
-    k = (r * len(rest)) // max(repeat, 1) if rest else 0
-    return fixed + rest[k:] + rest[:k]
-
-
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("dir", type=Path, help="directory written by benchmarks/generate.py")
@@ -431,8 +366,7 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--json", type=Path, help="also write the raw measurements here")
     a = ap.parse_args(argv)
     if a.child:
-        out = child(a.child, a.dir, a.work, a.index)
-        print(json.dumps({**out, "peak_rss_mb": _vm_hwm_mb()}))
+        harness.report(**child(a.child, a.dir, a.work, a.index))
         if a.child.startswith("demsplit-run"):  # ends as the console script does (cli.command)
             from demsplit.command import exit_now
 
@@ -443,45 +377,41 @@ def main(argv: list[str] | None = None) -> None:
     with tempfile.TemporaryDirectory(prefix="demsplit-bench-") as work:
         index_file = str(Path(work) / "index.json")
         Path(index_file).write_text(json.dumps(frame_ranges(a.dir)))
-        load0 = os.getloadavg()
+        before = harness.machine()
         rounds = []
-        for r in range(a.repeat):
-            rounds.append({n: measure(n, a.dir, Path(work), index_file) for n in rotated(names, r, a.repeat)})
+        for order in harness.rounds(names, a.repeat, fixed=("warm-up", "imports")):
+            rounds.append({n: measure(n, a.dir, Path(work), index_file) for n in order})
             print(f"round {len(rounds)}: " + ", ".join(f"{n} {r.get('seconds', float('nan')):.1f} s"
                                                        for n, r in rounds[-1].items()), file=sys.stderr)
-        load1 = os.getloadavg()
+        after = harness.load()
     best = {n: min((r[n] for r in rounds), key=lambda x: x.get("seconds", float("inf"))) for n in names}
-    report(best, a.dir, load0, load1, a.repeat)
+    report(best, a.dir, before, after, a.repeat)
     if a.json:
-        a.json.write_text(json.dumps({"rounds": rounds, "load": [load0, load1], "nproc": os.cpu_count()},
-                                     indent=1, default=str))
+        a.json.write_text(json.dumps({"rounds": rounds, "machine": before, "load_after": after}, indent=1,
+                                     default=str))
 
 
-def report(m: dict, d: Path, load0, load1, repeat: int) -> None:
+def report(m: dict, d: Path, before: str, load_after: float, repeat: int) -> None:
     sizes = {f: (d / f).stat().st_size / 1e6 for f in ("atoms.txt", "pairs.txt")}
     k = m.get("kernel", {})
-    print(f"machine: {os.cpu_count()} cores (nproc), load average {load0[0]:.2f} before / {load1[0]:.2f} after; "
-          f"Python {sys.version.split()[0]}; best of {repeat}")
+    print(f"machine before: {before}; load average after {load_after:.2f}; best of {repeat}")
     print(f"files: atoms.txt {sizes['atoms.txt']:.0f} MB, pairs.txt {sizes['pairs.txt']:.0f} MB; "
           f"{k.get('particles', '?')} particles, {k.get('contacts', '?')} contacts per frame")
     print()
-    print(f"{'measurement':28s} {'wall s':>8s} {'peak RSS MB':>12s}")
+    print(f"{'measurement':28s} {'wall s':>8s} {'peak MiB':>12s}")
     for n, r in m.items():
         if n == "kernel":
             continue
         if "error" in r:
             print(f"{n:28s} failed: {r['error']}")
         else:
-            print(f"{n:28s} {r['seconds']:8.2f} {r['peak_rss_mb']:12.0f}")
+            print(f"{n:28s} {r['seconds']:8.2f} {r['peak_mib']:12.0f}")
 
     def t(n):
         return m.get(n, {}).get("seconds")
 
     def ratio(label, a, b):
-        if t(a) and t(b):
-            print(f"  {label:58s} {t(b) / t(a):6.2f}x")
-        else:
-            print(f"  {label:58s}   n/a ({a if not t(a) else b} not measured)")
+        print(harness.ratio(label, t(a), t(b)))
 
     print("\nspeed ratios (> 1: demsplit faster)")
     ratio("demsplit run vs polars bare parse of both files", "demsplit-run", "polars")
@@ -516,14 +446,14 @@ def report(m: dict, d: Path, load0, load1, repeat: int) -> None:
                       "included)")
     if k and "frame_bytes" in k and "imports" in m and "error" not in m["imports"]:
         fb = k["frame_bytes"] / 2**20
-        base = m["imports"]["peak_rss_mb"]
-        print(f"\npeak memory above imports ({base:.0f} MB), in units of one frame's arrays "
+        base = m["imports"]["peak_mib"]
+        print(f"\npeak memory above imports ({base:.0f} MiB), in units of one frame's arrays "
               f"({fb:.0f} MiB: particles + contacts tables)")
         for n in ("demsplit-run", "demsplit-run-gzip", "demsplit-run-lzf", "demsplit-run-nocompress",
                   "demsplit-run-nocompare", "demsplit-run-nocontacts", "pipeline-nostore",
                   "demsplit-read", "cache-read", "convert"):
             if n in m and "error" not in m[n]:
-                print(f"  {n:28s} {(m[n]['peak_rss_mb'] - base) / fb:6.2f}x")
+                print(f"  {n:28s} {(m[n]['peak_mib'] - base) / fb:6.2f}x")
     if k and "error" not in k:
         print(f"\nin-memory kernels, frame 0, one core (best of {KERNEL_REPEAT})")
         for label in ("partition+per_particle", "frame_tables --no-compare", "frame_tables"):

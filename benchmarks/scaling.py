@@ -2,11 +2,10 @@
 
 For each cell of a grid of (particles, frames), a run is written by
 :func:`generate.generate` (two contacts per particle, ``%g`` dumps) into a
-temporary directory outside the repository, its files are read once into the
-page cache (untimed), and ``demsplit run -q`` is timed in a fresh process,
-serially (best of two) and with ``--jobs 2``; the peak resident memory is the
-child's own ``VmHWM``. The run's directory is removed before the next cell is written.
-Printed: one row per cell (seconds, MB/s of input, peak RSS), then the
+temporary directory outside the repository, and ``demsplit run -q`` is timed in a fresh process
+(``harness.fresh``: inputs in the page cache), serially (best of two) and with ``--jobs 2``; the peak
+resident memory is the child's own ``VmHWM``. The run's directory is removed before the next cell is written.
+Printed: one row per cell (seconds, MB/s of input, peak memory), then the
 exponent b of the fit seconds = a (particles x frames)^b by least squares in
 log-log over the cells that take at least one second (below that, process
 start and imports dominate) and over those of at least five, the least-squares
@@ -17,9 +16,8 @@ Then the per-file overhead: a run of ``--files`` frames (1,000 by default) of
 100 particles, read once from one file per dump and once from one file per
 timestep (``dump ... atoms*.txt``, :mod:`demsplit.readers.dump_series`):
 the difference over the number of files.
-The load average is printed before and after (a timed run's own two threads
-raise it towards 2); a measurement that started with a load above 1 is
-marked "under load".
+The machine and its load average are printed before, the load after (a timed run's own threads raise it
+towards the number of cores); a grid that started with a load above 1 is marked "under load".
 
     python benchmarks/scaling.py [--big] [--cells 10000x1,10000x10] [--keep DIR] [--json FILE]
 
@@ -34,44 +32,32 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import shutil
-import subprocess
-import sys
 import tempfile
-import time
 from pathlib import Path
 
+import harness
 import numpy as np
-
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench import warm  # noqa: E402
-from generate import generate  # noqa: E402
+from generate import generate
 
 GRID = [(10_000, 1), (10_000, 10), (10_000, 100), (100_000, 1), (100_000, 10), (100_000, 30),
         (1_000_000, 1), (1_000_000, 3)]
 BIG = [(10_000_000, 1)]
-CHILD = ("import sys, pathlib\n"
-         "sys.argv[0] = 'demsplit'\n"  # as the console script: this process is the command (demsplit.command)
-         "from demsplit.cli import main\n"
-         "rc = main(sys.argv[1:])\n"
-         "hwm = [l for l in pathlib.Path('/proc/self/status').read_text().splitlines() if l.startswith('VmHWM:')]\n"
-         "print(int(hwm[0].split()[1]) / 1024 if hwm else float('nan'))\n"
-         "sys.exit(rc)\n")
+CHILD = """
+sys.argv[0] = "demsplit"  # as the console script: this process is the command (demsplit.command)
+from demsplit.cli import main
+rc = main(sys.argv[1:])
+report(rc=rc)
+sys.exit(rc)
+"""
 
 
 def timed_run(script: Path, out: Path, jobs: int) -> tuple[float, float]:
-    """Wall seconds and peak RSS (MB) of ``demsplit run`` in a fresh process."""
-    os.sync()
-    warm([p for p in script.parent.iterdir() if p.suffix == ".txt"])
-    t = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-c", CHILD, "run", str(script), "-o", str(out), "-q", "--jobs", str(jobs)],
-                          capture_output=True, text=True)
-    seconds = time.perf_counter() - t
-    if proc.returncode != 0:
-        raise RuntimeError(f"demsplit run failed on {script}: {proc.stderr.strip().splitlines()[-1:]}")
+    """Wall seconds and peak memory (MiB) of ``demsplit run`` in a fresh process."""
+    proc = harness.python(CHILD, "run", script, "-o", out, "-q", "--jobs", jobs,
+                          inputs=[p for p in script.parent.iterdir() if p.suffix == ".txt"])
     out.unlink(missing_ok=True)
-    return seconds, float(proc.stdout.strip().splitlines()[-1])
+    return proc.seconds, proc.peak_mib
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -91,12 +77,13 @@ def main(argv: list[str] | None = None) -> None:
         for particles, frames in grid:
             _written(a.keep, particles, frames)
         return
-    load0 = os.getloadavg()
+    before = harness.machine()
+    load0 = harness.load()
+    print(f"machine: {before}", flush=True)
     rows = []
     # a throw-away run first, so that numba's cached kernels are compiled before any cell is timed
     with tempfile.TemporaryDirectory(prefix="demsplit-scaling-") as work:
-        sample = Path(__file__).resolve().parent.parent / "sample_dumps" / "liggghts" / "packing" / "in.packing"
-        timed_run(sample, Path(work) / "warm.h5", 1)
+        timed_run(harness.SAMPLE, Path(work) / "warm.h5", 1)
         for particles, frames in grid:
             d = _written(a.keep, particles, frames) if a.keep else Path(work) / f"run_{particles}_{frames}"
             if not a.keep:
@@ -105,19 +92,18 @@ def main(argv: list[str] | None = None) -> None:
             serial, rss = min(timed_run(d / "in.bench", Path(work) / "out.h5", 1) for _ in range(2))
             parallel, rss2 = timed_run(d / "in.bench", Path(work) / "out.h5", 2)
             rows.append({"particles": particles, "frames": frames, "bytes": size, "seconds": serial,
-                         "peak_rss_mb": rss, "seconds_jobs2": parallel, "peak_rss_mb_jobs2": rss2,
-                         "load": os.getloadavg()[0]})
+                         "peak_mib": rss, "seconds_jobs2": parallel, "peak_mib_jobs2": rss2,
+                         "load": harness.load()})
             r = rows[-1]
             print(f"{particles:>10,d} particles x {frames:>3d} frames  {size / 1e6:8.0f} MB  {serial:7.2f} s  "
-                  f"{size / serial / 1e6:6.0f} MB/s  peak {rss:6.0f} MB  | --jobs 2 {parallel:7.2f} s "
+                  f"{size / serial / 1e6:6.0f} MB/s  peak {rss:6.0f} MiB  | --jobs 2 {parallel:7.2f} s "
                   f"({serial / parallel:.2f}x serial)  load {r['load']:.2f}", flush=True)
             if not a.keep:
                 shutil.rmtree(d)
         per_file = per_file_overhead(Path(work), a.files)
-    load1 = os.getloadavg()
-    marked = " (under load: other work was running when it started)" if load0[0] > 1 else ""
-    print(f"\nload average {load0[0]:.2f} before / {load1[0]:.2f} after (the runs' own threads raise it to about 2)"
-          f"{marked}; {os.cpu_count()} cores")
+    load1 = harness.load()
+    marked = " (under load: other work was running when it started)" if load0 > 1 else ""
+    print(f"\nload average {load0:.2f} before / {load1:.2f} after{marked}")
     for floor in (1.0, 5.0):
         fit = [r for r in rows if r["seconds"] >= floor]
         if len(fit) >= 2:
@@ -131,16 +117,16 @@ def main(argv: list[str] | None = None) -> None:
         print(f"least squares over all cells: seconds = {c0:.2f} + {1e3 * c_frame:.1f} ms x frames + "
               f"{1e9 * c_row:.0f} ns x particles x frames")
         (m0, m1), *_ = np.linalg.lstsq(np.array([[1.0, r["particles"]] for r in rows]),
-                                      [r["peak_rss_mb"] for r in rows], rcond=None)
-        print(f"peak memory: {m0:.0f} MB + {1e3 * m1:.2f} kB x particles (of one frame; the frames do not add)")
+                                      [r["peak_mib"] for r in rows], rcond=None)
+        print(f"peak memory: {m0:.0f} MiB + {m1 * 2**20:.0f} B x particles (of one frame; the frames do not add)")
     worst = max(rows, key=lambda r: r["seconds_jobs2"] / r["seconds"])
     print(f"--jobs 2 against serial: slowest {worst['seconds_jobs2'] / worst['seconds']:.2f}x "
           f"({worst['particles']:,d} particles x {worst['frames']} frames)")
     print(f"{a.files} frames of 100 particles: one file per dump {per_file['single']:.2f} s, one file per timestep "
           f"({2 * a.files} files) {per_file['series']:.2f} s: {per_file['per_file_ms']:.2f} ms per file")
     if a.json:
-        a.json.write_text(json.dumps({"rows": rows, "per_file": per_file, "load": [load0, load1],
-                                      "nproc": os.cpu_count()}, indent=1))
+        a.json.write_text(json.dumps({"rows": rows, "per_file": per_file, "machine": before, "load_after": load1},
+                                     indent=1))
 
 
 def _written(keep: Path, particles: int, frames: int) -> Path:

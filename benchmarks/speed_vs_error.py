@@ -43,10 +43,10 @@ best answer those dumps hold) on a run written by ``benchmarks/generate.py``.
 from __future__ import annotations
 
 import argparse
-import time
 from functools import partial
 from pathlib import Path
 
+import harness
 import numpy as np
 from demsplit.frame import ParticleIndex, take_rows
 from demsplit.physics.partition import ContactLawEnergy, contact_energies, partition, per_particle
@@ -95,13 +95,7 @@ def timed(f, min_time: float) -> float:
     """Best time of one call of ``f``, repeating for at least ``min_time`` seconds,
     after one untimed call (the first call loads numba's cached kernels)."""
     f()
-    best, spent = np.inf, 0.0
-    while spent < min_time or best == np.inf:
-        t = time.perf_counter()
-        f()
-        dt = time.perf_counter() - t
-        best, spent = min(best, dt), spent + dt
-    return best
+    return harness.best_of(f, 1, min_time)
 
 
 def stats(x: np.ndarray) -> tuple[float, float, float]:
@@ -171,6 +165,7 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--big", type=Path, help="a directory written by benchmarks/generate.py")
     ap.add_argument("--min-time", type=float, default=0.3, help="seconds of repetitions per timing")
     a = ap.parse_args(argv)
+    print("machine:", harness.machine())
     s = a.sample
     frames, ref, scene, fns = variants(
         s / "in.packing",

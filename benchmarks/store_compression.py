@@ -4,7 +4,7 @@ The frames are real results: ``demsplit.pipeline.frame_tables`` of each frame
 of a run (default: the medium benchmark run /tmp/bench_mid/in.bench, 2 frames
 of 2e5 particles and 4e5 contacts, written by benchmarks/generate.py),
 computed once and then stored with each compression. Times are the best of
-``--repeat`` stores (the machine is shared: quote ``uptime``).
+``--repeat`` stores; the machine and its load average are printed first.
 
 Run: python benchmarks/store_compression.py [RUN] [--repeat 3] [--auto-max-ratio 0.5 0.75 0.9]
 
@@ -26,6 +26,7 @@ import time
 import zlib
 
 import demsplit.results.store as S
+import harness
 import numpy as np
 from demsplit.pipeline import Options, frame_tables
 from demsplit.readers import open_run
@@ -91,7 +92,8 @@ def main() -> None:
     frames = real_frames(args.run)
     raw = sum(v.nbytes for f in frames for t in f.values() for v in t.values())
     rows = {t: sum(len(next(iter(f[t].values()), ())) for f in frames if t in f) for t in S.TABLES}
-    print(f"{args.run}: {len(frames)} frames, {rows}, {raw / 2**20:.1f} MiB of arrays; load: {os.getloadavg()}")
+    print("machine:", harness.machine())
+    print(f"{args.run}: {len(frames)} frames, {rows}, {raw / 2**20:.1f} MiB of arrays")
     if args.columns:
         column_table(frames[0])
     cases = [(c, S.AUTO_MAX_RATIO) for c in S.COMPRESSIONS] + [("auto", r) for r in args.auto_max_ratio]

@@ -1,29 +1,22 @@
-"""Fuzz: generated bad inputs of every family of ``benchmarks/fuzz.py`` (LIGGGHTS text, binary and compressed
-dumps, input scripts, YADE snapshots in both formats, output paths) keep the promise: exit 0 with a store
-whose every number is finite, or exit 2 with one message; never another exception, never an input changed,
-never a file left behind. A bounded hypothesis run (under a minute); the long run and its counts are in
-docs/reliability.md (``python benchmarks/fuzz.py --count 20000 --seed 1``), which also bounds the time and
-the memory of every input in a worker child, tested here with inputs that hang, crash or allocate too much."""
+"""Fuzz: generated bad inputs of every family of the fuzzer ``tests/fuzz.py`` (LIGGGHTS text, binary and
+compressed dumps, input scripts, YADE snapshots in both formats, output paths) keep the promise: exit 0 with a
+store whose every number is finite, or exit 2 with one message; never another exception, never an input
+changed, never a file left behind. A bounded hypothesis run (under a minute); the long run and its counts are
+in docs/reliability.md (``python tests/fuzz.py --count 30000 --seed 1``), which also bounds the time and the
+memory of every input in a worker child, tested here with inputs that hang, crash or allocate too much."""
 
 from __future__ import annotations
 
-import importlib.util
 import os
 import signal
-import sys
 import time
 from pathlib import Path
 
+import fuzz
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-
-_spec = importlib.util.spec_from_file_location(
-    "demsplit_fuzz", Path(__file__).resolve().parent.parent / "benchmarks" / "fuzz.py")
-fuzz = importlib.util.module_from_spec(_spec)
-sys.modules[_spec.name] = fuzz  # its dataclasses look their module up
-_spec.loader.exec_module(fuzz)
 
 
 @pytest.fixture(scope="module")

@@ -1,5 +1,5 @@
 """docs/accuracy.md shows only what the committed commands wrote: every row of its tables is a row of a table in
-benchmarks/validation/results/*.md (convergence.py, paper_tables.py, e12.py, fit.py, cost.py write them)."""
+benchmarks/accuracy_study/results/*.md (convergence.py, paper_tables.py, e12.py, fit.py, cost.py write them)."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ def table_rows(text: str) -> list[str]:
 
 def test_every_table_row_of_the_accuracy_doc_is_a_committed_result():
     results = set()
-    for path in (REPO / "benchmarks" / "validation" / "results").glob("*.md"):
+    for path in (REPO / "benchmarks" / "accuracy_study" / "results").glob("*.md"):
         results.update(table_rows(path.read_text()))
     doc = table_rows((REPO / "docs" / "accuracy.md").read_text())
     assert len(doc) > 50

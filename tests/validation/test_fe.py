@@ -1,8 +1,8 @@
-"""The finite-element reference of benchmarks/validation/ on coarse cases, and the fitted error model.
+"""The finite-element reference of benchmarks/accuracy_study/ on coarse cases, and the fitted error model.
 
 The FE cases take a few seconds each on one core (marked slow; they run in CI: scikit-fem is in the test
 extra). The error-model tests check plugin/physics/accuracy.py against the held-out predictions that
-benchmarks/validation/sweep.py committed.
+benchmarks/accuracy_study/sweep.py committed.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 REPO = Path(__file__).resolve().parents[2]
-VALIDATION = REPO / "benchmarks" / "validation"
+VALIDATION = REPO / "benchmarks" / "accuracy_study"
 sys.path.insert(0, str(VALIDATION))
 
 import fe  # noqa: E402
@@ -108,7 +108,7 @@ def test_error_model_reproduces_committed_heldout_predictions():
 
 
 def test_error_model_coefficients_are_the_committed_fit():
-    """plugin/physics/accuracy.py's generated block is benchmarks/validation/fit.py's output (results/fit.json)."""
+    """plugin/physics/accuracy.py's generated block is benchmarks/accuracy_study/fit.py's output (results/fit.json)."""
     fit = json.loads((VALIDATION / "results" / "fit.json").read_text())
     assert [tuple(f) for f in fit["form"]] == list(accuracy.FORM)
     assert accuracy.term_names() == fit["terms"]
@@ -151,7 +151,7 @@ def test_error_model_limits():
 @pytest.mark.slow
 def test_geometrically_linear_e12_does_not_depend_on_E():
     """Feng & Gao Table 2 cases 2 and 5 with the linearized gap (small strain: a geometrically linear problem):
-    e12 is the same for E1 = 210 and 70 GPa and near -2.9 % (benchmarks/validation/e12.py), the current-position
+    e12 is the same for E1 = 210 and 70 GPa and near -2.9 % (benchmarks/accuracy_study/e12.py), the current-position
     gap makes it depend on E."""
     e12 = {}
     for gap in ("reference", "current"):

@@ -19,8 +19,8 @@ not solved again (``--fresh`` solves every point).
 
 Run (one FE process at a time: --jobs 1; about 6 s per point for both materials)::
 
-    nice -n 10 python benchmarks/validation/sweep.py --name fit --points 240
-    nice -n 10 python benchmarks/validation/sweep.py --name heldout --points 160
+    nice -n 10 python benchmarks/accuracy_study/sweep.py --name fit --points 240
+    nice -n 10 python benchmarks/accuracy_study/sweep.py --name heldout --points 160
 """
 
 from __future__ import annotations
@@ -139,8 +139,8 @@ def main(argv=None):
     out = RESULTS / f"sweep_{args.name}"
     out.mkdir(parents=True, exist_ok=True)
     pts = sweep_points(args.points, seed)
-    info = {"command": f"nice -n 10 python benchmarks/validation/sweep.py --name {args.name} --points {args.points}",
-            "seed": seed, "points": args.points, "models": {}}
+    info = {"command": f"nice -n 10 python benchmarks/accuracy_study/sweep.py --name {args.name} "
+                       f"--points {args.points}", "seed": seed, "points": args.points, "models": {}}
     t0 = time.perf_counter()
     for model in args.models.split(","):
         path = out / f"sweep_{model}.csv"

@@ -46,9 +46,9 @@ input; a child that dies (a crash, the memory limit) is reported with its
 input. Input ``i`` of a seed is always the same input, so a reported one is
 reproduced with ``--only i``.
 
-    python benchmarks/fuzz.py --count 20000 --seed 1 [--families a,b] [--json out.json]
-    python benchmarks/fuzz.py --seconds 60          # as many as fit
-    python benchmarks/fuzz.py --seed 1 --only 1234  # one input, in this process, with its traceback
+    python tests/fuzz.py --count 20000 --seed 1 [--families a,b] [--json out.json]
+    python tests/fuzz.py --seconds 60          # as many as fit
+    python tests/fuzz.py --seed 1 --only 1234  # one input, in this process, with its traceback
 
 prints the counts per family and outcome and every promise broken (with the
 input that broke it). Exit status 1 when a promise was broken.

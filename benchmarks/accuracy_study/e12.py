@@ -18,7 +18,7 @@ convergence of case 2's e12 in the default and the geometrically linear variants
 
 Run::
 
-    nice -n 10 python benchmarks/validation/e12.py
+    nice -n 10 python benchmarks/accuracy_study/e12.py
 
 Writes results/e12.json and results/e12.md.
 """

@@ -7,7 +7,7 @@ corrected split is plugin/physics/accuracy.py's (a plane taken as a half-space).
 
 Run (after sweep.py and fit.py)::
 
-    nice -n 10 python benchmarks/validation/cost.py
+    nice -n 10 python benchmarks/accuracy_study/cost.py
 
 Writes results/cost_vs_error.json and results/cost_vs_error.md.
 """

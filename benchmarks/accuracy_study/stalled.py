@@ -9,7 +9,7 @@ keeps the solution with the smallest out-of-balance force.)
 
 Run (after sweep.py; one FE process)::
 
-    nice -n 10 python benchmarks/validation/stalled.py
+    nice -n 10 python benchmarks/accuracy_study/stalled.py
 
 Writes results/stalled.md and results/stalled.json.
 """

@@ -10,7 +10,7 @@ Each case is solved with both materials of fe.py (``small``, ``neohooke``) at me
 
 Run::
 
-    nice -n 10 python benchmarks/validation/paper_tables.py [--refine 1]
+    nice -n 10 python benchmarks/accuracy_study/paper_tables.py [--refine 1]
 
 Writes results/paper_tables.csv and results/paper_tables.md.
 """

@@ -14,7 +14,7 @@
 
 Run::
 
-    nice -n 10 python benchmarks/validation/convergence.py
+    nice -n 10 python benchmarks/accuracy_study/convergence.py
 
 Writes results/convergence.json and results/convergence.md.
 """
