@@ -18,12 +18,12 @@ kept. Measurements:
     after an install does); its time is printed, and every later process loads
     the cached machine code.
 ``demsplit run`` / ``--compression gzip|lzf|none`` / ``--no-compare`` / ``--no-contacts``
-    the command's process (``sys.argv[0]`` is ``demsplit``, so :mod:`demsplit.command`'s settings apply
-    as they do to the console script, and it ends as the console script does, without the interpreter's
-    teardown: ``demsplit.command.exit_now``), end to end: read, partition, aggregate, write the HDF5 store (the store's
-    default ``auto`` compression: gzip on the columns whose first chunk
-    compresses, none on the others; ``--no-contacts`` leaves out the
-    per-contact table, by far the largest).
+    the command's process (``sys.argv[0]`` is ``demsplit``, so :mod:`demsplit.runtime.command`'s settings
+    apply as they do to the console script, and it ends as the console script does, without the
+    interpreter's teardown: ``demsplit.runtime.command.exit_now``), end to end: read, partition,
+    aggregate, write the HDF5 store (the store's default ``auto`` compression: gzip on the columns whose
+    first chunk compresses, none on the others; ``--no-contacts`` leaves out the per-contact table, by
+    far the largest).
 ``pipeline (no store)``
     not a command: the pipeline of ``demsplit run`` without the store: every frame's tables computed
     (``demsplit.pipeline.process_run``) and dropped.
@@ -112,7 +112,7 @@ def child(name: str, d: Path, work: Path, index_file: str) -> dict:
 
         return {"rc": main(["run", str(harness.SAMPLE), "-o", str(work / "warm-up.h5"), "-q"])}
     if name.startswith("demsplit-run"):
-        sys.argv[0] = "demsplit"  # as the console script: this process is the command (demsplit.command)
+        sys.argv[0] = "demsplit"  # as the console script: this process is the command (demsplit.runtime.command)
         from demsplit.cli import main
 
         out = work / f"{name}.h5"
@@ -275,12 +275,11 @@ def _ovito(atoms: Path, pairs: Path) -> dict:
 
 def _kernel(script: Path, work: Path) -> dict:
     import numpy as np
-    from demsplit import threads
-    from demsplit.frame import ParticleIndex
-    from demsplit.physics.bodies import ContactBodies
-    from demsplit.physics.partition import contact_energies, partition, per_particle
-    from demsplit.pipeline import Options, frame_tables
+    from demsplit.compute import Options, frame_tables
+    from demsplit.physics.bodies import FrameContacts
+    from demsplit.physics.partition import body_tables, law_energies, split_energies
     from demsplit.readers import open_run
+    from demsplit.runtime import threads
 
     cache = work / "cache.h5"
     run = open_run(cache if cache.exists() else script)
@@ -291,11 +290,9 @@ def _kernel(script: Path, work: Path) -> dict:
     frame_bytes = sum(v.nbytes for v in p.values()) + sum(v.nbytes for v in c.values())
 
     def kernels():
-        index = ParticleIndex(p["id"])
-        bodies = ContactBodies.build(c, scene, p, index)
-        energies = contact_energies(c, scene, p, bodies, index)
-        e = partition(c, scene, p, energies=energies, bodies=bodies, index=index)
-        per_particle(c, e, p, n_walls=len(scene.walls), index=index)
+        frame = FrameContacts(c, scene, p)
+        e = split_energies(frame, law_energies(frame))
+        body_tables(frame, e, n_walls=len(scene.walls))
 
     out = {"contacts": n, "particles": len(p["id"]), "frame_bytes": frame_bytes,
            "frame_columns": {"particles": list(p), "contacts": list(c)}}
@@ -368,7 +365,7 @@ def main(argv: list[str] | None = None) -> None:
     if a.child:
         harness.report(**child(a.child, a.dir, a.work, a.index))
         if a.child.startswith("demsplit-run"):  # ends as the console script does (cli.command)
-            from demsplit.command import exit_now
+            from demsplit.runtime.command import exit_now
 
             exit_now(0)
         return

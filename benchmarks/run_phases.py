@@ -27,7 +27,7 @@ in the child before the run:
     the first frame's memory not mapped ahead while the run opens (``first_frame_prefaulted`` patched out):
     the first frame's fresh memory without the warm-up;
 ``settings=LIST``
-    the process started as a program that imports demsplit (so :mod:`demsplit.command` makes none of the
+    the process started as a program that imports demsplit (so :mod:`demsplit.runtime.command` makes none of the
     command's settings), then only the settings of LIST made by hand before the run: ``blas`` (one
     OpenBLAS thread), ``malloc`` (glibc keeps freed memory), ``gc`` (rare collections), ``pages`` (numpy
     asks for no huge pages); ``settings=`` makes none. Such a process ends as a library program does,
@@ -69,13 +69,16 @@ if variant.startswith("settings="):  # a program that imports demsplit, with the
     if "pages" in settings:
         os.environ["NUMPY_MADVISE_HUGEPAGE"] = "0"
     import gc
-    from demsplit import command
+    try:
+        from demsplit.runtime import command
+    except ImportError:  # a revision from before demsplit.runtime
+        from demsplit import command
     if "malloc" in settings:
         command.keep_freed_memory()
     if "gc" in settings:
         gc.set_threshold(*command.GC_THRESHOLDS)
 else:
-    sys.argv[0] = "demsplit"  # as the console script: this process is the command (demsplit.command)
+    sys.argv[0] = "demsplit"  # as the console script: this process is the command (demsplit.runtime.command)
 phases, calls, fresh = {}, {}, {}
 PAGE_MIB = resource.getpagesize() / 2**20
 
@@ -96,20 +99,25 @@ def timed(owner, name, label):
 import demsplit.pipeline as pipeline
 import demsplit.readers as readers
 from demsplit.readers.liggghts import LiggghtsRun
-from demsplit.results.store import ResultWriter
+try:  # where each piece lives now, and in a revision from before demsplit.runtime
+    import demsplit.executors as executors
+    import demsplit.runtime.hashing as hashing
+    from demsplit.results.writer import ResultWriter
+except ImportError:
+    import demsplit.fingerprint as hashing
+    from demsplit.results.store import ResultWriter
+    executors = pipeline
 if variant == "sha256":
     import hashlib, types
-    import demsplit.fingerprint as fingerprint
-    fingerprint.blake3 = types.SimpleNamespace(blake3=hashlib.sha256)
+    hashing.blake3 = types.SimpleNamespace(blake3=hashlib.sha256)
 elif variant == "no-hash":
-    import demsplit.fingerprint as fingerprint
-    pipeline.hash_in_background = fingerprint.hash_in_background = lambda paths: None
-    fingerprint.file_digest = lambda path: "0" * 64
+    pipeline.hash_in_background = hashing.hash_in_background = lambda paths: None
+    hashing.file_digest = lambda path: "0" * 64
 elif variant == "no-prefault":
-    pipeline.first_frame_prefaulted = lambda enabled: contextlib.nullcontext()
+    pipeline.first_frame_prefaulted = lambda rows: contextlib.nullcontext()
 timed(readers, "open_run", "open_run")
 timed(LiggghtsRun, "frame", "read frame")
-timed(pipeline, "frame_tables", "frame_tables")
+timed(executors, "frame_tables", "frame_tables")
 timed(ResultWriter, "append", "append")
 timed(ResultWriter, "close", "close")
 from demsplit.cli import main
@@ -121,17 +129,23 @@ os.unlink(sys.argv[2])
 report(rc=rc, total=total, phases=phases, calls=calls, fresh=fresh, main_end=time.time())
 if not variant.startswith("settings="):
     try:  # the process ends as this revision's console script ends it
-        from demsplit.command import exit_now
-    except ImportError:  # a revision from before exit_now: the interpreter's teardown
-        pass
-    else:
+        from demsplit.runtime.command import exit_now
+    except ImportError:
+        try:
+            from demsplit.command import exit_now
+        except ImportError:  # a revision from before exit_now: the interpreter's teardown
+            exit_now = None
+    if exit_now is not None:
         exit_now(rc)
 sys.exit(rc)
 """
 
 STAGES = r"""
 import hashlib, os, sys
-from demsplit.fingerprint import file_digest
+try:
+    from demsplit.runtime.hashing import file_digest
+except ImportError:  # a revision from before demsplit.runtime
+    from demsplit.fingerprint import file_digest
 from demsplit.readers import lammps_dump, open_run
 
 def sha256(path):

@@ -44,7 +44,7 @@ GRID = [(10_000, 1), (10_000, 10), (10_000, 100), (100_000, 1), (100_000, 10), (
         (1_000_000, 1), (1_000_000, 3)]
 BIG = [(10_000_000, 1)]
 CHILD = """
-sys.argv[0] = "demsplit"  # as the console script: this process is the command (demsplit.command)
+sys.argv[0] = "demsplit"  # as the console script: this process is the command (demsplit.runtime.command)
 from demsplit.cli import main
 rc = main(sys.argv[1:])
 report(rc=rc)

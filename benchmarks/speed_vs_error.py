@@ -49,7 +49,8 @@ from pathlib import Path
 import harness
 import numpy as np
 from demsplit.frame import ParticleIndex, take_rows
-from demsplit.physics.partition import ContactLawEnergy, contact_energies, partition, per_particle
+from demsplit.physics.bodies import FrameContacts
+from demsplit.physics.partition import ContactLawEnergy, body_tables, law_energies, split_energies
 from demsplit.readers.lammps_dump import open_dump
 from demsplit.readers.liggghts import LiggghtsRun
 
@@ -83,12 +84,13 @@ def normal_force(run: LiggghtsRun) -> list[np.ndarray]:
 
 def compute(variant: str, contacts: dict, particles: dict, scene, split: str, fn: np.ndarray | None):
     """Per-contact split and per-particle sums of one frame under ``variant``."""
+    frame = FrameContacts(contacts, scene, particles)
     if variant == "(2/5)|Fn| delta":
         energies = ContactLawEnergy(np.stack([0.4 * fn * np.maximum(contacts["delta"], 0.0), np.zeros(len(fn))]))
     else:
-        energies = contact_energies(contacts, scene, particles)
-    e = partition(contacts, scene, particles, split=split, energies=energies)
-    return e, per_particle(contacts, e, particles, n_walls=len(scene.walls))[0]
+        energies = law_energies(frame)
+    e = split_energies(frame, energies, split=split)
+    return e, body_tables(frame, e, n_walls=len(scene.walls))[0]
 
 
 def timed(f, min_time: float) -> float:

@@ -1,6 +1,6 @@
 """Store size, write (append: every frame, as it arrives), close and read time per compression.
 
-The frames are real results: ``demsplit.pipeline.frame_tables`` of each frame
+The frames are real results: ``demsplit.compute.frame_tables`` of each frame
 of a run (default: the medium benchmark run /tmp/bench_mid/in.bench, 2 frames
 of 2e5 particles and 4e5 contacts, written by benchmarks/generate.py),
 computed once and then stored with each compression. Times are the best of
@@ -9,7 +9,7 @@ computed once and then stored with each compression. Times are the best of
 Run: python benchmarks/store_compression.py [RUN] [--repeat 3] [--auto-max-ratio 0.5 0.75 0.9]
 
 ``--auto-max-ratio`` adds ``auto`` rows with other thresholds (the default
-row uses demsplit.results.store.AUTO_MAX_RATIO); ``--columns`` first prints, for
+row uses demsplit.results.chunks.AUTO_MAX_RATIO); ``--columns`` first prints, for
 each column of the first frame with at least a chunk of rows, the size of its
 chunks after shuffle + deflate (fraction of the raw size) and the deflate
 speed (one thread, MB/s of raw data) with the store's deflate (ISA-L level 1,
@@ -25,11 +25,14 @@ import tempfile
 import time
 import zlib
 
-import demsplit.results.store as S
+import demsplit.results.chunks as C
 import harness
 import numpy as np
-from demsplit.pipeline import Options, frame_tables
+from demsplit.compute import Options, frame_tables
 from demsplit.readers import open_run
+from demsplit.results.schema import TABLES
+from demsplit.results.store import read_store
+from demsplit.results.writer import ResultWriter
 from isal import isal_zlib
 
 
@@ -42,17 +45,17 @@ def real_frames(path: str) -> list[dict]:
 
 
 def column_table(tables: dict) -> None:
-    deflates = {"isal 1": lambda c: isal_zlib.compress(c, S.GZIP_LEVEL), "zlib 1": lambda c: zlib.compress(c, 1),
+    deflates = {"isal 1": lambda c: isal_zlib.compress(c, C.GZIP_LEVEL), "zlib 1": lambda c: zlib.compress(c, 1),
                 "zlib 4": lambda c: zlib.compress(c, 4)}
     print("| column | first chunk, isal 1 | " + " | ".join(f"all, {k}" for k in deflates) + " | "
           + " | ".join(f"MB/s {k}" for k in deflates) + " | auto |")
     print("|---" * (3 + 2 * len(deflates)) + "|")
     for name, table in tables.items():
         for col, values in table.items():
-            whole = len(values) // S.CHUNK_ROWS * S.CHUNK_ROWS
+            whole = len(values) // C.CHUNK_ROWS * C.CHUNK_ROWS
             if not whole:
                 continue
-            chunks = [S._shuffled(values[k: k + S.CHUNK_ROWS]) for k in range(0, whole, S.CHUNK_ROWS)]
+            chunks = [C._shuffled(values[k: k + C.CHUNK_ROWS]) for k in range(0, whole, C.CHUNK_ROWS)]
             ratio, speed = {}, {}
             for key, deflate in deflates.items():
                 t0 = time.perf_counter()
@@ -62,19 +65,19 @@ def column_table(tables: dict) -> None:
             first = len(deflates["isal 1"](chunks[0])) / len(chunks[0])
             print(f"| {name}/{col} | {first:.3f} | " + " | ".join(f"{ratio[k]:.3f}" for k in deflates) + " | "
                   + " | ".join(f"{speed[k]:.0f}" for k in deflates)
-                  + f" | {S._choose_filter(np.asarray(values[:S.CHUNK_ROWS]))} |")
+                  + f" | {C._choose_filter(np.asarray(values[:C.CHUNK_ROWS]))} |")
 
 
 def store_once(frames: list[dict], compression: str, directory: str) -> dict:
     out = os.path.join(directory, "out.h5")
     t0 = time.perf_counter()
-    w = S.ResultWriter(out, {"inputs": []}, compression=compression)
+    w = ResultWriter(out, {"inputs": []}, compression=compression)
     for tables in frames:
         w.append(tables)
     t1 = time.perf_counter()
     w.close()
     t2 = time.perf_counter()
-    S.read_store(out)
+    read_store(out)
     t3 = time.perf_counter()
     result = {"size": os.path.getsize(out), "append": t1 - t0, "close": t2 - t1, "read": t3 - t2}
     os.remove(out)
@@ -91,23 +94,23 @@ def main() -> None:
 
     frames = real_frames(args.run)
     raw = sum(v.nbytes for f in frames for t in f.values() for v in t.values())
-    rows = {t: sum(len(next(iter(f[t].values()), ())) for f in frames if t in f) for t in S.TABLES}
+    rows = {t: sum(len(next(iter(f[t].values()), ())) for f in frames if t in f) for t in TABLES}
     print("machine:", harness.machine())
     print(f"{args.run}: {len(frames)} frames, {rows}, {raw / 2**20:.1f} MiB of arrays")
     if args.columns:
         column_table(frames[0])
-    cases = [(c, S.AUTO_MAX_RATIO) for c in S.COMPRESSIONS] + [("auto", r) for r in args.auto_max_ratio]
+    cases = [(c, C.AUTO_MAX_RATIO) for c in C.COMPRESSIONS] + [("auto", r) for r in args.auto_max_ratio]
     print("| compression | size (MiB) | append (s) | close (s) | append + close (s) | read_store (s) |")
     print("|---|---|---|---|---|---|")
-    default = S.AUTO_MAX_RATIO
+    default = C.AUTO_MAX_RATIO
     for compression, ratio in cases:
-        S.AUTO_MAX_RATIO = ratio
+        C.AUTO_MAX_RATIO = ratio
         d = tempfile.mkdtemp()
         try:
             runs = [store_once(frames, compression, d) for _ in range(args.repeat)]
         finally:
             shutil.rmtree(d)
-            S.AUTO_MAX_RATIO = default
+            C.AUTO_MAX_RATIO = default
         best = {k: min(r[k] for r in runs) for k in ("size", "append", "close", "read")}
         label = compression + (f" (<= {ratio:g})" if compression == "auto" else "")
         total = min(r["append"] + r["close"] for r in runs)

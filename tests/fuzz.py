@@ -1255,9 +1255,9 @@ def main(argv: list[str] | None = None) -> int:
 
     signal.signal(signal.SIGTERM, stop)
     os.environ.setdefault("NUMBA_NUM_THREADS", "1")
-    import demsplit.threads
+    import demsplit.runtime.threads
 
-    demsplit.threads.THREADS = 1  # one core: the fuzzer runs beside other work
+    demsplit.runtime.threads.THREADS = 1  # one core: the fuzzer runs beside other work
     if args.only is not None:
         with tempfile.TemporaryDirectory(prefix="demsplit-fuzz-") as tmp:
             base = make_bases(Path(tmp))
