@@ -26,7 +26,8 @@ import numpy as np
 from .errors import DemsplitError, system_error
 from .outputs import check_output_path
 from .physics import laws
-from .readers.liggghts_script import NORMAL, TANGENTIAL
+from .physics.laws import simulator_words
+from .readers.liggghts_script import TANGENTIAL
 from .scene import Material
 
 EXIT_ERROR = 2
@@ -108,7 +109,7 @@ def _add_input(p: argparse.ArgumentParser) -> None:
     n.add_argument("--wall-columns", metavar="KEYWORDS", help="keywords of the compute wall/gran/local behind --walls")
     n.add_argument("--wall-type", type=int, metavar="T",
                    help="material type of the mesh walls (LIGGGHTS) or of the wall, facet and box bodies (YADE VTK)")
-    n.add_argument("--model", choices=tuple(NORMAL), help="pair_style gran model (default hertz)")
+    n.add_argument("--model", choices=tuple(simulator_words("liggghts")), help="pair_style gran model (default hertz)")
     n.add_argument("--tangential", choices=TANGENTIAL, help="tangential model (default history)")
     n.add_argument("--characteristic-velocity", type=float, metavar="V", help="for model hooke (m/s)")
     n.add_argument("--boundary", metavar='"X Y Z"', help='boundary as in the script, e.g. "p p f" (default "f f f")')

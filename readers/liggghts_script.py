@@ -81,7 +81,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import DemsplitError, MaterialError, ScriptError, UnsupportedModelError
-from ..physics.laws import ContactLaw, law_class
+from ..physics.laws import ContactLaw, law_class, simulator_words
 from ..physics.laws._liggghts import COHESION_MODELS, ROLLING_MODELS, TANGENTIAL_MODELS
 from ..physics.laws._liquid_bridge import BRIDGE_MODELS
 from ..physics.laws._liggghts import SHEAR as SHEAR_COLUMNS
@@ -276,27 +276,8 @@ class LiggghtsScript:
 # Contact models
 # --------------------------------------------------------------------------
 
-NORMAL = {"hertz": "liggghts:hertz", "hooke": "liggghts:hooke", "hertz/stiffness": "liggghts:hertz/stiffness",
-          "hooke/stiffness": "liggghts:hooke/stiffness", "hooke/hysteresis": "liggghts:hooke/hysteresis",
-          "luding": "liggghts:luding", "edinburgh": "liggghts:edinburgh",
-          "edinburgh/stiffness": "liggghts:edinburgh/stiffness", "thornton_ning": "liggghts:thornton_ning"}
-"""LIGGGHTS ``model`` word -> contact-law registry key (:mod:`demsplit.physics.laws`)."""
 TANGENTIAL = TANGENTIAL_MODELS
 """LIGGGHTS ``tangential`` words, passed to the law as its ``tangential`` parameter."""
-PROPERTY_PARAMETERS = {"characteristicVelocity": "characteristic_velocity",
-                       "coefficientRollingFriction": "rolling_friction", "rollingStiffness": "rolling_stiffness",
-                       "cohesionEnergyDensity": "cohesion_energy_density", "kn": "kn", "kt": "kt",
-                       "coefficientMaxElasticStiffness": "max_elastic_stiffness",
-                       "coefficientAdhesionStiffness": "adhesion_stiffness",
-                       "coefficientPlasticityDepth": "plasticity_depth", "LoadingStiffness": "loading_stiffness",
-                       "UnloadingStiffness": "unloading_stiffness", "pullOffForce": "pull_off_force",
-                       "overlapExponent": "overlap_exponent", "surfaceEnergy": "surface_energy",
-                       "coeffFrictionStiffness": "friction_stiffness",
-                       "coeffRollingStiffness": "rolling_stiffness_ratio", "surfaceTension": "surface_tension",
-                       "contactAngle": "contact_angle", "maxSeparationDistanceRatio": "max_separation_ratio",
-                       "minSeparationDistanceRatio": "min_separation_ratio", "fluidViscosity": "fluid_viscosity",
-                       "surfaceLiquidContentInitial": "liquid_content_initial"}
-"""``fix property/global`` scalar -> the law parameter it gives, where the law declares that parameter."""
 _MODEL_KEYS = ("model", "tangential", "cohesion", "rolling_friction", "surface")
 
 
@@ -341,8 +322,9 @@ def _parse_model(words: list[str], stop: tuple[str, ...], where: Where,
     if normal is None:
         raise ScriptError(f"{what}: no 'model' keyword.", file=where.file, line=where.line,
                           fix="give 'model hertz' or 'model hooke'.")
-    if normal not in NORMAL:
-        raise unsupported(f"normal model {normal!r} is not supported.", ", ".join(f"model {w}" for w in NORMAL))
+    normals = simulator_words("liggghts")  # every law registered as liggghts:WORD, when the line is read
+    if normal not in normals:
+        raise unsupported(f"normal model {normal!r} is not supported.", ", ".join(f"model {w}" for w in normals))
     tangential = kinds.get("tangential", "no_history")  # LIGGGHTS' default (measured)
     if tangential not in TANGENTIAL:
         raise unsupported(f"tangential model {tangential!r} is not supported.",
@@ -358,7 +340,7 @@ def _parse_model(words: list[str], stop: tuple[str, ...], where: Where,
     surface = kinds.get("surface", "default")
     if surface != "default":
         raise unsupported(f"surface model {surface!r} is not supported.", "surface default")
-    return _ModelSpec(NORMAL[normal], tangential, rolling, cohesion, settings, where), i
+    return _ModelSpec(normals[normal], tangential, rolling, cohesion, settings, where), i
 
 
 # --------------------------------------------------------------------------
@@ -765,11 +747,10 @@ class _Reader:
     def model(self, spec: _ModelSpec) -> ContactModel:
         """The contact model of a ``pair_style gran`` or ``fix wall/gran``: the law's key and the
         parameters it declares, from the model's words and the script's global properties."""
-        declared = law_class(spec.law).parameters
+        law = law_class(spec.law)
+        declared = law.parameters
         params: dict = {"tangential": spec.tangential, "rolling": spec.rolling, "cohesion": spec.cohesion}
-        for prop, name in PROPERTY_PARAMETERS.items():
-            if name not in declared:
-                continue
+        for prop, name in law.run_parameters().items():
             value = self.properties.get(prop)
             if value is None:
                 if declared[name][0] is ContactLaw.REQUIRED:
@@ -778,10 +759,9 @@ class _Reader:
                                      f"add the {prop} the run used.")
                 continue
             params[name] = float(value[1]) if np.ndim(value[1]) == 0 else value[1]
-        if "kt_to_kn" in declared:
-            params["kt_to_kn"] = 2.0 / 7.0 if spec.on("ktToKnUser") else 1.0
-        if "torsion" in declared:
-            params["torsion"] = "on" if spec.on("torsion") else "off"
+        for setting, (name, on, off) in law.simulator_settings.items():
+            if name in declared:
+                params[name] = on if spec.on(setting) else off
         if spec.cohesion in BRIDGE_MODELS:
             params["contact_distance_factor"] = self.contact_distance_factor
         if spec.cohesion == "washino/capillary/viscous":

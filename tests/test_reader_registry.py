@@ -19,9 +19,11 @@ SAMPLES = Path(__file__).resolve().parent.parent / "sample_dumps"
 
 
 def test_every_registered_reader_keeps_the_contract():
-    tested = {cls.reader for cls in ReaderContract.__subclasses__()}
+    """Every reader of the package has a test class inheriting the contract (a reader a test defines for
+    itself has one too, but is registered only while its tests run)."""
+    tested = {getattr(cls, "reader", None) for cls in ReaderContract.__subclasses__()}
     assert test_cache and test_liggghts_run and test_yade_readers and test_yade_state  # they inherit the contract
-    assert set(readers()) == tested
+    assert set(readers()) <= tested
 
 
 def test_a_new_reader_registers_itself_and_is_found_by_its_detect(tmp_path):

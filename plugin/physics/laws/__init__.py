@@ -52,6 +52,14 @@ def law_class(key: str) -> type[ContactLaw]:
                 "'How to add a contact law').") from None
 
 
+def simulator_words(simulator: str) -> dict[str, str]:
+    """The ``simulator``'s own name of every law registered for it -> the law's key: a law is registered as
+    ``simulator:name`` with the simulator's spelling of its name (``liggghts:hooke/hysteresis``,
+    ``yade:Law2_ScGeom_MindlinPhys_Mindlin``), so the readers' word maps need no table of their own."""
+    prefix = f"{simulator}:"
+    return {key[len(prefix):]: key for key in supported() if key.startswith(prefix)}
+
+
 def make(key: str, params: Mapping[str, Any] | None = None) -> ContactLaw:
     """An instance of the law ``key`` with ``params`` (defaults filled in, checked)."""
     return law_class(key)(params)
@@ -61,4 +69,5 @@ for _module in pkgutil.iter_modules(__path__):
     if _module.name != "base":
         import_module(f"{__name__}.{_module.name}")
 
-__all__ = ["DEFAULT", "ContactLaw", "ContactRows", "LawEnergy", "law_class", "make", "register", "supported"]
+__all__ = ["DEFAULT", "ContactLaw", "ContactRows", "LawEnergy", "law_class", "make", "register", "simulator_words",
+           "supported"]

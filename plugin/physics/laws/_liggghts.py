@@ -171,6 +171,21 @@ class LiggghtsNormalModel(ContactLaw):
         "contact_distance_factor": (None, "neigh_modify contact_distance_factor (default 1); LIGGGHTS raises it to "
                                           "1.1 maxSeparationDistanceRatio (liquid bridges)"),
     }
+    simulator_parameters = {
+        "characteristicVelocity": "characteristic_velocity", "coefficientRollingFriction": "rolling_friction",
+        "rollingStiffness": "rolling_stiffness", "cohesionEnergyDensity": "cohesion_energy_density", "kn": "kn",
+        "kt": "kt", "coefficientMaxElasticStiffness": "max_elastic_stiffness",
+        "coefficientAdhesionStiffness": "adhesion_stiffness", "coefficientPlasticityDepth": "plasticity_depth",
+        "LoadingStiffness": "loading_stiffness", "UnloadingStiffness": "unloading_stiffness",
+        "pullOffForce": "pull_off_force", "overlapExponent": "overlap_exponent", "surfaceEnergy": "surface_energy",
+        "coeffFrictionStiffness": "friction_stiffness", "coeffRollingStiffness": "rolling_stiffness_ratio",
+        "surfaceTension": "surface_tension", "contactAngle": "contact_angle",
+        "maxSeparationDistanceRatio": "max_separation_ratio", "minSeparationDistanceRatio": "min_separation_ratio",
+        "fluidViscosity": "fluid_viscosity", "surfaceLiquidContentInitial": "liquid_content_initial"}
+    """LIGGGHTS ``fix property/global`` names of the parameters of its normal models and sub-models: a normal
+    model takes those of the parameters it declares."""
+    simulator_settings = {"ktToKnUser": ("kt_to_kn", 2.0 / 7.0, 1.0), "torsion": ("torsion", "on", "off")}
+    """Switches of the ``pair_style gran``/``fix wall/gran`` line and the parameters they set."""
 
     def check(self) -> None:
         p = self.params

@@ -100,7 +100,12 @@ class ContactLaw(ABC):
     ``example_params``
         parameters of a typical run, for the registry-wide tests and the docs;
     ``simulator_parameters``
-        attribute of the simulator's law object (YADE's Law2 functor) -> the parameter it gives;
+        the simulator's name of a value its run defines (an attribute of YADE's Law2 functor, a LIGGGHTS
+        ``fix property/global``) -> the parameter of this law it gives, where the law declares that
+        parameter: the readers take the law's parameters from the run through this map;
+    ``simulator_settings``
+        a switch of the simulator's model line (LIGGGHTS ``ktToKnUser on``) -> ``(parameter, value when
+        on, value when off)``;
     ``normal_from_stored_force``
         the normal energy comes from a force the simulator stored (a cohesive bond
         holds energy in tension, at delta < 0), not from delta: the properties "no
@@ -125,6 +130,7 @@ class ContactLaw(ABC):
     example_params: ClassVar[Mapping[str, Any]] = {}
     normal_from_stored_force: ClassVar[bool] = False
     simulator_parameters: ClassVar[Mapping[str, str]] = {}
+    simulator_settings: ClassVar[Mapping[str, tuple[str, Any, Any]]] = {}
 
     def __init__(self, params: Mapping[str, Any] | None = None) -> None:
         params = dict(params or {})
@@ -163,6 +169,12 @@ class ContactLaw(ABC):
         """One line for ``info``/``check``: the key, its parameters (but those unset or ``off``) and the summary."""
         shown = ", ".join(f"{k}={v!r}" for k, v in sorted(self.params.items()) if v is not None and v != "off")
         return f"{self.key}" + (f" ({shown})" if shown else "") + f": {self.summary}"
+
+    @classmethod
+    def run_parameters(cls) -> dict[str, str]:
+        """The entries of :attr:`simulator_parameters` whose parameter this law has: what a reader reads
+        from the run for it (simulator name -> parameter)."""
+        return {name: param for name, param in cls.simulator_parameters.items() if param in cls.parameters}
 
     def needs(self) -> tuple[str, ...]:
         """Every contact column this law reads when it can (required and per-mode)."""
