@@ -111,11 +111,9 @@ MIN_THREADS_PER_WORKER = 2
 def worker_processes(jobs: int) -> int:
     """How many of the ``jobs`` worker processes asked for are used: at most one per
     :data:`MIN_THREADS_PER_WORKER` cores, so 1 (this process alone) on fewer than 4. The serial path
-    already runs its parse and its store compression on every core; measured on 2 cores,
-    ``--jobs 2`` was 1.47-2.5x slower than serial from 1e4 to 1e6 particles (under a load of 2.7-3.1)
-    (``python benchmarks/scaling.py``, docs/performance.md), as the workers' start, their
-    thread pools competing for the same cores and the frames' transfer to the writing process
-    cost more than the per-frame physics they share out."""
+    already runs its parse and its store compression on every core, so on fewer cores the workers' start,
+    their thread pools competing for the same cores and the frames' transfer to the writing process cost
+    more than the per-frame physics they share out (docs/performance.md, "Standing decisions")."""
     return max(1, min(jobs, threads.THREADS // MIN_THREADS_PER_WORKER))
 
 

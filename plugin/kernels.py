@@ -33,7 +33,7 @@ Outputs are allocated by numpy and filled by the loops (the public functions
 here are thin wrappers around the compiled ``_...`` loops): numpy asks the
 kernel for transparent huge pages on large arrays, numba's allocator does not,
 and the 4 KiB page faults of fresh numba arrays dominate a loop
-(``docs/performance.md``, "Compiled loops").
+(``docs/performance.md``, "Standing decisions").
 
 This module imports numba: import it lazily, inside the functions that use it
 (``import demsplit`` must work in YADE's Python, without numba).
@@ -68,7 +68,7 @@ def _stride(values):
 
 # Loops select values inline, ``values[code[i]] if coded else values[i * stride]``:
 # a helper function taking the arrays would not be inlined and would pay numba's
-# reference counting of both arrays on every call (10x slower). For the same
+# reference counting of both arrays on every call, which costs more than the loop's work. For the same
 # reason the formulas called per contact get scalars and tuples, never arrays.
 
 

@@ -171,7 +171,7 @@ def run_to_store(path: str | Path, out: str | Path, *, options: Options = DEFAUL
     compression : ``"auto"`` (gzip only for the columns that compress well,
         readable by every HDF5 tool), ``"gzip"`` (every column; smallest,
         slowest), ``"lzf"`` (h5py only) or ``"none"``/``None`` (fastest,
-        largest); see ``docs/performance.md``, "The result store", for the measured cost of each.
+        largest); see ``docs/performance.md``, "Standing decisions", for the measured cost of each.
     type_names : material names of particle types, as for :func:`analyze`.
     """
     from .readers import open_run

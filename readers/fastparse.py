@@ -41,11 +41,7 @@ called, and read the text through its address (:func:`demsplit.runtime.jit.byte_
 array argument, reference counting cost as much as the step itself. A read
 field's end is found (64 bytes a step) before the field is converted, so that
 the next field's start does not wait for the conversion and the conversions of
-a row overlap in the processor. On the benchmark's contact rows (9 of 41
-columns read), one thread: 3.91 GB/s against 2.48 GB/s with 8-byte steps and
-ends found after the conversion (``python benchmarks/parse_kernel.py
-/tmp/bench_big --rev 2a2c648 --mb 300``), which had brought it from 1.71 GB/s
-when the steps were calls (``--rev c4cbded``; docs/performance.md).
+a row overlap in the processor (docs/performance.md, "Standing decisions").
 """
 
 from __future__ import annotations
@@ -350,7 +346,7 @@ def _skip_fields(base: int, p: int, end: int, n: int) -> int:
     0x80 exactly when b7 >= 0x21; a byte with its high bit set is no separator). The two loops are the
     same steps on the two layouts of flags, written out twice on purpose: one loop over both (the 8-byte
     flags gathered into a bit per byte) or none for the last bytes (-2 within 64 bytes of ``end``) made
-    the kernel 5-10 % slower (``benchmarks/parse_kernel.py --rev HEAD``, two or three times each)."""
+    the kernel slower."""
     before = _U(1)          # a separator just before the step: one at its first byte ends an empty field
     left = n
     while p + _BLOCK <= end:

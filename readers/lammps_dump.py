@@ -1,94 +1,29 @@
 """Low-level readers of LAMMPS/LIGGGHTS dump files: per-frame column arrays.
 
-``open_dump(path)`` sniffs the file and returns a :class:`DumpFile`:
+``open_dump(path)`` sniffs the file and returns a :class:`DumpFile`: a text ``dump custom`` (kind
+``'atoms'``) or ``dump local`` (kind ``'local'``, any ``dump_modify label``), plain or compressed with gzip,
+bzip2 or xz (recognised by their magic bytes), or a LAMMPS binary ``dump custom`` (``*.bin``, native byte
+order, no column names: pass ``columns=``). It does not interpret columns (which ``c_ID[k]`` is a force is
+the input script's business); it indexes the frames, streams one frame at a time and names bad input by
+its line.
 
-* text ``dump custom`` atom dumps (``ITEM: ATOMS id type x ...``, kind ``'atoms'``),
-* text ``dump local`` dumps (``ITEM: ENTRIES c_cpgl[1] ...`` or any other
-  label set with ``dump_modify label``, kind ``'local'``),
-* the same text compressed with gzip, bzip2 or xz (recognised by the magic
-  bytes, whatever the suffix),
-* LAMMPS binary ``dump custom`` files (``*.bin``, native byte order; layout in
-  ``/work/shared/reference/liggghts.md`` §1). They carry no column names: pass
-  ``open_dump(path, columns=[...])`` or get ``col1..colN``.
+Index: the first access to ``steps``/``frame(k)`` scans the file once, on every core, with a compiled pass
+(:func:`~demsplit.readers.fastparse.scan_chunk`) that counts newlines and finds ``ITEM: TIMESTEP``: each
+frame's step, header, box, column names and byte range, plus the newline count before every 1 MiB (the
+checkpoints where a frame is cut for the threads). Binary files are indexed by hopping from header to header.
 
-The reader does not interpret columns (which ``c_cpgl[k]`` is a force is
-decided elsewhere, from the input script). It parses fast, streams one frame at
-a time and reports bad input precisely.
+Reading a frame: rows are parsed straight into preallocated arrays by the compiled kernel
+(:func:`~demsplit.readers.fastparse.parse_rows`), each thread reading (``os.preadv``) and parsing its own
+slice; a compressed file is read in blocks of whole rows. The kernel checks every row's shape and converts
+only the requested columns, integers exactly and reals correctly rounded; what it cannot finish (``nan``,
+a non-number, too many long literals) goes to ``polars.read_csv``, which also gives the located error.
+Every value read is finite, every row has the header's number of fields, and a frame holds the rows its
+header announces (else :class:`~demsplit.errors.TruncatedFileError` at the end of a file).
 
-Index
-    The first access to ``n_frames``/``steps``/``frame(k)`` scans the
-    (decompressed) file once: a plain file in 16 MiB windows read into each
-    thread's buffer and scanned on every core (:func:`_scan_read`), a compressed one
-    through a reused buffer (:func:`_windows`); one compiled pass per 1 MiB
-    (:func:`~demsplit.readers.fastparse.scan_chunk`, numba) counts the
-    newlines and finds the ``ITEM: TIMESTEP`` markers; no per-line Python.
-    Each frame's entry holds its step, header row count, box, column names,
-    the byte range of its rows and their line numbers; the index also keeps
-    the newlines before every 1 MiB (the checkpoints), which is where a
-    frame's rows are cut for the threads. (The digest for the provenance is
-    not taken here but by :mod:`demsplit.fingerprint`, in the background
-    on idle cores while the frames are computed.) The index is cached on the object.
-    Binary files are indexed by hopping from header to header.
-
-Reading a frame
-    Rows are parsed straight into arrays preallocated from the header's row
-    count (the requested columns of each dtype are the rows of one 2-D
-    array); the text of a frame is never in memory at once. A plain file's
-    frame is cut at checkpoints into slices (a quarter of a thread's share, 1
-    to 16 MiB), and each thread of the pool reads a slice (``os.preadv``
-    into its own reused buffer) and parses it; the checkpoint's newline count
-    gives the slice's first row, so no slice waits for another and the copy
-    out of the page cache runs on every core too. A compressed file
-    (``frame(k)`` re-decompresses from the start up to frame k; iteration,
-    ``for f in dump``, reads the stream once, forwards) is read in blocks of
-    about 16 MiB of whole rows into one reused buffer, each block cut into
-    line-aligned slices, one per core. Memory: the requested columns plus a
-    buffer per thread.
-
-Parser
-    Each slice is parsed by the compiled kernel
-    :func:`~demsplit.readers.fastparse.parse_rows` (it releases the GIL): in
-    one pass it checks every row's shape (``ncols`` fields, single spaces,
-    the optional trailing space, a newline) and converts the requested
-    columns, integers exactly, reals by Clinger's fast path (correctly
-    rounded: bit for bit Python's ``float``).
-    The rare real outside that path (a mantissa above 2**53: 17 digits, some
-    of 16; or a decimal exponent beyond +-22 such as ``8.4781e-19``) is
-    converted by ``float`` (at most 4096 per slice). A slice or block holding
-    anything else (``%.17g`` text beyond that count, ``nan``, a non-number, a
-    real in an integer column) is parsed again by the general path,
-    ``polars.read_csv`` (full schema, only the requested columns converted),
-    which also makes an integer column real and, for bad input, leads to the
-    located error. ``fast_blocks`` and ``fallback_blocks`` on a
-    :class:`TextDump` count the slices (blocks) of each. What it costs, and
-    what it replaced: ``docs/performance.md``, "Parser and index".
-
-Validation (every frame that is read)
-    * the header's ``NUMBER OF ATOMS/ENTRIES`` equals the number of lines
-      before the next ``ITEM: TIMESTEP`` (counted by the index scan); at the
-      end of the file a shortfall or a last line without newline is a
-      :class:`~demsplit.errors.TruncatedFileError`;
-    * every row has as many values as the header has names, single spaces
-      between (the shape check of the compiled parse);
-    * every value of the columns read is a number (the compiled parse, else
-      polars), and finite (``numpy.isfinite``).
-    When one of these fails, a diagnostic pass over that block alone finds the
-    first offending line (1-based, in the decompressed file) and column.
-    Non-numbers and NaN/inf in columns that were not requested are not seen.
-
-Printed precision (``DumpFrame.digits``)
-    Columns parsed as exact integers (every token an integer literal: ``%d``,
-    or ``%g`` integers below 1e6) get ``None`` (exact), as do all binary
-    columns. For the others, the significant mantissa digits of each token of
-    the frame's first 128 KiB of rows are counted with vectorised byte
-    arithmetic (leading zeros and the exponent excluded), the maximum taken per
-    column (``observed``), and the frame's precision ``P`` = the largest
-    ``observed`` over all real-valued columns. A column whose sampled values
-    take at most 16 distinct values (a radius 0.001, a mass, zeros), which
-    therefore print with fewer digits than the format allows, gets ``P``;
-    every other column keeps its own ``observed`` (6 for ``%g``, 17 for
-    ``%.17g``). This assumes a low-variety column was printed with the frame's
-    finest float format.
+Printed precision (``DumpFrame.digits``): the significant digits of each real column, counted on the frame's
+first 128 KiB of rows (``None``: exact, as for integer and binary columns); a column of at most 16 distinct
+values, which prints with fewer digits than its format allows, takes the frame's largest count. Why it is
+built this way: docs/performance.md, "Standing decisions".
 """
 
 from __future__ import annotations
@@ -936,7 +871,7 @@ def _scan_read(fd: int, start: int, size: int) -> tuple[list, int, np.ndarray, i
     (``CHUNK`` bytes and ``HEADER_MAX`` more, so that a header starting in it is whole), read with
     ``os.preadv`` into this thread's reused buffer (the one its parses use, :func:`_thread_buffer`).
     Copying the window out of the page cache into memory that stays mapped costs less than mapping
-    the window's pages each time (docs/performance.md, "Parser and index")."""
+    the window's pages each time (docs/performance.md, "Standing decisions")."""
     window = _thread_buffer(min(start + CHUNK + HEADER_MAX, size) - start)
     window = window[: _read_at(fd, window, start)]  # shorter only when the file shrank since its size was taken
     return _scan_window(start, window, min(CHUNK, size - start, window.size))

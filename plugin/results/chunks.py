@@ -5,7 +5,7 @@ shuffle) when its first chunk compresses to at most :data:`AUTO_MAX_RATIO` of it
 filter; the choice is the dataset's HDF5 filter pipeline, which every HDF5 reader decodes. The deflate
 streams are made by ISA-L (``isal``), for its speed; they are standard zlib streams, which any inflate
 decodes. :class:`TableSink` writes a table's whole chunks with ``write_direct_chunk``, compressed on the
-process's thread pool (docs/performance.md, "The result store").
+process's thread pool (docs/performance.md, "Standing decisions").
 """
 
 from __future__ import annotations
@@ -26,13 +26,13 @@ COMPRESSIONS = ("auto", "gzip", "lzf", "none")
 COMPRESSION = "auto"
 GZIP_LEVEL = 1
 """Deflate level of the gzip filter: a higher level shrinks the columns gzip is
-kept for only a little more, at a fraction of the speed (docs/performance.md, "The result store")."""
+kept for only a little more, at a fraction of the speed (docs/performance.md, "Standing decisions")."""
 AUTO_MAX_RATIO = 0.5
 """``auto`` gzips a column when its first chunk, shuffled and deflated, is at
 most this fraction of its raw size: below it deflating costs less than writing
 the bytes it saves; integer columns and shares fall far below it, energies and
-overlaps (full-mantissa floats) far above (docs/performance.md, "The result
-store"). A table without rows in its first
+overlaps (full-mantissa floats) far above (docs/performance.md, "Standing
+decisions"). A table without rows in its first
 frame is decided by dtype: integers gzip, reals none."""
 CHUNK_ROWS = 65536
 """Rows per HDF5 chunk (512 KiB of float64 before compression), at most: a

@@ -12,27 +12,9 @@ Layout (see docs/store.md)::
     /index/<table>    (n_frames + 1,) row offset of frame k in <table>:
                       frame k is rows offsets[k]:offsets[k+1]
 
-Writing (:class:`ResultWriter`): the store is written once, as frames arrive,
-to ``.OUT.h5.partial/store.h5`` next to the target, in HDF5's single-writer
-(SWMR) mode, whose on-disk state stays a valid HDF5 file at every moment, so
-a run killed at any point (SIGKILL included) leaves a readable file. After
-each frame the file is flushed and a commit record,
-``.OUT.h5.partial/commit.npys``, is renamed into place: the steps and row
-offsets of the frames stored so far and the rows that do not yet fill a chunk
-(less than one chunk per column). :meth:`ResultWriter.close` writes those
-last rows, the frame index and the provenance, fsyncs the file and renames it
-to ``OUT.h5``. Nothing exists at ``OUT.h5`` until it is complete. With
-``resume=True`` an interrupted run is continued when its provenance (input
-checksums, options, scene, demsplit version) is the same: the committed
-frames' chunks are copied, as stored, into a fresh file.
-
-Compression (``compression="auto"``, the default): each dataset is gzip
-(level :data:`GZIP_LEVEL`, with shuffle) when its first chunk compresses to at
-most :data:`AUTO_MAX_RATIO` of its size, else stored without filter; the
-choice is the dataset's HDF5 filter pipeline, which every HDF5 reader decodes.
-The deflate streams are made by ISA-L (``isal``), for its speed (measured
-against zlib in docs/performance.md, "The result store"); they are standard
-zlib streams, which any inflate decodes.
+The store is written by :class:`demsplit.results.writer.ResultWriter` (once, as frames arrive, resumably),
+its chunks compressed by :mod:`demsplit.results.chunks`; this module holds the format, the provenance and
+the reading.
 """
 
 from __future__ import annotations

@@ -3,7 +3,7 @@
 Imported first by the package's ``__init__``, before numpy, and applied on import (:func:`settle`) only when the
 process is the command (:func:`is_command`): the ``demsplit`` console script, or ``python -m demsplit.cli``.
 A program that imports demsplit keeps its own settings. What each gains is measured by the command's phase
-profile (docs/performance.md, "The command's process settings").
+profile (docs/performance.md, "Standing decisions").
 
 OpenBLAS threads
     ``OPENBLAS_NUM_THREADS=1`` unless the user set it: the command calls no BLAS, but OpenBLAS starts its

@@ -34,7 +34,7 @@ from .threads import run_on_idle_cores
 
 BYTES_PER_PARTICLE = 140
 """Memory mapped ahead per particle of the first frame (bytes): about two thirds of the fresh memory per
-particle of a generated run (docs/performance.md, "The first frame's memory")."""
+particle of a generated run (docs/performance.md, "Standing decisions")."""
 BYTES_PER_CONTACT = 200
 """Memory mapped ahead per contact of the first frame (bytes), likewise."""
 LARGEST = MMAP_THRESHOLD - (1 << 20)

@@ -12,8 +12,7 @@ are written too) is NaN, never the store's 0. Where types have material names (Y
 labels, ``demsplit run --type-name``), every file's field data carries them as two
 parallel arrays, ``type_id`` (integers) and ``material`` (strings). The files are VTK XML unstructured grids of
 vertex cells, written by meshio: pure Python and a small fraction of VTK's
-size (the two writers measured: ``python benchmarks/vtk_writers.py``, figures
-in docs/performance.md).
+size (docs/performance.md, "Standing decisions").
 """
 
 from __future__ import annotations
