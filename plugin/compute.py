@@ -133,7 +133,7 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = DEFAULT_OPTIONS)
             frame.notes.append(note)
     n = len(contacts)
     step = np.int64(frame.step)
-    _mark_missing_walls(scene, main, ptable, wtable, n)
+    _mark_missing_walls(scene, main, wtable)
     accuracy = _accuracy(contacts, ratios, main, ptable) if options.accuracy else {}
     tables: Tables = {"particles": {"step": np.full(len(ptable["id"]), step), **ptable},
                       "walls": {"step": np.full(len(wtable["wall"]), step), **wtable}}
@@ -153,8 +153,7 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = DEFAULT_OPTIONS)
         "n_particles": np.array([len(ptable["id"])], dtype=np.int64),
         "n_contacts": np.array([n], dtype=np.int64),
         "n_wall_contacts": np.array([int(np.count_nonzero(contacts.contacts["wall"] >= 0))], dtype=np.int64),
-        **({"n_not_computed": np.array([int(np.count_nonzero(main.not_computed))], dtype=np.int64)}
-           if main.not_computed is not None else {}),
+        "n_not_computed": np.array([int(np.count_nonzero(main.not_computed))], dtype=np.int64),
         **{mode.column: np.array([main.u[k].sum()]) for k, mode in enumerate(main.modes)},
         **({ADHESION_COLUMN: np.array([main.u_adh.sum()])} if main.u_adh is not None else {}),
         "u_particles": np.array([ptable["u"].sum()]),
@@ -235,16 +234,11 @@ def refuse_missing_walls(scene: Scene, options: Options) -> None:
                 f"--allow-missing {w.name}: the wall's energy is then marked not computed.")
 
 
-def _mark_missing_walls(scene: Scene, main: ContactEnergy, ptable: Table, wtable: Table, n: int) -> None:
-    """Give every table a ``not_computed`` column when a wall's contacts are missing, with every mode's
-    bit set on that wall (its contacts, and so its particles, are unknown)."""
+def _mark_missing_walls(scene: Scene, main: ContactEnergy, wtable: Table) -> None:
+    """Set every mode's bit on the walls whose contacts are missing (their contacts, unread, are unknown)."""
     walls = missing_walls(scene)
     if not walls:
         return
-    if main.not_computed is None:
-        main.not_computed = np.zeros(n, dtype=np.int32)
-        ptable["not_computed"] = np.zeros(len(ptable["id"]), dtype=np.int32)
-        wtable["not_computed"] = np.zeros(len(wtable["wall"]), dtype=np.int32)
     every = sum(NOT_COMPUTED_BITS[m.column] for m in main.modes) + (
         NOT_COMPUTED_BITS[ADHESION_COLUMN] if main.u_adh is not None else 0)
     for i, _ in walls:

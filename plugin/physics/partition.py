@@ -55,10 +55,10 @@ class ContactLawEnergy(_ByMode):
     not compute from the data given (their columns were not dumped), with why; ``not_computed``: per
     contact, the bits (:data:`~demsplit.physics.modes.NOT_COMPUTED_BITS`) of the modes whose value is
     unknown (``missing`` modes, and history-dependent modes of contacts whose history the simulator
-    never wrote, flagged by the reader with the contact column ``history_unknown``), or None when
-    every value is known. A law may decide itself which of its rows are unknown (``LawEnergy.unknown``), e.g. a
-    liquid bridge apart from a primitive wall, whose state LIGGGHTS never writes, while the same contact
-    touching holds one for certain."""
+    never wrote, flagged by the reader with the contact column ``history_unknown``; 0: known). A law may
+    decide itself which of its rows are unknown (``LawEnergy.unknown``), e.g. a liquid bridge apart from a
+    primitive wall, whose state LIGGGHTS never writes, while the same contact touching holds one for certain.
+    An unknown value is 0 in ``u`` and ``u_adh``, never an estimate."""
 
     u: np.ndarray
     skipped: dict[str, str] = field(default_factory=dict)
@@ -67,6 +67,9 @@ class ContactLawEnergy(_ByMode):
     missing: dict[str, str] = field(default_factory=dict)
     not_computed: np.ndarray | None = None
 
+    def __post_init__(self) -> None:
+        if self.not_computed is None:  # every value known
+            self.not_computed = np.zeros(self.u.shape[-1], dtype=np.int32)
 
 @dataclass
 class ContactEnergy(_ByMode):
@@ -78,7 +81,8 @@ class ContactEnergy(_ByMode):
     body; ``depth1`` (m): approach of body 1; ``cp`` (m, shape (n, 3), stored by
     coordinate: ``cp[:, 0]`` is contiguous): contact point; ``separated``:
     contacts with delta < 0 (zero energy, kept and flagged); ``skipped``:
-    quantities not computed and why.
+    quantities not computed and why; ``not_computed``: per contact, the bits of its unknown modes
+    (:class:`ContactLawEnergy`).
     """
 
     u: np.ndarray
@@ -93,19 +97,18 @@ class ContactEnergy(_ByMode):
     modes: tuple[Mode, ...] = ALWAYS
     u_adh: np.ndarray | None = None
     missing: dict[str, str] = field(default_factory=dict)
-    not_computed: np.ndarray | None = None
+    not_computed: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int32))
 
     def table(self) -> Table:
         """The per-contact columns as a table: every mode's energy and share, ``u_adh`` when the scene
-        has cohesion, ``u1 u2 depth1 cpx cpy cpz``."""
+        has cohesion, ``u1 u2 depth1 cpx cpy cpz``, ``not_computed``."""
         out = {m.column: self.u[k] for k, m in enumerate(self.modes)}
         if self.u_adh is not None:
             out[ADHESION_COLUMN] = self.u_adh
         out.update({m.share_column: self.shares[k] for k, m in enumerate(self.modes)})
         out.update(u1=self.u1, u2=self.u2, depth1=self.depth1, cpx=self.cp[:, 0], cpy=self.cp[:, 1],
                    cpz=self.cp[:, 2])
-        if self.not_computed is not None:
-            out["not_computed"] = self.not_computed
+        out["not_computed"] = self.not_computed
         return out
 
 
@@ -160,7 +163,7 @@ def law_energies(frame: FrameContacts, *, compiled: bool = True) -> ContactLawEn
     skipped: dict[str, str] = {}
     missing: dict[str, str] = {}
     unknown = np.asarray(contacts["history_unknown"]) != 0 if "history_unknown" in contacts else None
-    not_computed = np.zeros(n, dtype=np.int32) if unknown is not None else None
+    not_computed = np.zeros(n, dtype=np.int32)
     for law, rows in groups:
         result = law.energies(LawRows(frame, rows, law.key), compiled=compiled)
         for k, mode in enumerate(modes):
@@ -179,13 +182,16 @@ def law_energies(frame: FrameContacts, *, compiled: bool = True) -> ContactLawEn
                                    if m not in result.skipped and m not in result.unknown)
         decided = {m: mask for m, mask in result.unknown.items() if mask.any()}  # rows the law itself says are unknown
         if bits or decided or (unknown is not None and bits_without_history):
-            if not_computed is None:
-                not_computed = np.zeros(n, dtype=np.int32)
             not_computed[rows] |= bits
             if unknown is not None and bits_without_history:
                 not_computed[rows] |= np.where(unknown[rows], bits_without_history, 0).astype(np.int32)
             for m, mask in decided.items():
                 not_computed[rows] |= np.where(mask, NOT_COMPUTED_BITS[m], 0).astype(np.int32)
+    if not_computed.any():  # an unknown value is 0 with its bit, never what the law made of no data
+        for k, mode in enumerate(modes):
+            u[k][(not_computed & NOT_COMPUTED_BITS[mode.column]) != 0] = 0.0
+        if u_adh is not None:
+            u_adh[(not_computed & NOT_COMPUTED_BITS[ADHESION_COLUMN]) != 0] = 0.0
     return ContactLawEnergy(u, skipped, modes, u_adh, missing, not_computed)
 
 
@@ -296,9 +302,11 @@ def body_tables(frame: FrameContacts, energy: ContactEnergy, n_walls: int = 0) -
     """Sum each body's energy over its contacts (one compiled pass, :func:`demsplit.kernels.body_sums`).
 
     Returns ``(particle_table, wall_table)``: per particle ``id type x y z radius u``,
-    the energy of every mode (J), ``u_adh`` with cohesion, and ``n_contacts``, in the particles' row
-    order; per wall ``wall u``, every mode, ``u_adh``, ``n_contacts``. ``u`` is the sum of
-    the elastic modes; ``u_adh`` gets half of each contact's cohesion work. Conservation: sum of
+    the energy of every mode (J), ``u_adh`` with cohesion, ``n_contacts``, ``not_computed`` (the bits of
+    the modes any of its contacts could not give) and ``n_not_computed`` (those contacts), in the
+    particles' row order; per wall ``wall u``, every mode, ``u_adh``, ``n_contacts``, ``not_computed``,
+    ``n_not_computed``. ``u`` is the sum of the elastic modes, each the known part where a contact's
+    value is not computed; ``u_adh`` gets half of each contact's cohesion work. Conservation: sum of
     particle u + sum of wall u = sum over contacts of every mode, to rounding.
     """
     from ..kernels import body_sums, max_wall  # compiled: see the module docstring
@@ -317,15 +325,19 @@ def body_tables(frame: FrameContacts, energy: ContactEnergy, n_walls: int = 0) -
     }
     wtable = {"wall": np.arange(n_walls, dtype=np.int64), "u": _total(wu), **dict(zip(columns, wu)),
               "n_contacts": w_contacts}
-    if energy.not_computed is not None:  # a body is incomplete in every mode one of its contacts is
-        pbits = np.zeros(table_length(particles), dtype=np.int32)
-        wbits = np.zeros(n_walls, dtype=np.int32)
-        np.bitwise_or.at(pbits, rows1, energy.not_computed)
-        pair = rows2 >= 0
-        np.bitwise_or.at(pbits, rows2[pair], energy.not_computed[pair])
-        np.bitwise_or.at(wbits, -1 - rows2[~pair], energy.not_computed[~pair])
-        ptable["not_computed"] = pbits
-        wtable["not_computed"] = wbits
+    # a body is incomplete in every mode one of its contacts is; n_not_computed counts those contacts
+    unknown = energy.not_computed != 0
+    pair = rows2 >= 0
+    pbits = np.zeros(table_length(particles), dtype=np.int32)
+    wbits = np.zeros(n_walls, dtype=np.int32)
+    np.bitwise_or.at(pbits, rows1, energy.not_computed)
+    np.bitwise_or.at(pbits, rows2[pair], energy.not_computed[pair])
+    np.bitwise_or.at(wbits, -1 - rows2[~pair], energy.not_computed[~pair])
+    ptable["not_computed"] = pbits
+    ptable["n_not_computed"] = (np.bincount(rows1[unknown], minlength=len(pbits))
+                                + np.bincount(rows2[pair & unknown], minlength=len(pbits)))
+    wtable["not_computed"] = wbits
+    wtable["n_not_computed"] = np.bincount(-1 - rows2[~pair & unknown], minlength=n_walls)
     if energy.u_adh is not None:  # the interface's work, half to each body
         half = np.full((1, len(energy.u_adh)), ADHESION_SHARE)
         p_adh, _, w_adh, _ = body_sums(rows1, rows2, half, energy.u_adh[None, :], table_length(particles), n_walls)

@@ -108,13 +108,21 @@ def grouped_stats(df: pd.DataFrame, keys: Sequence[str], value: str) -> pd.DataF
 
 def per_type(particles: pd.DataFrame, value: str = "u", *, by_frame: bool = True) -> pd.DataFrame:
     """Statistics of ``value`` (J) per particle type, plus ``share_of_total``:
-    the type's total over the total of all types (of that frame if by_frame), and, when the particles
+    the type's total over the total of all types (of that frame if by_frame), ``n_not_computed`` (the
+    particles of the type with a value not computed: the statistics hold their known part; with the
+    particles' ``not_computed`` column), and, when the particles
     carry ``u_n_error``, ``expected_error``: the type's expected normal-energy error over its total
     (the energy-weighted expected error of the split, from the finite-element model, docs/accuracy.md)."""
     keys = ["step", "type"] if by_frame else ["type"]
     out = grouped_stats(particles, keys, value)
     whole = out.groupby("step")["total"].transform("sum") if by_frame else out["total"].sum()
-    out["share_of_total"] = out["total"] / whole
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out["share_of_total"] = out["total"] / whole
+    if "not_computed" in particles:
+        unknown = particles.assign(n_not_computed=particles["not_computed"] != 0)
+        counts = unknown.groupby(keys, sort=True)["n_not_computed"].sum().reset_index()
+        out = out.merge(counts, on=keys, how="left")
+        out["n_not_computed"] = out["n_not_computed"].astype(np.int64)
     if "u_n_error" in particles and value == "u":
         err = particles.groupby(keys, sort=True)["u_n_error"].sum().rename("err").reset_index()
         err = out[keys].merge(err, on=keys, how="left")["err"].to_numpy()

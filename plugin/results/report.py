@@ -95,15 +95,6 @@ def _fmt(df: pd.DataFrame, unknown: Mapping[str, np.ndarray] | None = None) -> p
     return out
 
 
-def _incomplete_per_type(table: pd.DataFrame, particles: pd.DataFrame) -> pd.DataFrame:
-    """``table`` (one row per type) with ``n_not_computed``: the particles of each type with a mode not
-    computed (their ``u`` holds only what is known), when any particle has one."""
-    if "not_computed" not in particles or not (particles["not_computed"] != 0).any():
-        return table
-    counts = particles.assign(n=particles["not_computed"] != 0).groupby("type")["n"].sum()
-    return table.assign(n_not_computed=[int(counts.get(t, 0)) for t in table["type"]])
-
-
 def _mode_total(frame: pd.Series, contacts: pd.DataFrame, mode: str) -> str:
     """A frame's total of ``mode`` for display (J), followed by how many contacts it leaves out as not
     computed (their ``not_computed`` bit of that mode)."""
@@ -143,11 +134,11 @@ def text_summary(results: Results, step: int | None = None, names: Mapping[int, 
     names of types (added to the provenance's, see :meth:`Results.type_names`)."""
     step = _pick_step(results, step)
     one = results.frame(step)
-    fr = one.frames.iloc[0]
+    fr = one.raw.frames.iloc[0]
     names = results.type_names(names)
-    modes = elastic_columns(one.frames)
+    modes = elastic_columns(one.raw.frames)
     u_total = sum(fr[m] for m in modes)
-    parts = ", ".join(f"{MODE_NAMES.get(m, m)} {_mode_total(fr, one.contacts, m)}" for m in modes)
+    parts = ", ".join(f"{MODE_NAMES.get(m, m)} {_mode_total(fr, one.raw.contacts, m)}" for m in modes)
     lines = [
         f"demsplit results: {len(results.steps)} frame(s); frame at timestep {step}"
         + (f" (t = {fr['time']:.6g} s)" if known(fr.get("time")) else ""),
@@ -158,7 +149,7 @@ def text_summary(results: Results, step: int | None = None, names: Mapping[int, 
         lines += [f"    - {n}" for n in missing]
     lines.append(f"  {int(fr['n_particles'])} particles, {int(fr['n_contacts'])} contacts "
                  f"({int(fr['n_wall_contacts'])} with walls); elastic contact energy {u_total:.6g} J ({parts})"
-                 + (f"; cohesion work {_mode_total(fr, one.contacts, 'u_adh')}, apart" if "u_adh" in fr else ""))
+                 + (f"; cohesion work {_mode_total(fr, one.raw.contacts, 'u_adh')}, apart" if "u_adh" in fr else ""))
     model = results.provenance.get("model")
     if model:
         params = ", ".join(f"{k}={v!r}" for k, v in sorted(model.get("params", {}).items())
@@ -172,27 +163,28 @@ def text_summary(results: Results, step: int | None = None, names: Mapping[int, 
     cols = ["type", "count", "total", "share_of_total", "mean", "p50", "p95", "top10_share", "gini"]
     table = one.per_type()
     cols += ["expected_error"] if "expected_error" in table else []
-    table = _incomplete_per_type(table[cols], one.particles)
+    cols += ["n_not_computed"] if "n_not_computed" in table and table["n_not_computed"].any() else []
+    table = table[cols]
     if names:
         table = table.assign(material=[names.get(int(t), "") for t in table["type"]])
     lines += ["", "Energy per particle type (J; material distribution law; expected_error: the split's expected "
               "relative error, finite-element model):", _fmt(table).to_string(index=False)]
-    if {"u_equal", "u_radius"} <= set(one.particles.columns):
+    if {"u_equal", "u_radius"} <= set(one.raw.particles.columns):
         sc = one.split_comparison()
         sc = sc[["type"] + [c for c in sc.columns if c.startswith(("total_", "misattribution_"))]]
         lines += ["", "Split comparison (J; misattribution in % of the material-law total):",
                   _fmt(sc).to_string(index=False)]
-    if len(one.walls):
+    if len(one.raw.walls):
         we = one.wall_energy()
         lines += ["", "Walls (J):", _fmt(we[[c for c in ("wall", "name", "kind", "u", *energy_modes(we),
                                                          "n_contacts", "share") if c in we]],
                                          not_computed_mask(we)).to_string(index=False)]
-    if {"cpx_sim", "cpy_sim", "cpz_sim"} <= set(one.contacts.columns):
+    if {"cpx_sim", "cpy_sim", "cpz_sim"} <= set(one.raw.contacts.columns):
         lines += ["", "Contact point: |cp - cp_simulator| / overlap (print_bound_median: what the dump's printed "
                   "digits alone allow; a shift not far above it measures the print precision):",
                   _fmt(one.contact_point_shift()).to_string(index=False)]
-    if "share_n1_error" in one.contacts:
-        lines += ["", accuracy_line(one.contacts, results.provenance.get("options", {}).get("split", "material"))]
+    if "share_n1_error" in one.raw.contacts:
+        lines += ["", accuracy_line(one.raw.contacts, results.provenance.get("options", {}).get("split", "material"))]
     pf = results.per_frame()
     worst = pf["balance_rel_error"].max()
     lines += ["", f"Energy balance over {len(pf)} frame(s): max |sum particles + sum walls - sum contacts| "
@@ -543,14 +535,15 @@ def _mode_table(one: Results) -> pd.DataFrame:
     """Frame totals of every energy mode over contacts, particles and walls (J), and how many contacts
     each total leaves out as not computed (``contacts_not_computed``)."""
     rows = []
-    found = dict.fromkeys([*one.frames.columns, *one.contacts.columns, *one.particles.columns])
+    unknown = not_computed_mask(one.raw.contacts)
+    found = dict.fromkeys([*one.raw.frames.columns, *one.raw.contacts.columns, *one.raw.particles.columns])
     for col in energy_modes(pd.DataFrame(columns=list(found))):
-        table = one.frames if col in one.frames else one.contacts if col in one.contacts else None
+        table = one.raw.frames if col in one.raw.frames else one.raw.contacts if col in one.raw.contacts else None
         total = table[col].sum() if table is not None else np.nan
         rows.append({"mode": MODE_NAMES.get(col, col), "column": col, "contacts": float(total),
-                     "particles": float(one.particles[col].sum()) if col in one.particles else np.nan,
-                     "walls": float(one.walls[col].sum()) if col in one.walls else np.nan,
-                     "contacts_not_computed": int(not_computed_mask(one.contacts).get(col, np.zeros(0, bool)).sum())})
+                     "particles": float(one.raw.particles[col].sum()) if col in one.raw.particles else np.nan,
+                     "walls": float(one.raw.walls[col].sum()) if col in one.raw.walls else np.nan,
+                     "contacts_not_computed": int(unknown[col].sum()) if col in unknown else 0})
     return pd.DataFrame(rows, columns=["mode", "column", "contacts", "particles", "walls", "contacts_not_computed"])
 
 
@@ -563,7 +556,7 @@ def write_html(results: Results, path: str | Path, step: int | None = None,
     matplotlib.use("Agg")
     step = _pick_step(results, step)
     one = results.frame(step)
-    fr = one.frames.iloc[0]
+    fr = one.raw.frames.iloc[0]
     names = results.type_names(names)
     pf = results.per_frame()
     prov = results.provenance or {}
@@ -593,31 +586,32 @@ def write_html(results: Results, path: str | Path, step: int | None = None,
     body = [*head, "<h2>Energy per mode</h2>",
             "<p>Totals of this frame (J). The elastic modes sum to the elastic total; the cohesion work "
             "<code>u_adh</code>, where present, is signed and kept apart.</p>", _table(_mode_table(one))]
-    if "share_n1_error" in one.contacts:
-        body.append(f"<p>{esc(accuracy_line(one.contacts, prov.get('options', {}).get('split', 'material')))}</p>")
+    if "share_n1_error" in one.raw.contacts:
+        body.append(f"<p>{esc(accuracy_line(one.raw.contacts, prov.get('options', {}).get('split', 'material')))}</p>")
     cols = ["type", "count", "total", "share_of_total", "mean", "std", "p05", "p50", "p95", "top1_share",
             "top10_share", "gini"]
     per_type = one.per_type()
     cols += ["expected_error"] if "expected_error" in per_type else []
     body += ["<h2>Energy per particle type</h2>",
-             _table(_with_names(_incomplete_per_type(per_type[cols], one.particles), names)),
-             _figure(_fig_histogram(one.particles, step, names),
+             _table(_with_names(per_type[cols + (["n_not_computed"] if "n_not_computed" in per_type
+                                                 and per_type["n_not_computed"].any() else [])], names)),
+             _figure(_fig_histogram(one.raw.particles, step, names),
                      "Histogram of per-particle elastic energy (material distribution law).",
                      "Energy histogram per type")]
     body += ["<h2>Distribution</h2>", _figure(
-        _fig_distribution(one.particles, step, names),
+        _fig_distribution(one.raw.particles, step, names),
         "Left: probability density of u/&lt;u&gt; over log-spaced bins, &lt;u&gt; the mean over every particle of "
         "the group (particles with u = 0 count in the normalisation, not in the curve). Right: the complementary "
         "cumulative distribution P(u/&lt;u&gt; &ge; x). Log axes: a power-law tail is a straight line.",
         "Normalised distribution and CCDF")]
-    fig, note = _fig_radius(one.particles, step, names)
+    fig, note = _fig_radius(one.raw.particles, step, names)
     body.append(_figure(fig, f"Particle energy against radius{esc(note)}.", "Energy against radius"))
-    if {"x", "y", "z"} <= set(one.particles.columns):
+    if {"x", "y", "z"} <= set(one.raw.particles.columns):
         body += ["<h2>Where the energy sits</h2>",
-                 _figure(_fig_height(one.particles, step, names),
+                 _figure(_fig_height(one.raw.particles, step, names),
                          f"Mean energy per particle (left) and share of the frame's particle energy (right) in "
                          f"{HEIGHT_BINS} horizontal slabs of z (particles by their centre).", "Energy against height")]
-        fig, note = _fig_views(one.particles, step)
+        fig, note = _fig_views(one.raw.particles, step)
         body.append(_figure(fig, "Left: the particles cut by the plane y = median y, drawn as their cross-sections "
                             "and coloured by u (log scale; grey: u = 0). Right: every particle's centre projected on "
                             f"the x-z plane{esc(note)}, the highest energies drawn last.", "Slice and projection"))
@@ -627,7 +621,7 @@ def write_html(results: Results, path: str | Path, step: int | None = None,
                      "between the smallest and the largest radius of this frame); log energy axes.",
                      "Energy per size class"),
              _table(per_size)]
-    if {"u_equal", "u_radius"} <= set(one.particles.columns):
+    if {"u_equal", "u_radius"} <= set(one.raw.particles.columns):
         sc = one.split_comparison()
         body += ["<h2>Split comparison</h2>", _figure(
             _fig_split(sc, step, names),
@@ -635,23 +629,23 @@ def write_html(results: Results, path: str | Path, step: int | None = None,
             "misattribution = (split total - material total)/material total.", "Energy per type under each split"),
             _table(_with_names(sc[["step", "type", "count"] + [c for c in sc.columns if c.startswith(
                 ("total_", "misattribution_", "gini_"))]], names)),
-            _figure(_fig_misattribution(one.particles, step),
+            _figure(_fig_misattribution(one.raw.particles, step),
                     "Per-particle misattribution (u_split - u)/u of the simpler splits, over the particles with "
                     "u &gt; 0 (values beyond the 99.5th percentile are gathered in the last bin). -1: the split "
                     "gives the particle nothing; +1: twice its energy.", "Per-particle misattribution"),
-            _table(misattribution_table(one.particles))]
+            _table(misattribution_table(one.raw.particles))]
     frame_cols = ["step", "time", "n_particles", "n_contacts", "n_wall_contacts", "u_contacts", *energy_modes(pf),
                   "u_walls", "balance_rel_error", "gini"]
     body += ["<h2>Frames</h2>", _figure(_fig_frames(pf), "Elastic total, every energy mode and the energy held by "
                                         "walls per frame, on a log axis so that small terms are visible.",
                                         "Energy per frame"),
              _table(pf[[c for c in dict.fromkeys(frame_cols) if c in pf]])]
-    if len(one.walls):
+    if len(one.raw.walls):
         we = one.wall_energy()
         body += ["<h2>Walls</h2>", _table(_with_names(we, names), not_computed_mask(we))]
-    if {"cpx_sim", "cpy_sim", "cpz_sim"} <= set(one.contacts.columns):
+    if {"cpx_sim", "cpy_sim", "cpz_sim"} <= set(one.raw.contacts.columns):
         body += ["<h2>Contact point</h2>", _figure(
-            _fig_cp(one.contacts, step), "Distance between the material-weighted contact point and the simulator's "
+            _fig_cp(one.raw.contacts, step), "Distance between the material-weighted contact point and the simulator's "
             "own, in units of the overlap.", "Contact point shift"), _table(one.contact_point_shift())]
     materials = (prov.get("scene") or {}).get("materials") or {}
     if materials or names:

@@ -6,21 +6,27 @@
     one row per particle and frame: ``step``, ``id``, ``type``, ``x y z`` (m, the centre as the
     reader gives it: wrapped into a periodic box), ``radius`` (m),
     ``u``, ``u_n``, ``u_t`` (J, material distribution law), ``u_equal`` (J, 50/50
-    split), ``u_radius`` (J, radius-weighted split), ``n_contacts``; optionally
+    split), ``u_radius`` (J, radius-weighted split), ``n_contacts``, ``not_computed`` (bits of the modes
+    some contact of the particle could not give), ``n_not_computed`` (those contacts); optionally
     ``u_springs`` (J).
 ``contacts``
     one row per contact and frame: ``step``, ``id1``, ``id2`` (-1 for a wall),
     ``wall`` (-1 for pairs), ``delta`` (m), ``u_n``, ``u_t``, ``u1``, ``u2`` (J),
-    ``share_n1``, ``share_t1``, ``depth1`` (m), ``cpx cpy cpz`` (m), optionally
+    ``share_n1``, ``share_t1``, ``depth1`` (m), ``cpx cpy cpz`` (m), ``not_computed``, optionally
     ``cpx_sim cpy_sim cpz_sim`` (m, the simulator's own contact point).
 ``walls``
     one row per wall and frame: ``step``, ``wall``, ``u``, ``u_n``, ``u_t`` (J),
-    ``n_contacts``.
+    ``n_contacts``, ``not_computed``, ``n_not_computed``.
 ``frames``
     one row per frame: ``step``, ``time`` (s), ``n_particles``, ``n_contacts``
     (all contacts, wall contacts included), ``n_wall_contacts``, ``u_n``, ``u_t`` (J, sums
     over contacts), ``u_particles``, ``u_walls`` (J, sums of the particles' and the
-    walls' ``u``), ``overlap_max_rel_error``.
+    walls' ``u``), ``n_not_computed`` (contacts with a value not computed), ``overlap_max_rel_error``.
+
+A value that was not computed is NaN in these tables, as in every export (:func:`with_not_computed_as_nan`:
+a mode whose bit is set in the row's ``not_computed``, and the totals and splits made from it).
+``results.raw`` holds the tables as stored: 0 there, and every total the known part, which is what the
+statistics (:meth:`Results.per_type`, ...) sum; they say how many contributions were not computed.
 
 Every DataFrame carries ``df.attrs['units']``, a mapping column -> unit
 (``"1"`` for dimensionless numbers and counts). Rows are ordered by ``step``
@@ -32,7 +38,8 @@ come from memory (:meth:`Results.from_frames`) or from a store
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from functools import cached_property
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -53,20 +60,51 @@ def _sorted_by_step(table: Table) -> Table:
 
 
 @dataclass
-class Results:
-    """Per-particle, per-contact, per-wall and per-frame results of a run.
-
-    Build it with :meth:`from_frames` (per-frame tables from the pipeline),
-    :meth:`from_tables` (tables already holding every frame) or
-    :func:`load_results` (a store written by :class:`demsplit.results.writer.ResultWriter`).
-    """
+class RawTables:
+    """The tables as the store holds them: a value not computed is 0 (with its row's bit), a total the
+    known part."""
 
     particles: pd.DataFrame
     contacts: pd.DataFrame
     walls: pd.DataFrame
     frames: pd.DataFrame
-    provenance: dict = field(default_factory=dict)
-    walls_meta: list[dict] = field(default_factory=list)
+
+
+class Results:
+    """Per-particle, per-contact, per-wall and per-frame results of a run (module docstring).
+
+    Build it with :meth:`from_frames` (per-frame tables from the pipeline),
+    :meth:`from_tables` (tables already holding every frame) or
+    :func:`load_results` (a store written by :class:`demsplit.results.writer.ResultWriter`). The
+    constructor takes the tables as stored (:class:`RawTables`).
+    """
+
+    def __init__(self, particles: pd.DataFrame, contacts: pd.DataFrame, walls: pd.DataFrame, frames: pd.DataFrame,
+                 provenance: dict | None = None, walls_meta: list[dict] | None = None) -> None:
+        self.raw = RawTables(particles, contacts, walls, frames)
+        self.provenance: dict = dict(provenance or {})
+        self.walls_meta: list[dict] = list(walls_meta or [])
+
+    @cached_property
+    def particles(self) -> pd.DataFrame:
+        """One row per particle and frame; NaN where not computed."""
+        return with_not_computed_as_nan(self.raw.particles)
+
+    @cached_property
+    def contacts(self) -> pd.DataFrame:
+        """One row per contact and frame; NaN where not computed."""
+        return with_not_computed_as_nan(self.raw.contacts)
+
+    @cached_property
+    def walls(self) -> pd.DataFrame:
+        """One row per wall and frame; NaN where not computed."""
+        return with_not_computed_as_nan(self.raw.walls)
+
+    @property
+    def frames(self) -> pd.DataFrame:
+        """One row per frame: totals of what is known, ``n_not_computed`` the contacts with a value not
+        computed."""
+        return self.raw.frames
 
     @classmethod
     def from_tables(
@@ -184,7 +222,7 @@ class Results:
             raise StoreError(f"no frame with timestep {step}; the results hold {len(self.steps)} frame(s), "
                              f"timesteps {describe_steps(self.steps)}.",
                              fix="pick one of the stored timesteps.")
-        pick = {name: getattr(self, name) for name in TABLES}
+        pick = {name: getattr(self.raw, name) for name in TABLES}
         return Results(
             **{name: _with_units((df[df["step"] == step] if "step" in df else df).reset_index(drop=True), df)
                for name, df in pick.items()},  # a table not stored (run --no-contacts) has no columns
@@ -197,45 +235,45 @@ class Results:
         """Distribution statistics of ``value`` per particle type (see :func:`demsplit.results.aggregate.per_type`)."""
         from .aggregate import per_type
 
-        return per_type(self.particles, value, by_frame=by_frame)
+        return per_type(self.raw.particles, value, by_frame=by_frame)
 
     def per_size(self, bins=None, value: str = "u", *, by_frame: bool = True) -> pd.DataFrame:
         """Statistics of ``value`` per radius class (see :func:`demsplit.results.aggregate.per_size`)."""
         from .aggregate import per_size
 
-        return per_size(self.particles, bins, value, by_frame=by_frame)
+        return per_size(self.raw.particles, bins, value, by_frame=by_frame)
 
     def per_frame(self) -> pd.DataFrame:
         """Time series of totals and distribution statistics (see :func:`demsplit.results.aggregate.per_frame`)."""
         from .aggregate import per_frame
 
-        return per_frame(self.particles, self.walls, self.frames)
+        return per_frame(self.raw.particles, self.raw.walls, self.raw.frames)
 
     def split_comparison(self, *, by_frame: bool = True) -> pd.DataFrame:
         """Material law against 50/50 and radius splits per type (see
         :func:`demsplit.results.aggregate.split_comparison`)."""
         from .aggregate import split_comparison
 
-        return split_comparison(self.particles, by_frame=by_frame)
+        return split_comparison(self.raw.particles, by_frame=by_frame)
 
     def contact_point_shift(self, *, by_frame: bool = True) -> pd.DataFrame:
         """|cp - cp_sim|/delta statistics (see :func:`demsplit.results.aggregate.contact_point_shift`)."""
         from .aggregate import contact_point_shift
 
-        return contact_point_shift(self.contacts, by_frame=by_frame)
+        return contact_point_shift(self.raw.contacts, by_frame=by_frame)
 
     def per_clump(self) -> pd.DataFrame:
         """Energy per YADE clump and frame, summed over its member spheres
         (see :func:`demsplit.results.aggregate.per_clump`)."""
         from .aggregate import per_clump
 
-        return per_clump(self.particles)
+        return per_clump(self.raw.particles)
 
     def wall_energy(self) -> pd.DataFrame:
         """Energy per wall and frame, with the wall names (see :func:`demsplit.results.aggregate.wall_energy`)."""
         from .aggregate import wall_energy
 
-        return wall_energy(self.walls, self.walls_meta, self.frames)
+        return wall_energy(self.raw.walls, self.walls_meta, self.raw.frames)
 
 
 def _with_units(df: pd.DataFrame, like: pd.DataFrame) -> pd.DataFrame:

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from ...outputs import atomic_path, check_output_path
-from ..tables import Results, with_not_computed_as_nan
+from ..tables import Results
 
 LEADING = ("id", "type", "x", "y", "z", "radius")
 """The columns every frame starts with, in OVITO's and LAMMPS' names."""
@@ -28,7 +28,7 @@ LEADING = ("id", "type", "x", "y", "z", "radius")
 def export_dump(results: Results, path: str | Path, inputs: Iterable[str | Path] = ()) -> Path:
     """Write the per-particle table of every frame of ``results`` to the dump ``path`` (module docstring)."""
     path = check_output_path(path, inputs)
-    df = with_not_computed_as_nan(results.particles)
+    df = results.particles
     columns = [*LEADING, *(c for c in df.columns if c not in (*LEADING, "step"))]
     integer = [df[c].dtype.kind in "iu" for c in columns]
     with atomic_path(path) as tmp, open(tmp, "w") as f:

@@ -11,7 +11,7 @@ from ...errors import StoreError
 from ...outputs import check_output_path, write_atomic
 from ..schema import TABLES
 from ..store import to_json
-from ..tables import Results, with_not_computed_as_nan
+from ..tables import Results
 
 
 def export_tables(results: Results, directory: str | Path, fmt: str = "parquet",
@@ -39,7 +39,7 @@ def export_tables(results: Results, directory: str | Path, fmt: str = "parquet",
     if directory.exists() and not directory.is_dir():
         raise StoreError("the export directory is a file.", file=directory, fix="give a directory name.")
     directory.mkdir(parents=True, exist_ok=True)
-    frames = {name: with_not_computed_as_nan(getattr(results, name)) for name in TABLES}
+    frames = {name: getattr(results, name) for name in TABLES}
     if "clump" in results.particles and (results.particles["clump"] >= 0).any():
         frames["clumps"] = results.per_clump()  # YADE clumps: the members' sums, next to the spheres
         frames["clumps"].attrs["units"] = {c: results.particles.attrs.get("units", {}).get(c, "")

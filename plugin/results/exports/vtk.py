@@ -25,7 +25,7 @@ import numpy as np
 
 from ...errors import StoreError
 from ...outputs import atomic_path, check_output_path
-from ..tables import Results, with_not_computed_as_nan
+from ..tables import Results
 
 POSITIONS = {"particles": ("x", "y", "z"), "contacts": ("cpx", "cpy", "cpz")}
 """Where each table's rows are drawn: the particle centre, the contact point (m)."""
@@ -43,7 +43,7 @@ def export_vtk(results: Results, directory: str | Path, inputs: Iterable[str | P
     if directory.exists() and not directory.is_dir():
         raise StoreError("the export directory is a file.", file=directory, fix="give a directory name.")
     directory.mkdir(parents=True, exist_ok=True)
-    tables = {name: with_not_computed_as_nan(getattr(results, name)) for name, position in POSITIONS.items()
+    tables = {name: getattr(results, name) for name, position in POSITIONS.items()
               if not getattr(results, name).empty and set(position) <= set(getattr(results, name).columns)}
     plan = {name: [(int(step), directory / f"{name}_{int(step):012d}.vtu") for step in df["step"].unique()]
             for name, df in tables.items()}
