@@ -78,7 +78,7 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = DEFAULT_OPTIONS)
     u_n u_t``) and, with ``options.compare``, under the comparison splits;
     ``contacts``: per-contact energies, shares, depth and contact points
     (``cp*_sim``: the simulator's own point, when the input has it);
-    ``walls``: energy stored in each wall; ``frames``: one row of totals (contact
+    ``walls``: energy stored in each wall that exists at the step; ``frames``: one row of totals (contact
     energies, and the sums over particles and walls that the energy balance
     compares them with).
     """
@@ -134,6 +134,9 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = DEFAULT_OPTIONS)
     n = len(contacts)
     step = np.int64(frame.step)
     _mark_missing_walls(scene, main, wtable)
+    if frame.walls is not None:  # a wall that does not exist at this step has no row
+        present = np.isin(wtable["wall"], np.asarray(frame.walls, dtype=np.int64))
+        wtable = {c: v[present] for c, v in wtable.items()}
     accuracy = _accuracy(contacts, ratios, main, ptable) if options.accuracy else {}
     tables: Tables = {"particles": {"step": np.full(len(ptable["id"]), step), **ptable},
                       "walls": {"step": np.full(len(wtable["wall"]), step), **wtable}}

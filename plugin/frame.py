@@ -142,7 +142,9 @@ class Frame:
     ``"dumped delta"``, ``"positions, full precision"``) and
     ``overlap_error`` is the per-contact bound on the relative error of
     ``delta`` that source implies (``None`` when it is at double precision).
-    ``notes`` collects what the reader could not provide and why.
+    ``notes`` collects what the reader could not provide and why. ``walls`` lists the indices of the
+    scene's walls that exist at this step (a wall fix added after a ``run`` or removed by ``unfix``, a YADE
+    body added or erased between states), ``None`` when every wall does.
     """
 
     step: int
@@ -154,6 +156,7 @@ class Frame:
     overlap_source: str = ""
     overlap_error: np.ndarray | None = None
     notes: list[str] = field(default_factory=list)
+    walls: tuple[int, ...] | None = None
 
     @property
     def n_particles(self) -> int:

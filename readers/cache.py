@@ -112,6 +112,7 @@ def _write_frame(g: h5py.Group, frame: Frame) -> None:
     g.attrs["source"] = json.dumps(list(frame.source))
     g.attrs["overlap_source"] = frame.overlap_source
     g.attrs["notes"] = json.dumps(list(frame.notes))
+    g.attrs["walls"] = json.dumps(None if frame.walls is None else list(frame.walls))
     if frame.box is not None:
         g.attrs["box_lo"], g.attrs["box_hi"] = frame.box.lo, frame.box.hi
         g.attrs["box_periodic"] = np.array(frame.box.periodic, dtype=bool)
@@ -213,7 +214,8 @@ class CacheRun(Run):
         return Frame(step=int(a["step"]), particles=particles, contacts=contacts,
                      box=box, time=None if np.isnan(time) else time, source=tuple(json.loads(a["source"])),
                      overlap_source=str(a["overlap_source"]),
-                     overlap_error=arrays.get(("overlap_error", None)), notes=json.loads(a["notes"]))
+                     overlap_error=arrays.get(("overlap_error", None)), notes=json.loads(a["notes"]),
+                     walls=_walls(a))
 
     def describe(self) -> dict:
         """The original reader's description, with the cache named."""
@@ -251,3 +253,9 @@ class CacheRun(Run):
                 raise InputFormatError(f"the cache ends inside a dataset (byte {offset + done}).", file=self.path,
                                        fix="the file was cut short: convert the run again.")
             done += got
+
+
+def _walls(attrs) -> tuple[int, ...] | None:
+    """A frame's walls as :func:`_write_frame` stored them (a cache without them: every wall)."""
+    walls = json.loads(attrs["walls"]) if "walls" in attrs else None
+    return None if walls is None else tuple(int(w) for w in walls)

@@ -35,7 +35,7 @@ from .base import Run
 from .dump_series import DumpSeries, series_files
 from .lammps_dump import HEADER_LINES, DumpFile, DumpFrame, open_dump
 from .liggghts_join import ATOM_COLUMNS, StepJoin
-from .liggghts_script import LiggghtsScript, read_script
+from .liggghts_script import DumpSpec, LiggghtsScript, read_script
 from .liggghts_vtk import vtk_dump_note
 
 DEFAULT_OVERLAP_TOLERANCE = 1e-3
@@ -150,19 +150,21 @@ def _series(script: LiggghtsScript, spec) -> DumpSeries | None:
     return DumpSeries(spec.file, files, columns=spec.keywords if spec.style == "custom" else None) \
         if files else None
 
-def _open_atoms(script: LiggghtsScript, given) -> DumpFile:
+def _open_atoms(script: LiggghtsScript, given) -> tuple[DumpFile, DumpSpec | None]:
+    """The atom dump, opened, and the script's dump line that writes it (None: a file given that no line
+    of the script names)."""
     if given is not None:
         path = existing_file(given)
         if path is None:
             raise InputFormatError("atom dump not found.", file=given, fix="check the --atoms path.")
         spec = next((d for d in _candidates(script, "atoms") if existing_file(d.file) == path), None)
-        return open_dump(path, columns=spec.keywords if spec else None)
+        return open_dump(path, columns=spec.keywords if spec else None), spec
     for spec in _candidates(script, "atoms"):
         if (series := _series(script, spec)) is not None:
-            return series
+            return series, spec
         path = existing_file(spec.file)
         if path is not None:
-            return open_dump(path, columns=spec.keywords)
+            return open_dump(path, columns=spec.keywords), spec
     raise InputFormatError(
         "no atom dump found: the script has no 'dump ... custom' with id type x y z radius whose file exists."
         + vtk_dump_note(script.dumps), file=script.path,
@@ -193,10 +195,30 @@ def _open_local(script: LiggghtsScript, given, kind: str) -> DumpFile | None:
 
 
 
-def _open_dumps(script: LiggghtsScript, atoms, contacts, walls) -> tuple[DumpFile, DumpFile, DumpFile | None]:
+def _open_dumps(script: LiggghtsScript, atoms, contacts,
+                walls) -> tuple[DumpFile, DumpFile, DumpFile | None, DumpSpec | None]:
     """The atom, pair contact and mesh-wall contact dumps of the run (given, else the script's, full precision
-    first), opened (their first headers read) but not indexed."""
-    return _open_atoms(script, atoms), _open_local(script, contacts, "pair"), _open_local(script, walls, "wall")
+    first), opened (their first headers read) but not indexed, and the atom dump's line in the script."""
+    atom_dump, spec = _open_atoms(script, atoms)
+    return atom_dump, _open_local(script, contacts, "pair"), _open_local(script, walls, "wall"), spec
+
+
+def walls_present(script: LiggghtsScript, dump: DumpSpec | None, step: int) -> tuple[int, ...] | None:
+    """The indices of the scene's walls that exist when ``dump`` (None: a dump from the first run on) wrote
+    its frame of timestep ``step``; None when every wall exists in every run.
+
+    A frame is written by the first run of the dump's (from the run before which the dump line stands)
+    whose timesteps hold ``step``: a step at the end of one run and the start of the next was written at
+    the end of the first, before the lines between them (a wall fix, an ``unfix``) took effect. A wall
+    exists in the runs from its fix line to its ``unfix`` line."""
+    if all(first == 0 and end is None for first, end in script.wall_runs):
+        return None
+    first = dump.first_run if dump is not None else 0
+    runs = [k for k, (start, end) in enumerate(script.runs) if k >= first and start <= step <= end]
+    if not runs:  # not a step of this script's runs: the walls of the last run
+        runs = [len(script.runs) - 1]
+    k = runs[0]
+    return tuple(i for i, (start, end) in enumerate(script.wall_runs) if start <= k and (end is None or k < end))
 
 
 def _script(path: str | Path | None, *, variables, materials, atoms, contacts, walls,
@@ -258,7 +280,7 @@ class LiggghtsRun(Run):
             base = Scene({**base.materials, **materials}, base.model, base.walls, base.units, base.source)
         self.overlap_tolerance = DEFAULT_OVERLAP_TOLERANCE if overlap_tolerance is None else overlap_tolerance
         self.force_positions = force_positions
-        self.atoms, self.pairs, self.walls = _open_dumps(self.script, atoms, contacts, walls)
+        self.atoms, self.pairs, self.walls, self._atom_spec = _open_dumps(self.script, atoms, contacts, walls)
         self._pair_names = self._local_names(self.pairs, "pair")
         self._wall_names = self._local_names(self.walls, "wall")
         self.notes: list[str] = list(self.script.warnings)
@@ -296,7 +318,7 @@ class LiggghtsRun(Run):
             dumps = _open_dumps(script, atoms, contacts, walls)
         except DemsplitError:
             return None
-        return dumps[0].head_rows, sum(d.head_rows for d in dumps[1:] if d is not None)
+        return dumps[0].head_rows, sum(d.head_rows for d in dumps[1:3] if d is not None)
 
     def named_files(self) -> list[Path]:
         """The files read, and every other file the script names: its includes, its mesh files and the
@@ -368,7 +390,7 @@ class LiggghtsRun(Run):
         af = self.atoms.frame(k, columns=self._atom_columns())
         pf = self._local_at(self.pairs, step, self._pair_names)
         wf = self._local_at(self.walls, step, self._wall_names) if self.walls is not None else None
-        return self.join.frame(af, pf, wf)
+        return self.join.frame(af, pf, wf, walls_present(self.script, self._atom_spec, step))
 
     def __iter__(self) -> Iterator[Frame]:
         """Stream the three dumps side by side (one decompression each)."""
@@ -377,7 +399,7 @@ class LiggghtsRun(Run):
         for af in self.atoms.frames(columns=self._atom_columns()):
             pf = self._advance(pairs, af.step, self.pairs)
             wf = self._advance(walls, af.step, self.walls) if walls is not None else None
-            yield self.join.frame(af, pf, wf)
+            yield self.join.frame(af, pf, wf, walls_present(self.script, self._atom_spec, af.step))
 
     def _atom_columns(self) -> list[str]:
         cols = list(ATOM_COLUMNS)

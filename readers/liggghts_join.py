@@ -67,7 +67,9 @@ class StepJoin:
     overlap_tolerance: float
     force_positions: bool
 
-    def frame(self, af: DumpFrame, pf: DumpFrame, wf: DumpFrame | None) -> Frame:
+    def frame(self, af: DumpFrame, pf: DumpFrame, wf: DumpFrame | None, walls: tuple[int, ...] | None) -> Frame:
+        """The Frame of one timestep's atom, pair and mesh-wall dump frames; ``walls``: the scene's walls
+        that exist at this step (None: every one), the primitive ones rebuilt only where they exist."""
         step = af.step
         box = Box(af.box.lo, af.box.hi, tuple(p or q for p, q in zip(af.box.periodic, self.periodic)),
                   af.box.tilt)
@@ -108,8 +110,8 @@ class StepJoin:
         # that the wall's law still acts across (a liquid bridge), as LIGGGHTS evaluates them
         reach = [(w.model or self.scene.model).contact_law.separation_limit(particles["radius"], np.inf)
                  for w in self.scene.walls]
-        primitive = primitive_wall_contacts(particles, self.scene.walls, margin=np.sqrt(3.0) * h, reach=reach) \
-            if has_primitive else {}
+        primitive = primitive_wall_contacts(particles, self.scene.walls, margin=np.sqrt(3.0) * h, reach=reach,
+                                            present=walls) if has_primitive else {}
         notes = []
         # the law reads a contact history, which LIGGGHTS never writes for primitive walls: every frame's
         # contacts say which rows lack it (history_unknown), so that their modes are "not computed"
@@ -140,7 +142,7 @@ class StepJoin:
         time = None if self.timestep is None else step * self.timestep
         return Frame(step=step, particles=particles, contacts=contacts, box=box, time=time,
                      source=(str(af.file), str(pf.file)) + ((str(wf.file),) if wf is not None else ()),
-                     overlap_source=source, overlap_error=error, notes=notes)
+                     overlap_source=source, overlap_error=error, notes=notes, walls=walls)
 
     def _pairs(self, pf: DumpFrame, index: ParticleIndex, xyzr: np.ndarray, h: np.ndarray | None,
                box: Box) -> Table:

@@ -225,6 +225,22 @@ class DumpSpec:
     label: str | None = None
     sort: str | None = None
     full_precision: bool = False
+    first_run: int = 0
+    """The ``run`` commands before the dump line: it writes from the run of that index on."""
+
+
+@dataclass
+class WallFix:
+    """A ``fix wall/gran``: its walls, model, whether it is the mesh kind, and the ``run`` commands it
+    lasts for, ``first_run`` (the runs before the fix line) up to ``end_run`` (the runs before its ``unfix``
+    line; None: to the end)."""
+
+    id: str
+    walls: list[Wall]
+    spec: _ModelSpec
+    is_mesh: bool
+    first_run: int
+    end_run: int | None = None
 
 
 @dataclass
@@ -243,6 +259,9 @@ class LiggghtsScript:
         ``mesh_index`` column of a ``wall/gran/local`` dump (LIGGGHTS attaches
         the compute to the last mesh ``fix wall/gran``).
     warnings : what was ignored or is doubtful, and why.
+    runs : the ``run`` commands, as the first and last timestep of each.
+    wall_runs : for each wall of ``scene.walls``, the runs it exists in, ``(first, end)``: runs
+        ``first <= k < end`` (end None: to the last run).
     """
 
     path: Path
@@ -254,6 +273,8 @@ class LiggghtsScript:
     ntypes: int | None
     timestep: float | None
     run_steps: list[int]
+    runs: list[tuple[int, int]]
+    wall_runs: list[tuple[int, int | None]]
     local_computes: dict[str, LocalLayout]
     dumped_mesh_walls: list[int]
     variables: dict[str, str]
@@ -348,7 +369,7 @@ def _parse_model(words: list[str], stop: tuple[str, ...], where: Where,
 # --------------------------------------------------------------------------
 
 _INTERPRETED = {"units", "boundary", "create_box", "variable", "include", "fix", "pair_style",
-                "compute", "dump", "dump_modify", "timestep", "run", "create_atoms", "unfix"}
+                "compute", "dump", "dump_modify", "timestep", "run", "create_atoms", "unfix", "reset_timestep"}
 _CONTROL_FLOW = {"jump", "if", "next", "label", "clear"}
 _COMMAND_NAME = re.compile(r"[a-z][a-z0-9_/]*")
 """What a LIGGGHTS command name looks like (input.cpp's commands and styles): a line of another kind of
@@ -399,7 +420,7 @@ class _Reader:
         self.ntypes: int | None = None
         self.properties: dict[str, tuple[str, object, Where]] = {}
         self.pair: _ModelSpec | None = None
-        self.walls: dict[str, tuple[list[Wall], _ModelSpec, bool]] = {}
+        self.walls: list[WallFix] = []
         self.meshes: dict[str, Wall] = {}
         self.computes: dict[str, tuple[str, list[str], Where]] = {}
         self.dumps: dict[str, DumpSpec] = {}
@@ -407,6 +428,8 @@ class _Reader:
         self.gravity: np.ndarray | None = None
         self.timestep: float | None = None
         self.run_steps: list[int] = []
+        self.runs: list[tuple[int, int]] = []
+        self.step = 0
         self.type_uses: list[tuple[int, str, Where]] = []
         self.contact_distance_factor: float | None = None
         self.include_stack: list[Path] = []
@@ -520,7 +543,15 @@ class _Reader:
 
     def cmd_run(self, args: list[str], where: Where) -> None:
         self.need(args, 1, where, "run", "run N")
-        self.run_steps.append(self.integer(args[0], where, "run"))
+        n = self.integer(args[0], where, "run")
+        self.run_steps.append(n)
+        end = n if "upto" in args[1:] else self.step + n  # 'run N upto' runs to timestep N
+        self.runs.append((self.step, end))
+        self.step = end
+
+    def cmd_reset_timestep(self, args: list[str], where: Where) -> None:
+        self.need(args, 1, where, "reset_timestep", "reset_timestep N")
+        self.step = self.integer(args[0], where, "reset_timestep")
 
     def cmd_create_atoms(self, args: list[str], where: Where) -> None:
         if args and args[0].isdigit():
@@ -539,9 +570,9 @@ class _Reader:
             self.contact_distance_factor = self.number(value, where, "neigh_modify contact_distance_factor")
 
     def cmd_unfix(self, args: list[str], where: Where) -> None:
-        if args and args[0] in self.walls:
-            self.warnings.append(f"{where.file}:{where.line}: wall fix {args[0]} is removed here; it "
-                                 "stays in the scene's wall list for the frames before.")
+        for fix in self.walls:  # the wall fix of that id that exists now, if any
+            if args and fix.id == args[0] and fix.end_run is None:
+                fix.end_run = len(self.runs)
 
     def cmd_fix(self, args: list[str], where: Where) -> None:
         self.need(args, 3, where, "fix", "fix ID GROUP STYLE ...")
@@ -705,7 +736,10 @@ class _Reader:
         # fix wall/gran takes its on/off settings after the geometry (measured:
         # 'computeElasticPotential on' before 'mesh' is "wrong keyword order")
         spec.settings.update({a: b for a, b in zip(tail, tail[1:]) if b in ("on", "off")})
-        self.walls[fid] = (walls, spec, rest[i] == "mesh")
+        for fix in self.walls:  # a fix defined again under its id replaces the one that exists
+            if fix.id == fid and fix.end_run is None:
+                fix.end_run = len(self.runs)
+        self.walls.append(WallFix(fid, walls, spec, rest[i] == "mesh", len(self.runs)))
 
     def cmd_compute(self, args: list[str], where: Where) -> None:
         self.need(args, 3, where, "compute", "compute ID GROUP STYLE ...")
@@ -720,7 +754,8 @@ class _Reader:
         file = Path(args[4])
         if not file.is_absolute():
             file = self.root.parent / file
-        self.dumps[did] = DumpSpec(id=did, style=style, every=every, file=str(file), keywords=args[5:])
+        self.dumps[did] = DumpSpec(id=did, style=style, every=every, file=str(file), keywords=args[5:],
+                                   first_run=len(self.runs))
         self.dump_where[did] = where
 
     def cmd_dump_modify(self, args: list[str], where: Where) -> None:
@@ -873,13 +908,15 @@ class _Reader:
         materials = self.materials()
         pair_model = self.model(self.pair) if self.pair else ContactModel()
         walls: list[Wall] = []
+        wall_runs: list[tuple[int, int | None]] = []
         mesh_fix, dumped_mesh_walls = None, []
-        for fid, (entries, spec, is_mesh) in self.walls.items():
-            model = self.model(spec)
+        for fix in self.walls:
+            model = self.model(fix.spec)
             first = len(walls)
-            walls += [replace(wall, model=None if model == pair_model else model) for wall in entries]
-            if is_mesh:
-                mesh_fix = (fid, spec)
+            walls += [replace(wall, model=None if model == pair_model else model) for wall in fix.walls]
+            wall_runs += [(fix.first_run, fix.end_run)] * len(fix.walls)
+            if fix.is_mesh:
+                mesh_fix = (fix.id, fix.spec)
                 dumped_mesh_walls = list(range(first, len(walls)))
         for t, what, where in self.type_uses:
             if materials and t not in materials:
@@ -900,7 +937,8 @@ class _Reader:
         return LiggghtsScript(
             path=self.root, scene=scene, periodic=self.periodic, dumps=list(self.dumps.values()),
             gravity=self.gravity, coefficients=coefficients, ntypes=self.ntypes, timestep=self.timestep,
-            run_steps=self.run_steps, local_computes=layouts, dumped_mesh_walls=dumped_mesh_walls,
+            run_steps=self.run_steps, runs=self.runs, wall_runs=wall_runs, local_computes=layouts,
+            dumped_mesh_walls=dumped_mesh_walls,
             variables=variables, warnings=self.warnings, included=self.included,
             local_histories={kind: history_columns(self.model(spec).contact_law, kind,
                                                    elastic_potential=spec.on("computeElasticPotential"))

@@ -15,7 +15,7 @@ LIGGGHTS uses R* = r (the wall's curvature is ignored), so ``r2 = inf``.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 
 import numpy as np
 
@@ -46,10 +46,11 @@ def wall_distance(x: np.ndarray, wall: Wall) -> tuple[np.ndarray, np.ndarray]:
 
 
 def primitive_wall_contacts(particles: Table, walls: list[Wall], margin: np.ndarray | float = 0.0,
-                            reach: Sequence[np.ndarray | float] | None = None) -> Table:
+                            reach: Sequence[np.ndarray | float] | None = None,
+                            present: Collection[int] | None = None) -> Table:
     """Contacts (canonical columns, see :mod:`demsplit.frame`) of the particles
-    with every primitive wall (``plane``/``cylinder``) in ``walls``; a contact
-    exists where delta = r - d > 0, as LIGGGHTS decides it.
+    with every primitive wall (``plane``/``cylinder``) in ``walls`` that exists at this step (the indices
+    ``present``; None: every one); a contact exists where delta = r - d > 0, as LIGGGHTS decides it.
 
     ``margin`` (m, scalar or one value per particle): also return the pairs with
     -margin < delta <= 0, whose contact the uncertainty of printed positions can
@@ -63,7 +64,7 @@ def primitive_wall_contacts(particles: Table, walls: list[Wall], margin: np.ndar
     margin = np.broadcast_to(np.asarray(margin, dtype=np.float64), r.shape)
     parts: list[Table] = []
     for k, wall in enumerate(walls):
-        if wall.kind not in ("plane", "cylinder"):
+        if wall.kind not in ("plane", "cylinder") or (present is not None and k not in present):
             continue
         d, n = wall_distance(x, wall)
         delta = r - d

@@ -643,7 +643,7 @@ def test_cli_run_writes_the_store(setup_frame, tmp_path):
     stored = demsplit.load_results(out)
     run, frame = setup_frame("packing")
     np.testing.assert_array_equal(stored.steps, run.steps)
-    first = stored.frame(int(run.steps[0])).particles
+    first = stored.frame(int(run.steps[0])).raw.particles  # as stored: the known part of each particle
     expected = frame_tables(frame, run.scene)["particles"]
     np.testing.assert_array_equal(first["id"].to_numpy(), expected["id"])
     np.testing.assert_allclose(first["u"].to_numpy(), expected["u"], rtol=1e-15)
