@@ -4,7 +4,7 @@
 # Each run takes well under a minute on one core.
 set -eu
 here=$(cd "$(dirname "$0")" && pwd)
-for scene in packing periodic analytic; do
+for scene in packing periodic analytic gate; do
     cd "$here/$scene"
     rm -f ./*.txt ./*.txt.gz ./*.bin
     # stdbuf: LIGGGHTS loses error->one messages when stdout is a pipe.
@@ -12,9 +12,11 @@ for scene in packing periodic analytic; do
         tail -20 liggghts.out; exit 1
     fi
     rm liggghts.out
-    # The big full-precision dumps of packing/ and periodic/ are stored gzip-compressed
-    # (-n: no name/time stamp, so the bytes are reproducible); analytic/ stays plain text.
-    if [ "$scene" != analytic ]; then
-        gzip -n -9 -f ./*_full.txt
-    fi
+    # The big full-precision dumps of packing/ and periodic/, and every dump of gate/, are stored
+    # gzip-compressed (-n: no name/time stamp, so the bytes are reproducible); analytic/ stays plain text.
+    case "$scene" in
+        analytic) ;;
+        gate) gzip -n -9 -f ./*.txt ;;
+        *) gzip -n -9 -f ./*_full.txt ;;
+    esac
 done
