@@ -241,3 +241,15 @@ def test_a_run_without_contacts_or_comparison_is_reported(tmp_path):
     page = write_html(res, tmp_path / "r.html", step=0).read_text()
     assert len(re.findall(r"<img", page)) == 7 and "<h2>Split comparison</h2>" not in page
     assert "frame at timestep 0" in text_summary(res, step=0)
+
+
+def test_a_frame_without_energy_reports_empty_not_nan(tmp_path):
+    """A run's first frames often hold no contact yet (particles still falling): the report says the frame
+    holds no energy instead of printing shares and Gini coefficients of zeros (NaN)."""
+    frames = [synthetic_frame(0, n_pairs=0, n_wall_contacts=0), synthetic_frame(1000)]
+    res = Results.from_frames(frames, PROVENANCE, WALLS_META)
+    text = text_summary(res, step=0)
+    assert "no elastic energy" in text and "nan" not in text.lower()
+    page = write_html(res, tmp_path / "r.html", step=0).read_text()
+    assert "no elastic energy" in page and ">nan<" not in page.lower()
+    assert "nan" not in text_summary(res, step=1000).lower()

@@ -23,6 +23,7 @@ import base64
 import html
 import io
 import json
+import math
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -85,10 +86,15 @@ def _pick_step(results: Results, step: int | None) -> int:
     return int(step)
 
 
+UNDEFINED_TEXT = "-"
+"""What a table shows for a ratio without a value (a share or an inequality of no energy, 0/0)."""
+
+
 def _fmt(df: pd.DataFrame, unknown: Mapping[str, np.ndarray] | None = None) -> pd.DataFrame:
-    """Floats with 4 significant digits for display; the cells of ``unknown`` (column -> rows, as
-    :func:`~demsplit.results.tables.not_computed_mask` gives them for the same rows) read "not computed"."""
-    out = df.map(lambda v: f"{v:.4g}" if isinstance(v, float) else v)
+    """Floats with 4 significant digits for display (NaN, a ratio of nothing: :data:`UNDEFINED_TEXT`); the
+    cells of ``unknown`` (column -> rows, as :func:`~demsplit.results.tables.not_computed_mask` gives them for
+    the same rows) read "not computed"."""
+    out = df.map(lambda v: (UNDEFINED_TEXT if math.isnan(v) else f"{v:.4g}") if isinstance(v, float) else v)
     for column, rows in (unknown or {}).items():
         if column in out:
             out[column] = np.where(rows, NOT_COMPUTED_TEXT, out[column].astype(object))
@@ -160,6 +166,9 @@ def text_summary(results: Results, step: int | None = None, names: Mapping[int, 
         shown = "unbounded (a contact the printed positions may hide)" if bound >= UNBOUNDED else f"{bound:.3g}"
         lines.append("  overlaps recomputed from printed positions (contacts without a dumped delta, e.g. primitive "
                      f"walls): max relative error bound {shown}")
+    if u_total == 0:  # nothing to distribute: no table of shares and inequalities of zeros
+        lines += ["", EMPTY_FRAME]
+        return _closing(results, lines)
     cols = ["type", "count", "total", "share_of_total", "mean", "p50", "p95", "top10_share", "gini"]
     table = one.per_type()
     cols += ["expected_error"] if "expected_error" in table else []
@@ -185,10 +194,21 @@ def text_summary(results: Results, step: int | None = None, names: Mapping[int, 
                   _fmt(one.contact_point_shift()).to_string(index=False)]
     if "share_n1_error" in one.raw.contacts:
         lines += ["", accuracy_line(one.raw.contacts, results.provenance.get("options", {}).get("split", "material"))]
+    return _closing(results, lines)
+
+
+EMPTY_FRAME = "This frame holds no elastic energy (no contact): nothing to split, no shares or inequality to show."
+"""What a report says of a frame without energy, instead of tables of ratios of zeros."""
+
+
+def _closing(results: Results, lines: list[str]) -> str:
+    """``lines`` and the energy balance of every frame (over the frames that hold energy), as the summary's
+    text."""
     pf = results.per_frame()
-    worst = pf["balance_rel_error"].max()
-    lines += ["", f"Energy balance over {len(pf)} frame(s): max |sum particles + sum walls - sum contacts| "
-              f"/ sum contacts = {worst:.3g}"]
+    held = pf[pf["u_contacts"] > 0]
+    if len(held):
+        lines += ["", f"Energy balance over {len(held)} frame(s) with energy: max |sum particles + sum walls - sum "
+                  f"contacts| / sum contacts = {held['balance_rel_error'].max():.3g}"]
     return "\n".join(lines) + "\n"
 
 
@@ -547,47 +567,11 @@ def _mode_table(one: Results) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=["mode", "column", "contacts", "particles", "walls", "contacts_not_computed"])
 
 
-def write_html(results: Results, path: str | Path, step: int | None = None,
-               names: Mapping[int, str] | None = None) -> Path:
-    """Write the HTML report of frame ``step`` (default: the last) and the per-frame series to ``path``
-    (atomically: ``path.tmp``, then renamed); ``names``: material names of types (:meth:`Results.type_names`)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    step = _pick_step(results, step)
-    one = results.frame(step)
-    fr = one.raw.frames.iloc[0]
-    names = results.type_names(names)
-    pf = results.per_frame()
-    prov = results.provenance or {}
+def _energy_sections(one: Results, step: int, names: Mapping[int, str]) -> list[str]:
+    """The report's sections on how a frame's energy is distributed: per type, its distribution, against
+    radius and height, per size class, and the split comparison."""
     esc = html.escape
-    time = f" (t = {fr['time']:.6g} s)" if known(fr.get("time")) else ""
-    steps = results.steps
-    head = [f"<h1>demsplit report</h1><p>{len(steps)} frame(s), timesteps {int(steps.min())} to {int(steps.max())}; "
-            f"detailed frame: <b>timestep {step}</b>{esc(time)} (another: <code>demsplit report FILE --step N</code>)."]
-    source = (prov.get("scene") or {}).get("source")
-    model = prov.get("model") or {}
-    if source or model:
-        head.append(f"<br>Run: {esc(str(source or '?'))}; contact law {esc(str(model.get('law', '?')))}.")
-    head.append(f"<br>{int(fr['n_particles'])} particles, {int(fr['n_contacts'])} contacts "
-                f"({int(fr['n_wall_contacts'])} with walls).</p>")
-    missing = not_computed(results, fr)
-    if missing:
-        head += ["<div class='missing' id='not-computed'><h2>Not computed</h2><p>These values are unknown, not 0; "
-                 "they are left out of every total below.</p><ul>",
-                 *(f"<li>{esc(m)}</li>" for m in missing), "</ul></div>"]
-    else:
-        head.append("<p class='ok' id='not-computed'>Not computed: nothing (the store records no mode, wall or "
-                    "contact left out).</p>")
-    other = [n for n in prov.get("notes", []) if "NOT COMPUTED" not in n]
-    if other:
-        head += ["<details><summary>Notes of the run</summary><ul>", *(f"<li>{esc(n)}</li>" for n in other),
-                 "</ul></details>"]
-    body = [*head, "<h2>Energy per mode</h2>",
-            "<p>Totals of this frame (J). The elastic modes sum to the elastic total; the cohesion work "
-            "<code>u_adh</code>, where present, is signed and kept apart.</p>", _table(_mode_table(one))]
-    if "share_n1_error" in one.raw.contacts:
-        body.append(f"<p>{esc(accuracy_line(one.raw.contacts, prov.get('options', {}).get('split', 'material')))}</p>")
+    body: list[str] = []
     cols = ["type", "count", "total", "share_of_total", "mean", "std", "p05", "p50", "p95", "top1_share",
             "top10_share", "gini"]
     per_type = one.per_type()
@@ -634,6 +618,52 @@ def write_html(results: Results, path: str | Path, step: int | None = None,
                     "u &gt; 0 (values beyond the 99.5th percentile are gathered in the last bin). -1: the split "
                     "gives the particle nothing; +1: twice its energy.", "Per-particle misattribution"),
             _table(misattribution_table(one.raw.particles))]
+    return body
+
+
+def write_html(results: Results, path: str | Path, step: int | None = None,
+               names: Mapping[int, str] | None = None) -> Path:
+    """Write the HTML report of frame ``step`` (default: the last) and the per-frame series to ``path``
+    (atomically: ``path.tmp``, then renamed); ``names``: material names of types (:meth:`Results.type_names`)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    step = _pick_step(results, step)
+    one = results.frame(step)
+    fr = one.raw.frames.iloc[0]
+    names = results.type_names(names)
+    pf = results.per_frame()
+    prov = results.provenance or {}
+    esc = html.escape
+    time = f" (t = {fr['time']:.6g} s)" if known(fr.get("time")) else ""
+    steps = results.steps
+    head = [f"<h1>demsplit report</h1><p>{len(steps)} frame(s), timesteps {int(steps.min())} to {int(steps.max())}; "
+            f"detailed frame: <b>timestep {step}</b>{esc(time)} (another: <code>demsplit report FILE --step N</code>)."]
+    source = (prov.get("scene") or {}).get("source")
+    model = prov.get("model") or {}
+    if source or model:
+        head.append(f"<br>Run: {esc(str(source or '?'))}; contact law {esc(str(model.get('law', '?')))}.")
+    head.append(f"<br>{int(fr['n_particles'])} particles, {int(fr['n_contacts'])} contacts "
+                f"({int(fr['n_wall_contacts'])} with walls).</p>")
+    missing = not_computed(results, fr)
+    if missing:
+        head += ["<div class='missing' id='not-computed'><h2>Not computed</h2><p>These values are unknown, not 0; "
+                 "they are left out of every total below.</p><ul>",
+                 *(f"<li>{esc(m)}</li>" for m in missing), "</ul></div>"]
+    else:
+        head.append("<p class='ok' id='not-computed'>Not computed: nothing (the store records no mode, wall or "
+                    "contact left out).</p>")
+    other = [n for n in prov.get("notes", []) if "NOT COMPUTED" not in n]
+    if other:
+        head += ["<details><summary>Notes of the run</summary><ul>", *(f"<li>{esc(n)}</li>" for n in other),
+                 "</ul></details>"]
+    body = [*head, "<h2>Energy per mode</h2>",
+            "<p>Totals of this frame (J). The elastic modes sum to the elastic total; the cohesion work "
+            "<code>u_adh</code>, where present, is signed and kept apart.</p>", _table(_mode_table(one))]
+    if "share_n1_error" in one.raw.contacts:
+        body.append(f"<p>{esc(accuracy_line(one.raw.contacts, prov.get('options', {}).get('split', 'material')))}</p>")
+    u_total = sum(fr[m] for m in elastic_columns(one.raw.frames))
+    body += _energy_sections(one, step, names) if u_total > 0 else [f"<p>{esc(EMPTY_FRAME)}</p>"]
     frame_cols = ["step", "time", "n_particles", "n_contacts", "n_wall_contacts", "u_contacts", *energy_modes(pf),
                   "u_walls", "balance_rel_error", "gini"]
     body += ["<h2>Frames</h2>", _figure(_fig_frames(pf), "Elastic total, every energy mode and the energy held by "
@@ -643,7 +673,7 @@ def write_html(results: Results, path: str | Path, step: int | None = None,
     if len(one.raw.walls):
         we = one.wall_energy()
         body += ["<h2>Walls</h2>", _table(_with_names(we, names), not_computed_mask(we))]
-    if {"cpx_sim", "cpy_sim", "cpz_sim"} <= set(one.raw.contacts.columns):
+    if {"cpx_sim", "cpy_sim", "cpz_sim"} <= set(one.raw.contacts.columns) and len(one.raw.contacts):
         body += ["<h2>Contact point</h2>", _figure(
             _fig_cp(one.raw.contacts, step), "Distance between the material-weighted contact point and the simulator's "
             "own, in units of the overlap.", "Contact point shift"), _table(one.contact_point_shift())]
