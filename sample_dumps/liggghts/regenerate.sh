@@ -18,3 +18,6 @@ for scene in packing periodic analytic; do
         gzip -n -9 -f ./*_full.txt
     fi
 done
+# The wall-force scenes (walls/, see walls/make_scenes.py): each model with a primitive and with a mesh floor.
+python3 "$here/walls/make_scenes.py" "$here/walls" > /dev/null
+gzip -n -9 -f "$here"/walls/*/ds_*.txt
