@@ -27,7 +27,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 HALF_WIDTH = 0.006  # m: the periodic cell and the mesh floor span x, y in [-HALF_WIDTH, HALF_WIDTH]
 TIMESTEP = 2.0e-6  # s
-GRAVITY = (9.81, (0.3, 0.0, -1.0))  # fix gravity: magnitude (m/s^2) and direction (normalised by LIGGGHTS)
+GRAVITY = (9.81, (0.15, 0.0, -1.0))  # fix gravity: magnitude (m/s^2) and direction (normalised by LIGGGHTS)
 SETTLE = 40000  # steps before the output run
 OUTPUT_EVERY, OUTPUT_STEPS = 500, 2000  # frames at SETTLE (setup frame) and 4 more mid-run
 
@@ -36,7 +36,7 @@ YOUNG = (1.0e8, 1.0e7, 5.0e8)
 POISSON = (0.25, 0.40, 0.30)
 RESTITUTION = ((0.3, 0.3, 0.3), (0.3, 0.3, 0.3), (0.3, 0.3, 0.3))
 FRICTION = ((0.5, 0.4, 0.3), (0.4, 0.6, 0.3), (0.3, 0.3, 0.3))
-ROLLING_FRICTION = ((0.1, 0.1, 0.1), (0.1, 0.1, 0.1), (0.1, 0.1, 0.1))
+ROLLING_FRICTION = ((0.2, 0.2, 0.2), (0.2, 0.2, 0.2), (0.2, 0.2, 0.2))
 CHARACTERISTIC_VELOCITY = 0.5  # m/s, hooke's kn
 MAX_ELASTIC_STIFFNESS, PLASTICITY_DEPTH = 2.5, 0.001  # hooke/hysteresis: k2Max/kn, phiF (no adhesion: kc = 0)
 DIAMETER = {1: 0.0022, 2: 0.0018}  # m
