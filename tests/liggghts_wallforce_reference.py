@@ -1,9 +1,9 @@
 """Wall contacts of a LIGGGHTS 3.8.0 run rebuilt from each wall fix's force, independently of demsplit, for the tests.
 
 LIGGGHTS never dumps the contacts of ``fix wall/gran ... primitive`` walls, but ``store_force yes`` makes the fix
-keep the force it applied to each particle in the step (``f_force_<fixID>[1..3]`` in a ``dump custom``). This module
-rebuilds, from that force, the atom dump (``fx fy fz tqx tqy tqz`` included) and the pair dump with its history,
-what the wall contact's history would have held, transcribing the LIGGGHTS-PUBLIC 3.8.0 source (file:line below):
+keep the force it applied to each particle in the step (``f_force_<fixID>[1..3]`` in a ``dump custom``). From that
+force, the atom dump (``fx fy fz tqx tqy tqz`` included) and the pair dump with its history, this module rebuilds what
+the wall contact's history would have held, transcribing the LIGGGHTS-PUBLIC 3.8.0 source (file:line below):
 
 - the force: ``fix_wall_gran_base.h:205-206, 345-350`` stores f(after) - f(before) of the atom around the contact's
   evaluation in ``post_force`` (with ``computeflag``), summed over the fix's contacts of the particle;
@@ -12,7 +12,9 @@ what the wall contact's history would have held, transcribing the LIGGGHTS-PUBLI
 - the velocities of the step's force evaluation: Verlet integrates x and v by half a step before the force and v by
   the other half after it, so the dumped v, omega are the step's plus (dt/2) f/m and (dt/2) tau/I
   (``fix_nve_sphere.cpp:157-181``: I = 0.4 m r^2, ``dtf`` = dt/2 in SI); in a frame written at the setup of a ``run``
-  no half step separates them (``fix_wall_gran.cpp:740``: ``shearupdate`` is 0 then, no history is updated);
+  no half step separates them (``fix_wall_gran.cpp:740``: ``shearupdate`` is 0 then, no history is updated). A dump
+  writes at a run's setup only a step it has not written yet (``output.cpp:229-231``): its first frame when it is
+  defined between runs, never the step where the previous run ended (written then, mid-run);
 - the contact geometry: ``primitive_wall_definitions.h:133-191`` (plane, cylinder: the vector ``delta`` from the
   centre to the wall), ``fix_wall_gran_base.h:181-261`` (r = r_i - delta_n, e_n = -delta/r from the wall to the
   particle, R* = r_i, m* = m_i); pairs ``pair_gran_base.h:279-394`` (e_n = (x_i - x_j)/r, m* = m_i m_j/(m_i + m_j));
@@ -22,7 +24,8 @@ what the wall contact's history would have held, transcribing the LIGGGHTS-PUBLI
   gamma = -2 sqrt(5/6) beta sqrt(S m*), S_n = 2 Y* sqrt(R* d), S_t = k_t; beta = ln e/sqrt(ln^2 e + pi^2),
   ``global_properties.cpp:432, 463, 516, 539``), ``normal_model_hooke.h:269-292`` (k_n = 16/15 sqrt(R*) Y*
   (15 m* V^2/(16 sqrt(R*) Y*))^0.2, k_t = k_n, gamma_n = gamma_t = sqrt(4 m* k_n ln^2 e/(ln^2 e + pi^2))),
-  ``normal_model_hooke_hysteresis.h:139-200`` (hooke's k_n; k2 = k_n + (k2Max - k_n) dmax/dlim below
+  ``normal_model_hooke_hysteresis.h:139-200`` (hooke's k_n and gamma_n, written sqrt(4 m* k_n/(1 + (pi/ln e)^2)),
+  equal to rounding; k2 = k_n + (k2Max - k_n) dmax/dlim below
   dlim = k2Max/(k2Max - k_n) phiF 2 R*, else k2Max; f = k_n d loading, k2 (d - dmax) + k_n dmax unloading, >= -kc d;
   the applied normal force is f - gamma_n v_n in every model here (limitForce off));
 - the tangential model ``tangential_model_history.h:147-228``: the history ``shear`` gets v_tr dt and loses its
@@ -33,7 +36,13 @@ what the wall contact's history would have held, transcribing the LIGGGHTS-PUBLI
 - the rolling model ``rolling_model_epsd2.h:161-224``: M = M_hist + k_r w_t dt, k_r = k_t R*^2, capped at
   mu_r |F_n| R*, stored when ``shearupdate`` (mid-run the history *is* the applied torque), applied as -M on i
   (``:136-141``), w = omega_i - omega_j (a wall: the w_r above), w_t its part normal to e_n;
-- the torques: -c_i e_n x F_t on i, -c_j e_n x F_t on j (``tangential_model_history.h:229-262``).
+- the torques: -c_i e_n x F_t on i, -c_j e_n x F_t on j (``tangential_model_history.h:229-262``); with ``newton
+  off`` a pair across a periodic boundary is evaluated from each side, with the other atom's image and each side's own
+  copy of the history, applying the force to its own atom only (``pair_gran_base.h:421-429``); the pair dump lists
+  one side.
+
+On hooke/hysteresis's unloading line the elastic force f = k_n d + a dmax (d - dmax), a = (k2Max - k_n)/dlim, gives
+dmax = (d + sqrt(d^2 - 4 (f - k_n d)/a))/2 (>= d; dmax = d on the loading line), hence k2 and u_n = f^2/(2 k2).
 
 Per wall contact this gives the elastic normal force (checked against the model, or, for hooke/hysteresis, inverted
 for the unloading stiffness), the tangential spring F_el with u_t = |F_el|^2/(2 k_t), and, from the particle's
@@ -197,7 +206,7 @@ class WallContacts:
     id: np.ndarray
     delta: np.ndarray
     fn: np.ndarray  # the applied normal force (N, > 0 repulsive), F . e_n
-    fn_model: np.ndarray  # the model's applied normal force (hysteresis: the stored force's branch, NaN)
+    fn_model: np.ndarray  # the model's applied normal force (NaN for hooke/hysteresis, whose force is path dependent)
     kt: np.ndarray
     capped: np.ndarray  # the tangential force sat at the Coulomb cap
     u_n: np.ndarray
@@ -412,7 +421,8 @@ def reconstruct(law: Law, walls: list[Wall], frame: Frame, print_rtol: float = 0
     capped = np.abs(_norm(ft) - cap) <= CAP_RTOL * cap
     spring = np.where(capped[:, None], ft, ft + gammat[:, None] * vtr)
     tq_t = -cr[:, None] * np.cross(en, ft)
-    fscale = _norm(force) + np.abs(gamman * vn) + _norm(gammat[:, None] * vtr)
+    # rounding: of the terms, and of the step's relative velocity from the atom's velocities
+    fscale = _norm(force) + (gamman + gammat) * (_norm(vh[ip]) + cr * _norm(wh[ip]))
     np.add.at(res_f, ip, -force)
     np.add.at(res_t, ip, -tq_t)
     np.add.at(scale_f, ip, fscale)
