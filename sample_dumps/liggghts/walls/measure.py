@@ -174,7 +174,9 @@ def packing() -> None:
             print(f"   step {step}{' (setup)' if k == 0 else ''}: wall contacts {per_fix}; particles on two primitive "
                   f"walls {(two > 1).sum()}; u_t not computed: primitive {int(np.isnan(c.u_t[primitive]).sum())} of "
                   f"{int(primitive.sum())}, mesh floor {int((~ok).sum())} of {len(floor)}; reasons "
-                  f"{dict(reasons(c))}; floor u_t from force = from history (1e-9) for {int(agree.sum())}/{len(agree)}")
+                  f"{dict(reasons(c))}; floor u_t from force = from history (1e-9) for "
+                  f"{int(agree.sum())}/{len(agree)}; u_t of the primitive walls "
+                  f"{np.nansum(c.u_t[primitive]):.4g} J (mesh floor {np.nansum(c.u_t[floor]):.4g} J)")
         print("   " + closure_line(closures))
 
 
