@@ -37,7 +37,8 @@ def closure_line(closures) -> str:
     closes = sum(int(c.closes.sum()) for c in closures)
     total = sum(len(c.id) for c in closures)
     force = max(float(np.max(c.force_residual / c.force_tolerance)) for c in closures)
-    torque = max(float(np.nanmax(c.torque_residual / c.torque_tolerance, initial=0.0)) for c in closures)
+    with np.errstate(invalid="ignore"):  # 0/0: an atom touching nothing, with no torque
+        torque = max(float(np.nanmax(c.torque_residual / c.torque_tolerance, initial=0.0)) for c in closures)
     return f"balance closes for {closes}/{total} atom-frames (largest residual/tolerance: force {force:.2g}, " \
            f"torque {torque:.2g})"
 
