@@ -418,7 +418,8 @@ def reconstruct(law: Law, walls: list[Wall], frame: Frame, print_rtol: float = 0
     vn, vtr = _tangential_velocity(vh[ip], en, wr, dvec)
     f_el_n = fn + gamman * vn  # the elastic normal force: the applied one less the damping
     cap = law.pair_table("friction", t1, t2) * np.abs(fn)
-    capped = np.abs(_norm(ft) - cap) <= CAP_RTOL * cap
+    # the stored force is f(after) - f(before): rounded to the magnitude of the atom's other forces
+    capped = np.abs(_norm(ft) - cap) <= CAP_RTOL * cap + tolerance(scale_f[ip], print_rtol)
     spring = np.where(capped[:, None], ft, ft + gammat[:, None] * vtr)
     tq_t = -cr[:, None] * np.cross(en, ft)
     # rounding: of the terms, and of the step's relative velocity from the atom's velocities
