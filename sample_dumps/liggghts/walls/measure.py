@@ -110,17 +110,38 @@ def walls_scenes() -> None:
 
 
 def stored_vs_output(scene: str) -> None:
-    """f_force of the mesh floor against the wall compute's output-time force."""
-    out = []
+    """f_force of the mesh floor against the wall compute's output-time force, and that force's tangential part
+    rebuilt as the compute evaluates it: the dumped velocities, the history not updated, so uncapped (F_el - gamma_t
+    v_tr) wherever k_t |shear| <= mu |F_n(output)|, else F_el rescaled to the cap."""
+    model = scene.rsplit("_", 1)[0]
+    out, rebuilt_err = [], []
     for frame, walls in frames(scene):
         at = {int(i): k for k, i in enumerate(frame.atoms["id"])}
         rows = np.array([at[int(i)] for i in walls["id"]])
         stored = np.stack([frame.atoms[f"f_force_wfloor[{c}]"][rows] for c in (1, 2, 3)], -1)
         output = np.stack([walls[c] for c in ("fx", "fy", "fz")], -1)
-        ratio = np.hypot(output[:, 0], output[:, 1]) / (make_scenes.FRICTION[0][2] * np.abs(output[:, 2]))
+        mu_fn = make_scenes.FRICTION[0][2] * np.abs(output[:, 2])
+        ratio = np.hypot(output[:, 0], output[:, 1]) / mu_fn
         out.append(f"{'setup ' if frame.setup else ''}{np.abs(stored - output).max() / np.abs(output).max():.1g} "
                    f"({(ratio > 1 + 1e-9).sum()} rows beyond mu F_n, up to {ratio.max():.3g}x)")
+        if frame.setup:
+            continue
+        a, delta = frame.atoms, walls["delta"]
+        r = a["radius"][rows]
+        _, kt, _, gammat = law(model).stiffness(a["type"][rows].astype(np.int64), np.full(len(rows), FLOOR_TYPE), r,
+                                                a["mass"][rows], delta)
+        en, dist = np.array([0.0, 0.0, 1.0]), r - delta
+        omega = np.stack([a[f"omega{c}"][rows] for c in "xyz"], -1)
+        vr = np.stack([a[f"v{c}"][rows] for c in "xyz"], -1)
+        vt = vr - vr[:, 2:3] * en
+        vtr = vt - np.cross((r - 0.5 * delta)[:, None] * omega / dist[:, None], dist[:, None] * en)
+        f_el = -kt[:, None] * np.stack([walls[f"shear{c}"] for c in "xyz"], -1)
+        mag = np.linalg.norm(f_el, axis=1)
+        ft = np.where((mag <= mu_fn)[:, None], f_el - gammat[:, None] * vtr, f_el * (mu_fn / mag)[:, None])
+        rebuilt_err.append(np.abs(ft - (output - output[:, 2:3] * en)).max() / np.abs(output).max())
     print("   |stored - output-time force| / largest force per frame: " + "; ".join(out))
+    print("   output-time tangential force rebuilt (uncapped unless k_t|shear| > mu F_n(output)), largest error / "
+          "largest force per mid-run frame: " + ", ".join(f"{e:.1g}" for e in rebuilt_err))
 
 
 # packing/: hertz, tangential history; types 1, 2 spheres, 3 primitive walls, 4 mesh floor
