@@ -20,3 +20,6 @@ for scene in packing periodic analytic gate; do
         *) gzip -n -9 -f ./*_full.txt ;;
     esac
 done
+# The wall-force scenes (walls/, see walls/make_scenes.py): each model with a primitive and with a mesh floor.
+python3 "$here/walls/make_scenes.py" "$here/walls" > /dev/null
+gzip -n -9 -f "$here"/walls/*/ds_*.txt
