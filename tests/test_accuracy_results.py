@@ -82,7 +82,7 @@ def test_accuracy_line_counts_the_contacts_beyond_the_fit():
 
 def test_per_type_expected_error_is_energy_weighted(material):
     t = material.per_type()
-    p = material.particles
+    p = material.raw.particles  # the statistics sum what is known of each particle
     for _, row in t.iterrows():
         sub = p[(p["step"] == row["step"]) & (p["type"] == row["type"])]
         assert row["expected_error"] == pytest.approx(sub["u_n_error"].sum() / sub["u"].sum(), rel=1e-12)
