@@ -23,12 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import DemsplitError, system_error
+from .errors import DemsplitError, InputFormatError, system_error
 from .outputs import check_output_path
-from .physics import laws
-from .physics.laws import simulator_words
-from .readers.liggghts_script import TANGENTIAL
-from .scene import Material
 
 EXIT_ERROR = 2
 EXIT_BUG = 3
@@ -44,86 +40,73 @@ def _raise_terminated(signum, frame) -> None:
     raise Terminated()
 
 
-def _material(text: str) -> tuple[int, Material]:
-    try:
-        t, E, nu = text.split(":")
-        return int(t), Material(float(E), float(nu))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected TYPE:E:NU (e.g. 1:5e7:0.3), got {text!r}") from None
-
-
 def _reader_options(args: argparse.Namespace) -> dict:
-    """Options of :func:`demsplit.readers.open_run` given on the command line."""
-    opts: dict = {}
-    for name in ("atoms", "contacts", "walls"):
-        value = getattr(args, name, None)
-        if value:
-            opts[name] = value
-    if getattr(args, "var", None):
-        opts["variables"] = dict(args.var)
-    if getattr(args, "material", None):
-        opts["materials"] = dict(args.material)
-    if getattr(args, "overlap_tolerance", None) is not None:
-        opts["overlap_tolerance"] = args.overlap_tolerance
-    if getattr(args, "force_positions", False):
-        opts["force_positions"] = True
-    if getattr(args, "plane_as_plane", False):
-        opts["plane_as_plane"] = True
-    if getattr(args, "law", None):
-        opts["law"] = args.law
-    for name in ("yade", "state_cache"):
-        if getattr(args, name, None):
-            opts[name] = getattr(args, name)
-    if getattr(args, "input", None) is None:  # no script: the scene comes from these options
-        scene = {k: getattr(args, k) for k in ("columns", "wall_columns", "wall_type", "model", "tangential",
-                                                "characteristic_velocity", "boundary")
-                 if getattr(args, k, None) is not None}
-        opts["scene_options"] = scene
-    elif getattr(args, "wall_type", None) is not None:
-        opts["wall_type"] = args.wall_type
-    return opts
+    """Options of :func:`demsplit.readers.open_run` given on the command line, as the reader of the input
+    takes them (:attr:`demsplit.readers.base.Run.cli_options`); an option its reader does not take is an
+    error naming the option."""
+    from .readers import reader_for, readers
+
+    given = {}
+    for cls in readers():
+        for opt in cls.cli_options:
+            value = getattr(args, _dest(opt), None)
+            if value not in (None, False, []):
+                given[opt.flags] = value
+    if not given:
+        return {}
+    inputs = args.input if isinstance(args.input, list) else [args.input]
+    cls = reader_for(inputs[0])
+    options: dict = {}
+    for flags, value in given.items():
+        opt = next((o for o in cls.cli_options if o.flags == flags), None)
+        if opt is None:
+            taken = sorted({o.flags[0] for o in cls.cli_options})
+            raise InputFormatError(f"{flags[0]} does not apply to {cls.formats[0]}.",
+                                   fix=f"leave it out; this input takes {', '.join(taken) or 'no input option'}.")
+        if opt.into:
+            options.setdefault(opt.into, {})[opt.name] = opt.value(value)
+        else:
+            options[opt.name] = opt.value(value)
+    return options
+
+
+def _dest(opt) -> str:
+    """The argparse destination of a reader option: its first flag, as argparse names it."""
+    return opt.flags[0].lstrip("-").replace("-", "_")
+
+
+def _argparse_type(convert):
+    """A reader option's ``type`` for argparse: its ValueError becomes argparse's usage error with the text."""
+    def parse(text: str):
+        try:
+            return convert(text)
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+    parse.__name__ = getattr(convert, "__name__", "value")
+    return parse
 
 
 def _add_input(p: argparse.ArgumentParser) -> None:
+    """The input argument and every registered reader's options, in its help section."""
+    from .readers import readers
+
     p.add_argument("input", nargs="*", default=None,
-                   help="LIGGGHTS input script, a demsplit.yade snapshot file, an ingest cache, a YADE "
-                   "VTKExporter spheres file, or YADE saved states (O.save files, a directory or a glob of them; "
-                   "several files are one run); omit it to describe a LIGGGHTS scene with --atoms, --contacts, "
-                   "--material and --columns")
-    g = p.add_argument_group("LIGGGHTS inputs (default: the files the script's dump lines write)")
-    g.add_argument("--atoms", help="atom dump (dump custom, text, .bin, or compressed)")
-    g.add_argument("--contacts", help="pair contact dump (dump local of compute pair/gran/local)")
-    g.add_argument("--walls", help="mesh-wall contact dump (dump local of compute wall/gran/local)")
-    g.add_argument("--var", nargs=2, action="append", metavar=("NAME", "VALUE"),
-                   help="script variable, as liggghts -var NAME VALUE")
-    g.add_argument("--material", action="append", type=_material, metavar="TYPE:E:NU",
-                   help="material of a type (Pa, -), overriding or completing the script")
-    g.add_argument("--overlap-tolerance", type=float, default=None, metavar="REL",
-                   help="largest relative overlap error accepted when overlaps must be recomputed from "
-                   "printed positions (default 1e-3)")
-    g.add_argument("--force-positions", action="store_true",
-                   help="recompute overlaps from printed positions even above the tolerance (reported)")
-    n = p.add_argument_group("LIGGGHTS without an input script (the scene from these options)")
-    n.add_argument("--columns", metavar="KEYWORDS",
-                   help='keywords of the compute pair/gran/local behind --contacts, e.g. "pos id delta history"')
-    n.add_argument("--wall-columns", metavar="KEYWORDS", help="keywords of the compute wall/gran/local behind --walls")
-    n.add_argument("--wall-type", type=int, metavar="T",
-                   help="material type of the mesh walls (LIGGGHTS) or of the wall, facet and box bodies (YADE VTK)")
-    n.add_argument("--model", choices=tuple(simulator_words("liggghts")), help="pair_style gran model (default hertz)")
-    n.add_argument("--tangential", choices=TANGENTIAL, help="tangential model (default history)")
-    n.add_argument("--characteristic-velocity", type=float, metavar="V", help="for model hooke (m/s)")
-    n.add_argument("--boundary", metavar='"X Y Z"', help='boundary as in the script, e.g. "p p f" (default "f f f")')
-    y = p.add_argument_group("YADE inputs")
-    y.add_argument("--plane-as-plane", action="store_true",
-                   help="treat YADE walls/facets/boxes as planes (R = inf) instead of YADE's refR")
-    y.add_argument("--law", choices=[k for k in laws.supported() if k.startswith("yade:")],
-                   help="the run's contact law, for YADE VTKExporter files (which do not hold it)")
-    y.add_argument("--yade", metavar="EXE",
-                   help="the YADE build that saved the states (yade, yade-mpfr150, yade-float128; default: the "
-                   "first that loads them)")
-    y.add_argument("--state-cache", metavar="DIR",
-                   help="where converted YADE saved states are kept (default for run: OUTPUT.states next to the "
-                   "output; for info and check: $XDG_CACHE_HOME/demsplit/yade-states)")
+                   help="the run: " + "; ".join(f for cls in readers() for f in cls.formats)
+                   + " (several files are one run only where the reader says so); omit it to describe a LIGGGHTS "
+                   "scene with --atoms, --contacts, --material and --columns")
+    groups: dict[str, argparse._ArgumentGroup] = {}
+    added: set[tuple[str, ...]] = set()
+    for cls in readers():
+        for opt in cls.cli_options:
+            if opt.flags in added:
+                continue
+            added.add(opt.flags)
+            title = opt.group or cls.cli_group
+            group = groups.get(title) or groups.setdefault(title, p.add_argument_group(title))
+            kwargs = dict(opt.argparse)
+            if "type" in kwargs:
+                kwargs["type"] = _argparse_type(kwargs["type"])
+            group.add_argument(*opt.flags, dest=_dest(opt), help=opt.help, **kwargs)
 
 
 def _options(args: argparse.Namespace):

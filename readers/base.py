@@ -18,7 +18,8 @@ from __future__ import annotations
 
 import inspect
 from abc import ABC, abstractmethod
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator, Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -26,10 +27,50 @@ import numpy as np
 
 from ..errors import InputFormatError
 from ..frame import Frame
-from ..scene import Scene
+from ..scene import Material, Scene
 
 REGISTRY: dict[str, type[Run]] = {}
 """``format_name`` -> reader class, in registration order."""
+
+
+@dataclass(frozen=True)
+class Option:
+    """A reader option as the command line gives it: ``flags`` and ``help``, the other keywords of argparse's
+    ``add_argument`` in ``argparse``, and where the parsed value goes: the reader's constructor keyword ``name``,
+    through ``convert`` (default: as parsed), or, with ``into``, the entry ``name`` of the dict keyword
+    ``into``. ``group``: the help section (default: the reader's ``cli_group``). Readers that take the same
+    flag share its definition (the first registered reader's help is shown)."""
+
+    name: str
+    flags: tuple[str, ...]
+    help: str
+    argparse: Mapping[str, Any] = field(default_factory=dict)
+    convert: Callable[[Any], Any] | None = None
+    into: str | None = None
+    group: str | None = None
+
+    def value(self, parsed: Any) -> Any:
+        """The constructor's value of what argparse parsed."""
+        return self.convert(parsed) if self.convert is not None else parsed
+
+
+def material_spec(text: str) -> tuple[int, Material]:
+    """``TYPE:E:NU`` (e.g. ``1:5e7:0.3``: Pa, -) as ``(type, Material)``; ValueError when malformed."""
+    try:
+        t, E, nu = text.split(":")
+        return int(t), Material(float(E), float(nu))
+    except ValueError:
+        raise ValueError(f"expected TYPE:E:NU (e.g. 1:5e7:0.3), got {text!r}") from None
+
+
+MATERIALS = Option("materials", ("--material",), "the elastic constants of a material type, TYPE:E:NU (Pa, -), "
+                   "completing or overriding what the run's files say (repeatable)",
+                   {"action": "append", "type": material_spec, "metavar": "TYPE:E:NU"}, convert=dict)
+"""The option every reader with materials takes."""
+OVERLAP_TOLERANCE = Option("overlap_tolerance", ("--overlap-tolerance",), "largest relative overlap error "
+                           "accepted when overlaps must be recomputed from printed positions (default 1e-3)",
+                           {"type": float, "metavar": "REL"})
+"""The option of readers that may recompute overlaps from printed positions."""
 
 class Run(ABC):
     """A run opened for reading (see the module docstring).
@@ -51,6 +92,8 @@ class Run(ABC):
     format_name: ClassVar[str]
     formats: ClassVar[tuple[str, ...]]
     priority: ClassVar[int] = 0
+    cli_group: ClassVar[str] = ""
+    cli_options: ClassVar[tuple[Option, ...]] = ()
 
     scene: Scene
     steps: np.ndarray

@@ -31,11 +31,12 @@ import numpy as np
 from ..errors import DemsplitError, InputFormatError
 from ..frame import Frame, describe_steps
 from ..scene import Material, Scene
-from .base import Run
+from .base import MATERIALS, OVERLAP_TOLERANCE, Option, Run
 from .dump_series import DumpSeries, series_files
 from .lammps_dump import HEADER_LINES, DumpFile, DumpFrame, open_dump
 from .liggghts_join import ATOM_COLUMNS, StepJoin
-from .liggghts_script import DumpSpec, LiggghtsScript, read_script
+from ..physics.laws import simulator_words
+from .liggghts_script import TANGENTIAL, DumpSpec, LiggghtsScript, read_script
 from .liggghts_vtk import vtk_dump_note
 
 DEFAULT_OVERLAP_TOLERANCE = 1e-3
@@ -226,6 +227,10 @@ def _script(path: str | Path | None, *, variables, materials, atoms, contacts, w
     """The run's script, or without one the script equivalent to the scene given as options
     (:func:`scene_script`, whose text is returned too)."""
     if path is not None:
+        if scene_options:
+            raise InputFormatError(f"the scene options ({', '.join(sorted(scene_options))}) describe a run without "
+                                   "its input script, and this run has one.", file=path,
+                                   fix="leave them out: the script says what they would.")
         return read_script(path, variables), None
     if atoms is None or contacts is None:
         raise InputFormatError("without an input script, the atom and pair contact dumps must be given.",
@@ -244,6 +249,33 @@ class LiggghtsRun(Run):
     formats = ("a LIGGGHTS input script (its dumps found from its dump lines, or given as options)",
                "LIGGGHTS dumps given as options (atoms=, contacts=) with the scene as options")
     priority = -10  # any text file that no other reader claims is taken for a script
+    cli_group = "LIGGGHTS inputs (default: the files the script's dump lines write)"
+    cli_options = (
+        Option("atoms", ("--atoms",), "atom dump (dump custom, text, .bin, or compressed)"),
+        Option("contacts", ("--contacts",), "pair contact dump (dump local of compute pair/gran/local)"),
+        Option("walls", ("--walls",), "mesh-wall contact dump (dump local of compute wall/gran/local)"),
+        Option("variables", ("--var",), "script variable, as liggghts -var NAME VALUE",
+               {"nargs": 2, "action": "append", "metavar": ("NAME", "VALUE")}, convert=dict),
+        MATERIALS, OVERLAP_TOLERANCE,
+        Option("force_positions", ("--force-positions",), "recompute overlaps from printed positions even above "
+               "the tolerance (reported)", {"action": "store_true"}),
+        *(Option(name, flags, help, kwargs, into="scene_options",
+                 group="LIGGGHTS without an input script (the scene from these options)")
+          for name, flags, help, kwargs in (
+              ("columns", ("--columns",), 'keywords of the compute pair/gran/local behind --contacts, e.g. '
+               '"pos id delta history"', {"metavar": "KEYWORDS"}),
+              ("wall_columns", ("--wall-columns",), "keywords of the compute wall/gran/local behind --walls",
+               {"metavar": "KEYWORDS"}),
+              ("wall_type", ("--wall-type",), "material type of the mesh walls (LIGGGHTS) or of the wall, facet "
+               "and box bodies (YADE VTK)", {"type": int, "metavar": "T"}),
+              ("model", ("--model",), "pair_style gran model (default hertz)",
+               {"choices": tuple(simulator_words("liggghts"))}),
+              ("tangential", ("--tangential",), "tangential model (default history)", {"choices": TANGENTIAL}),
+              ("characteristic_velocity", ("--characteristic-velocity",), "for model hooke (m/s)",
+               {"type": float, "metavar": "V"}),
+              ("boundary", ("--boundary",), 'boundary as in the script, e.g. "p p f" (default "f f f")',
+               {"metavar": '"X Y Z"'}))),
+    )
 
     @classmethod
     def detect(cls, path: Path | None, head: bytes) -> bool:

@@ -38,9 +38,10 @@ from typing import Any
 import numpy as np
 from demsplit.errors import InputFormatError, MaterialError, PrecisionError
 from demsplit.frame import Box, Frame, Table, describe_steps
+from demsplit.physics.laws import simulator_words
 from demsplit.scene import ContactModel, Material, Scene, Wall
 
-from .base import Run
+from .base import MATERIALS, OVERLAP_TOLERANCE, Option, Run
 from .precision import position_error, printed_step
 from .yade_snapshot import particle_first
 
@@ -400,6 +401,16 @@ class YadeVtkRun(Run):
     format_name = "yade-vtk"
     formats = ("YADE VTKExporter files (NAME-spheres-N.vtk beside NAME-intrs-N.vtk) with --material for every "
                "material id, --law and --wall-type",)
+    cli_group = "YADE inputs"
+    cli_options = (
+        MATERIALS,
+        Option("law", ("--law",), "the run's contact law, for YADE VTKExporter files (which do not hold it): "
+               + ", ".join(simulator_words("yade").values()),
+               {"choices": tuple(simulator_words("yade").values()), "metavar": "LAW"}),
+        Option("wall_type", ("--wall-type",), "material type of the mesh walls (LIGGGHTS) or of the wall, facet "
+               "and box bodies (YADE VTK)", {"type": int, "metavar": "T"}),
+        OVERLAP_TOLERANCE,
+    )
 
     @classmethod
     def detect(cls, path: Path | None, head: bytes) -> bool:

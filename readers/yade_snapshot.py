@@ -36,13 +36,17 @@ from demsplit.yade import (
     sniff_format,
 )
 
-from .base import Run
+from .base import Option, Run
 from .hdf5_inputs import refuse_foreign_storage
 from .lammps_input import excerpt
 
 LAW_MODELS = {key[len(YADE_PREFIX):]: ContactModel(key) for key in law_registry.supported()
               if key.startswith(YADE_PREFIX)}
 """YADE Law2 functor class -> the contact model (its law's registry key is ``yade:`` + the class)."""
+
+PLANE_AS_PLANE = Option("plane_as_plane", ("--plane-as-plane",), "treat YADE walls/facets/boxes as planes (R = inf) "
+                        "instead of YADE's refR", {"action": "store_true"})
+"""The option of the YADE readers whose laws can rebuild their normal stiffness from the materials."""
 
 WALL_KINDS = {"wall": "yade_wall", "facet": "facet", "box": "box"}
 """Body kind in the snapshot -> :class:`demsplit.scene.Wall` kind."""
@@ -548,6 +552,8 @@ class YadeSnapshotRun(Run):
 
     format_name = "yade-snapshot"
     formats = ("a YADE snapshot file written by demsplit.yade.snapshot() (HDF5 or npy stream)",)
+    cli_group = "YADE inputs"
+    cli_options = (PLANE_AS_PLANE,)
 
     @classmethod
     def detect(cls, path: Path | None, head: bytes) -> bool:

@@ -48,8 +48,8 @@ from ..errors import InputFormatError, ScriptError
 from ..fingerprint import DIGEST, file_fingerprint
 from ..frame import Frame
 from ..yade import FORMAT_VERSION
-from .base import Run
-from .yade_snapshot import YadeSnapshotRun
+from .base import Option, Run
+from .yade_snapshot import PLANE_AS_PLANE, YadeSnapshotRun
 
 SIGNATURES = (b"serialization::archive", b"<!DOCTYPE boost_serialization>")
 """What a boost archive (binary, then XML) holds in its first bytes, once decompressed."""
@@ -131,6 +131,15 @@ class YadeStateRun(Run):
     format_name = "yade-state"
     formats = ("a YADE saved state (O.save: .yade, .xml, .gz, .bz2), a directory or a glob of them",)
     priority = 5
+    cli_group = "YADE inputs"
+    cli_options = (
+        PLANE_AS_PLANE,
+        Option("yade", ("--yade",), "the YADE build that saved the states (yade, yade-mpfr150, yade-float128; "
+               "default: the first that loads them)", {"metavar": "EXE"}),
+        Option("state_cache", ("--state-cache",), "where converted YADE saved states are kept (default for run: "
+               "OUTPUT.states next to the output; for info and check: $XDG_CACHE_HOME/demsplit/yade-states)",
+               {"metavar": "DIR"}),
+    )
 
     @classmethod
     def detect(cls, path: Path | None, head: bytes) -> bool:

@@ -122,6 +122,21 @@ def test_the_toy_reader_and_law_are_read_computed_stored_and_exported(tmp_path):
     np.testing.assert_array_equal(back["u_n"].to_numpy(), res.contacts["u_n"].to_numpy())
 
 
+def test_the_command_line_takes_a_readers_options_from_the_reader(tmp_path, capsys):
+    """The toy reader's one option is on the command line, reaches its constructor, and is refused for an input
+    of another reader, by name."""
+    path = toy_file(tmp_path / "run.toy")
+    with pytest.raises(SystemExit):
+        main(["run", "--help"])
+    assert "--toy-stiffness K" in capsys.readouterr().out
+    assert main(["run", str(path), "-o", str(tmp_path / "k.h5"), "-q", "--toy-stiffness", "5000"]) == 0
+    res = load_results(tmp_path / "k.h5")
+    np.testing.assert_allclose(res.contacts["u_n"], 0.5 * 5000 * res.contacts["delta"] ** 2, rtol=1e-14)
+    packing = SAMPLES / "liggghts" / "packing" / "in.packing"
+    assert main(["check", str(packing), "-q", "--toy-stiffness", "5000"]) == 2
+    assert "--toy-stiffness does not apply to a LIGGGHTS input script" in capsys.readouterr().err
+
+
 def test_a_liggghts_law_is_found_by_its_word_and_reads_its_script_property(tmp_path):
     """``pair_style gran model toy_spring`` in a copy of the packing sample: the pairs are the new law's, with
     k from the script; the walls keep their own hertz fixes."""

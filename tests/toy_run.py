@@ -12,7 +12,8 @@ The format is a small text file a test writes (``TOY 1`` on its first line)::
 
 Each ``step`` starts a frame: its particles (``p``, SI units) and the pairs in contact (``c``), whose overlap,
 normal and centres the reader computes from the positions (full precision). The law line names a registered
-law by its key, with its parameters.
+law by its key, with its parameters; the reader's one option, ``stiffness`` (``--toy-stiffness K`` on the
+command line), overrides the law's ``stiffness`` parameter.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ from pathlib import Path
 import numpy as np
 from demsplit.errors import InputFormatError
 from demsplit.frame import Frame
-from demsplit.readers.base import Run
+from demsplit.readers.base import Option, Run
 from demsplit.scene import ContactModel, Material, Scene
 
 SIGNATURE = b"TOY 1\n"
@@ -33,12 +34,15 @@ class ToyRun(Run):
 
     format_name = "toy"
     formats = ("a demsplit toy run (TOY 1)",)
+    cli_group = "toy inputs"
+    cli_options = (Option("stiffness", ("--toy-stiffness",), "the toy law's stiffness (N/m), instead of the "
+                          "file's", {"type": float, "metavar": "K"}),)
 
     @classmethod
     def detect(cls, path: Path | None, head: bytes) -> bool:
         return head.startswith(SIGNATURE)
 
-    def __init__(self, path: Path) -> None:
+    def __init__(self, path: Path, *, stiffness: float | None = None) -> None:
         lines = Path(path).read_text().splitlines()[1:]
         materials, model, frames = {}, None, []
         for number, line in enumerate(lines, start=2):
@@ -60,6 +64,8 @@ class ToyRun(Run):
                                        fix="write law, material, step, p and c lines.")
         if model is None:
             raise InputFormatError("no law line.", file=path, fix="name the run's law: law KEY NAME=VALUE ...")
+        if stiffness is not None:
+            model = ContactModel(model.law, {**model.params, "stiffness": stiffness})
         self.scene = Scene(materials, model)
         self.steps = np.array([step for step, _, _ in frames], dtype=np.int64)
         self.sources = [Path(path)]
