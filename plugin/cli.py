@@ -50,7 +50,7 @@ def _reader_options(args: argparse.Namespace) -> dict:
     for cls in readers():
         for opt in cls.cli_options:
             value = getattr(args, _dest(opt), None)
-            if value not in (None, False, []):
+            if value is not None and value is not False and value != []:  # (0 is a value: `in` would equate it)
                 given[opt.flags] = value
     if not given:
         return {}

@@ -171,9 +171,9 @@ def test_totals_are_conserved_per_mode(model_run):
     modes = [m for m in ("u_n", "u_t", "u_r", "u_adh") if m in res.contacts]
     law = open_run(script).scene.model.contact_law
     assert set(modes) == set(law.modes) | {"u_n", "u_t"}
-    for step, frame in res.contacts.groupby("step"):
-        parts = res.particles[res.particles["step"] == step]
-        walls = res.walls[res.walls["step"] == step]
+    for step, frame in res.raw.contacts.groupby("step"):  # as stored: the known parts add up
+        parts = res.raw.particles[res.raw.particles["step"] == step]
+        walls = res.raw.walls[res.raw.walls["step"] == step]
         for mode in modes:
             total = frame[mode].sum()
             assert parts[mode].sum() + walls[mode].sum() == pytest.approx(total, rel=1e-12, abs=1e-300), mode

@@ -11,7 +11,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import require_program
-from demsplit.frame import ParticleIndex
 from demsplit.physics.partition import partition, per_particle
 from demsplit.readers.yade_snapshot import open_yade_snapshot
 
@@ -162,8 +161,7 @@ def per_particle_energy(path: Path) -> list[np.ndarray]:
     out = []
     for frame in run:
         e = partition(frame.contacts, run.scene, frame.particles)
-        table, _ = per_particle(frame.contacts, e, frame.particles, len(run.scene.walls),
-                                ParticleIndex(frame.particles["id"]))
+        table, _ = per_particle(frame.contacts, e, frame.particles, len(run.scene.walls))
         out.append(table["u"])
     return out
 
