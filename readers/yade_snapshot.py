@@ -371,6 +371,11 @@ def _split_materials(meta: dict, law, given: Mapping[int, Material], *, path: Pa
     materials, unusable, read = {}, {}, False
     for m in meta["materials"]:
         t, name = int(m["id"]), str(m.get("label") or "")
+        if not all(isinstance(m.get(a, 0.0), (int, float)) and not isinstance(m.get(a), bool)
+                   for a in ("young", "poisson")):
+            raise MaterialError(f"YADE material {t}: young {excerpt(repr(m.get('young')))} and poisson "
+                                f"{excerpt(repr(m.get('poisson')))} are not both finite numbers.", file=path,
+                                step=step, fix=FIX_DAMAGED)
         if t in given:
             materials[t] = Material(given[t].E, given[t].nu, name=name or given[t].name)
             continue
@@ -870,7 +875,8 @@ def yade_energies(meta: dict, law: YadeLaw) -> list[dict]:
     return out
 
 
-def open_yade_snapshot(path: str | Path, *, plane_as_plane: bool = False) -> YadeSnapshotRun:
+def open_yade_snapshot(path: str | Path, *, plane_as_plane: bool = False,
+                       materials: Mapping[int, Material] | None = None) -> YadeSnapshotRun:
     """Open a file written by :func:`demsplit.yade.snapshot` (HDF5 or npy stream).
 
     plane_as_plane
@@ -879,5 +885,7 @@ def open_yade_snapshot(path: str | Path, *, plane_as_plane: bool = False) -> Yad
         sphere of the particle's radius, a Facet as one of twice it). True:
         ``r2 = inf`` for walls, facets and boxes and ``kno`` is dropped, so
         Hertz is recomputed for a sphere on a plane (not what YADE computed).
+    materials
+        the split's moduli by material id, instead of the law's reading of YADE's materials (``--material``).
     """
-    return YadeSnapshotRun(path, plane_as_plane=plane_as_plane)
+    return YadeSnapshotRun(path, plane_as_plane=plane_as_plane, materials=materials)

@@ -13,6 +13,7 @@ import demsplit as ds
 import numpy as np
 import pytest
 from demsplit.errors import DemsplitError, InputFormatError, PrecisionError, TruncatedFileError
+from demsplit.physics import laws
 from demsplit.physics.partition import partition
 from demsplit.readers import open_run
 from demsplit.readers.yade_export import YadeVtkRun, overlap_error_bound, read_vtk, vtk_frame
@@ -207,7 +208,9 @@ def test_writer_round_trip(tmp_path, fmt):
 
 
 def test_vtk_export_agrees_with_the_snapshot_to_percent_g():
-    frame = _vtk_frame(YADE / "mindlin_box-spheres-00024000.vtk", YADE / "mindlin_box-intrs-00024000.vtk")
+    mindlin = laws.law_class("yade:Law2_ScGeom_MindlinPhys_Mindlin").phys  # the attributes the law reads
+    frame = _vtk_frame(YADE / "mindlin_box-spheres-00024000.vtk", YADE / "mindlin_box-intrs-00024000.vtk",
+                       attributes=mindlin)
     ref = open_yade_snapshot(YADE / "mindlin_box.h5").frame(2)
     assert frame.step == ref.step == 24000
     assert frame.n_contacts == ref.n_contacts == 235

@@ -1,10 +1,11 @@
 # YADE's own JCFpm example, examples/jointedCohesiveFrictionalPM/gravityBis.py as Debian installs it (a rock
 # cube cut by a smooth joint, loaded by gravity, the joint's cohesion removed once the block is still), run
 # as it is but trimmed to run fast: DEMSPLIT_SPHERES spheres instead of 3000, DEMSPLIT_ITER iterations
-# instead of 10000, a seeded packing (DEMSPLIT_SEED) instead of a random one, no GUI, and the indicator sphere the example looks for taken as the highest sphere when
-# a small packing has none where the example expects it. The state is then saved the usual way
-# (O.save after O.run), with YADE's own numbers of that instant beside it (<state>.json, as
-# saved_instants.py writes them). Run headless (tests/test_yade_instants.py):
+# instead of 10000, a seeded packing (DEMSPLIT_SEED) instead of a random one, no GUI, and the indicator
+# sphere the example looks for taken as the highest sphere when a small packing has none where the example
+# expects it. The state is then saved the usual way (O.save after O.run), with YADE's own numbers of that
+# instant beside it (<state>.json, as saved_instants.py writes them). Run headless
+# (tests/test_yade_instants.py):
 #   DEMSPLIT_OUT=<dir> yade -n -j1 -x jcfpm_example.py
 import json
 import os
