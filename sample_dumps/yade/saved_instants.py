@@ -4,8 +4,9 @@
 # The script never imports demsplit. Beside every state it writes <state>.json with YADE's own numbers of
 # that instant, computed by YADE at the moment of the save: the law's energy functions, O.energy, sums over
 # the real interactions' i.phys and i.geom (the energy of each mode as the law defines it) and
-# O.interactions.countReal(), and the spheres' positions at the InteractionLoop that computed the saved forces
-# (the instant YADE's energy functions report). Run headless (tests/test_yade_instants.py):
+# O.interactions.countReal(), the spheres' positions at the InteractionLoop that computed the saved forces
+# (the instant YADE's energy functions report), and how much the scene moves (the real interactions made in
+# the last 100 iterations, the largest speed). Run headless (tests/test_yade_instants.py):
 #   DEMSPLIT_OUT=<dir> [DEMSPLIT_SCENES=mindlin,cundall,...] yade -n -j1 -x saved_instants.py
 import json
 import os
@@ -14,9 +15,9 @@ import random
 from yade import geom, pack, utils
 
 out = os.environ.get("DEMSPLIT_OUT", ".")
-START = int(os.environ.get("DEMSPLIT_START", "3000"))
+START = int(os.environ.get("DEMSPLIT_START", "1800"))
 """Iterations before the first save: the spheres are falling and colliding, contacts form and break
-(the clumps, which bounce longer, get 1500 more)."""
+(the clumps, which bounce longer, get 900 more)."""
 
 
 def law_energies(kind):
@@ -84,7 +85,9 @@ def save(tag):
     ref = {"scene": scene, "tag": tag, "iter": O.iter, "time": O.time, "dt": O.dt,
            "count_real": O.interactions.countReal(), "law_energies": law_energies(kind),
            "energy": {k: float(v) for k, v in O.energy.items()}, "sums": phys_sums(kind),
-           "positions": held[forces_at]}
+           "positions": held[forces_at],
+           "made_in_last_100": sum(1 for i in O.interactions if i.iterMadeReal > O.iter - 100),
+           "max_speed": max(b.state.vel.norm() for b in O.bodies if isinstance(b.shape, Sphere))}
     with open(name + ".json", "w") as f:
         json.dump(ref, f, indent=1)
     O.save(name)
@@ -241,9 +244,9 @@ ALL = ("mindlin", "cundall", "periodic", "clumps", "viscel", "viscofrict", "hert
 for scene in [s for s in os.environ.get("DEMSPLIT_SCENES", ",".join(ALL)).split(",") if s]:
     O.reset()
     held.clear()
-    start = START + (1500 if scene == "clumps" else 0)
+    start = START + (900 if scene == "clumps" else 0)
     build()
-    O.dt = 0.3 * utils.PWaveTimeStep()
+    O.dt = 0.5 * utils.PWaveTimeStep()
     O.run(start + 3, True)  # through the PyRunner saves
     O.run(2, True)
     save("run")  # after O.run(N, True)
