@@ -14,9 +14,6 @@ sample_dumps/yade/jcfpm_example.py runs YADE's own JCFpm example (trimmed) and s
 from __future__ import annotations
 
 import json
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import demsplit
@@ -163,21 +160,16 @@ def test_inline_materials_give_the_material_split(saved):
         assert on_inline.sum() > 0 and np.all(expected[on_inline] > 0.7), scene  # the particle is the softer
 
 
-def cli(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "demsplit.cli", *args], capture_output=True, text=True,
-                          timeout=600, env=dict(os.environ))
-
-
-def test_viscel_needs_the_split_moduli(saved, tmp_path):
+def test_viscel_needs_the_split_moduli(saved, tmp_path, capsys):
     """ViscEl's stiffness comes from the materials' kn, ks: the law never reads young and poisson (ViscElMat's
     defaults), so the split's moduli are refused without --material and taken from it with it."""
     state = states(saved, "viscel")[-1]
-    no = cli("run", str(state), "-o", str(tmp_path / "no.h5"), "-q", "--state-cache", str(saved / "cache"))
-    assert no.returncode == 2 and "never reads its young and poisson" in no.stderr and "--material" in no.stderr
+    assert main(["run", str(state), "-o", str(tmp_path / "no.h5"), "-q", "--state-cache", str(saved / "cache")]) == 2
+    err = capsys.readouterr().err
+    assert "never reads its young and poisson" in err and "--material" in err
     assert not (tmp_path / "no.h5").exists()
-    yes = cli("run", str(state), "-o", str(tmp_path / "yes.h5"), "-q", "--state-cache", str(saved / "cache"),
-              "--material", "0:3e7:0.25", "--material", "1:9e7:0.2")
-    assert yes.returncode == 0, yes.stderr
+    assert main(["run", str(state), "-o", str(tmp_path / "yes.h5"), "-q", "--state-cache", str(saved / "cache"),
+                 "--material", "0:3e7:0.25", "--material", "1:9e7:0.2"]) == 0
     materials = load_results(tmp_path / "yes.h5").provenance["scene"]["materials"]
     assert (materials["0"]["E"], materials["0"]["nu"], materials["1"]["E"]) == (3e7, 0.25, 9e7)
 

@@ -138,7 +138,7 @@ def engines(shapes, ip2, law2, newton):
 
 def box_scene(seed, mat=FrictMat, **kw):
     soft, stiff = two(mat, **kw)
-    L = 0.04
+    L = 0.03
     cloud((0.001, 0.001, 0.001), (L - 0.001, L - 0.001, 0.03), soft, stiff, seed)
     O.bodies.append(geom.facetBox((L / 2, L / 2, 0.03), (L / 2, L / 2, 0.03), wallMask=31, material=stiff))
     return soft, stiff
@@ -151,7 +151,7 @@ def build():
     newton = NewtonIntegrator(gravity=(0, 0, -200.0), damping=0.3)
     if scene == "mindlin":  # damped Hertz-Mindlin; facets and a box with inline materials
         soft, stiff = two(FrictMat)
-        L = 0.04
+        L = 0.03
         cloud((0.001, 0.001, 0.007), (L - 0.001, L - 0.001, 0.03), soft, stiff, 1)
         O.bodies.append(geom.facetBox((L / 2, L / 2, 0.03), (L / 2, L / 2, 0.03), wallMask=31,
                                       material=FrictMat(young=1e9, poisson=0.3, density=2500, frictionAngle=0.4)))
@@ -161,7 +161,7 @@ def build():
         engines(("Sphere", "Facet", "Box"), Ip2_FrictMat_FrictMat_MindlinPhys(en=0.6, es=0.6), law, newton)
     elif scene == "cundall":  # CundallStrack between Walls, O.energy tracked
         soft, stiff = two(FrictMat)
-        L = 0.04
+        L = 0.03
         cloud((0.001, 0.001, 0.001), (L - 0.001, L - 0.001, 0.03), soft, stiff, 2)
         O.bodies.append([utils.wall(0, axis=2, sense=1, material=stiff),
                          utils.wall(0, axis=0, sense=1, material=soft),
