@@ -382,3 +382,27 @@ def test_several_files_are_one_run_only_for_a_reader_of_several_files():
     assert YadeStateRun.several_files and not YadeSnapshotRun.several_files
     with pytest.raises(InputFormatError, match="a run by itself"):
         open_run([YADE / "mindlin_box.h5", YADE / "cundall_periodic.h5"])
+
+
+def test_a_format_1_snapshot_is_read_with_what_it_holds(tmp_path):
+    """A snapshot of format 1 (before the laws declared their attributes) has no elastic shear force of
+    Hertz-Mindlin (shearElastic, fse) and no angular velocities: it is read, with u_t of that law missing
+    (refused by run without --allow-missing), the other modes and laws as before."""
+    meta, tables = _open_store(YADE / "mindlin_box.npys").snapshot(2)
+    for c in ("fsex", "fsey", "fsez"):
+        del tables["interactions"][c]
+    for c in ("wx", "wy", "wz"):
+        del tables["bodies"][c]
+    meta["format_version"] = 1
+    old = tmp_path / "v1.npys"
+    write_snapshot(old, meta, tables, format="npy")
+    frame = open_yade_snapshot(old).frame(0)
+    new = open_yade_snapshot(YADE / "mindlin_box.npys")
+    e, ref = partition(frame.contacts, new.scene, frame.particles), partition(*_frame_and_scene(new))
+    assert "u_t" in e.missing and "ftx" not in frame.contacts
+    np.testing.assert_array_equal(e.u_n, ref.u_n)
+
+
+def _frame_and_scene(run):
+    frame = run.frame(2)
+    return frame.contacts, run.scene, frame.particles
