@@ -221,8 +221,8 @@ def checked_meta(meta, *, path: Path, k: int) -> dict:
     """A snapshot's metadata, or the InputFormatError of the first entry this reader needs that is missing
     or of the wrong type: ``iter`` (an integer in [0, 2^63)), ``time`` (finite, >= 0), ``periodic`` (a
     boolean) with ``hSize`` and, when given, ``velGrad`` (nine finite numbers), ``materials`` (objects with an
-    integer ``id``), ``engines`` and ``functors.law`` (objects with a ``class`` name; a law's ``attrs`` an object), the
-    interaction counts (integers >= 0)."""
+    integer ``id``), ``engines``, ``functors.law`` and ``functors.phys`` (objects with a ``class`` name; a law's
+    ``attrs`` an object), the interaction counts (integers >= 0)."""
     def need(ok: bool, what: str) -> None:
         if not ok:
             raise InputFormatError(f"snapshot {k}: the metadata's {what}.", file=path, fix=FIX_DAMAGED)
@@ -248,6 +248,7 @@ def checked_meta(meta, *, path: Path, k: int) -> dict:
     functors = meta.get("functors")
     need(isinstance(functors, dict), "'functors' is not an object")
     named(functors.get("law"), "'functors.law'")
+    named(functors.get("phys", []), "'functors.phys'")
     need(all(isinstance(f.get("attrs", {}), dict) for f in functors["law"]), "law attrs are not an object")
     for key in ("n_interactions_potential", "n_interactions_real"):
         need(_is_int(meta.get(key)) and 0 <= meta[key] < 2**63, f"{key!r} is not a count")
@@ -379,7 +380,7 @@ def _split_materials(meta: dict, law, given: Mapping[int, Material], *, path: Pa
         if t in given:
             materials[t] = Material(given[t].E, given[t].nu, name=name or given[t].name)
             continue
-        moduli = law.split_moduli(m)
+        moduli = law.split_moduli(m, meta["functors"].get("phys", []))
         what = f"YADE material {t} ({name or m.get('class', '?')})"
         if isinstance(moduli, str):
             unusable[t] = f"{what}: {moduli}"
@@ -745,8 +746,7 @@ class YadeSnapshotRun(Run):
                      f"  YADE {meta0.get('yade_version')}, {meta0.get('precision_name')}, "
                      f"periodic {meta0.get('periodic')}",
                      f"  model:    {scene.model.describe()}",
-                     "  materials: " + ", ".join(f"{t}: E={m.E:g} Pa nu={m.nu:g}"
-                                                 for t, m in sorted(scene.materials.items())),
+                     "  materials: " + material_list(run),
                      "  walls:    " + (", ".join(f"{w.name} ({w.kind}, type {w.type})" for w in scene.walls)
                                        or "none"),
                      "  iteration   time (s)       bodies  interactions (real)"]
@@ -848,6 +848,10 @@ class YadeSnapshotRun(Run):
         _, rows = self._frame(meta, tables)
         return _text(tables["interactions"]["depth_text"][rows])
 
+    def materials_without_moduli(self) -> dict[int, str]:
+        """The materials the split has no moduli for (id -> why): refused when a contact touches one."""
+        return dict(self._unusable)
+
     def describe(self) -> dict:
         """The file, and YADE's own elastic energies of each snapshot (:func:`yade_energies`)."""
         return {"kind": self.format_name, "path": str(self.path), "plane_as_plane": self.plane_as_plane,
@@ -855,6 +859,15 @@ class YadeSnapshotRun(Run):
 
     def close(self) -> None:
         self._store.close()
+
+
+def material_list(run: YadeSnapshotRun) -> str:
+    """Every material id of a run with its split moduli, or why it has none (for ``info``)."""
+    items = {t: f"{t}: E={m.E:g} Pa nu={m.nu:g}" + (f" ({m.name})" if m.name else "")
+             for t, m in run.scene.materials.items()}
+    items.update({t: f"{t}: no moduli for the split ({why}; --material {t}:E:NU)"
+                  for t, why in run.materials_without_moduli().items()})
+    return ", ".join(items[t] for t in sorted(items))
 
 
 def yade_energies(meta: dict, law: YadeLaw) -> list[dict]:

@@ -41,13 +41,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputFormatError, ScriptError
+from ..errors import DemsplitError, InputFormatError, ScriptError
 from ..fingerprint import DIGEST, file_fingerprint
 from ..frame import Frame
 from ..scene import Material
 from ..yade import FORMAT_VERSION
 from .base import Run
-from .yade_snapshot import YadeSnapshotRun
+from .yade_snapshot import YadeSnapshotRun, material_list
 
 SIGNATURES = (b"serialization::archive", b"<!DOCTYPE boost_serialization>")
 """What a boost archive (binary, then XML) holds in its first bytes, once decompressed."""
@@ -152,7 +152,10 @@ class YadeStateRun(Run):
         return len(self._runs)
 
     def frame(self, k: int) -> Frame:
-        frame = self._runs[k].frame(0)
+        try:
+            frame = self._runs[k].frame(0)
+        except DemsplitError as exc:  # named by the state, not by its converted copy in the cache
+            raise type(exc)(exc.message, file=self._states[k], step=exc.step, line=exc.line, fix=exc.fix) from None
         frame.source = (str(self._states[k]),)
         return frame
 
@@ -164,20 +167,21 @@ class YadeStateRun(Run):
     @classmethod
     def describe_file(cls, path: Path) -> str:
         with cls.open(path) as run:
-            frame = run.frame(len(run) - 1)
             meta = run._runs[-1].meta(0)
-            walls = {}
-            for w in run.scene.walls:
-                walls[w.kind] = walls.get(w.kind, 0) + 1
+            bodies = run._runs[-1]._read(0)[1]["bodies"]
+            kinds = bodies["kind"].astype(str).tolist()
+            walls = {k: kinds.count(k) for k in ("wall", "facet", "box") if k in kinds}
+            try:
+                contacts = f"{run.frame(len(run) - 1).n_contacts} read as contacts"
+            except DemsplitError as exc:
+                contacts = f"not analysable as they are: {exc}"
             lines = [f"{path}: YADE saved state(s), {len(run)} ({', '.join(s.name for s in run._states)})",
                      f"  iterations: {run.steps.tolist()}",
-                     f"  bodies:     {len(frame.particles['id'])} spheres, walls "
+                     f"  bodies:     {kinds.count('sphere')} spheres, walls "
                      + (", ".join(f"{n} {k}" for k, n in sorted(walls.items())) or "none"),
-                     f"  interactions (last state): {meta['n_interactions_real']} real, "
-                     f"{len(frame.contacts['delta'])} read as contacts",
+                     f"  interactions (last state): {meta['n_interactions_real']} real, {contacts}",
                      f"  law:        {run.scene.model.describe()}",
-                     "  materials:  " + ", ".join(f"{t}: E={m.E:g} Pa nu={m.nu:g}"
-                                                  for t, m in sorted(run.scene.materials.items())),
+                     "  materials:  " + material_list(run._runs[-1]),
                      f"  YADE:       {meta.get('yade_version', '?')} {meta.get('precision_name', '?')}"]
         return "\n".join(lines)
 

@@ -13,7 +13,7 @@ YADE laws derive from :class:`YadeLaw` (or :class:`YadeScGeomLaw`, with the shea
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -120,9 +120,10 @@ class YadeLaw(ContactLaw):
         reader then takes it from the geometry). Default: nowhere."""
         return np.full(len(t["nx"]), np.nan)
 
-    def split_moduli(self, material: Mapping) -> tuple[float, float] | str:
+    def split_moduli(self, material: Mapping, physics: Sequence[Mapping] = ()) -> tuple[float, float] | str:
         """(E, nu) of a YADE material (its attributes, ``O.materials[i].dict()``) for the split, or why the
-        law gives none (see ``moduli``)."""
+        law gives none (see ``moduli``); ``physics``: the Ip2 functors (class and attributes), which may
+        build the stiffness without the materials' moduli."""
         E, nu = material.get("young"), material.get("poisson")
         if not finite_positive(E):
             return f"its young = {E!r} is not a modulus > 0"

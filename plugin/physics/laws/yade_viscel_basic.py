@@ -17,17 +17,22 @@ its springs are FrictPhys' (``moduli = "springs"``).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import math
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
 from ..elastic import hooke_energy, overlap
 from . import register
-from ._yade import SHEAR_FORCE, Phys, Table, YadeScGeomLaw, finite_positive, where_known
+from ._yade import SHEAR_FORCE, Phys, Table, YadeScGeomLaw, where_known
 from .base import ContactRows, LawEnergy
 
-STIFFNESS_ATTRIBUTES = ("kn", "ks", "cn", "cs", "tc")
-"""ViscElMat attributes that, when set (finite), make the law's stiffness without young and poisson."""
+STIFFNESS_ATTRIBUTES = ("kn", "ks", "tc")
+"""ViscElMat attributes that, when set (finite), make the law's stiffness without young and poisson
+(Ip2_ViscElMat_ViscElMat_ViscElPhys: from kn, ks with cn, cs, or from the collision time tc with en, et)."""
+FUNCTOR_ATTRIBUTES = ("tc", "en", "et")
+"""Ip2_ViscElMat_ViscElMat_ViscElPhys attributes (MatchMakers) that, set together, make the stiffness from the
+collision time whatever the materials give."""
 
 
 @register
@@ -49,9 +54,14 @@ class YadeViscElBasic(YadeScGeomLaw):
         """delta = Fn/kn from the elastic normal force (the law keeps only contacts with delta >= 0)."""
         return where_known(t["kn"] > 0, t["fn_elastic"] / t["kn"])
 
-    def split_moduli(self, material: Mapping) -> tuple[float, float] | str:
-        given = [a for a in STIFFNESS_ATTRIBUTES if finite_positive(material.get(a))]
+    def split_moduli(self, material: Mapping, physics: Sequence[Mapping] = ()) -> tuple[float, float] | str:
+        given = [a for a in STIFFNESS_ATTRIBUTES if isinstance(material.get(a), (int, float))
+                 and math.isfinite(material[a])]
         if given:
             return (f"it gives {', '.join(given)}, so {self.key} never reads its young and poisson (ViscElMat's "
                     "defaults, not moduli of the material)")
-        return super().split_moduli(material)
+        for f in physics:
+            if all(f.get("attrs", {}).get(a) is not None for a in FUNCTOR_ATTRIBUTES):
+                return (f"{f['class']} sets tc, en and et, so {self.key} never reads its young and poisson "
+                        "(ViscElMat's defaults, not moduli of the material)")
+        return super().split_moduli(material, physics)
