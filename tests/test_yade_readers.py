@@ -406,3 +406,19 @@ def test_a_format_1_snapshot_is_read_with_what_it_holds(tmp_path):
 def _frame_and_scene(run):
     frame = run.frame(2)
     return frame.contacts, run.scene, frame.particles
+
+
+def test_a_wall_without_material_is_refused_not_split_in_half():
+    """One particle material and a wall of a type without one: the single-material shortcut (every share 1/2)
+    gave that wall half the energy, exit 0; the lookup now names the wall's type."""
+    from demsplit.errors import MaterialError
+
+    scene = ds.Scene({0: ds.Material(1e7, 0.3)}, walls=[ds.Wall("w", "yade_wall", type=5)])
+    contacts = {"id1": np.array([0]), "id2": np.array([-1]), "wall": np.array([0]), "delta": np.array([1e-5]),
+                "nx": np.ones(1), "ny": np.zeros(1), "nz": np.zeros(1), "x1": np.zeros(1), "y1": np.zeros(1),
+                "z1": np.zeros(1), "r1": np.full(1, 1e-3), "r2": np.full(1, 1e-3)}
+    particles = {"id": np.array([0]), "type": np.array([0], np.int32), "x": np.zeros(1), "y": np.zeros(1),
+                 "z": np.zeros(1), "radius": np.full(1, 1e-3)}
+    assert not scene.single_material
+    with pytest.raises(MaterialError, match=r"wall type\(s\) \[5\] have no material"):
+        partition(contacts, scene, particles)
