@@ -1,10 +1,10 @@
 """The YADE side of demsplit: a full-precision snapshot exporter that runs
 inside a YADE script.
 
-Use it from a ``PyRunner`` placed between ``InteractionLoop`` and
-``NewtonIntegrator``, so that geometry, forces and positions are of the same
-instant (a PyRunner at the end of ``O.engines`` sees positions already moved
-to t + dt)::
+Use it from a ``PyRunner``, best placed between ``InteractionLoop`` and
+``NewtonIntegrator``, where geometry, forces and positions are of the same
+instant (from a PyRunner after the integrator, the reader steps the positions
+back to the forces' instant)::
 
     import site; site.addsitedir("<site-packages of the Python where demsplit is installed>")
     import demsplit.yade
@@ -13,9 +13,10 @@ to t + dt)::
                  PyRunner(command='demsplit.yade.snapshot("run.h5")', iterPeriod=1000),
                  NewtonIntegrator(...)]
 
-Each call appends one snapshot (bodies, real interactions, the Ip2/Law2
-functors and their attributes, the periodic cell, ``O.energy`` and the laws'
-own elastic energies for validation) to one file. The file is HDF5 when
+Each call appends one snapshot (bodies, real interactions with the attributes
+of their physics their law declares, every material, inline ones included,
+the Ip2/Law2 functors and their attributes, the periodic cell, ``O.energy``
+and the laws' own elastic energies for validation) to one file. The file is HDF5 when
 ``h5py`` is importable, otherwise an append-only stream of ``.npy`` records
 that needs nothing but numpy; :func:`demsplit.readers.yade_snapshot.open_yade_snapshot`
 reads both. Reals are stored as float64; in high-precision builds (mpmath

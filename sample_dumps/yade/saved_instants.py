@@ -9,6 +9,7 @@
 # the last 100 iterations, the largest speed). Run headless (tests/test_yade_instants.py):
 #   DEMSPLIT_OUT=<dir> [DEMSPLIT_SCENES=mindlin,cundall,...] yade -n -j1 -x saved_instants.py
 import json
+import math
 import os
 import random
 
@@ -48,8 +49,8 @@ def phys_sums(kind):
         d = float(g.penetrationDepth)
         if kind in ("mindlin", "adhesion", "hertz_linear", "deresiewitz"):
             u["u_n"] += 0.4 * float(p.kno) * max(d, 0.0) ** 2.5
-            if kind == "hertz_linear":
-                u["u_t"] += spring(sq(p.shearForce), float(p.kso))
+            if kind == "hertz_linear":  # nonLin=1: the law's shear stiffness is kso sqrt(delta), not stored
+                u["u_t"] += spring(sq(p.shearForce), float(p.kso) * math.sqrt(max(d, 0.0)))
             elif kind != "deresiewitz":
                 u["u_t"] += spring(sq(p.shearElastic), float(p.ks))
             if kind == "adhesion":
@@ -214,7 +215,7 @@ def build():
         engines(("Sphere", "Facet"), Ip2_FrictMat_FrictMat_ViscoFrictPhys(), law, newton)
     elif scene == "hertz_linear":
         box_scene(7)
-        law = Law2_ScGeom_MindlinPhys_HertzWithLinearShear()
+        law = Law2_ScGeom_MindlinPhys_HertzWithLinearShear(nonLin=1)  # ks = kso sqrt(delta)
         engines(("Sphere", "Facet"), Ip2_FrictMat_FrictMat_MindlinPhys(), law, newton)
     elif scene == "deresiewitz":
         box_scene(8)
