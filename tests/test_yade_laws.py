@@ -17,7 +17,6 @@ from conftest import require_program
 from demsplit.physics.partition import partition, per_particle
 from demsplit.errors import UnsupportedModelError
 from demsplit.readers.yade_snapshot import _open_store, open_yade_snapshot
-from demsplit.scene import Material
 from demsplit.yade import write_snapshot
 from test_yade_simulator import SAMPLE_SCRIPTS, run_yade
 
@@ -31,9 +30,6 @@ LAWS = {"viscel": "yade:Law2_ScGeom_ViscElPhys_Basic",
         "capillary": "yade:Law2_ScGeom_FrictPhys_CundallStrack"}
 
 pytestmark = pytest.mark.simulator
-
-VISCEL_MODULI = {0: Material(2e7, 0.3), 1: Material(1e8, 0.2)}
-"""The split's moduli of laws_box.py's ViscElMat materials, which the law does not read (--material)."""
 
 
 @pytest.fixture(scope="module", params=sorted(LAWS))
@@ -64,7 +60,7 @@ def independent(law: str, t: dict) -> dict[str, float]:
 
 def test_totals_per_mode_equal_yades_own_or_an_independent_sum(law_run):
     law, path = law_run
-    run = open_yade_snapshot(path, materials=VISCEL_MODULI if law == "viscel" else None)
+    run = open_yade_snapshot(path)
     assert run.scene.model.law == LAWS[law]
     store = _open_store(path)
     assert len(run) == 2
