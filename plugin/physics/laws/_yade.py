@@ -145,15 +145,13 @@ class YadeScGeomLaw(YadeLaw):
     mode_columns = {"u_t": SHEAR_COLUMNS}
 
     def shear_energy(self, rows: ContactRows) -> tuple[dict[str, np.ndarray], dict[str, str]]:
-        """``({"u_t": energy}, {})``, or ``({}, {"u_t": why not})`` when the columns are absent; the shear
-        stiffness is the last column of the law's ``u_t`` columns (``ks``, or ``kso`` for a law that keeps
-        its shear stiffness there)."""
+        """``({"u_t": energy}, {})``, or ``({}, {"u_t": why not})`` when the columns are absent:
+        u_t = |F_t|^2/(2 ks) with the stored shear force and stiffness (:data:`SHEAR_COLUMNS`)."""
         why = self.missing_mode(rows, "u_t")
         if why:
             return {}, {"u_t": why}
-        columns = self.mode_columns["u_t"]
-        ft = np.stack([rows.column(c) for c in columns[:3]], axis=-1)
-        return {"u_t": stored_shear_energy(rows.delta, ft, rows.column(columns[3]))}, {}
+        ft = np.stack([rows.column(c) for c in SHEAR_COLUMNS[:3]], axis=-1)
+        return {"u_t": stored_shear_energy(rows.delta, ft, rows.column("ks"))}, {}
 
 
 def stored_spring_energy(force: np.ndarray, k: np.ndarray) -> np.ndarray:
