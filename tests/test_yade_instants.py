@@ -204,3 +204,15 @@ def test_the_report_prints_yades_own_total(saved, tmp_path):
     assert "YADE&#x27;s own O.energy[&#x27;elastPotential&#x27;]" in html
     before = text_summary(res, step=int(reference(states(saved, "cundall")[0])["iter"]))
     assert "ForceResetter zeroes it" in before
+
+
+def test_info_lists_every_material_of_the_states(saved):
+    """demsplit info on a glob of states: each material id with its split moduli (the inline ones numbered
+    after O.materials), or why it has none and the option that gives them."""
+    from demsplit.inspection import describe_file
+
+    text = describe_file(Path(f"{saved}/mindlin-*"))
+    assert "YADE saved state(s), 4" in text and "1 box, 10 facet" in text
+    assert "2: E=1e+09 Pa nu=0.3 (inline FrictMat of body" in text and "3: E=5e+08 Pa nu=0.25" in text
+    text = describe_file(states(saved, "viscel")[-1])
+    assert "0: no moduli for the split" in text and "--material 0:E:NU" in text and "not analysable" in text
