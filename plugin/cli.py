@@ -121,9 +121,11 @@ def cmd_run(args: argparse.Namespace) -> int:
     from .pipeline import run_to_store
 
     options = _reader_options(args)
-    if args.input is not None and "state_cache" not in options and _yade_states(args.input):
-        # converted YADE states are kept next to the output, where a rerun of this analysis finds them
-        options["state_cache"] = str(Path(args.output).with_name(Path(args.output).name + ".states"))
+    if args.input:  # what the run's reader keeps next to the output (converted YADE states)
+        from .readers import reader_for
+
+        first = args.input[0] if isinstance(args.input, list) else args.input
+        options = {**reader_for(first).output_options(Path(args.output)), **options}
     report, _ = run_to_store(args.input, args.output, options=_options(args), jobs=args.jobs, dask=args.dask,
                              resume=args.resume, on_bad_frame=args.on_bad_frame,
                              compression=None if args.compression == "none" else args.compression,
@@ -214,13 +216,6 @@ def cmd_export(args: argparse.Namespace) -> int:
         for path in written:
             print(f"wrote {path}")
     return 0
-
-
-def _yade_states(inputs: str | list[str]) -> bool:
-    """Whether the run's input is YADE saved states (which are converted, and cached)."""
-    from .readers.yade_state import state_files
-
-    return all(state_files(Path(p)) for p in (inputs if isinstance(inputs, list) else [inputs]))
 
 
 def cmd_prepare(args: argparse.Namespace) -> int:

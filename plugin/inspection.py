@@ -37,20 +37,24 @@ def describe_file(path: str | Path) -> str:
     """A human-readable description of ``path`` (see the module docstring): a result store, a dump or a
     VTK file that is part of a run (none of which is a run), else what the reader that reads it says
     (``Run.describe_file``)."""
-    from .readers import read_head, reader_for
+    from .readers import read_head, reader_for, readers
     from .readers.lammps_dump import describe_dump, looks_like_dump
     from .readers.liggghts_vtk import describe_vtk_dump, is_liggghts_vtk
     from .readers.yade_export import describe_vtk, is_vtk_part
-    from .readers.yade_state import YadeStateRun, state_files
 
     path = Path(path)
-    if state_files(path):  # YADE saved states, which are compressed like dumps can be
-        return YadeStateRun.describe_file(path)
     head = read_head(path)
+    if path.is_dir() or not path.exists():  # a directory or a glob: only a reader of several files takes it
+        return reader_for(path).describe_file(path)
     if not head:
         raise InputFormatError("the file is empty.", file=path, fix="check that the program that writes it ran.")
-    for looks_like, describe in ((_is_store, _describe_store), (looks_like_dump, describe_dump),
-                                 (is_liggghts_vtk, describe_vtk_dump), (is_vtk_part, describe_vtk)):
+    if _is_store(path, head):
+        return _describe_store(path)
+    for cls in readers():  # readers that know their files by a signature (YADE states are compressed like dumps)
+        if cls.priority > 0 and cls.detect(path, head):
+            return cls.describe_file(path)
+    for looks_like, describe in ((looks_like_dump, describe_dump), (is_liggghts_vtk, describe_vtk_dump),
+                                 (is_vtk_part, describe_vtk)):
         if looks_like(path, head):
             return describe(path)
     return reader_for(path).describe_file(path)
@@ -178,9 +182,11 @@ def _finish(out: list[str], problems: list[str]) -> tuple[str, bool]:
 
 
 def _check_overlaps(run, frame: Frame) -> list[str]:
-    """-limit < delta <= min(r1, r2) for every contact (first offending row of each kind), with limit the largest
-    gap at which the contact's law acts (0: delta > 0, ``ContactLaw.separation_limit``)."""
+    """-limit < delta <= its law's largest overlap for every contact (first offending row of each kind), with
+    limit the largest gap at which the contact's law acts (0: delta > 0, ``ContactLaw.separation_limit``) and
+    the largest overlap as the validation has it (:func:`demsplit.validate.overlap_limit`)."""
     from .physics.partition import law_groups
+    from .validate import overlap_limit
 
     c = frame.contacts
     delta = c["delta"]
@@ -190,7 +196,8 @@ def _check_overlaps(run, frame: Frame) -> list[str]:
     problems = []
     for bad, what in ((~(delta > -limit), "overlap delta <= 0 (not in contact)" if not limit.any() else
                        "a gap -delta at or beyond the largest its law acts across (0 but for a liquid bridge)"),
-                      (delta > np.minimum(c["r1"], c["r2"]), "overlap larger than the smaller radius")):
+                      (delta > overlap_limit(c), "overlap larger than the smaller radius (or the largest its law "
+                                                 "allows)")):
         if bad.any():
             row = int(np.flatnonzero(bad)[0])
             who = (f"particles {int(c['id1'][row])}-{int(c['id2'][row])}" if c["wall"][row] < 0

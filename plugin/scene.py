@@ -137,8 +137,10 @@ class Scene:
     @property
     def single_material(self) -> bool:
         """True when every type (walls included) has the same E and nu, so
-        every share is exactly 1/2 and no per-contact lookup is needed."""
-        return len(set(self.materials.values())) == 1
+        every share is exactly 1/2 and no per-contact lookup is needed. A wall
+        whose type has no material makes it False: the lookup then names it,
+        instead of the wall getting the particles' half."""
+        return len(set(self.materials.values())) == 1 and all(w.type in self.materials for w in self.walls)
 
     def material_tables(self) -> tuple[np.ndarray, np.ndarray]:
         """Dense lookup tables ``E[type]``, ``nu[type]`` (NaN where no material)."""

@@ -15,7 +15,9 @@ the file, the timestep, the table, the column and the row. The checks:
 * radius, r1, r2 > 0; stored stiffnesses (``kn ks kno kso``) >= 0; the normal
   is a unit vector (to 1e-5, the precision of ``%g`` exports);
 * the box is finite with lo < hi; the frame's time, when known, is finite and >= 0;
-* an overlap is not larger than the smaller of the two radii.
+* an overlap is not larger than the one its law allows: the contacts' ``overlap_limit`` column, which a
+  reader sets from the law (:meth:`~demsplit.physics.laws.ContactLaw.overlap_limit`: a JCFpm smooth joint,
+  r1 + r2), else the smaller of the two radii.
 
 :func:`typed_columns` is the same layer one step earlier, for a reader's raw
 records (a YADE snapshot's tables, before the reader combines their columns):
@@ -39,10 +41,13 @@ from .frame import Frame, Table
 INTEGER_COLUMNS = {"id": np.int64, "type": np.int32, "clump": np.int64, "id1": np.int64, "id2": np.int64,
                    "wall": np.int64, "type1": np.int64, "type2": np.int64, "history_unknown": np.int8}
 """Integer columns and their canonical dtypes; every other column is a real (float64)."""
-POSITIVE = ("radius", "r1", "r2")
 NOT_NEGATIVE = ("kn", "ks", "kno", "kso", "kr", "ktw", "mb", "mtw", "mass")
 MAY_BE_INFINITE = ("r2",)  # a plane: R = inf
 UNIT_TOLERANCE = 1e-5
+OVERLAP_LIMIT = "overlap_limit"
+"""Contact column (m): the largest overlap each contact's law allows, where a reader has it from the law;
+without it, the smaller radius (:func:`overlap_limit`)."""
+POSITIVE = ("radius", "r1", "r2", OVERLAP_LIMIT)
 
 
 def validated_frame(frame: Frame) -> Frame:
@@ -124,14 +129,22 @@ def _refuse(bad: np.ndarray, table: str, col: str, values: np.ndarray, what: str
 def _check_geometry(c: Table, where: dict) -> None:
     norm = np.sqrt(c["nx"] ** 2 + c["ny"] ** 2 + c["nz"] ** 2)
     _refuse(np.abs(norm - 1.0) > UNIT_TOLERANCE, "contacts", "|n|", norm, "is not a unit normal", c, where)
-    too_deep = c["delta"] > np.minimum(c["r1"], c["r2"])
+    limit = overlap_limit(c)
+    too_deep = c["delta"] > limit
     if too_deep.any():
         row = int(np.flatnonzero(too_deep)[0])
+        what = "the largest its law allows" if OVERLAP_LIMIT in c else "its smaller radius"
         raise ContactError(
             f"{_who('contacts', c, row)} (row {row}) has an overlap of {float(c['delta'][row]):g} m, larger than "
-            f"its smaller radius ({float(min(c['r1'][row], c['r2'][row])):g} m): not a plausible DEM contact; "
+            f"{what} ({float(limit[row]):g} m): not a plausible DEM contact; "
             f"{int(np.count_nonzero(too_deep))} such contact(s).", **where,
             fix="check that the contact and atom dumps belong to the same run and timestep.")
+
+
+def overlap_limit(c: Table) -> np.ndarray:
+    """The largest plausible overlap (m) of each contact: its ``overlap_limit`` column (its law's, set by the
+    reader), else the smaller of r1 and r2."""
+    return c[OVERLAP_LIMIT] if OVERLAP_LIMIT in c else np.minimum(c["r1"], c["r2"])
 
 
 def check_finite_energies(u: np.ndarray, contacts: Table, *, file: str | None, step: int) -> None:

@@ -1,10 +1,10 @@
 """The YADE side of demsplit: a full-precision snapshot exporter that runs
 inside a YADE script.
 
-Use it from a ``PyRunner`` placed between ``InteractionLoop`` and
-``NewtonIntegrator``, so that geometry, forces and positions are of the same
-instant (a PyRunner at the end of ``O.engines`` sees positions already moved
-to t + dt)::
+Use it from a ``PyRunner``, best placed between ``InteractionLoop`` and
+``NewtonIntegrator``, where geometry, forces and positions are of the same
+instant (from a PyRunner after the integrator, the reader steps the positions
+back to the forces' instant)::
 
     import site; site.addsitedir("<site-packages of the Python where demsplit is installed>")
     import demsplit.yade
@@ -13,9 +13,10 @@ to t + dt)::
                  PyRunner(command='demsplit.yade.snapshot("run.h5")', iterPeriod=1000),
                  NewtonIntegrator(...)]
 
-Each call appends one snapshot (bodies, real interactions, the Ip2/Law2
-functors and their attributes, the periodic cell, ``O.energy`` and the laws'
-own elastic energies for validation) to one file. The file is HDF5 when
+Each call appends one snapshot (bodies, real interactions with the attributes
+of their physics their law declares, every material, inline ones included,
+the Ip2/Law2 functors and their attributes, the periodic cell, ``O.energy``
+and the laws' own elastic energies for validation) to one file. The file is HDF5 when
 ``h5py`` is importable, otherwise an append-only stream of ``.npy`` records
 that needs nothing but numpy; :func:`demsplit.readers.yade_snapshot.open_yade_snapshot`
 reads both. Reals are stored as float64; in high-precision builds (mpmath
@@ -40,7 +41,9 @@ import numpy as np
 from .errors import InputFormatError, TruncatedFileError
 
 FORMAT_NAME = "demsplit-yade-snapshot"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
+"""2: the physics' columns are those the laws declare (Mindlin's elastic shear force ``fsex fsey fsez``, ...),
+inline materials are listed, a state loaded with ``O.load`` says so. Version 1 files are read too."""
 
 HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 NPY_STREAM_MAGIC = b"DEMSPLIT-YADE-SNAPSHOT npy-stream v1\n"
@@ -105,31 +108,73 @@ def _engines(O) -> tuple[list[dict], dict]:
     return order, functors
 
 
+def _law_functors(O) -> list:
+    """The Law2 functors of the InteractionLoop(s)."""
+    return [f for e in O.engines if type(e).__name__ == "InteractionLoop" for f in e.lawDispatcher.functors]
+
+
 def _law_energies(O) -> dict:
     """The laws' own elastic energies (J), for validation: each registered law's
     ``simulator_energies`` (e.g. Mindlin's ``normElastEnergy()``)."""
     from .physics import laws
 
     out = {}
-    for e in O.engines:
-        if type(e).__name__ != "InteractionLoop":
-            continue
-        for f in e.lawDispatcher.functors:
-            key = YADE_PREFIX + type(f).__name__
-            if key in laws.supported():
-                for name, (method, _) in laws.law_class(key).simulator_energies.items():
-                    if hasattr(f, method):
-                        out[name] = float(getattr(f, method)())
+    for f in _law_functors(O):
+        key = YADE_PREFIX + type(f).__name__
+        if key in laws.supported():
+            for name, (method, _) in laws.law_class(key).simulator_energies.items():
+                if hasattr(f, method):
+                    out[name] = float(getattr(f, method)())
     return out
+
+
+def _phys_attributes(O) -> list:
+    """The interaction attributes to export: those each law of the InteractionLoop declares (its ``phys``;
+    a law demsplit does not have: the normal and shear springs), and those of the engines beside it (the
+    capillary force)."""
+    from .physics import laws
+    from .physics.laws._yade import ENGINE_PHYS, SPRINGS
+
+    found = []
+    for f in _law_functors(O):
+        key = YADE_PREFIX + type(f).__name__
+        found += getattr(laws.law_class(key), "phys", SPRINGS) if key in laws.supported() else SPRINGS
+    for e in O.engines:
+        found += ENGINE_PHYS.get(type(e).__name__, ())
+    return list(dict.fromkeys(found))
+
+
+def _materials(O) -> tuple[list[dict], dict]:
+    """Every material of the scene: ``O.materials`` (id = its index) and the materials of bodies made inline
+    (``material=FrictMat(...)`` in ``utils.sphere``/``facet``/``wall``, not in ``O.materials``, all with id -1),
+    numbered after them, one per distinct class and attributes, flagged ``inline``. Returns the list and
+    the id of each inline material by its key (:func:`_material_key`)."""
+    out = [{"class": type(m).__name__, **_plain(m.dict())} for m in O.materials]
+    inline: dict = {}
+    for b in O.bodies:
+        m = None if b is None else b.material
+        if m is None or m.id >= 0:
+            continue
+        key = _material_key(m)
+        if key not in inline:
+            inline[key] = len(out)
+            out.append({"class": type(m).__name__, **_plain(m.dict()), "id": len(out), "inline": True,
+                        "label": m.label or "inline %s of body %d" % (type(m).__name__, b.id)})
+    return out, inline
+
+
+def _material_key(m) -> str:
+    return json.dumps([type(m).__name__, _plain(m.dict())], sort_keys=True)
 
 
 def _vec(v) -> tuple[float, ...]:
     return tuple(float(x) for x in v)
 
 
-def _body_table(O) -> dict[str, np.ndarray]:
+def _body_table(O, inline: dict) -> dict[str, np.ndarray]:
     """One row per body. Positions are YADE's (unwrapped) ``state.pos`` and,
-    for periodic runs, ``O.cell.wrap(pos)``; facet vertices are global."""
+    for periodic runs, ``O.cell.wrap(pos)``; facet vertices are global; ``material`` is the material's id
+    in :func:`_materials` (``inline``: the ids of inline materials), -1 for a body without one."""
     periodic = bool(O.periodic)
     nan3 = (np.nan,) * 3
     rows = []
@@ -147,16 +192,16 @@ def _body_table(O) -> dict[str, np.ndarray]:
         else:
             verts = nan3 * 3
         rows.append((
-            b.id, kind, shape_class, getattr(mat, "id", -1),
+            b.id, kind, shape_class, -1 if mat is None else mat.id if mat.id >= 0 else inline[_material_key(mat)],
             float(getattr(mat, "young", np.nan)), float(getattr(mat, "poisson", np.nan)),
             float(getattr(mat, "density", np.nan)), radius,
             *_vec(pos), *_vec(O.cell.wrap(pos) if periodic else pos),
-            *_vec(b.state.vel), float(b.state.mass), *_vec(b.state.ori),
+            *_vec(b.state.vel), *_vec(b.state.angVel), float(b.state.mass), *_vec(b.state.ori),
             b.clumpId, bool(b.dynamic), axis, sense,
             *(_vec(b.shape.extents) if kind == "box" else nan3), *verts,
         ))
     cols = ("id kind shape_class material young poisson density radius x y z xw yw zw "
-            "vx vy vz mass qx qy qz qw clump dynamic wall_axis wall_sense ex ey ez "
+            "vx vy vz wx wy wz mass qx qy qz qw clump dynamic wall_axis wall_sense ex ey ez "
             "v0x v0y v0z v1x v1y v1z v2x v2y v2z").split()
     data = list(zip(*rows)) if rows else [()] * len(cols)
     dtypes = {"id": np.int64, "material": np.int64, "clump": np.int64, "dynamic": np.bool_,
@@ -164,30 +209,30 @@ def _body_table(O) -> dict[str, np.ndarray]:
     return {c: np.asarray(d, dtype=dtypes.get(c, np.float64)) for c, d in zip(cols, data)}
 
 
-def _interaction_table(O, high_precision: bool) -> dict[str, np.ndarray]:
+GEOMETRY_COLUMNS = ("id1 id2 geom_class phys_class depth nx ny nz cpx cpy cpz refR1 refR2 cdx cdy cdz "
+                    "iter_made_real").split()
+"""The interactions table's columns every interaction has (its ScGeom); the physics' columns follow, as the
+laws declare them (:class:`demsplit.physics.laws._yade.Phys`)."""
+
+
+def _interaction_table(O, high_precision: bool, attributes: list) -> dict[str, np.ndarray]:
     """One row per real interaction (``for i in O.interactions`` visits only
-    real ones), YADE's order of id1/id2 kept."""
+    real ones), YADE's order of id1/id2 kept: the geometry, then each of
+    ``attributes`` (NaN where an interaction's physics lacks it; a boolean as 0 or 1)."""
     rows, depth_text = [], []
-    nan = np.nan
+    nan, nan3 = np.nan, (np.nan,) * 3
     for i in O.interactions:
         g, p = i.geom, i.phys
         d = g.penetrationDepth
-        rows.append((
-            i.id1, i.id2, type(g).__name__, type(p).__name__, float(d),
-            *_vec(g.normal), *_vec(g.contactPoint), float(g.refR1), float(g.refR2),
-            *_vec(p.normalForce), *_vec(p.shearForce), float(p.kn), float(p.ks),
-            float(getattr(p, "kno", nan)), float(getattr(p, "kso", nan)),
-            *(int(c) for c in i.cellDist), i.iterMadeReal,
-            *_vec(getattr(p, "moment_bending", (nan,) * 3)), *_vec(getattr(p, "moment_twist", (nan,) * 3)),
-            float(getattr(p, "kr", nan)), float(getattr(p, "ktw", nan)),
-            float(getattr(p, "adhesionForce", nan)),
-            float(sum(float(x) ** 2 for x in p.fCap) ** 0.5) if hasattr(p, "fCap") else nan,  # |capillary force|
-        ))
+        row = [i.id1, i.id2, type(g).__name__, type(p).__name__, float(d),
+               *_vec(g.normal), *_vec(g.contactPoint), float(g.refR1), float(g.refR2),
+               *(int(c) for c in i.cellDist), i.iterMadeReal]
+        for a in attributes:
+            row += [float(getattr(p, a.yade, nan))] if a.shape == "scalar" else _vec(getattr(p, a.yade, nan3))
+        rows.append(row)
         if high_precision:
             depth_text.append(str(d))
-    cols = ("id1 id2 geom_class phys_class depth nx ny nz cpx cpy cpz refR1 refR2 "
-            "fnx fny fnz fsx fsy fsz kn ks kno kso cdx cdy cdz iter_made_real "
-            "mbx mby mbz mtwx mtwy mtwz kr ktw adhesion fcap").split()
+    cols = GEOMETRY_COLUMNS + [c for a in attributes for c in a.columns]
     data = list(zip(*rows)) if rows else [()] * len(cols)
     dtypes = {"id1": np.int64, "id2": np.int64, "cdx": np.int64, "cdy": np.int64, "cdz": np.int64,
               "iter_made_real": np.int64, "geom_class": "S32", "phys_class": "S32"}
@@ -197,15 +242,20 @@ def _interaction_table(O, high_precision: bool) -> dict[str, np.ndarray]:
     return table
 
 
-def collect(O=None, *, law_energies: bool = True) -> tuple[dict, dict[str, dict[str, np.ndarray]]]:
+def collect(O=None, *, law_energies: bool = True,
+            loaded: bool = False) -> tuple[dict, dict[str, dict[str, np.ndarray]]]:
     """The current state of YADE's ``O`` as ``(meta, tables)``.
 
     ``tables`` has ``bodies`` and ``interactions`` (column name -> array);
-    ``meta`` is JSON-able: iteration, time, dt, cell, materials, engines,
-    functors with their attributes, ``O.energy``, the laws' elastic energies
-    (``law_energies=False`` leaves them out: a state just loaded with ``O.load``
-    has functors without their scene until the next step, and YADE 2023.02a
-    crashes calling their energy functions), interaction counts and the build's precision.
+    ``meta`` is JSON-able: iteration, time, dt, cell, materials (inline ones
+    included, :func:`_materials`), engines, functors with their attributes,
+    ``O.energy``, the laws' elastic energies (``law_energies=False`` leaves them
+    out), interaction counts and the build's precision.
+
+    ``loaded``: the scene is a state just loaded with ``O.load`` (``meta["loaded_state"]``): its
+    ``penetrationDepth`` is NaN (YADE does not save it; the reader recovers it), and its law functors have
+    no scene until the next step (YADE 2023.02a crashes calling their energy functions), so the laws'
+    energies are left out.
     """
     import yade
     import yade.config
@@ -215,6 +265,7 @@ def collect(O=None, *, law_energies: bool = True) -> tuple[dict, dict[str, dict[
     name = str(getattr(yade.config, "highPrecisionName", "PrecisionDouble"))
     high_precision = name != "PrecisionDouble"
     engines, functors = _engines(O)
+    materials, inline = _materials(O)
     n_potential = len(O.interactions)
     n_real = O.interactions.countReal()
     meta = {
@@ -229,16 +280,19 @@ def collect(O=None, *, law_energies: bool = True) -> tuple[dict, dict[str, dict[
         "dt": float(O.dt),
         "periodic": bool(O.periodic),
         "hSize": _plain(O.cell.hSize) if O.periodic else None,
-        "materials": [{"class": type(m).__name__, **_plain(m.dict())} for m in O.materials],
+        "velGrad": _plain(O.cell.velGrad) if O.periodic else None,
+        "materials": materials,
         "engines": engines,
         "functors": functors,
         "energy": {k: float(v) for k, v in O.energy.items()},
         "track_energy": bool(O.trackEnergy),
-        "law_energies": _law_energies(O) if law_energies else {},
+        "law_energies": _law_energies(O) if law_energies and not loaded else {},
+        "loaded_state": loaded,
         "n_interactions_potential": n_potential,
         "n_interactions_real": n_real,
     }
-    tables = {"bodies": _body_table(O), "interactions": _interaction_table(O, high_precision)}
+    tables = {"bodies": _body_table(O, inline),
+              "interactions": _interaction_table(O, high_precision, _phys_attributes(O))}
     if len(tables["interactions"]["id1"]) != n_real:
         raise InputFormatError(
             f"iterating O.interactions gave {len(tables['interactions']['id1'])} interactions "

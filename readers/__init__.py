@@ -80,18 +80,26 @@ def reader_for(path: str | Path | None) -> type[Run]:
 
 
 def open_run(path: str | Path | list | None, **options) -> Run:
-    """Open a run (see the module docstring). ``options`` go to the reader. A list of paths is a run
-    of several files (YADE saved states).
+    """Open a run (see the module docstring). ``options`` go to the reader. A list of paths is one run of
+    several files, for a reader whose files are that (``Run.several_files``: YADE saved states).
 
     The returned run remembers ``(path, options)`` as ``run.spec`` so that
     worker processes can open the same run again.
     """
     if isinstance(path, (list, tuple)) and len(path) == 1:
         path = path[0]
-    if isinstance(path, (list, tuple)):  # several files: YADE saved states are the one run made of many files
-        from .yade_state import YadeStateRun
-
-        run = YadeStateRun.open([Path(p) for p in path], **options)
+    if isinstance(path, (list, tuple)):
+        paths = [Path(p) for p in path]
+        cls = reader_for(paths[0])
+        if not cls.several_files:
+            raise InputFormatError(f"several inputs were given, but {paths[0].name} is {cls.formats[0]}, which is "
+                                   "a run by itself.", file=paths[0],
+                                   fix="give one run (several files are one run only for YADE saved states).")
+        for other in paths[1:]:
+            if reader_for(other) is not cls:
+                raise InputFormatError(f"this input is not {cls.formats[0]}, as {paths[0].name} is.", file=other,
+                                       fix="give the files of one run.")
+        run = cls.open(paths, **options)
         run.spec = {"path": [str(p) for p in path], **options}
         return run
     run = reader_for(path).open(None if path is None else Path(path), **options)

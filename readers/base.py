@@ -72,14 +72,18 @@ OVERLAP_TOLERANCE = Option("overlap_tolerance", ("--overlap-tolerance",), "large
                            {"type": float, "metavar": "REL"})
 """The option of readers that may recompute overlaps from printed positions."""
 
+
 class Run(ABC):
     """A run opened for reading (see the module docstring).
 
     Class attributes a reader sets: ``format_name`` (its registry key),
-    ``formats`` (the inputs it accepts, in words, for messages and ``info``)
-    and ``priority`` (readers with a higher priority are asked first; a
+    ``formats`` (the inputs it accepts, in words, for messages and ``info``),
+    ``priority`` (readers with a higher priority are asked first; a
     reader whose ``detect`` is a weak guess, like "any text file is a script",
-    asks last).
+    asks last; one above 0 recognises its files by a signature and is asked
+    before ``info`` takes a compressed file for a dump) and ``several_files``
+    (several paths are one run: :func:`~demsplit.readers.open_run` hands it the
+    list, as YADE's saved states, one file per instant).
 
     Instance attributes every reader sets: ``scene``, ``steps`` (timestep of
     every readable frame, int64; frames ``len(steps)`` to ``len(self) - 1``, if
@@ -92,6 +96,7 @@ class Run(ABC):
     format_name: ClassVar[str]
     formats: ClassVar[tuple[str, ...]]
     priority: ClassVar[int] = 0
+    several_files: ClassVar[bool] = False
     cli_group: ClassVar[str] = ""
     cli_options: ClassVar[tuple[Option, ...]] = ()
 
@@ -122,6 +127,12 @@ class Run(ABC):
             raise InputFormatError(f"option(s) {unknown} do not apply to {cls.formats[0]}.", file=path,
                                    fix=f"leave them out; this reader takes {sorted(taken) or 'none'}.")
         return cls(path, **options)
+
+    @classmethod
+    def output_options(cls, output: Path) -> dict[str, Any]:
+        """Reader options for a run analysed into ``output`` (``demsplit run -o``), below the user's own: a
+        reader that converts its inputs keeps them next to the output. Default: none."""
+        return {}
 
     @classmethod
     def describe_file(cls, path: Path) -> str:

@@ -25,8 +25,10 @@ What the files hold (yade 2023.02a, py/export.py):
   body 1 and the centre of body 2 + hSize.cellDist (unwrapped, so consistent
   with each other), and the ``what`` cell fields. demsplit needs ``id1``,
   ``id2`` and reads, when present, ``penetrationDepth``, ``normal``,
-  ``refR1``, ``refR2``, ``kno``, ``kso``, ``kn``, ``ks``, ``normalForce``,
-  ``shearForce``, ``contactPoint``. Without ``what`` the file has no data.
+  ``refR1``, ``refR2``, ``contactPoint`` and the physics' attributes the law
+  reads, each in the field named as YADE's attribute (``kno``, ``kso``, ``kn``,
+  ``ks``, ``normalForce``, ``shearForce``; Hertz-Mindlin's ``shearElastic``; the
+  law's ``phys``). Without ``what`` the file has no data.
 """
 
 from __future__ import annotations
@@ -39,6 +41,7 @@ import numpy as np
 from demsplit.errors import InputFormatError, MaterialError, PrecisionError
 from demsplit.frame import Box, Frame, Table, describe_steps
 from demsplit.physics.laws import simulator_words
+from demsplit.physics.laws._yade import SCALAR, SPRINGS, Phys
 from demsplit.scene import ContactModel, Material, Scene, Wall
 
 from .base import MATERIALS, OVERLAP_TOLERANCE, Option, Run
@@ -237,7 +240,8 @@ def vtk_particles(spheres: VtkPolyData, *, default_type: int | None = None) -> T
 
 def vtk_frame(spheres_path: str | Path, interactions_path: str | Path | None = None, *,
               tolerance: float = 1e-3, step: int | None = None, default_type: int | None = None,
-              wall_ids: list[int] | None = None, box: Box | None = None) -> tuple[Frame, np.ndarray]:
+              wall_ids: list[int] | None = None, box: Box | None = None,
+              attributes: tuple[Phys, ...] = SPRINGS) -> tuple[Frame, np.ndarray]:
     """One Frame from VTKExporter's sphere file and (optionally) interaction file.
 
     ``delta`` is the dumped ``penetrationDepth`` field when present (``%g`` of
@@ -248,6 +252,8 @@ def vtk_frame(spheres_path: str | Path, interactions_path: str | Path | None = N
     ``refR1`` and ``refR2`` fields; their wall index is the position of the
     body id in ``wall_ids`` (default: the sorted non-sphere ids found).
     ``step`` defaults to the number in the file name (VTKExporter's numLabel).
+    ``attributes``: the interaction physics the run's law reads (its ``phys``), each taken from the field
+    named as YADE's attribute (``normalForce``, ``shearElastic``, ``kno``, ...) when the file has it.
     Returns the frame and the wall body ids (wall index k is body ``wall_ids[k]``).
     """
     spheres = read_vtk(spheres_path)
@@ -321,13 +327,13 @@ def vtk_frame(spheres_path: str | Path, interactions_path: str | Path | None = N
     t = {"id1": id1, "id2": id2, "delta": delta, "nx": normal[:, 0], "ny": normal[:, 1], "nz": normal[:, 2],
          "refR1": refR1, "refR2": refR2, "xa": xa[:, 0], "ya": xa[:, 1], "za": xa[:, 2],
          "xb": xb[:, 0], "yb": xb[:, 1], "zb": xb[:, 2]}
-    for vec, prefix in (("normalForce", "fn"), ("shearForce", "fs"), ("contactPoint", "cp")):
-        if vec in cdata:
-            t.update({prefix + a: cdata[vec][:, k] for k, a in enumerate("xyz")})
-    t.update({c: cdata[c] for c in ("kn", "ks", "kno", "kso") if c in cdata})
-    if "cpx" in t:
-        t["cpx"], t["cpy"], t["cpz"] = t.pop("cpx"), t.pop("cpy"), t.pop("cpz")
-    contacts = particle_first(t, sa, wall1, wall2)
+    if "contactPoint" in cdata:
+        t.update({"cp" + a: cdata["contactPoint"][:, k] for k, a in enumerate("xyz")})
+    for a in attributes:
+        if a.yade in cdata:
+            t.update({a.column: cdata[a.yade]} if a.shape == SCALAR else
+                     {c: cdata[a.yade][:, k] for k, c in enumerate(a.columns)})
+    contacts = particle_first(t, sa, wall1, wall2, attributes)
     types = particles["type"]
     contacts["type1"] = types[np.where(sa, ra, rb)]
     # wall types are not in the export: they come from the scene's wall list
@@ -476,7 +482,8 @@ class YadeVtkRun(Run):
 
     def frame(self, k: int) -> Frame:
         return vtk_frame(self._spheres[k], self._interactions(k), tolerance=self._tolerance,
-                         step=int(self.steps[k]), wall_ids=self._wall_ids)[0]
+                         step=int(self.steps[k]), wall_ids=self._wall_ids,
+                         attributes=self.scene.model.contact_law.phys)[0]
 
     def describe(self) -> dict[str, Any]:
         return {"kind": self.format_name, "spheres": [str(p) for p in self._spheres],

@@ -20,7 +20,9 @@ import io
 import json
 import math
 import zlib
+from collections.abc import Mapping
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -28,15 +30,16 @@ from demsplit.errors import (
     ContactError, DemsplitError, InputFormatError, MaterialError, TruncatedFileError, UnsupportedModelError, plain,
 )
 from demsplit.frame import Box, Frame, Table
-from demsplit.validate import typed_columns
 from demsplit.physics import laws as law_registry
+from demsplit.physics.laws._yade import ENGINE_PHYS, SCALAR, SPRINGS, VECTOR, Phys, YadeLaw, magnitude
 from demsplit.scene import ContactModel, Material, Scene, Wall
+from demsplit.validate import OVERLAP_LIMIT, typed_columns
 from demsplit.yade import (
     FORMAT_NAME, FORMAT_VERSION, HDF5_SIGNATURE, NPY_STREAM_MAGIC, RECORD_TAIL, YADE_PREFIX, npy_records,
     sniff_format,
 )
 
-from .base import Option, Run
+from .base import MATERIALS, Option, Run
 from .hdf5_inputs import refuse_foreign_storage
 from .lammps_input import excerpt
 
@@ -61,14 +64,14 @@ RawSnapshot = tuple[dict, dict[str, Table]]
 BODY_COLUMNS = {"id": "int", "kind": "text", "shape_class": "text", "material": "int", "radius": "real",
                 "x": "real", "y": "real", "z": "real", "xw": "real", "yw": "real", "zw": "real", "vx": "real",
                 "vy": "real", "vz": "real", "mass": "real", "clump": "int", "wall_axis": "int"}
+OPTIONAL_BODY_COLUMNS = {"wx": "real", "wy": "real", "wz": "real"}
+"""The angular velocity (rad/s), which steps a clump's members back along its rotation (format 2 on)."""
 INTERACTION_COLUMNS = {**{c: "int" for c in ("id1", "id2", "cdx", "cdy", "cdz")},
-                       **{c: "real" for c in ("depth", "nx", "ny", "nz", "cpx", "cpy", "cpz", "refR1", "refR2",
-                                              "fnx", "fny", "fnz", "fsx", "fsy", "fsz", "kn", "ks", "kno", "kso")}}
-OPTIONAL_INTERACTION_COLUMNS = {**{c: "real" for c in ("adhesion", "fcap", "mbx", "mby", "mbz", "mtwx", "mtwy",
-                                                       "mtwz", "kr", "ktw")}, "depth_text": "text"}
-"""The columns of a snapshot's tables this reader uses, and their kinds (demsplit.validate.typed_columns)."""
-MOMENT_COLUMNS = ("mbx", "mby", "mbz", "mtwx", "mtwy", "mtwz", "kr", "ktw")
-"""Optional interaction columns the exporter writes together (the laws with moment springs read them together)."""
+                       **{c: "real" for c in ("depth", "nx", "ny", "nz", "cpx", "cpy", "cpz", "refR1", "refR2")}}
+"""The columns of a snapshot's tables this reader uses, and their kinds (demsplit.validate.typed_columns):
+the bodies, and the geometry of every interaction; the columns of the interactions' physics are those its
+laws declare (:func:`phys_attributes`)."""
+OPTIONAL_INTERACTION_COLUMNS = {"depth_text": "text"}
 FIX_DAMAGED = ("the snapshot file is damaged or was not written by demsplit.yade.snapshot(): rewrite it (rerun the "
                "simulation).")
 
@@ -221,9 +224,9 @@ def _is_real(v) -> bool:
 def checked_meta(meta, *, path: Path, k: int) -> dict:
     """A snapshot's metadata, or the InputFormatError of the first entry this reader needs that is missing
     or of the wrong type: ``iter`` (an integer in [0, 2^63)), ``time`` (finite, >= 0), ``periodic`` (a
-    boolean) with ``hSize`` (nine finite numbers), ``materials`` (objects with an integer ``id``),
-    ``engines`` and ``functors.law`` (objects with a ``class`` name; a law's ``attrs`` an object), the
-    interaction counts (integers >= 0)."""
+    boolean) with ``hSize`` and, when given, ``velGrad`` (nine finite numbers), ``materials`` (objects with an
+    integer ``id``), ``engines``, ``functors.law`` and ``functors.phys`` (objects with a ``class`` name; a law's
+    ``attrs`` an object), the interaction counts (integers >= 0)."""
     def need(ok: bool, what: str) -> None:
         if not ok:
             raise InputFormatError(f"snapshot {k}: the metadata's {what}.", file=path, fix=FIX_DAMAGED)
@@ -237,10 +240,11 @@ def checked_meta(meta, *, path: Path, k: int) -> dict:
     need(_is_real(meta.get("time")) and meta["time"] >= 0, "'time' is not a finite time >= 0")
     need(isinstance(meta.get("periodic"), bool), "'periodic' is not true or false")
     if meta["periodic"]:
-        h = meta.get("hSize")
-        rows = h if isinstance(h, list) and all(isinstance(r, list) for r in h) else [h]
-        flat = [v for r in rows if isinstance(r, list) for v in r]
-        need(len(flat) == 9 and all(_is_real(v) for v in flat), "'hSize' is not a 3x3 matrix of finite numbers")
+        for key in ("hSize", "velGrad") if meta.get("velGrad") is not None else ("hSize",):
+            h = meta.get(key)
+            rows = h if isinstance(h, list) and all(isinstance(r, list) for r in h) else [h]
+            flat = [v for r in rows if isinstance(r, list) for v in r]
+            need(len(flat) == 9 and all(_is_real(v) for v in flat), f"{key!r} is not a 3x3 matrix of finite numbers")
     need(isinstance(meta.get("materials"), list) and all(isinstance(m, dict) and _is_int(m.get("id"))
                                                         for m in meta["materials"]),
          "'materials' is not a list of objects with an integer id")
@@ -248,6 +252,7 @@ def checked_meta(meta, *, path: Path, k: int) -> dict:
     functors = meta.get("functors")
     need(isinstance(functors, dict), "'functors' is not an object")
     named(functors.get("law"), "'functors.law'")
+    named(functors.get("phys", []), "'functors.phys'")
     need(all(isinstance(f.get("attrs", {}), dict) for f in functors["law"]), "law attrs are not an object")
     for key in ("n_interactions_potential", "n_interactions_real"):
         need(_is_int(meta.get(key)) and 0 <= meta[key] < 2**63, f"{key!r} is not a count")
@@ -255,14 +260,30 @@ def checked_meta(meta, *, path: Path, k: int) -> dict:
     return meta
 
 
+def phys_attributes(meta: dict) -> tuple[Phys, ...]:
+    """The interaction attributes the snapshot's Law2 functors declare (``phys`` of their laws; a law
+    demsplit does not have: the normal and shear springs), and those of the engines beside them."""
+    found: list[Phys] = []
+    for f in meta["functors"]["law"]:
+        model = LAW_MODELS.get(f["class"])
+        found += model.contact_law.phys if model is not None else SPRINGS
+    for e in meta["engines"]:
+        found += ENGINE_PHYS.get(e["class"], ())
+    return tuple(dict.fromkeys(found))
+
+
 def checked_tables(tables: dict, meta: dict, *, path: Path, k: int) -> dict[str, Table]:
-    """A snapshot's tables with the columns this reader uses, typed (:func:`demsplit.validate.typed_columns`);
-    the moment columns (:data:`MOMENT_COLUMNS`) all or none."""
+    """A snapshot's tables with the columns this reader uses, typed (:func:`demsplit.validate.typed_columns`):
+    the geometry, and of each attribute the laws declare (:func:`phys_attributes`) all its columns or none (a
+    file of an older format may lack an attribute; the law then says which energy it cannot compute)."""
     where = {"file": path, "step": meta["iter"], "where": f"snapshot {k}"}
     inter = tables.get("interactions")
-    present = [c for c in MOMENT_COLUMNS if isinstance(inter, dict) and c in inter]
-    schema = {**INTERACTION_COLUMNS, **({c: "real" for c in MOMENT_COLUMNS} if present else {})}
-    return {"bodies": typed_columns(tables.get("bodies"), BODY_COLUMNS, name="bodies", **where),
+    schema = dict(INTERACTION_COLUMNS)
+    for a in phys_attributes(meta):
+        if isinstance(inter, dict) and any(c in inter for c in a.columns):
+            schema.update({c: "real" for c in a.columns})
+    return {"bodies": typed_columns(tables.get("bodies"), BODY_COLUMNS, name="bodies",
+                                    optional=OPTIONAL_BODY_COLUMNS, **where),
             "interactions": typed_columns(inter, schema, name="interactions", optional=OPTIONAL_INTERACTION_COLUMNS,
                                           **where)}
 
@@ -283,11 +304,24 @@ def _text(col: np.ndarray) -> np.ndarray:
     return col.astype(str)
 
 
+@dataclass
+class SceneParts:
+    """What a snapshot's metadata gives: the scene, the materials the split cannot use (type -> why) and what
+    the reader says about the materials."""
+
+    scene: Scene
+    unusable: dict[int, str]
+    notes: list[str]
+
+
 def scene_from_snapshot(meta: dict, bodies: Table, *, path: Path, step: int | None = None,
-                        plane_as_plane: bool = False) -> Scene:
-    """Materials (keyed by YADE material id), contact model and walls of a snapshot. With
-    ``plane_as_plane`` a law that stores its normal stiffness rebuilds it from the materials
-    and the radii instead (its ``normal_stiffness`` parameter)."""
+                        plane_as_plane: bool = False, materials: Mapping[int, Material] | None = None) -> SceneParts:
+    """Materials (keyed by the material id of the snapshot: YADE's, then the inline ones), contact model and
+    walls of a snapshot. Each material's moduli for the split are the law's reading of it
+    (:meth:`~demsplit.physics.laws._yade.YadeLaw.split_moduli`) unless ``materials`` (``--material``) gives
+    them; a material the law gives none for is refused when a contact touches it. With ``plane_as_plane`` a
+    law that stores its normal stiffness rebuilds it from the materials and the radii instead (its
+    ``normal_stiffness`` parameter)."""
     laws = [f["class"] for f in meta["functors"]["law"]]
     known = [law for law in laws if law in LAW_MODELS]
     if len(known) != 1 or len(laws) != 1:
@@ -295,22 +329,13 @@ def scene_from_snapshot(meta: dict, bodies: Table, *, path: Path, step: int | No
             f"the InteractionLoop has Law2 functor(s) {laws}; demsplit reads runs with exactly one of "
             f"{sorted(LAW_MODELS)}.", file=path, step=step,
             fix=f"use {' or '.join(sorted(LAW_MODELS))}.")
-    materials = {}
-    for m in meta["materials"]:
-        if "young" not in m or "poisson" not in m:
-            continue
-        if not (_is_real(m["young"]) and _is_real(m["poisson"])):
-            raise MaterialError(f"YADE material {m['id']}: young {excerpt(repr(m['young']))} and poisson "
-                                f"{excerpt(repr(m['poisson']))} are not both finite numbers.", file=path, step=step,
-                                fix=FIX_DAMAGED)
-        try:
-            materials[int(m["id"])] = Material(E=float(m["young"]), nu=float(m["poisson"]),
-                                               name=str(m.get("label") or ""))
-        except MaterialError as err:
-            raise MaterialError(
-                f"YADE material {m['id']} ({m.get('label', '')!r}): {err.message}", file=path, step=step,
-                fix="CundallStrack's 'poisson' is ks/kn, not a Poisson ratio; demsplit needs it in (-1, 0.5].",
-            ) from None
+    model = LAW_MODELS[known[0]]
+    attrs = meta["functors"]["law"][0].get("attrs", {})
+    given = {name: attrs[attr] for attr, name in model.contact_law.simulator_parameters.items() if attr in attrs}
+    if given:  # the functor's own settings (Mindlin's includeAdhesion, ...)
+        model = ContactModel(model.law, {**model.params, **given})
+    law = model.contact_law
+    scene_materials, unusable, notes = _split_materials(meta, law, materials or {}, path=path, step=step)
     kinds = _text(bodies["kind"])
     walls = []
     for row in np.flatnonzero(np.isin(kinds, list(WALL_KINDS))):
@@ -322,14 +347,9 @@ def scene_from_snapshot(meta: dict, bodies: Table, *, path: Path, step: int | No
         pos = (bodies["x"][row], bodies["y"][row], bodies["z"][row])[axis]
         walls.append(Wall(name=f"body {int(bodies['id'][row])} ({kind})", kind=kind,
                           type=int(bodies["material"][row]), axis=axis, position=float(pos)))
-    model = LAW_MODELS[known[0]]
-    attrs = meta["functors"]["law"][0].get("attrs", {})
-    given = {name: attrs[attr] for attr, name in model.contact_law.simulator_parameters.items() if attr in attrs}
-    if given:  # the functor's own settings (Mindlin's includeAdhesion, ...)
-        model = ContactModel(model.law, {**model.params, **given})
-    if plane_as_plane and "normal_stiffness" in model.contact_law.parameters:
+    if plane_as_plane and "normal_stiffness" in law.parameters:
         model = ContactModel(model.law, {**model.params, "normal_stiffness": "materials"})
-    elif plane_as_plane and "kno" in model.contact_law.contact_columns:
+    elif plane_as_plane and "kno" in law.contact_columns:
         raise UnsupportedModelError(
             f"--plane-as-plane rebuilds a plane contact's Hertz stiffness from the materials, but "
             f"{known[0]} reads the stiffness kno that YADE stored for each interaction, which YADE computed "
@@ -337,17 +357,59 @@ def scene_from_snapshot(meta: dict, bodies: Table, *, path: Path, step: int | No
             file=path, step=step,
             fix="run without --plane-as-plane: the plane contacts are then analysed as YADE computed them "
                 "(a sphere of the particle's radius).")
-    return Scene(materials=materials, model=model, walls=walls,
-                 source=f"{path} (YADE {meta.get('yade_version', '?')}, {meta.get('precision_name', '?')})")
+    scene = Scene(materials=scene_materials, model=model, walls=walls,
+                  source=f"{path} (YADE {meta.get('yade_version', '?')}, {meta.get('precision_name', '?')})")
+    return SceneParts(scene, unusable, notes)
 
 
-def _cell_box(meta: dict) -> Box | None:
-    """The periodic cell as a Box (origin 0, LAMMPS tilt from an upper-triangular hSize)."""
-    if not meta["periodic"]:
+def _split_materials(meta: dict, law, given: Mapping[int, Material], *, path: Path,
+                     step: int | None) -> tuple[dict[int, Material], dict[int, str], list[str]]:
+    """The split's moduli of every material of the snapshot: given (``--material``), else the law's reading
+    of it; the materials the law gives none for, with why; a note on the law's reading when it is not the
+    materials' own (E, nu)."""
+    ids = {int(m["id"]) for m in meta["materials"]}
+    unknown = sorted(set(given) - ids)
+    if unknown:
+        raise MaterialError(f"--material names material id(s) {unknown}, which the run does not have (it has "
+                            f"{sorted(ids)}).", file=path, step=step,
+                            fix="give the ids 'demsplit info' lists for the run's materials.")
+    materials, unusable, read = {}, {}, False
+    for m in meta["materials"]:
+        t, name = int(m["id"]), str(m.get("label") or "")
+        if not all(isinstance(m.get(a, 0.0), (int, float)) and not isinstance(m.get(a), bool)
+                   for a in ("young", "poisson")):
+            raise MaterialError(f"YADE material {t}: young {excerpt(repr(m.get('young')))} and poisson "
+                                f"{excerpt(repr(m.get('poisson')))} are not both finite numbers.", file=path,
+                                step=step, fix=FIX_DAMAGED)
+        if t in given:
+            materials[t] = Material(given[t].E, given[t].nu, name=name or given[t].name)
+            continue
+        moduli = law.split_moduli(m, meta["functors"].get("phys", []))
+        what = f"YADE material {t} ({name or m.get('class', '?')})"
+        if isinstance(moduli, str):
+            unusable[t] = f"{what}: {moduli}"
+            continue
+        try:
+            materials[t] = Material(*moduli, name=name)
+        except MaterialError as err:
+            unusable[t] = f"{what}: {err.message}"
+            continue
+        read = True
+    note = law.moduli_note() if read else None
+    return materials, unusable, [note] if note else []
+
+
+def _cell_box(hsize: np.ndarray | None) -> Box | None:
+    """The periodic cell of column vectors ``hsize`` as a Box (origin 0, LAMMPS tilt from an upper-triangular
+    hSize); None for a run that is not periodic."""
+    if hsize is None:
         return None
-    h = np.asarray(meta["hSize"], dtype=np.float64).reshape(3, 3)
-    return Box(lo=np.zeros(3), hi=np.diag(h).copy(), periodic=(True, True, True),
-               tilt=np.array([h[0, 1], h[0, 2], h[1, 2]]))
+    return Box(lo=np.zeros(3), hi=np.diag(hsize).copy(), periodic=(True, True, True),
+               tilt=np.array([hsize[0, 1], hsize[0, 2], hsize[1, 2]]))
+
+
+def _matrix(value) -> np.ndarray:
+    return np.asarray(value, dtype=np.float64).reshape(3, 3)
 
 
 CAPILLARY_ENGINE = "Law2_ScGeom_CapillaryPhys_Capillarity"
@@ -357,11 +419,15 @@ def _capillary_note(meta: dict, inter: Table, path: Path, step: int) -> str | No
     """What the capillary law adds: nothing to say without it; a note when every capillary force is 0
     (YADE found no capillary tables M(r=1)...M(r=10) in its working directory, and Debian ships none);
     an error when there are capillary forces, whose work (an integral over the meniscus tables) the
-    snapshot does not hold."""
+    snapshot does not hold, or when the snapshot does not hold them at all."""
     if CAPILLARY_ENGINE not in [e["class"] for e in meta["engines"]]:
         return None
-    fcap = inter["fcap"] if "fcap" in inter else np.zeros(0)
-    if np.any(np.abs(np.nan_to_num(fcap)) > 0):
+    if "fcapx" not in inter:
+        raise UnsupportedModelError(
+            f"the run has {CAPILLARY_ENGINE}, but the snapshot holds no capillary forces (fCap), so demsplit "
+            "cannot tell whether the bridges hold energy.", file=path, step=step,
+            fix="write the snapshot again with this demsplit (demsplit.yade.snapshot exports fCap).")
+    if np.any(np.nan_to_num(magnitude(inter, "fcap")) > 0):
         raise UnsupportedModelError(
             f"the run has {CAPILLARY_ENGINE} with nonzero capillary forces; their work (the cohesion energy "
             "u_adh) needs YADE's meniscus tables, which demsplit does not read.", file=path, step=step,
@@ -371,34 +437,110 @@ def _capillary_note(meta: dict, inter: Table, path: Path, step: int) -> str | No
             "force and no energy")
 
 
-def _timing_note(meta: dict) -> str | None:
-    """Warn when no PyRunner sits between InteractionLoop and NewtonIntegrator
-    (the snapshot cannot tell which PyRunner called it; any one there runs at
-    the consistent instant)."""
-    names = [e["class"] for e in meta["engines"]]
-    if "InteractionLoop" not in names or "NewtonIntegrator" not in names:
-        return None
-    lo, hi = names.index("InteractionLoop"), names.index("NewtonIntegrator")
-    if any(e["class"] == "PyRunner" for e in meta["engines"][lo + 1:hi]):
-        return None
-    return ("no PyRunner sits between InteractionLoop and NewtonIntegrator: "
-            "positions (x1, contact point) may be one step ahead of delta and the normal")
+INSTANT_TOLERANCE = 1e-6
+"""The largest distance (relative to the sphere's radius) of a sphere's centre from the line through YADE's
+contact point along its normal at which an overlap is still taken from the positions (:func:`_line_residual`):
+at the positions the geometry was computed from it is rounding (1e-16 |x|/R), one step off it is v dt/R."""
 
 
-def particle_first(t: Table, sphere1: np.ndarray, wall1: np.ndarray, wall2: np.ndarray) -> Table:
+def _line_residual(pos: np.ndarray, inter: Table, sphere1: np.ndarray, shift: np.ndarray, ra: np.ndarray,
+                   rb: np.ndarray) -> np.ndarray:
+    """|(x - cp) x n| / R per interaction: how far the centre x of a sphere of it (body 2 at pos + hSize.cellDist)
+    lies from the line through YADE's contact point cp along its normal n, relative to its radius R, the larger
+    of the two spheres' of a pair. Every Ig2 functor puts the spheres' centres on that line (Sphere-Sphere:
+    cp = x1 + (r1 - delta/2) n, x2 + shift = x1 + |x2 + shift - x1| n; Facet and Box: cp = x2 - (R - delta/2) n;
+    Wall: cp is x2 projected onto the wall), so it is 0, up to rounding, at the positions and the periodic cell
+    the geometry was computed from."""
+    n = np.stack([inter["nx"], inter["ny"], inter["nz"]], axis=-1)
+    cp = np.stack([inter["cpx"], inter["cpy"], inter["cpz"]], axis=-1)
+    second = np.linalg.norm(np.cross(pos[rb] + shift - cp, n), axis=1) / inter["refR2"]
+    first = np.linalg.norm(np.cross(pos[ra] - cp, n), axis=1) / inter["refR1"]
+    return np.where(sphere1, np.maximum(first, second), second)
+
+
+def _step_move(bodies: Table, pos: np.ndarray, dt: float, rows) -> np.ndarray:
+    """How far NewtonIntegrator moved each body in its last step: v dt (it moves a body by its velocity after
+    the step's update, which YADE saves); a clump member along its clump's rotation, x_m - (X_c - V_c dt +
+    Rot(-w_c dt)(x_m - X_c)) with the clump's centre X_c, velocity V_c and angular velocity w_c (Clump::moveMembers
+    places the members from the clump), exact to the rotation's second order. ``rows``: body ids -> rows."""
+    move = np.stack([bodies["vx"], bodies["vy"], bodies["vz"]], axis=-1) * dt
+    members = np.flatnonzero((bodies["clump"] >= 0) & (_text(bodies["kind"]) == "sphere"))
+    if "wx" not in bodies or not len(members):
+        return move
+    c = rows(bodies["clump"][members], "clumpId")
+    r = pos[members] - pos[c]
+    w = np.stack([bodies["wx"], bodies["wy"], bodies["wz"]], axis=-1)[c] * -dt  # the rotation to undo
+    angle = np.linalg.norm(w, axis=1)
+    axis = np.divide(w, angle[:, None], out=np.zeros_like(w), where=angle[:, None] > 0)
+    cos, sin = np.cos(angle)[:, None], np.sin(angle)[:, None]
+    rotated = (r * cos + np.cross(axis, r) * sin
+               + axis * np.einsum("ij,ij->i", axis, r)[:, None] * (1.0 - cos))  # Rodrigues' formula
+    move[members] = pos[members] - (pos[c] - move[c] + rotated)
+    return move
+
+
+def _forces_instant(meta: dict, inter: Table, pos: np.ndarray, move: np.ndarray, sphere1: np.ndarray,
+                    ra: np.ndarray, rb: np.ndarray) -> tuple[bool, np.ndarray | None, np.ndarray, np.ndarray]:
+    """Which positions and periodic cell the saved geometry was computed from: the saved ones, or those one
+    NewtonIntegrator step before (``pos - move``, a snapshot or state saved after the integrator moved the
+    bodies); the saved cell ``hSize``, or the one a step before, (I + dt velGrad)^-1 hSize (saved after YADE
+    moved the cell at the start of the next step, before its InteractionLoop; ``O.load`` loses
+    ``prevHSize``). The candidate whose sphere centres lie closest to their contact
+    lines (:func:`_line_residual`) wins; ties (bodies at rest) keep the saved ones. Returns (stepped back,
+    the cell (None: not periodic), each interaction's shift hSize.cellDist of body 2, the residuals)."""
+    cells: list[np.ndarray | None] = [None]
+    if meta["periodic"]:
+        cells = [_matrix(meta["hSize"])]
+        if meta.get("velGrad") is not None and np.any(_matrix(meta["velGrad"])):  # Cell::integrateAndUpdate undone
+            cells.append(np.linalg.solve(np.eye(3) + float(meta["dt"]) * _matrix(meta["velGrad"]), cells[0]))
+    dist = np.stack([inter["cdx"], inter["cdy"], inter["cdz"]], axis=-1).astype(np.float64)
+    best = None
+    for stepped in (False, True):
+        for h in cells:
+            shift = np.zeros((len(ra), 3)) if h is None else dist @ h.T
+            r = _line_residual(pos - move if stepped else pos, inter, sphere1, shift, ra, rb)
+            score = float(np.sum(r * r))
+            if best is None or score < best[0]:
+                best = (score, stepped, h, shift, r)
+    return best[1], best[2], best[3], best[4]
+
+
+def _depth_from_geometry(pos: np.ndarray, inter: Table, kind1: np.ndarray, sphere1: np.ndarray,
+                         shift: np.ndarray, ra: np.ndarray, rb: np.ndarray) -> np.ndarray:
+    """penetrationDepth (m) as YADE's Ig2 functors compute it from the positions ``pos`` (those the geometry
+    was computed from) and the saved contact point and normal: r1 + r2 - |x2 + hSize.cellDist - x1| for two
+    spheres (Ig2_Sphere_Sphere_ScGeom); from the sphere's centre x_s along the normal n, R - |(x_s - cp).n| on a
+    Wall and 2 (R - (x_s - cp).n) on a Facet or a Box (whose contact point is the midpoint of the overlap)."""
+    pair = sphere1 & (kind1 == "sphere")
+    gap = np.linalg.norm(pos[rb] + shift - pos[ra], axis=1)
+    n = np.stack([inter["nx"], inter["ny"], inter["nz"]], axis=-1)
+    cp = np.stack([inter["cpx"], inter["cpy"], inter["cpz"]], axis=-1)
+    along = np.einsum("ij,ij->i", pos[rb] + shift - cp, n)  # the sphere is body 2 (YADE's order for a wall)
+    radius = inter["refR2"]
+    plane = np.where(kind1 == "wall", radius - np.abs(along), 2.0 * (radius - along))
+    return np.where(pair, inter["refR1"] + inter["refR2"] - gap, plane)
+
+
+def _wrapped(x: np.ndarray, hsize: np.ndarray) -> np.ndarray:
+    """Positions (n, 3) wrapped into the periodic cell of column vectors ``hsize`` (YADE's ``O.cell.wrap``)."""
+    frac = np.linalg.solve(hsize, x.T).T
+    return (frac - np.floor(frac)) @ hsize.T
+
+
+def particle_first(t: Table, sphere1: np.ndarray, wall1: np.ndarray, wall2: np.ndarray,
+                   attributes: tuple[Phys, ...] = ()) -> Table:
     """Canonical contacts (:mod:`demsplit.frame`) from interactions in YADE's order.
 
     ``t`` holds ``id1 id2 delta nx ny nz refR1 refR2``, the centres ``xa ya za``
     of body 1 and ``xb yb zb`` of body 2 in the frame of the normal (body 2
-    shifted by hSize.cellDist), and optionally ``type_a type_b``, ``fnx fny
-    fnz`` (normalForce), ``fsx fsy fsz`` (shearForce), ``kn ks kno kso``,
-    ``cpx cpy cpz``, ``mb mtw`` (magnitudes of CohFrictPhys' bending and twisting
-    moments, N m) with ``kr ktw`` (their stiffnesses, N m/rad). ``sphere1`` says whether YADE's body 1 is a sphere;
+    shifted by hSize.cellDist), and optionally ``type_a type_b``, ``cpx cpy cpz``
+    and the columns of the physics' ``attributes`` (:class:`~demsplit.physics.laws._yade.Phys`), which give the
+    contact columns the laws read. ``sphere1`` says whether YADE's body 1 is a sphere;
     ``wall1``/``wall2`` give the wall index of each body (-1 for a sphere).
 
     Where body 1 is a wall, facet or box (YADE's usual order), the particle
-    (body 2) becomes body 1: the normal and the shear force change sign
-    (YADE's shearForce acts on its body 2), refR1/refR2 trade places.
+    (body 2) becomes body 1: the normal and a vector attribute (a force on YADE's body 2) change sign,
+    refR1/refR2 trade places.
     """
     swap = ~np.asarray(sphere1, dtype=bool)
     sign = np.where(swap, -1.0, 1.0)
@@ -419,13 +561,18 @@ def particle_first(t: Table, sphere1: np.ndarray, wall1: np.ndarray, wall2: np.n
     if "type_a" in t:
         out["type1"] = pick("type_a", "type_b").astype(np.int32)
         out["type2"] = pick("type_b", "type_a").astype(np.int32)
-    if "fnx" in t:
-        out["fn"] = np.sqrt(t["fnx"] ** 2 + t["fny"] ** 2 + t["fnz"] ** 2)
-    if "fsx" in t:
-        out["ftx"], out["fty"], out["ftz"] = sign * t["fsx"], sign * t["fsy"], sign * t["fsz"]
-    for c in ("kn", "ks", "kno", "kso", "cpx", "cpy", "cpz", "mb", "mtw", "kr", "ktw", "adhesion_force"):
+    for c in ("cpx", "cpy", "cpz"):
         if c in t:
             out[c] = np.asarray(t[c], dtype=np.float64)
+    for a in attributes:
+        if a.contact is None or not all(c in t and _written(t[c]) for c in a.columns):
+            continue
+        if a.shape == SCALAR:
+            out[a.contact] = np.asarray(t[a.column], dtype=np.float64)
+        elif a.shape == VECTOR:
+            out.update({a.contact + x: sign * t[a.column + x] for x in "xyz"})
+        else:
+            out[a.contact] = magnitude(t, a.column)
     return out
 
 
@@ -438,10 +585,18 @@ def _written(col: np.ndarray) -> bool:
 
 
 def frame_from_snapshot(meta: dict, tables: dict[str, Table], scene_walls: dict[int, int], *,
-                        path: Path, plane_as_plane: bool = False,
-                        keep_separated: bool = False) -> tuple[Frame, np.ndarray]:
+                        path: Path, law: YadeLaw, plane_as_plane: bool = False,
+                        unusable: Mapping[int, str] | None = None) -> tuple[Frame, np.ndarray]:
     """One Frame from one raw snapshot, and the rows of the interactions table
-    that became contacts (to align per-interaction extras such as ``depth_text``)."""
+    that became contacts (to align per-interaction extras such as ``depth_text``).
+
+    The frame is of the instant of the interactions' forces: where the saved positions are one
+    NewtonIntegrator step after it (a snapshot or a state saved after the integrator moved the bodies), they
+    are stepped back by v dt (:func:`_line_residual` tells which). A state loaded with ``O.load`` has no
+    penetrationDepth: the law gives it from its stored physics (:meth:`YadeLaw.depth_from_phys`), the
+    geometry at that instant where it does not (:func:`_depth_from_geometry`). ``law``: the scene's law;
+    ``unusable``: the materials the split has no moduli for (type -> why), refused when a contact touches one.
+    """
     step = int(meta["iter"])
     bodies, inter = tables["bodies"], tables["interactions"]
     kinds = _text(bodies["kind"])
@@ -449,18 +604,6 @@ def frame_from_snapshot(meta: dict, tables: dict[str, Table], scene_walls: dict[
     order = np.argsort(ids, kind="stable")  # ids present, sorted: memory by the bodies, not the largest id
     sorted_ids = ids[order]
     periodic = bool(meta["periodic"])
-
-    sphere = kinds == "sphere"
-    particles = {
-        "id": ids[sphere].astype(np.int64),
-        "type": bodies["material"][sphere].astype(np.int32),
-        "x": bodies["xw" if periodic else "x"][sphere], "y": bodies["yw" if periodic else "y"][sphere],
-        "z": bodies["zw" if periodic else "z"][sphere],
-        "radius": bodies["radius"][sphere],
-        "mass": bodies["mass"][sphere],
-        "vx": bodies["vx"][sphere], "vy": bodies["vy"][sphere], "vz": bodies["vz"][sphere],
-        "clump": bodies["clump"][sphere].astype(np.int64),
-    }
 
     def rows(body_ids: np.ndarray, which: str) -> np.ndarray:
         at = np.clip(np.searchsorted(sorted_ids, body_ids), 0, max(len(ids) - 1, 0))
@@ -483,62 +626,102 @@ def frame_from_snapshot(meta: dict, tables: dict[str, Table], scene_walls: dict[
             file=path, step=step,
             fix="demsplit reads sphere-sphere, sphere-Wall, sphere-Facet and sphere-Box contacts.")
 
-    # Body 2 sits at pos2 + hSize.cellDist in the frame of the normal.
-    shift = np.zeros((len(ra), 3))
-    if periodic:
-        h = np.asarray(meta["hSize"], dtype=np.float64).reshape(3, 3)
-        shift = np.stack([inter["cdx"], inter["cdy"], inter["cdz"]], axis=-1).astype(np.float64) @ h.T
     pos = np.stack([bodies["x"], bodies["y"], bodies["z"]], axis=-1)
+    move = _step_move(bodies, pos, float(meta.get("dt", 0.0)), rows)
+    stepped, hsize, shift, residual = _forces_instant(meta, inter, pos, move, sa, ra, rb)
+    notes = [f"YADE {meta.get('yade_version', '?')} {meta.get('precision_name', '?')}"]
+    if stepped:
+        pos = pos - move
+        notes.append("the positions were saved one NewtonIntegrator step after the forces: stepped back by v dt "
+                     "to the forces' instant")
+    if periodic and hsize is not None and not np.array_equal(hsize, _matrix(meta["hSize"])):
+        notes.append("the periodic cell was saved one step after the forces (before the InteractionLoop): "
+                     "stepped back by velGrad dt to the forces' instant")
+    if len(residual) and residual.max() > INSTANT_TOLERANCE:
+        notes.append(f"the positions match the contact geometry to {residual.max():.2g} of a radius only "
+                     "(at neither the forces' instant nor one step after it): particle centres and contact "
+                     "points are that far off")
+    depth = inter["depth"]
+    overlap_source = "YADE penetrationDepth (double)"
+    if meta.get("loaded_state"):  # YADE does not save penetrationDepth
+        depth = law.depth_from_phys(inter)
+        geometric = np.isnan(depth)
+        overlap_source = f"from the forces and stiffnesses {law.key} stored (YADE does not save penetrationDepth)"
+        if geometric.any():
+            off = residual[geometric].max()
+            if off > INSTANT_TOLERANCE:
+                raise ContactError(
+                    f"{int(geometric.sum())} interaction(s) of {law.key} hold no force or stiffness that gives "
+                    "their overlap, and the saved positions are of neither the instant of the forces nor one "
+                    f"integrator step after it (the sphere centres lie up to {off:.2g} of a radius off their "
+                    "contact lines), so their overlap cannot be recovered.", file=path, step=step,
+                    fix="save the state from a PyRunner between the InteractionLoop and the NewtonIntegrator, "
+                        "or write demsplit.yade.snapshot() there (docs/yade.md).")
+            depth = np.where(geometric, _depth_from_geometry(pos, inter, kinds[ra], sa, shift, ra, rb), depth)
+            overlap_source += f"; {int(geometric.sum())} from the geometry at the forces' instant"
+    sphere = kinds == "sphere"
+    if not periodic:
+        x = pos
+    elif stepped or not np.array_equal(hsize, _matrix(meta["hSize"])):  # in the cell (YADE's O.cell.wrap)
+        x = _wrapped(pos, hsize)
+    else:
+        x = np.stack([bodies["xw"], bodies["yw"], bodies["zw"]], axis=-1)
+    particles = {
+        "id": ids[sphere].astype(np.int64),
+        "type": bodies["material"][sphere].astype(np.int32),
+        "x": x[sphere, 0], "y": x[sphere, 1], "z": x[sphere, 2],
+        "radius": bodies["radius"][sphere],
+        "mass": bodies["mass"][sphere],
+        "vx": bodies["vx"][sphere], "vy": bodies["vy"][sphere], "vz": bodies["vz"][sphere],
+        "clump": bodies["clump"][sphere].astype(np.int64),
+    }
     xa, xb = pos[ra], pos[rb] + shift
 
     wall_of_row = np.full(len(ids), -1, dtype=np.int64)  # wall index of each body row (-1: not a wall)
     for body_id, index in scene_walls.items():
         wall_of_row[rows(np.array([body_id]), "wall")] = index
-    yade_order = {
-        **{c: inter[c] for c in ("id1", "id2", "nx", "ny", "nz", "refR1", "refR2", "fnx", "fny", "fnz",
-                                 "fsx", "fsy", "fsz", "kn", "ks", "cpx", "cpy", "cpz")},
-        "delta": inter["depth"],
-        "xa": xa[:, 0], "ya": xa[:, 1], "za": xa[:, 2], "xb": xb[:, 0], "yb": xb[:, 1], "zb": xb[:, 2],
-        "type_a": bodies["material"][ra], "type_b": bodies["material"][rb],
-    }
-    if _written(inter["kno"]):
-        yade_order["kno"], yade_order["kso"] = inter["kno"], inter["kso"]
-    if "adhesion" in inter and _written(inter["adhesion"]):  # MindlinPhys' DMT adhesion force
-        yade_order["adhesion_force"] = inter["adhesion"]
-    if "mbx" in inter and _written(inter["mbx"]):  # CohFrictPhys: bending and twisting springs
-        # an interaction whose phys has no moments (the exporter wrote NaN for the absent attributes; MindlinPhys
-        # has kr and ktw but no moment_bending) holds no such springs: 0, not a bad number
-        absent = np.isnan(inter["mbx"]) & np.isnan(inter["mtwx"])
-        for c in ("mbx", "mby", "mbz", "mtwx", "mtwy", "mtwz", "kr", "ktw"):
-            yade_order[c] = np.where(absent, 0.0, inter[c])
-        yade_order["mb"] = np.sqrt(yade_order["mbx"] ** 2 + yade_order["mby"] ** 2 + yade_order["mbz"] ** 2)
-        yade_order["mtw"] = np.sqrt(yade_order["mtwx"] ** 2 + yade_order["mtwy"] ** 2 + yade_order["mtwz"] ** 2)
-    contacts = particle_first(yade_order, sa, wall_of_row[ra], wall_of_row[rb])
+    yade_order = {**inter, "delta": depth,
+                  "xa": xa[:, 0], "ya": xa[:, 1], "za": xa[:, 2], "xb": xb[:, 0], "yb": xb[:, 1], "zb": xb[:, 2],
+                  "type_a": bodies["material"][ra], "type_b": bodies["material"][rb]}
+    contacts = particle_first(yade_order, sa, wall_of_row[ra], wall_of_row[rb], law.phys)
     pair = sa & sb
     if plane_as_plane:
         contacts["r2"] = np.where(pair, contacts["r2"], np.inf)
         contacts.pop("kno", None)
 
-    notes = [f"YADE {meta.get('yade_version', '?')} {meta.get('precision_name', '?')}"]
     n_virtual = int(meta["n_interactions_potential"]) - int(meta["n_interactions_real"])
     if n_virtual:
         notes.append(f"{n_virtual} potential (non-real) interaction(s) not in the contacts table")
     # a NaN depth is kept, for the validation to name it; a cohesive bond holds energy in tension
-    keep = np.ones(len(inter["depth"]), bool) if keep_separated else ~(inter["depth"] < 0)
+    keep = np.ones(len(depth), bool) if law.normal_from_stored_force else ~(depth < 0)
     if not keep.all():
         notes.append(f"{int((~keep).sum())} real interaction(s) with penetrationDepth < 0 (neverErase) "
                      "left out of the contacts table: they carry no elastic energy")
         contacts = {c: v[keep] for c, v in contacts.items()}
-    timing = _timing_note(meta)
-    if timing:
-        notes.append(timing)
+    limit = law.overlap_limit(contacts)
+    if limit is not None:
+        contacts[OVERLAP_LIMIT] = limit
+    _refuse_unusable(contacts, unusable or {}, path=path, step=step)
     capillary = _capillary_note(meta, inter, path, step)
     if capillary:
         notes.append(capillary)
-    frame = Frame(step=step, particles=particles, contacts=contacts, box=_cell_box(meta),
+    frame = Frame(step=step, particles=particles, contacts=contacts, box=_cell_box(hsize),
                   time=float(meta["time"]), source=(str(path),),
-                  overlap_source="YADE penetrationDepth (double)", overlap_error=None, notes=notes)
+                  overlap_source=overlap_source, overlap_error=None, notes=notes)
     return frame, np.flatnonzero(keep)
+
+
+def _refuse_unusable(contacts: Table, unusable: Mapping[int, str], *, path: Path, step: int) -> None:
+    """The MaterialError of the first material the split has no moduli for that a contact touches."""
+    if not unusable:
+        return
+    touched = np.isin(contacts["type1"], list(unusable)) | np.isin(contacts["type2"], list(unusable))
+    if touched.any():
+        t = int(contacts["type1"][touched][0]) if contacts["type1"][touched][0] in unusable else \
+            int(contacts["type2"][touched][0])
+        raise MaterialError(f"{unusable[t]}; {int(touched.sum())} contact(s) need its moduli for the split.",
+                            file=path, step=step,
+                            fix=f"give the split's moduli of material {t} with --material {t}:E:NU (Pa, -).")
 
 
 class YadeSnapshotRun(Run):
@@ -553,7 +736,7 @@ class YadeSnapshotRun(Run):
     format_name = "yade-snapshot"
     formats = ("a YADE snapshot file written by demsplit.yade.snapshot() (HDF5 or npy stream)",)
     cli_group = "YADE inputs"
-    cli_options = (PLANE_AS_PLANE,)
+    cli_options = (PLANE_AS_PLANE, MATERIALS)
 
     @classmethod
     def detect(cls, path: Path | None, head: bytes) -> bool:
@@ -569,8 +752,7 @@ class YadeSnapshotRun(Run):
                      f"  YADE {meta0.get('yade_version')}, {meta0.get('precision_name')}, "
                      f"periodic {meta0.get('periodic')}",
                      f"  model:    {scene.model.describe()}",
-                     "  materials: " + ", ".join(f"{t}: E={m.E:g} Pa nu={m.nu:g}"
-                                                 for t, m in sorted(scene.materials.items())),
+                     "  materials: " + material_list(run),
                      "  walls:    " + (", ".join(f"{w.name} ({w.kind}, type {w.type})" for w in scene.walls)
                                        or "none"),
                      "  iteration   time (s)       bodies  interactions (real)"]
@@ -589,7 +771,8 @@ class YadeSnapshotRun(Run):
                     lines.append(f"  functors {kind}: " + ", ".join(i.get("class", "?") for i in items))
         return "\n".join(lines)
 
-    def __init__(self, path: str | Path, *, plane_as_plane: bool = False) -> None:
+    def __init__(self, path: str | Path, *, plane_as_plane: bool = False,
+                 materials: Mapping[int, Material] | None = None) -> None:
         self.path = Path(path)
         self.plane_as_plane = plane_as_plane
         self._store = _open_store(self.path)
@@ -601,16 +784,18 @@ class YadeSnapshotRun(Run):
             raise InputFormatError(
                 f"snapshot format version {meta['format_version']} is newer than this reader ({FORMAT_VERSION}).",
                 file=self.path, fix="update demsplit.")
-        self.scene = scene_from_snapshot(meta, tables["bodies"], path=self.path, step=int(meta["iter"]),
-                                         plane_as_plane=plane_as_plane)
+        parts = scene_from_snapshot(meta, tables["bodies"], path=self.path, step=int(meta["iter"]),
+                                    plane_as_plane=plane_as_plane, materials=materials)
+        self.scene, self._unusable, self.notes = parts.scene, parts.unusable, parts.notes
         self.sources = [self.path]
-        self.notes = []
         complete = [k for k in range(len(self._store)) if not self._store.problem(k)]
         if complete != list(range(len(complete))):
             raise InputFormatError(f"snapshot {len(complete)} is incomplete, but a later one is complete: the file "
                                    "is damaged (only the last snapshot can be cut short).", file=self.path,
                                    fix=FIX_DAMAGED)
-        self.steps = np.array([self.meta(k)["iter"] for k in complete], dtype=np.int64)
+        metas = [self.meta(k) for k in complete]
+        self.steps = np.array([m["iter"] for m in metas], dtype=np.int64)
+        self.yade_energies = [e for m in metas for e in yade_energies(m, self.scene.model.contact_law)]
         first: dict[int, int] = {}
         for k, step in enumerate(self.steps.tolist()):
             if step in first:
@@ -657,8 +842,8 @@ class YadeSnapshotRun(Run):
                 f"the walls/facets/boxes changed (body ids {self._wall_ids.tolist()} in the first snapshot, "
                 f"{ids.tolist()} here).", file=self.path, step=int(meta["iter"]),
                 fix="write snapshots of runs whose non-sphere bodies stay the same to one file each.")
-        return frame_from_snapshot(meta, tables, self._walls, path=self.path, plane_as_plane=self.plane_as_plane,
-                                   keep_separated=self.scene.model.contact_law.normal_from_stored_force)
+        return frame_from_snapshot(meta, tables, self._walls, path=self.path, law=self.scene.model.contact_law,
+                                   plane_as_plane=self.plane_as_plane, unusable=self._unusable)
 
     def depth_text(self, k: int) -> np.ndarray | None:
         """penetrationDepth of the contacts of frame ``k`` as decimal strings at
@@ -669,14 +854,48 @@ class YadeSnapshotRun(Run):
         _, rows = self._frame(meta, tables)
         return _text(tables["interactions"]["depth_text"][rows])
 
+    def materials_without_moduli(self) -> dict[int, str]:
+        """The materials the split has no moduli for (id -> why): refused when a contact touches one."""
+        return dict(self._unusable)
+
     def describe(self) -> dict:
-        return {"kind": self.format_name, "path": str(self.path), "plane_as_plane": self.plane_as_plane}
+        """The file, and YADE's own elastic energies of each snapshot (:func:`yade_energies`)."""
+        return {"kind": self.format_name, "path": str(self.path), "plane_as_plane": self.plane_as_plane,
+                "yade_energies": self.yade_energies}
 
     def close(self) -> None:
         self._store.close()
 
 
-def open_yade_snapshot(path: str | Path, *, plane_as_plane: bool = False) -> YadeSnapshotRun:
+def material_list(run: YadeSnapshotRun) -> str:
+    """Every material id of a run with its split moduli, or why it has none (for ``info``)."""
+    items = {t: f"{t}: E={m.E:g} Pa nu={m.nu:g}" + (f" ({m.name})" if m.name else "")
+             for t, m in run.scene.materials.items()}
+    items.update({t: f"{t}: no moduli for the split ({why}; --material {t}:E:NU)"
+                  for t, why in run.materials_without_moduli().items()})
+    return ", ".join(items[t] for t in sorted(items))
+
+
+def yade_energies(meta: dict, law: YadeLaw) -> list[dict]:
+    """YADE's own elastic energies (J) of a snapshot's instant, as the report prints them beside demsplit's:
+    the law's energy functions the snapshot recorded (``law_energies``; a state loaded with ``O.load`` has none)
+    and, when the run tracks ``O.energy``, the entries the law fills there (``tracked_energies``). Each:
+    ``{"step", "name", "value", "modes"}``, ``modes`` the demsplit energy columns whose sum it is."""
+    out = []
+    for name, (method, modes) in law.simulator_energies.items():
+        if name in meta.get("law_energies", {}):
+            out.append({"step": int(meta["iter"]), "name": f"{method}()", "value": meta["law_energies"][name],
+                        "modes": list(modes)})
+    if meta.get("track_energy"):
+        for name, modes in law.tracked_energies.items():
+            if name in meta.get("energy", {}):
+                out.append({"step": int(meta["iter"]), "name": f"O.energy['{name}']", "value": meta["energy"][name],
+                            "modes": list(modes)})
+    return out
+
+
+def open_yade_snapshot(path: str | Path, *, plane_as_plane: bool = False,
+                       materials: Mapping[int, Material] | None = None) -> YadeSnapshotRun:
     """Open a file written by :func:`demsplit.yade.snapshot` (HDF5 or npy stream).
 
     plane_as_plane
@@ -685,5 +904,7 @@ def open_yade_snapshot(path: str | Path, *, plane_as_plane: bool = False) -> Yad
         sphere of the particle's radius, a Facet as one of twice it). True:
         ``r2 = inf`` for walls, facets and boxes and ``kno`` is dropped, so
         Hertz is recomputed for a sphere on a plane (not what YADE computed).
+    materials
+        the split's moduli by material id, instead of the law's reading of YADE's materials (``--material``).
     """
-    return YadeSnapshotRun(path, plane_as_plane=plane_as_plane)
+    return YadeSnapshotRun(path, plane_as_plane=plane_as_plane, materials=materials)

@@ -8,19 +8,16 @@ that loads each state (``O.load``) and writes demsplit's full-precision
 snapshot of it (:func:`demsplit.yade.collect`); the snapshot reader then reads
 those (:mod:`demsplit.readers.yade_snapshot`).
 
-YADE does not save an interaction's ``penetrationDepth`` (it reads back as
-NaN), and a loaded law functor has no scene until the next step (its energy
-functions crash YADE 2023.02a). The converter therefore keeps only the engines
-that make contacts and forces (``ForceResetter``, the collider, the
-``InteractionLoop``: no integrator, none of the user's ``PyRunner``), sets
-``O.dt = 1e-300`` (0 gives NaN shear forces: Mindlin divides by dt) and makes
-one step: geometry and normal forces are recomputed from the saved positions
-and nothing moves; the incremental springs (shear force, bending and twisting
-moments) are then put back as saved. The snapshot keeps the saved iteration,
-time step and engine list. A state saved where a PyRunner between the
-InteractionLoop and the integrator would export gives the in-run snapshot bit
-for bit. The laws' own energy functions are then
-recorded for validation as in a run.
+Nothing is stepped: the converter only loads the state and exports what YADE saved, so the contacts are
+the real interactions YADE had, with their saved forces, springs, stiffnesses, normals and contact points,
+and no collider or InteractionLoop makes or drops one. YADE does not save an interaction's
+``penetrationDepth`` (``Attr::noSave``: NaN after ``O.load``); the snapshot reader recovers it from what
+each law stored (:meth:`~demsplit.physics.laws._yade.YadeLaw.depth_from_phys`), and from the geometry at the
+instant of the forces where that does not give it, and steps the positions back to that instant when the
+state was saved after the NewtonIntegrator moved the bodies
+(:func:`demsplit.readers.yade_snapshot.frame_from_snapshot`). A loaded law functor has no scene until the
+next step (its energy functions crash YADE 2023.02a), so a state holds no law energies; ``O.energy`` is
+saved with it.
 
 Converted states are cached (``state_cache``, default ``$XDG_CACHE_HOME/demsplit/yade-states``),
 keyed by the state file's BLAKE3 digest (its provenance fingerprint) and the snapshot format, so a
@@ -44,12 +41,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputFormatError, ScriptError
+from ..errors import DemsplitError, InputFormatError, ScriptError
 from ..fingerprint import DIGEST, file_fingerprint
 from ..frame import Frame
+from ..scene import Material
 from ..yade import FORMAT_VERSION
-from .base import Option, Run
-from .yade_snapshot import PLANE_AS_PLANE, YadeSnapshotRun
+from .base import MATERIALS, Option, Run
+from .yade_snapshot import PLANE_AS_PLANE, YadeSnapshotRun, material_list
 
 SIGNATURES = (b"serialization::archive", b"<!DOCTYPE boost_serialization>")
 """What a boost archive (binary, then XML) holds in its first bytes, once decompressed."""
@@ -62,31 +60,11 @@ import json, os, site, sys, traceback
 site.addsitedir(os.environ["DEMSPLIT_SITE"])
 try:
     import demsplit.yade
-    KEEP = ("ForceResetter", "InteractionLoop")
-    SPRINGS = ("shearForce", "moment_bending", "moment_twist")
-    DT = 1e-300  # not 0: some laws divide by dt (Mindlin's shear gives NaN); velocity x 1e-300 adds nothing
     for src, dst in json.loads(os.environ["DEMSPLIT_STATES"]):
         O.load(src)
-        saved, engines, dt = O.iter, list(O.engines), O.dt
-        # recompute penetrationDepth and forces at the saved positions: only the engines that make
-        # contacts and forces run (no integrator, no PyRunner of the user's), with a time step of 1e-300
-        O.engines = [e for e in engines if type(e).__name__ in KEEP or type(e).__name__.endswith("Collider")]
-        # the incremental springs are state YADE saved: keep them as saved (the step would re-project them
-        # onto the contact plane, which changes their last bits)
-        kept = {}
-        for i in O.interactions:
-            if i.isReal:
-                kept[(i.id1, i.id2)] = {a: Vector3(getattr(i.phys, a)) for a in SPRINGS if hasattr(i.phys, a)}
-        O.dt = DT
-        O.step()
-        for i in O.interactions:
-            for a, v in kept.get((i.id1, i.id2), {}).items():
-                setattr(i.phys, a, v)
-        O.engines, O.dt = engines, dt
-        meta, tables = demsplit.yade.collect()
-        meta["iter"] = saved
+        meta, tables = demsplit.yade.collect(loaded=True)  # as saved: nothing runs
         demsplit.yade.write_snapshot(dst, meta, tables, format="npy")
-        sys.stderr.write("DEMSPLIT-CONVERTED %s %d\n" % (src, saved))
+        sys.stderr.write("DEMSPLIT-CONVERTED %s %d\n" % (src, O.iter))
         sys.stderr.flush()
 except BaseException:
     sys.stderr.write("DEMSPLIT-FAILED\n")
@@ -131,9 +109,10 @@ class YadeStateRun(Run):
     format_name = "yade-state"
     formats = ("a YADE saved state (O.save: .yade, .xml, .gz, .bz2), a directory or a glob of them",)
     priority = 5
+    several_files = True
     cli_group = "YADE inputs"
     cli_options = (
-        PLANE_AS_PLANE,
+        PLANE_AS_PLANE, MATERIALS,
         Option("yade", ("--yade",), "the YADE build that saved the states (yade, yade-mpfr150, yade-float128; "
                "default: the first that loads them)", {"metavar": "EXE"}),
         Option("state_cache", ("--state-cache",), "where converted YADE saved states are kept (default for run: "
@@ -145,8 +124,13 @@ class YadeStateRun(Run):
     def detect(cls, path: Path | None, head: bytes) -> bool:
         return path is not None and bool(state_files(path))
 
+    @classmethod
+    def output_options(cls, output: Path) -> dict:
+        """Converted states are kept next to the output (``OUTPUT.states``), where a rerun finds them."""
+        return {"state_cache": str(output.with_name(output.name + ".states"))}
+
     def __init__(self, path: Path | list[Path], yade: str | None = None, state_cache: str | Path | None = None,
-                 plane_as_plane: bool = False) -> None:
+                 plane_as_plane: bool = False, materials: dict[int, Material] | None = None) -> None:
         states = []
         for p in (path if isinstance(path, list) else [path]):
             found = state_files(p)
@@ -155,13 +139,8 @@ class YadeStateRun(Run):
                                        fix="give files written by O.save, a directory or a glob of them.")
             states += [s for s in found if s not in states]
         cache = Path(state_cache) if state_cache is not None else default_cache()
-        cache.mkdir(parents=True, exist_ok=True)
-        # the provenance fingerprints the same files: each is hashed once
-        targets = [cache / f"{file_fingerprint(s)[DIGEST]}-v{FORMAT_VERSION}.npys" for s in states]
-        todo = [(s, t) for s, t in zip(states, targets) if not t.is_file()]
-        if todo:
-            _convert(todo, yade)
-        runs = [YadeSnapshotRun(t, plane_as_plane=plane_as_plane) for t in targets]
+        targets = converted(states, cache, yade=yade)
+        runs = [YadeSnapshotRun(t, plane_as_plane=plane_as_plane, materials=materials) for t in targets]
         order = np.argsort([int(r.steps[0]) if len(r.steps) else -1 for r in runs], kind="stable")
         self._runs = [runs[i] for i in order]
         self._states = [states[i] for i in order]
@@ -174,43 +153,67 @@ class YadeStateRun(Run):
         self.scene = first
         self.steps = np.array([int(r.steps[0]) for r in self._runs], dtype=np.int64)
         self.sources = list(self._states)
-        self.notes = [f"YADE saved states converted by YADE (cached in {cache}); penetration depths recomputed "
-                      "with one step of dt = 1e-300 over the contact engines (YADE does not save them)"]
+        self.notes = [f"YADE saved states converted by YADE (cached in {cache}): the interactions as saved, their "
+                      "overlaps from the forces and stiffnesses the law stored (YADE does not save them)",
+                      *first_notes(self._runs)]
 
     def __len__(self) -> int:
         return len(self._runs)
 
     def frame(self, k: int) -> Frame:
-        frame = self._runs[k].frame(0)
+        try:
+            frame = self._runs[k].frame(0)
+        except DemsplitError as exc:  # named by the state, not by its converted copy in the cache
+            raise type(exc)(exc.message, file=self._states[k], step=exc.step, line=exc.line, fix=exc.fix) from None
         frame.source = (str(self._states[k]),)
         return frame
 
     def describe(self) -> dict:
-        return {"kind": self.format_name, "states": [str(s) for s in self._states], "steps": self.steps.tolist()}
+        """The states, their iterations and YADE's own elastic energies saved with them (``O.energy``)."""
+        return {"kind": self.format_name, "states": [str(s) for s in self._states], "steps": self.steps.tolist(),
+                "yade_energies": [e for run in self._runs for e in run.yade_energies]}
 
     @classmethod
     def describe_file(cls, path: Path) -> str:
         with cls.open(path) as run:
-            frame = run.frame(len(run) - 1)
             meta = run._runs[-1].meta(0)
-            walls = {}
-            for w in run.scene.walls:
-                walls[w.kind] = walls.get(w.kind, 0) + 1
+            bodies = run._runs[-1]._read(0)[1]["bodies"]
+            kinds = bodies["kind"].astype(str).tolist()
+            walls = {k: kinds.count(k) for k in ("wall", "facet", "box") if k in kinds}
+            try:
+                contacts = f"{run.frame(len(run) - 1).n_contacts} read as contacts"
+            except DemsplitError as exc:
+                contacts = f"not analysable as they are: {exc}"
             lines = [f"{path}: YADE saved state(s), {len(run)} ({', '.join(s.name for s in run._states)})",
                      f"  iterations: {run.steps.tolist()}",
-                     f"  bodies:     {len(frame.particles['id'])} spheres, walls "
+                     f"  bodies:     {kinds.count('sphere')} spheres, walls "
                      + (", ".join(f"{n} {k}" for k, n in sorted(walls.items())) or "none"),
-                     f"  interactions (last state): {meta['n_interactions_real']} real, "
-                     f"{len(frame.contacts['delta'])} read as contacts",
+                     f"  interactions (last state): {meta['n_interactions_real']} real, {contacts}",
                      f"  law:        {run.scene.model.describe()}",
-                     "  materials:  " + ", ".join(f"{t}: E={m.E:g} Pa nu={m.nu:g}"
-                                                  for t, m in sorted(run.scene.materials.items())),
+                     "  materials:  " + material_list(run._runs[-1]),
                      f"  YADE:       {meta.get('yade_version', '?')} {meta.get('precision_name', '?')}"]
         return "\n".join(lines)
 
     def close(self) -> None:
         for run in self._runs:
             run.close()
+
+
+def converted(states: list[Path], cache: Path, *, yade: str | None = None) -> list[Path]:
+    """The converted snapshot of each state in ``cache`` (keyed by the state's BLAKE3 digest), converting
+    those not there yet with one YADE process (``yade``: the build; default: the first that loads them)."""
+    cache.mkdir(parents=True, exist_ok=True)
+    # the provenance fingerprints the same files: each is hashed once
+    targets = [cache / f"{file_fingerprint(s)[DIGEST]}-v{FORMAT_VERSION}.npys" for s in states]
+    todo = [(s, t) for s, t in zip(states, targets) if not t.is_file()]
+    if todo:
+        _convert(todo, yade)
+    return targets
+
+
+def first_notes(runs: list[YadeSnapshotRun]) -> list[str]:
+    """The notes of the states' readers (the split's moduli), each once."""
+    return list(dict.fromkeys(note for run in runs for note in run.notes))
 
 
 def _convert(todo: list[tuple[Path, Path]], yade: str | None) -> None:

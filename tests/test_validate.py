@@ -39,7 +39,7 @@ def run(path: Path, tmp_path: Path, capsys) -> tuple[int, str]:
 
 
 @pytest.mark.parametrize("table, column, value", [
-    ("interactions", "depth", np.nan), ("interactions", "fsx", np.inf), ("interactions", "nx", np.nan),
+    ("interactions", "depth", np.nan), ("interactions", "fsex", np.inf), ("interactions", "nx", np.nan),
     ("interactions", "kno", -np.inf), ("bodies", "radius", np.nan), ("bodies", "x", np.inf),
 ])
 def test_a_non_finite_number_is_refused_with_its_place(tmp_path, capsys, table, column, value):
@@ -73,7 +73,7 @@ def test_a_narrow_integer_stiffness_is_upcast_not_wrapped(tmp_path, capsys):
 
 
 def test_an_energy_that_overflows_is_refused(tmp_path, capsys):
-    rc, err = run(damaged_snapshot(tmp_path, "interactions", "fsx", 1e200), tmp_path, capsys)
+    rc, err = run(damaged_snapshot(tmp_path, "interactions", "fsex", 1e200), tmp_path, capsys)
     assert rc == 2 and "energy that is not finite" in err
     assert not (tmp_path / "out.h5").exists()
 
@@ -214,9 +214,8 @@ def _meta(key, value):
 
 RECORD_DAMAGE = {
     "missing column": (lambda s: s[1][1]["interactions"].pop("ny"), "column interactions.ny is missing"),
-    "one moment column missing": (lambda s: s[1][1]["interactions"].update(mbx=s[1][1]["interactions"]["kn"] * 0)
-                                  if "mbx" not in s[1][1]["interactions"] else None,
-                                  "column interactions.mby is missing"),
+    "one component of a force missing": (lambda s: s[1][1]["interactions"].pop("fsey"),
+                                         "column interactions.fsey is missing"),
     "text in a number column": (_set("bodies", "vy", lambda c: c.astype("S8")), "bodies.vy holds |S8 values"),
     "2-D column": (_set("bodies", "radius", lambda c: c.reshape(-1, 1)), "bodies.radius has shape"),
     "short column": (_set("interactions", "depth", lambda c: c[:-1]), "interactions.depth has"),

@@ -13,6 +13,7 @@ import demsplit as ds
 import numpy as np
 import pytest
 from demsplit.errors import DemsplitError, InputFormatError, PrecisionError, TruncatedFileError
+from demsplit.physics import laws
 from demsplit.physics.partition import partition
 from demsplit.readers import open_run
 from demsplit.readers.yade_export import YadeVtkRun, overlap_error_bound, read_vtk, vtk_frame
@@ -207,7 +208,9 @@ def test_writer_round_trip(tmp_path, fmt):
 
 
 def test_vtk_export_agrees_with_the_snapshot_to_percent_g():
-    frame = _vtk_frame(YADE / "mindlin_box-spheres-00024000.vtk", YADE / "mindlin_box-intrs-00024000.vtk")
+    mindlin = laws.law_class("yade:Law2_ScGeom_MindlinPhys_Mindlin").phys  # the attributes the law reads
+    frame = _vtk_frame(YADE / "mindlin_box-spheres-00024000.vtk", YADE / "mindlin_box-intrs-00024000.vtk",
+                       attributes=mindlin)
     ref = open_yade_snapshot(YADE / "mindlin_box.h5").frame(2)
     assert frame.step == ref.step == 24000
     assert frame.n_contacts == ref.n_contacts == 235
@@ -338,3 +341,84 @@ def test_plane_as_plane_is_refused_by_a_law_that_reads_yades_kno(sample, capsys,
     err = capsys.readouterr().err
     assert rc == 2 and "--plane-as-plane" in err and "without --plane-as-plane" in err, err
     assert "kno" in err and "missing" not in err and not (tmp_path / "out.h5").exists()
+
+
+def _joint_frame(smooth_joint: bool):
+    """Two JCFpm contacts of spheres r = 1 mm: one on a joint overlapped by 1.5 mm (the spheres slid past each
+    other), one bond in tension; the overlap limit as the YADE reader has it from the law."""
+    law = laws.make("yade:Law2_ScGeom_JCFpmPhys_JointedCohesiveFrictionalPM", {"smooth_joint": smooth_joint})
+    contacts = {"id1": np.array([0, 1]), "id2": np.array([1, 2]), "wall": np.array([-1, -1]),
+                "delta": np.array([1.5e-3, -1e-4]), "nx": np.ones(2), "ny": np.zeros(2), "nz": np.zeros(2),
+                "x1": np.zeros(2), "y1": np.zeros(2), "z1": np.zeros(2), "r1": np.full(2, 1e-3),
+                "r2": np.full(2, 1e-3), "on_joint": np.array([1.0, 0.0])}
+    contacts["overlap_limit"] = law.overlap_limit(contacts)
+    particles = {"id": np.arange(3), "type": np.zeros(3, np.int32), "x": np.zeros(3), "y": np.zeros(3),
+                 "z": np.zeros(3), "radius": np.full(3, 1e-3)}
+    return ds.Frame(step=1, particles=particles, contacts=contacts), law
+
+
+def test_a_smooth_joint_may_overlap_beyond_the_smaller_radius():
+    """JCFpm declares its plausibility limits: a contact on a smooth joint up to r1 + r2, a bond at any gap; the
+    validation applies the law's limit (it refused YADE's own JCFpm example as a broken dump)."""
+    from demsplit.errors import ContactError
+    from demsplit.validate import validated_frame
+
+    frame, law = _joint_frame(smooth_joint=True)
+    assert validated_frame(frame).contacts["overlap_limit"].tolist() == [2e-3, 1e-3]
+    assert law.separation_limit(1e-3, 1e-3) == np.inf
+    frame, _ = _joint_frame(smooth_joint=False)  # without smoothJoint YADE's law acts on delta: a radius at most
+    with pytest.raises(ContactError, match="larger than the largest its law allows"):
+        validated_frame(frame)
+    del frame.contacts["overlap_limit"]
+    with pytest.raises(ContactError, match="larger than its smaller radius"):
+        validated_frame(frame)
+
+
+def test_several_files_are_one_run_only_for_a_reader_of_several_files():
+    """A list of inputs is one run for a reader whose runs are several files (Run.several_files: YADE saved
+    states); two snapshot files are two runs."""
+    from demsplit.readers.yade_state import YadeStateRun
+
+    assert YadeStateRun.several_files and not YadeSnapshotRun.several_files
+    with pytest.raises(InputFormatError, match="a run by itself"):
+        open_run([YADE / "mindlin_box.h5", YADE / "cundall_periodic.h5"])
+
+
+def test_a_format_1_snapshot_is_read_with_what_it_holds(tmp_path):
+    """A snapshot of format 1 (before the laws declared their attributes) has no elastic shear force of
+    Hertz-Mindlin (shearElastic, fse) and no angular velocities: it is read, with u_t of that law missing
+    (refused by run without --allow-missing), the other modes and laws as before."""
+    meta, tables = _open_store(YADE / "mindlin_box.npys").snapshot(2)
+    for c in ("fsex", "fsey", "fsez"):
+        del tables["interactions"][c]
+    for c in ("wx", "wy", "wz"):
+        del tables["bodies"][c]
+    meta["format_version"] = 1
+    old = tmp_path / "v1.npys"
+    write_snapshot(old, meta, tables, format="npy")
+    frame = open_yade_snapshot(old).frame(0)
+    new = open_yade_snapshot(YADE / "mindlin_box.npys")
+    e, ref = partition(frame.contacts, new.scene, frame.particles), partition(*_frame_and_scene(new))
+    assert "u_t" in e.missing and "ftx" not in frame.contacts
+    np.testing.assert_array_equal(e.u_n, ref.u_n)
+
+
+def _frame_and_scene(run):
+    frame = run.frame(2)
+    return frame.contacts, run.scene, frame.particles
+
+
+def test_a_wall_without_material_is_refused_not_split_in_half():
+    """One particle material and a wall of a type without one: the single-material shortcut (every share 1/2)
+    gave that wall half the energy, exit 0; the lookup now names the wall's type."""
+    from demsplit.errors import MaterialError
+
+    scene = ds.Scene({0: ds.Material(1e7, 0.3)}, walls=[ds.Wall("w", "yade_wall", type=5)])
+    contacts = {"id1": np.array([0]), "id2": np.array([-1]), "wall": np.array([0]), "delta": np.array([1e-5]),
+                "nx": np.ones(1), "ny": np.zeros(1), "nz": np.zeros(1), "x1": np.zeros(1), "y1": np.zeros(1),
+                "z1": np.zeros(1), "r1": np.full(1, 1e-3), "r2": np.full(1, 1e-3)}
+    particles = {"id": np.array([0]), "type": np.array([0], np.int32), "x": np.zeros(1), "y": np.zeros(1),
+                 "z": np.zeros(1), "radius": np.full(1, 1e-3)}
+    assert not scene.single_material
+    with pytest.raises(MaterialError, match=r"wall type\(s\) \[5\] have no material"):
+        partition(contacts, scene, particles)

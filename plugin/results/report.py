@@ -135,6 +135,26 @@ def not_computed(results: Results, frame: pd.Series | None = None) -> list[str]:
     return items
 
 
+def simulator_energies(results: Results, step: int, frame: pd.Series) -> list[str]:
+    """The simulator's own elastic energies of frame ``step`` beside demsplit's sum of the same modes, one
+    sentence each: the reader's ``yade_energies`` in the provenance (YADE's law energy functions recorded by a
+    snapshot, the ``O.energy`` entries the law fills when the run tracks energies)."""
+    run = (results.provenance or {}).get("run") or {}
+    lines = []
+    for e in run.get("yade_energies", []):
+        if e.get("step") != step:
+            continue
+        modes = [m for m in e["modes"] if m in frame]
+        ours, theirs = float(sum(frame[m] for m in modes)), float(e["value"])
+        line = (f"YADE's own {e['name']} = {theirs:.10g} J, demsplit's {' + '.join(modes)} = {ours:.10g} J"
+                + (f" (relative difference {abs(ours - theirs) / abs(theirs):.2g})" if theirs else ""))
+        if theirs == 0 and ours > 0 and e["name"].startswith("O.energy"):
+            line += ("; YADE's ForceResetter zeroes it at the start of each step, so a state saved before the "
+                     "InteractionLoop holds 0")
+        lines.append(line)
+    return lines
+
+
 def text_summary(results: Results, step: int | None = None, names: Mapping[int, str] | None = None) -> str:
     """The per-type summary of frame ``step`` (default: the last), as plain text; ``names``: material
     names of types (added to the provenance's, see :meth:`Results.type_names`)."""
@@ -156,6 +176,7 @@ def text_summary(results: Results, step: int | None = None, names: Mapping[int, 
     lines.append(f"  {int(fr['n_particles'])} particles, {int(fr['n_contacts'])} contacts "
                  f"({int(fr['n_wall_contacts'])} with walls); elastic contact energy {u_total:.6g} J ({parts})"
                  + (f"; cohesion work {_mode_total(fr, one.raw.contacts, 'u_adh')}, apart" if "u_adh" in fr else ""))
+    lines += [f"  {line}" for line in simulator_energies(results, step, fr)]
     model = results.provenance.get("model")
     if model:
         params = ", ".join(f"{k}={v!r}" for k, v in sorted(model.get("params", {}).items())
@@ -660,6 +681,10 @@ def write_html(results: Results, path: str | Path, step: int | None = None,
     body = [*head, "<h2>Energy per mode</h2>",
             "<p>Totals of this frame (J). The elastic modes sum to the elastic total; the cohesion work "
             "<code>u_adh</code>, where present, is signed and kept apart.</p>", _table(_mode_table(one))]
+    own = simulator_energies(results, step, fr)
+    if own:
+        body += ["<p id='simulator-energies'>The simulator's own numbers of this instant:</p><ul>",
+                 *(f"<li>{esc(line)}</li>" for line in own), "</ul>"]
     if "share_n1_error" in one.raw.contacts:
         body.append(f"<p>{esc(accuracy_line(one.raw.contacts, prov.get('options', {}).get('split', 'material')))}</p>")
     u_total = sum(fr[m] for m in elastic_columns(one.raw.frames))

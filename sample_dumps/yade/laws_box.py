@@ -1,5 +1,5 @@
 # One small YADE scene per contact law of demsplit's registry (DEMSPLIT_LAW selects it):
-#   viscel            Law2_ScGeom_ViscElPhys_Basic (ViscElMat, kn/ks/cn/cs given)
+#   viscel            Law2_ScGeom_ViscElPhys_Basic (ViscElMat, stiffness from young and poisson, cn/cs given)
 #   viscofrict        Law2_ScGeom_ViscoFrictPhys_CundallStrack (FrictMat, shearCreep)
 #   hertz_linear      Law2_ScGeom_MindlinPhys_HertzWithLinearShear
 #   deresiewitz       Law2_ScGeom_MindlinPhys_MindlinDeresiewitz
@@ -27,8 +27,9 @@ if os.path.exists(snapshot):
     os.remove(snapshot)
 
 if law == "viscel":
-    mats = [ViscElMat(kn=2e4, ks=1e4, cn=0.5, cs=0.2, young=2e7, poisson=0.3, density=2500, frictionAngle=0.4),
-            ViscElMat(kn=6e4, ks=3e4, cn=0.5, cs=0.2, young=1e8, poisson=0.2, density=2500, frictionAngle=0.4)]
+    # stiffness from young (kn_i = 2 E_i R_i, ks_i = poisson kn_i) and the dashpots cn, cs
+    mats = [ViscElMat(cn=0.5, cs=0.2, young=2e7, poisson=0.3, density=2500, frictionAngle=0.4),
+            ViscElMat(cn=0.5, cs=0.2, young=1e8, poisson=0.2, density=2500, frictionAngle=0.4)]
     ip2, law2, ig2 = Ip2_ViscElMat_ViscElMat_ViscElPhys(), Law2_ScGeom_ViscElPhys_Basic(label="law"), "ScGeom"
 elif law == "cohfrict":
     mats = [CohFrictMat(young=2e7, poisson=0.3, density=2500, frictionAngle=0.4, isCohesive=True,

@@ -47,7 +47,8 @@ def export_state():
         vtk.exportInteractions(what=dict(
             id1="i.id1", id2="i.id2", penetrationDepth="i.geom.penetrationDepth", normal="i.geom.normal",
             refR1="i.geom.refR1", refR2="i.geom.refR2", kno="i.phys.kno", kn="i.phys.kn", ks="i.phys.ks",
-            normalForce="i.phys.normalForce", shearForce="i.phys.shearForce", contactPoint="i.geom.contactPoint"),
+            normalForce="i.phys.normalForce", shearForce="i.phys.shearForce", shearElastic="i.phys.shearElastic",
+            contactPoint="i.geom.contactPoint"),
             numLabel=O.iter)
         export.textExt(os.path.join(out, "mindlin_box.txt"), format="id_x_y_z_r_matId")
 

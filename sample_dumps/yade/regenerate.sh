@@ -16,3 +16,10 @@ done
 for law in viscel viscofrict hertz_linear deresiewitz cohfrict jcfpm adhesion capillary; do
     DEMSPLIT_LAW=$law yade -n -j1 -x laws_box.py 2>&1 | grep "^laws_box_$law:" | tee "laws_box_$law.log"
 done
+# saved states and YADE's own JCFpm example: their states are made by the tests (tests/test_yade_instants.py),
+# not kept; the logs record YADE's counts
+states=$(mktemp -d)
+for script in saved_instants jcfpm_example; do
+    DEMSPLIT_OUT="$states" yade -n -j1 -x "$script.py" 2>&1 | grep "^$script" | tee "$script.log"
+done
+rm -r "$states"

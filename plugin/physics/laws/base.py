@@ -111,8 +111,9 @@ class ContactLaw(ABC):
         holds energy in tension, at delta < 0), not from delta: the properties "no
         energy without overlap" and "dU_n/d(delta) is the normal force" do not apply.
 
-    A law whose contacts act across a gap (a liquid bridge) says how far with
-    :meth:`separation_limit`.
+    A law whose contacts act across a gap (a liquid bridge, a bond) says how far with
+    :meth:`separation_limit`; one whose contacts may overlap beyond the smaller radius (a JCFpm smooth joint)
+    says how deep with :meth:`overlap_limit`.
     """
 
     REQUIRED: ClassVar[object] = object()
@@ -164,6 +165,12 @@ class ContactLaw(ABC):
         ``r1`` and ``r2`` (r2 = inf: a wall): a contact further apart is not its output. 0 for a law whose
         contacts end when the bodies part (delta <= 0 is then no contact)."""
         return 0.0
+
+    def overlap_limit(self, contacts: Mapping[str, np.ndarray]) -> np.ndarray | None:
+        """The largest overlap delta (m) the simulator gives each contact of this law (``contacts``: the contact
+        columns of its rows), beyond which a contact is not a plausible output of the law; None: the smaller of
+        r1 and r2 (a sphere overlapped deeper than its radius is a broken dump, not a DEM contact)."""
+        return None
 
     def describe(self) -> str:
         """One line for ``info``/``check``: the key, its parameters (but those unset or ``off``) and the summary."""

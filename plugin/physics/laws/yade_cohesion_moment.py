@@ -8,14 +8,18 @@ spring's energy is |F|^2/(2 k), the sums YADE's own ``normElastEnergy()``,
 compute: u_n, u_t, u_r (bending) and u_tw (twisting). A bond in tension stores
 energy too (F_n < 0, |F_n|^2/(2 kn)). The normal energy comes from the stored
 force, not from delta (a broken or plastically shifted bond's force is not
-kn delta), so dU_n/d(delta) is not defined from the columns alone.
+kn delta), so dU_n/d(delta) is not defined from the columns alone. A saved state's overlap is
+delta = F_n/kn + unp (F_n signed along the normal, unp the bond's plastic normal displacement).
 """
 
 from __future__ import annotations
 
+import numpy as np
 
 from . import register
-from ._yade import YadeScGeomLaw, YadeStoredSprings, stored_spring_energy
+from ._yade import (
+    NORM, SPRINGS, Phys, Table, YadeScGeomLaw, YadeStoredSprings, along_normal, stored_spring_energy, where_known,
+)
 from .base import ContactRows, LawEnergy
 
 MOMENTS = {"u_r": ("mb", "kr"), "u_tw": ("mtw", "ktw")}
@@ -29,6 +33,8 @@ class YadeCohesionMoment(YadeStoredSprings):
                "twisting u_tw = |M_tw|^2/(2 ktw), YADE's stored forces, moments and stiffnesses")
     modes = ("u_n", "u_t", "u_r", "u_tw")
     mode_columns = {**YadeScGeomLaw.mode_columns, **MOMENTS}
+    phys = (*SPRINGS, Phys("moment_bending", "mb", "mb", NORM), Phys("moment_twist", "mtw", "mtw", NORM),
+            Phys("kr", "kr", "kr"), Phys("ktw", "ktw", "ktw"), Phys("unp", "unp"))
     simulator_energies = {"cohfrict_normElastEnergy": ("normElastEnergy", ("u_n",)),
                           "cohfrict_shearElastEnergy": ("shearElastEnergy", ("u_t",)),
                           "cohfrict_bendingElastEnergy": ("bendingElastEnergy", ("u_r",)),
@@ -43,3 +49,9 @@ class YadeCohesionMoment(YadeStoredSprings):
             else:
                 modes[mode] = stored_spring_energy(rows.column(moment), rows.column(k))
         return LawEnergy(modes, skipped)
+
+    def depth_from_phys(self, t: Table) -> np.ndarray:
+        """delta = F_n/kn + unp, the law's F_n = kn (delta - unp) inverted; unknown where YADE zeroed the normal
+        force (a bond sliding in tension)."""
+        fn = along_normal(t, "fn")
+        return where_known(fn != 0, fn / t["kn"] + t["unp"])

@@ -5,10 +5,13 @@ kno delta^(3/2); so u_n = (2/5) kno delta^(5/2) (eq. 13), with YADE's own
 refR conventions for walls and facets. With ``normal_stiffness="materials"``
 (the reader's ``plane_as_plane``) E* and R* are rebuilt from the materials and
 the radii the reader gives instead: u_n = (8/15) E* sqrt(R* delta) delta^2.
-The shear spring is the stored incremental one: u_t = |F_t|^2 / (2 ks).
+The shear spring is the stored incremental one: u_t = |F_t|^2 / (2 ks), with F_t the elastic shear force
+``shearElastic`` (``shearForce`` is it minus the viscous force when the contact is damped).
 With ``includeAdhesion`` the DMT adhesion force F_adh = 4 pi R* gamma that YADE
 stores per interaction pulls the bodies together: its work u_adh = -F_adh delta
 (J, apart from the elastic total); YADE's ``normElastEnergy()`` is then u_n + u_adh.
+A saved state's overlap follows from the stored tangent stiffness kn = (3/2) kno delta^(1/2), whatever
+the damping and the adhesion (both change the stored force, not kn).
 """
 
 from __future__ import annotations
@@ -20,7 +23,7 @@ from ...errors import UnsupportedModelError
 from ..elastic import hertz_energy_from_moduli, hertz_force_from_moduli, overlap
 from ..moduli import effective_modulus, effective_radius, f64
 from . import register
-from ._yade import YadeScGeomLaw
+from ._yade import KN, KNO, KS, KSO, NORMAL_FORCE, VECTOR, Phys, Table, YadeScGeomLaw, where_known
 from .base import ContactRows, LawEnergy
 
 STIFFNESS_SOURCES = ("stored", "materials")
@@ -39,6 +42,8 @@ class YadeMindlin(YadeScGeomLaw):
     summary = ("Hertz u_n = (2/5) kno delta^(5/2) with YADE's stored kno; Mindlin shear u_t = |F_t|^2/(2 ks) "
                "from the stored shear force and stiffness")
     contact_columns = ("kno",)
+    phys = (NORMAL_FORCE, Phys("shearElastic", "fse", "ft", VECTOR), KN, KS, KNO, KSO,
+            Phys("adhesionForce", "adhesion", "adhesion_force"))
     parameters = {"normal_stiffness": ("stored", "kno as YADE stored it ('stored'), or rebuilt from the "
                                                  "materials and the radii the reader gives ('materials')"),
                   "include_adhesion": (False, "includeAdhesion: the DMT adhesion force F_adh = 4 pi R* gamma "
@@ -68,6 +73,11 @@ class YadeMindlin(YadeScGeomLaw):
         if self.params["include_adhesion"]:  # the work of the constant DMT force since first touch
             modes["u_adh"] = -rows.column("adhesion_force") * overlap(rows.delta)
         return LawEnergy({"u_n": u_n, **modes}, skipped)
+
+    def depth_from_phys(self, t: Table) -> np.ndarray:
+        """delta = (kn / (1.5 kno))^2, from the tangent stiffness YADE stored; unknown where kn = 0 (a contact
+        kept apart by ``neverErase``, whose forces and stiffnesses YADE zeroes)."""
+        return where_known(t["kn"] > 0, (t["kn"] / (1.5 * t["kno"])) ** 2)
 
     def normal_force(self, rows: ContactRows) -> np.ndarray:
         if "kno" not in self.contact_columns:
