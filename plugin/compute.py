@@ -85,7 +85,7 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = DEFAULT_OPTIONS)
     source = frame.source[0] if frame.source else None
     require_columns(frame.particles, PARTICLE_REQUIRED, "particles", file=source, step=frame.step)
     require_columns(frame.contacts, CONTACT_REQUIRED, "contacts", file=source, step=frame.step)
-    frame = validated_frame(frame)  # canonical dtypes; every number finite, in range and plausible
+    frame = validated_frame(frame, scene)  # canonical dtypes; every number finite, in range and plausible
     particles = frame.particles
     contacts = FrameContacts(frame.contacts, scene, particles, ParticleIndex(particles["id"], file=source,
                                                                             step=frame.step))

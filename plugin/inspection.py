@@ -196,8 +196,8 @@ def _check_overlaps(run, frame: Frame) -> list[str]:
     problems = []
     for bad, what in ((~(delta > -limit), "overlap delta <= 0 (not in contact)" if not limit.any() else
                        "a gap -delta at or beyond the largest its law acts across (0 but for a liquid bridge)"),
-                      (delta > overlap_limit(c), "overlap larger than the smaller radius (or the largest its law "
-                                                 "allows)")):
+                      (delta > overlap_limit(c, run.scene), "overlap larger than the smaller radius (or the largest "
+                                                            "its law allows)")):
         if bad.any():
             row = int(np.flatnonzero(bad)[0])
             who = (f"particles {int(c['id1'][row])}-{int(c['id2'][row])}" if c["wall"][row] < 0

@@ -15,9 +15,9 @@ the file, the timestep, the table, the column and the row. The checks:
 * radius, r1, r2 > 0; stored stiffnesses (``kn ks kno kso``) >= 0; the normal
   is a unit vector (to 1e-5, the precision of ``%g`` exports);
 * the box is finite with lo < hi; the frame's time, when known, is finite and >= 0;
-* an overlap is not larger than the one its law allows: the contacts' ``overlap_limit`` column, which a
-  reader sets from the law (:meth:`~demsplit.physics.laws.ContactLaw.overlap_limit`: a JCFpm smooth joint,
-  r1 + r2), else the smaller of the two radii.
+* an overlap is not larger than the one its law allows (:meth:`~demsplit.physics.laws.ContactLaw.overlap_limit`,
+  asked of the law that acts on the contact: a JCFpm smooth joint, r1 + r2), by default the smaller of the two
+  radii.
 
 :func:`typed_columns` is the same layer one step earlier, for a reader's raw
 records (a YADE snapshot's tables, before the reader combines their columns):
@@ -37,6 +37,8 @@ import numpy as np
 
 from .errors import ContactError, InputFormatError
 from .frame import Frame, Table
+from .physics.partition import law_groups
+from .scene import Scene
 
 INTEGER_COLUMNS = {"id": np.int64, "type": np.int32, "clump": np.int64, "id1": np.int64, "id2": np.int64,
                    "wall": np.int64, "type1": np.int64, "type2": np.int64, "history_unknown": np.int8}
@@ -44,14 +46,12 @@ INTEGER_COLUMNS = {"id": np.int64, "type": np.int32, "clump": np.int64, "id1": n
 NOT_NEGATIVE = ("kn", "ks", "kno", "kso", "kr", "ktw", "mb", "mtw", "mass")
 MAY_BE_INFINITE = ("r2",)  # a plane: R = inf
 UNIT_TOLERANCE = 1e-5
-OVERLAP_LIMIT = "overlap_limit"
-"""Contact column (m): the largest overlap each contact's law allows, where a reader has it from the law;
-without it, the smaller radius (:func:`overlap_limit`)."""
-POSITIVE = ("radius", "r1", "r2", OVERLAP_LIMIT)
+POSITIVE = ("radius", "r1", "r2")
 
 
-def validated_frame(frame: Frame) -> Frame:
-    """``frame`` with canonical dtypes, or the error of its first invalid value (module docstring)."""
+def validated_frame(frame: Frame, scene: Scene) -> Frame:
+    """``frame`` with canonical dtypes, or the error of its first invalid value (module docstring); ``scene``:
+    the run's, whose laws say how deep their contacts may overlap."""
     source = frame.source[-1] if frame.source else None  # the contact file of a joined LIGGGHTS frame
     where = {"file": frame.source[0] if frame.source else None, "step": frame.step}
     particles = _canonical("particles", frame.particles, where)
@@ -65,7 +65,7 @@ def validated_frame(frame: Frame) -> Frame:
         raise InputFormatError(f"the frame's time {float(frame.time)!r} s is not a finite time >= 0.", **where,
                                fix="check the run's timestep and the frame's step.")
     if contacts and len(contacts["delta"]):
-        _check_geometry(contacts, {**where, "file": source})
+        _check_geometry(contacts, scene, {**where, "file": source})
     return replace(frame, particles=particles, contacts=contacts)
 
 
@@ -126,14 +126,15 @@ def _refuse(bad: np.ndarray, table: str, col: str, values: np.ndarray, what: str
                                fix="check the file at that row: a damaged or foreign value.")
 
 
-def _check_geometry(c: Table, where: dict) -> None:
+def _check_geometry(c: Table, scene: Scene, where: dict) -> None:
     norm = np.sqrt(c["nx"] ** 2 + c["ny"] ** 2 + c["nz"] ** 2)
     _refuse(np.abs(norm - 1.0) > UNIT_TOLERANCE, "contacts", "|n|", norm, "is not a unit normal", c, where)
-    limit = overlap_limit(c)
+    limit = overlap_limit(c, scene)
     too_deep = c["delta"] > limit
     if too_deep.any():
         row = int(np.flatnonzero(too_deep)[0])
-        what = "the largest its law allows" if OVERLAP_LIMIT in c else "its smaller radius"
+        radius = limit[row] == min(c["r1"][row], c["r2"][row])
+        what = "its smaller radius" if radius else "the largest its law allows"
         raise ContactError(
             f"{_who('contacts', c, row)} (row {row}) has an overlap of {float(c['delta'][row]):g} m, larger than "
             f"{what} ({float(limit[row]):g} m): not a plausible DEM contact; "
@@ -141,10 +142,15 @@ def _check_geometry(c: Table, where: dict) -> None:
             fix="check that the contact and atom dumps belong to the same run and timestep.")
 
 
-def overlap_limit(c: Table) -> np.ndarray:
-    """The largest plausible overlap (m) of each contact: its ``overlap_limit`` column (its law's, set by the
-    reader), else the smaller of r1 and r2."""
-    return c[OVERLAP_LIMIT] if OVERLAP_LIMIT in c else np.minimum(c["r1"], c["r2"])
+def overlap_limit(c: Table, scene: Scene) -> np.ndarray:
+    """The largest plausible overlap (m) of each contact: what the law that acts on it allows
+    (:meth:`~demsplit.physics.laws.ContactLaw.overlap_limit`), by default the smaller of r1 and r2."""
+    limit = np.minimum(c["r1"], c["r2"])
+    for model, rows in law_groups(c, scene):
+        law_limit = model.contact_law.overlap_limit({k: np.asarray(v)[rows] for k, v in c.items()})
+        if law_limit is not None:
+            limit[rows] = law_limit
+    return limit
 
 
 def check_finite_energies(u: np.ndarray, contacts: Table, *, file: str | None, step: int) -> None:

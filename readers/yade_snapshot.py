@@ -33,7 +33,7 @@ from demsplit.frame import Box, Frame, Table
 from demsplit.physics import laws as law_registry
 from demsplit.physics.laws._yade import ENGINE_PHYS, SCALAR, SPRINGS, VECTOR, Phys, YadeLaw, magnitude
 from demsplit.scene import ContactModel, Material, Scene, Wall
-from demsplit.validate import OVERLAP_LIMIT, typed_columns
+from demsplit.validate import typed_columns
 from demsplit.yade import (
     FORMAT_NAME, FORMAT_VERSION, HDF5_SIGNATURE, NPY_STREAM_MAGIC, RECORD_TAIL, YADE_PREFIX, npy_records,
     sniff_format,
@@ -698,9 +698,6 @@ def frame_from_snapshot(meta: dict, tables: dict[str, Table], scene_walls: dict[
         notes.append(f"{int((~keep).sum())} real interaction(s) with penetrationDepth < 0 (neverErase) "
                      "left out of the contacts table: they carry no elastic energy")
         contacts = {c: v[keep] for c, v in contacts.items()}
-    limit = law.overlap_limit(contacts)
-    if limit is not None:
-        contacts[OVERLAP_LIMIT] = limit
     _refuse_unusable(contacts, unusable or {}, path=path, step=step)
     capillary = _capillary_note(meta, inter, path, step)
     if capillary:

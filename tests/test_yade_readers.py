@@ -345,16 +345,16 @@ def test_plane_as_plane_is_refused_by_a_law_that_reads_yades_kno(sample, capsys,
 
 def _joint_frame(smooth_joint: bool):
     """Two JCFpm contacts of spheres r = 1 mm: one on a joint overlapped by 1.5 mm (the spheres slid past each
-    other), one bond in tension; the overlap limit as the YADE reader has it from the law."""
+    other), one bond in tension, and the scene of that law."""
     law = laws.make("yade:Law2_ScGeom_JCFpmPhys_JointedCohesiveFrictionalPM", {"smooth_joint": smooth_joint})
     contacts = {"id1": np.array([0, 1]), "id2": np.array([1, 2]), "wall": np.array([-1, -1]),
                 "delta": np.array([1.5e-3, -1e-4]), "nx": np.ones(2), "ny": np.zeros(2), "nz": np.zeros(2),
                 "x1": np.zeros(2), "y1": np.zeros(2), "z1": np.zeros(2), "r1": np.full(2, 1e-3),
                 "r2": np.full(2, 1e-3), "on_joint": np.array([1.0, 0.0])}
-    contacts["overlap_limit"] = law.overlap_limit(contacts)
     particles = {"id": np.arange(3), "type": np.zeros(3, np.int32), "x": np.zeros(3), "y": np.zeros(3),
                  "z": np.zeros(3), "radius": np.full(3, 1e-3)}
-    return ds.Frame(step=1, particles=particles, contacts=contacts), law
+    scene = ds.Scene({0: ds.Material(1e9, 0.3)}, ds.ContactModel(law.key, {"smooth_joint": smooth_joint}))
+    return ds.Frame(step=1, particles=particles, contacts=contacts), scene
 
 
 def test_a_smooth_joint_may_overlap_beyond_the_smaller_radius():
@@ -363,15 +363,15 @@ def test_a_smooth_joint_may_overlap_beyond_the_smaller_radius():
     from demsplit.errors import ContactError
     from demsplit.validate import validated_frame
 
-    frame, law = _joint_frame(smooth_joint=True)
-    assert validated_frame(frame).contacts["overlap_limit"].tolist() == [2e-3, 1e-3]
-    assert law.separation_limit(1e-3, 1e-3) == np.inf
-    frame, _ = _joint_frame(smooth_joint=False)  # without smoothJoint YADE's law acts on delta: a radius at most
-    with pytest.raises(ContactError, match="larger than the largest its law allows"):
-        validated_frame(frame)
-    del frame.contacts["overlap_limit"]
+    from demsplit.validate import overlap_limit
+
+    frame, scene = _joint_frame(smooth_joint=True)
+    validated_frame(frame, scene)
+    assert overlap_limit(frame.contacts, scene).tolist() == [2e-3, 1e-3]
+    assert scene.model.contact_law.separation_limit(1e-3, 1e-3) == np.inf
+    frame, scene = _joint_frame(smooth_joint=False)  # without smoothJoint YADE's law acts on delta: a radius at most
     with pytest.raises(ContactError, match="larger than its smaller radius"):
-        validated_frame(frame)
+        validated_frame(frame, scene)
 
 
 def test_several_files_are_one_run_only_for_a_reader_of_several_files():
