@@ -164,8 +164,8 @@ def _store_forces(lines: list[str], commands: list[tuple[int, list[str]]]) -> tu
         last = line - 1
         while lines[last].rstrip().endswith("&"):
             last += 1
-        code = strip_comment(lines[last])
-        lines[last] = code.rstrip() + f" {STORE_FORCE}" + lines[last][len(code):]
+        code = strip_comment(lines[last]).rstrip()
+        lines[last] = code + f" {STORE_FORCE}" + lines[last][len(code):]
         commands[k] = (line, [*words, *STORE_FORCE.split()])
         changed.append(words[1])
     return lines, changed

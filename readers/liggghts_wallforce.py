@@ -215,16 +215,14 @@ class WallForce:
         allow_f, allow_t = np.zeros(n_atoms), np.zeros(n_atoms)
         index = {int(k): n for n, k in enumerate(particles["id"])}
 
-        def add(rows1: np.ndarray, rows2: np.ndarray | None, terms: _Terms) -> None:
-            for rows, sign, torque in ((rows1, 1.0, terms.torque1), (rows2, -1.0, terms.torque2)):
-                if rows is None:
-                    continue
-                np.add.at(res_f, rows, -sign * terms.force)
-                np.add.at(res_t, rows, -torque)
-                np.add.at(scale_f, rows, terms.force_scale)
-                np.add.at(scale_t, rows, terms.torque_scale)
-                np.add.at(allow_f, rows, terms.force_allowance)
-                np.add.at(allow_t, rows, terms.torque_allowance)
+        def add(rows: np.ndarray, terms: _Terms) -> None:
+            """What contacts applied to their body 1, the particles ``rows``, out of those particles' balance."""
+            np.add.at(res_f, rows, -terms.force)
+            np.add.at(res_t, rows, -terms.torque1)
+            np.add.at(scale_f, rows, terms.force_scale)
+            np.add.at(scale_t, rows, terms.torque_scale)
+            np.add.at(allow_f, rows, terms.force_allowance)
+            np.add.at(allow_t, rows, terms.torque_allowance)
 
         # the pairs: one side each, both sides of a pair across a periodic boundary (each with its own image)
         if len(pairs.get("id1", ())):
@@ -233,17 +231,17 @@ class WallForce:
             ghost = np.asarray(pairs["periodic"]) == 1
             lengths = np.where(box.periodic, box.lengths, 0.0)
             listed = self._pair_terms(particles, pairs, i, j, slice(None), 1.0, lengths, v, w, setup, dt)
-            add(i, None, listed)
-            add(j[~ghost], None, _side2(listed, ~ghost))
+            add(i, listed)
+            add(j[~ghost], _side2(listed, ~ghost))
             if ghost.any():
-                other = self._pair_terms(particles, pairs, j[ghost], i[ghost], ghost, -1.0, lengths, v, w, setup, dt)
-                add(j[ghost], None, other)
+                add(j[ghost], self._pair_terms(particles, pairs, j[ghost], i[ghost], ghost, -1.0, lengths, v, w,
+                                               setup, dt))
         # the mesh walls, from their dumped history
         if mesh is not None and len(mesh.get("id1", ())):
             rows = np.array([index[int(k)] for k in mesh["id1"]], dtype=np.int64)
             touching = np.asarray(mesh["delta"]) > 0
-            add(rows[touching], None, self._mesh_terms(particles, mesh, rows, touching, v, w, setup, dt,
-                                                       mesh_delta_dumped))
+            add(rows[touching], self._mesh_terms(particles, mesh, rows, touching, v, w, setup, dt,
+                                                 mesh_delta_dumped))
         # every stored force, whether or not a contact was found for it
         for fix in self.stored.values():
             force = np.stack([np.asarray(particles[c], dtype=np.float64) for c in stored_force_columns(fix)], -1)
@@ -465,6 +463,10 @@ class WallForce:
             rolling = applied_rolling_torque(history, rolling_increment(w_roll, en, kr, dt),
                                              np.broadcast_to(cap_r, fn.shape), setup)
             torque1, torque2 = torque1 - rolling, torque2 + rolling
+        apart = ~(rows.delta > 0)  # LIGGGHTS applies nothing between bodies that do not overlap
+        if apart.any():
+            fn, ft, torque1, torque2, rolling = (np.where(apart if a.ndim == 1 else apart[:, None], 0.0, a)
+                                                 for a in (fn, ft, torque1, torque2, rolling))
         damping = (gamma_n + gamma_t) * speed
         ft_mag = magnitude(ft)
         force_allowance, rolling_allowance = np.zeros(len(fn)), np.zeros(len(fn))
