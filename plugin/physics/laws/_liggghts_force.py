@@ -82,16 +82,29 @@ def coulomb_rescaled(vec: np.ndarray, cap: np.ndarray) -> np.ndarray:
     return vec * np.where(mag > cap, cap / np.where(mag > 0, mag, 1.0), 1.0)[:, None]
 
 
+def at_cap(vec: np.ndarray, cap: np.ndarray, setup: bool) -> np.ndarray:
+    """Whether a spring (or rolling torque) ``vec`` as the history holds it after the step sat at its cap in the
+    step: at a setup step (no update) where it exceeds it; mid-run where it reaches it to CAP_RTOL (a capped history
+    was rescaled to the cap)."""
+    mag = magnitude(vec)
+    return mag > cap if setup else mag >= cap * (1.0 - CAP_RTOL)
+
+
+def onto_cap(vec: np.ndarray, cap: np.ndarray) -> np.ndarray:
+    """``vec`` rescaled to the magnitude ``cap`` (a zero vector stays zero)."""
+    mag = magnitude(vec)
+    return vec * (cap / np.where(mag > 0, mag, 1.0))[:, None]
+
+
 def applied_tangential_force(spring: np.ndarray, cap: np.ndarray, gamma_t: np.ndarray, vtr: np.ndarray,
                              setup: bool) -> tuple[np.ndarray, np.ndarray]:
     """The tangential force (N, (n, 3)) a contact applied in the step and whether it sat at the Coulomb cap
-    mu |F_n| (N), from its spring F_el = -k_t shear as the history holds it after the step: at a setup step the
-    history was not updated, the cap rescales it; mid-run a capped history was rescaled to the applied force
-    (|F_el| = cap, to rounding), an uncapped one adds the damping -gamma_t v_tr (module docstring)."""
-    mag = magnitude(spring)
-    capped = mag > cap if setup else mag >= cap * (1.0 - CAP_RTOL)
-    sliding = coulomb_rescaled(spring, cap) if setup else spring
-    return np.where(capped[:, None], sliding, spring - gamma_t[:, None] * vtr), capped
+    mu |F_n| (N), from its spring F_el = -k_t shear as the history holds it after the step (:func:`at_cap`): a
+    capped one applied F_el rescaled to the cap (mid-run its history was rescaled to it: the rescaling only removes
+    the rounding, or a copy's difference on the other side of a periodic boundary), an uncapped one adds the damping
+    -gamma_t v_tr (module docstring)."""
+    capped = at_cap(spring, cap, setup)
+    return np.where(capped[:, None], onto_cap(spring, cap), spring - gamma_t[:, None] * vtr), capped
 
 
 def tangential_spring(force: np.ndarray, cap: np.ndarray, gamma_t: np.ndarray, vtr: np.ndarray,
@@ -112,9 +125,11 @@ def rolling_increment(w: np.ndarray, en: np.ndarray, kr: np.ndarray, dt: float) 
 def applied_rolling_torque(history: np.ndarray, increment: np.ndarray, cap: np.ndarray,
                            setup: bool) -> np.ndarray:
     """The rolling spring torque M (N m, (n, 3)) an ``epsd2`` contact applied in the step, from its history after
-    the step: mid-run the history holds it; at a setup step (no update) it is cap(M_hist + k_r w_t dt), with the
-    cap mu_r |F_n| R* (N m)."""
-    return coulomb_rescaled(history + increment, cap) if setup else history
+    the step: mid-run the history holds it (on the cap mu_r |F_n| R* (N m) where it reached it,
+    :func:`at_cap`); at a setup step (no update) it is cap(M_hist + k_r w_t dt)."""
+    if setup:
+        return coulomb_rescaled(history + increment, cap)
+    return np.where(at_cap(history, cap, False)[:, None], onto_cap(history, cap), history)
 
 
 def contact_torque(lever: np.ndarray, en: np.ndarray, ft: np.ndarray) -> np.ndarray:
