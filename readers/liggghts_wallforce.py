@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..frame import Box, Table
+from ..frame import Box, ParticleIndex, Table
 from ..physics.bodies import FrameContacts, LawRows
 from ..physics.laws._liggghts import ROLLING_TORQUE, SHEAR, LiggghtsNormalModel
 from ..physics.laws._liggghts_force import (CAP_RTOL, applied_rolling_torque, applied_tangential_force,
@@ -213,7 +213,7 @@ class WallForce:
         res_f, res_t = vec["f"] - weight, vec["tq"].copy()
         scale_f, scale_t = magnitude(vec["f"]) + magnitude(weight), magnitude(vec["tq"])
         allow_f, allow_t = np.zeros(n_atoms), np.zeros(n_atoms)
-        index = {int(k): n for n, k in enumerate(particles["id"])}
+        index = ParticleIndex(particles["id"])
 
         def add(rows: np.ndarray, terms: _Terms) -> None:
             """What contacts applied to their body 1, the particles ``rows``, out of those particles' balance."""
@@ -226,8 +226,7 @@ class WallForce:
 
         # the pairs: one side each, both sides of a pair across a periodic boundary (each with its own image)
         if len(pairs.get("id1", ())):
-            i = np.array([index[int(k)] for k in pairs["id1"]], dtype=np.int64)
-            j = np.array([index[int(k)] for k in pairs["id2"]], dtype=np.int64)
+            i, j = index.rows(pairs["id1"]), index.rows(pairs["id2"])
             ghost = np.asarray(pairs["periodic"]) == 1
             lengths = np.where(box.periodic, box.lengths, 0.0)
             listed = self._pair_terms(particles, pairs, i, j, slice(None), 1.0, lengths, v, w, setup, dt)
@@ -238,7 +237,7 @@ class WallForce:
                                                setup, dt))
         # the mesh walls, from their dumped history
         if mesh is not None and len(mesh.get("id1", ())):
-            rows = np.array([index[int(k)] for k in mesh["id1"]], dtype=np.int64)
+            rows = index.rows(mesh["id1"])
             touching = np.asarray(mesh["delta"]) > 0
             add(rows[touching], self._mesh_terms(particles, mesh, rows, touching, v, w, setup, dt,
                                                  mesh_delta_dumped))
@@ -256,7 +255,7 @@ class WallForce:
         if n == 0:
             return Rebuilt(columns, unknown), True
         wall = np.asarray(primitive["wall"])[touch]
-        ip = np.array([index[int(k)] for k in np.asarray(primitive["id1"])[touch]], dtype=np.int64)
+        ip = index.rows(np.asarray(primitive["id1"])[touch])
         table = {c: np.asarray(primitive[c])[touch] for c in ("id1", "id2", "wall", "delta", "r1", "r2")}
         delta, r1 = table["delta"], table["r1"]
         en = -np.stack([np.asarray(primitive[c])[touch] for c in ("nx", "ny", "nz")], -1)
