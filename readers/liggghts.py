@@ -36,7 +36,7 @@ from .dump_series import DumpSeries, series_files
 from .lammps_dump import HEADER_LINES, DumpFile, DumpFrame, open_dump
 from .liggghts_join import ATOM_COLUMNS, PRIMITIVE_HISTORY_UNKNOWN, StepJoin
 from .liggghts_script import DumpSpec, LiggghtsScript, read_script
-from .liggghts_wallforce import BALANCE_COLUMNS, stored_force_columns, wall_force_of
+from .liggghts_wallforce import BALANCE_COLUMNS, WallForce, stored_force_columns, wall_force_of
 from .liggghts_vtk import vtk_dump_note
 
 DEFAULT_OVERLAP_TOLERANCE = 1e-3
@@ -335,7 +335,7 @@ class LiggghtsRun(Run):
                              list(self.script.dumped_mesh_walls), self.walls is not None, self.overlap_tolerance,
                              self.force_positions, self.wall_force, primitive_note)
 
-    def _wall_force(self, dumped: set[int]):
+    def _wall_force(self, dumped: set[int]) -> tuple[WallForce | None, str]:
         """The rebuilding of the primitive walls' history from their stored forces (None where the run does not
         allow it) and the note that says what becomes of that history."""
         if self.script_text is not None:
