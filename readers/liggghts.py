@@ -341,10 +341,12 @@ class LiggghtsRun(Run):
         if self.script_text is not None:
             return None, PRIMITIVE_HISTORY_UNKNOWN
         route, why = wall_force_of(self.script, self.scene, dumped)
-        if route is not None:
-            missing = [c for c in route.particle_columns() if c not in (self.atoms.columns or [])]
-            if missing:
-                route, why = None, f"the atom dump lacks the columns {missing}"
+        columns = set(self.atoms.columns or [])
+        if route is not None:  # a wall whose force the atom dump lacks stays unknown, as one without store_force
+            route.stored = {k: fix for k, fix in route.stored.items() if set(stored_force_columns(fix)) <= columns}
+            missing = [c for c in BALANCE_COLUMNS if c not in columns]
+            if missing or not route.stored:
+                route, why = None, f"the atom dump lacks the columns {missing or 'f_force_<ID>[1..3]'}"
         if route is None:
             return None, f"{PRIMITIVE_HISTORY_UNKNOWN} Their fixes' stored forces cannot stand in for it: {why} " \
                          "('demsplit prepare' adds store_force yes and the columns; docs/liggghts-output.md)."
@@ -356,7 +358,8 @@ class LiggghtsRun(Run):
                 "by every particle's force and torque balance; where it cannot be, it is NOT COMPUTED and a note says "
                 "why (docs/liggghts-output.md)")
         if rest:
-            note += f"; the walls {', '.join(rest)} have no store_force: {PRIMITIVE_HISTORY_UNKNOWN}"
+            note += f"; the walls {', '.join(rest)} have no stored force in the atom dump (store_force yes and its " \
+                    f"f_force_<ID> columns): {PRIMITIVE_HISTORY_UNKNOWN}"
         return route, note
 
     @classmethod

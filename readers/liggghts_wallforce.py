@@ -39,6 +39,7 @@ from ..physics.laws._liggghts_force import (CAP_RTOL, applied_rolling_torque, ap
 from ..physics.modes import HISTORY_LOST, NOT_COMPUTED_BITS
 from ..physics.moduli import effective_radius
 from ..scene import ContactModel, Scene
+from .liggghts_script import LiggghtsScript
 
 GHOST_RTOL = 1e-10
 """The allowance, relative to its tangential force and rolling torque, for the side of a pair across a periodic
@@ -62,8 +63,8 @@ REASONS = {
     "open_balance": "the history of the primitive-wall contacts of a particle whose dumped force or torque does not "
                     "close against its contacts (within the printed precision) is NOT COMPUTED",
     "unstored_wall": "the history of the primitive-wall contacts of a particle that also touches a primitive wall "
-                     "without 'store_force yes' is NOT COMPUTED: that wall's force is unknown, so the balance "
-                     "cannot be checked",
+                     "whose force the atom dump does not hold (no store_force yes, or no f_force column) is NOT "
+                     "COMPUTED: that wall's force is unknown, so the balance cannot be checked",
     "normal_off_model": "the history of a primitive-wall contact whose normal force the normal model does not give "
                         "with the step's velocities is NOT COMPUTED",
     "spring_beyond_cap": "u_t of a primitive-wall contact whose spring, rebuilt from the force, exceeds the Coulomb "
@@ -272,14 +273,13 @@ class WallForce:
         w_r = (lever / dist)[:, None] * w[ip]
         vn, vtr = contact_velocity(v[ip], en, w_r, dist)
         frame = FrameContacts(table, self.scene, particles)
-        law = _per_wall(self.scene, wall)
+        law: dict[int, LiggghtsNormalModel] = {}
         kt, gamma_n, gamma_t, mu, mu_r, kr = (np.zeros(n) for _ in range(6))
         rolls = np.zeros(n, dtype=bool)
         bits = np.zeros(n, dtype=np.int8)  # the modes each row's law reads a history for
         for k in np.unique(wall):
             at = wall == k
-            model = self.scene.walls[k].model or self.scene.model
-            contact_law = model.contact_law
+            contact_law = law[k] = (self.scene.walls[k].model or self.scene.model).contact_law
             bits[at] = sum(NOT_COMPUTED_BITS[m] for m in contact_law.mode_columns)
             settings = self.wall_settings[k]
             if settings is None:
@@ -483,7 +483,7 @@ class WallForce:
                       c1 * force_allowance + rolling_allowance)
 
 
-def wall_force_of(script, scene: Scene, dumped_mesh_walls: set[int]) -> tuple[WallForce | None, str]:
+def wall_force_of(script: LiggghtsScript, scene: Scene, dumped_mesh_walls: set[int]) -> tuple[WallForce | None, str]:
     """The rebuilding of the primitive-wall contacts of a run (a :class:`~.liggghts_script.LiggghtsScript` and its
     scene, the mesh walls whose contacts a dump holds), or None and why not."""
     primitive = [k for k, w in enumerate(scene.walls) if w.kind in ("plane", "cylinder")]
@@ -535,11 +535,6 @@ def _side2(terms: _Terms, rows: np.ndarray) -> _Terms:
     """The other side of the contacts ``rows`` of ``terms``: the opposite force and body 2's torque."""
     return _Terms(-terms.force[rows], terms.torque2[rows], terms.torque1[rows], terms.force_scale[rows],
                   terms.torque_scale[rows], terms.force_allowance[rows], terms.torque_allowance[rows])
-
-
-def _per_wall(scene: Scene, wall: np.ndarray) -> dict[int, LiggghtsNormalModel]:
-    """The contact law of every wall index present."""
-    return {int(k): (scene.walls[int(k)].model or scene.model).contact_law for k in np.unique(wall)}
 
 
 def _damping(law: LiggghtsNormalModel, rows: LawRows, settings: ForceSettings) -> tuple[np.ndarray, np.ndarray]:

@@ -303,3 +303,34 @@ def test_packing_prepared_and_rerun_has_its_primitive_walls_complete(liggghts, t
     primitive = c[c["wall"] >= 1]
     assert primitive["u_t"].notna().all() and (primitive["wall"] == 5).sum() == 3 * 17
     np.testing.assert_allclose(primitive.groupby("step")["u_t"].sum(), 7.786e-9, rtol=1e-3)
+
+
+def test_a_wall_without_stored_force_leaves_its_particles_unverified(tmp_path):
+    """A primitive wall without store_force (here one the run did not have: a plane through the packing) leaves
+    its own contacts' history unknown, and that of the floor contacts of the particles touching it (their balance
+    misses its force), with that reason; every other floor contact is rebuilt as before."""
+    script = tmp_path / "in.hertz_prim"
+    for name in ("ds_atoms.txt.gz", "ds_pairs.txt.gz"):
+        shutil.copy(WALLS / "hertz_prim" / name, tmp_path / name)
+    floor = "fix wfloor all wall/gran model hertz tangential history primitive type 3 zplane 0.0 store_force yes"
+    text = (WALLS / "hertz_prim" / "in.hertz_prim").read_text()
+    assert floor in text
+    script.write_text(text.replace(floor, floor + "\nfix wcut all wall/gran model hertz tangential history "
+                                   "primitive type 3 xplane 0.0"))
+    plain = analysed(WALLS / "hertz_prim" / "in.hertz_prim")
+    assert "wcut" in open_run(script).join.primitive_note
+    cut = both = 0
+    for (frame, e), (expected, ee) in zip(analysed(script), plain):
+        c = frame.contacts
+        on_cut = set(c["id1"][c["wall"] == 1].tolist())
+        cut += len(on_cut)
+        assert not known(e, np.flatnonzero(c["wall"] == 1), "u_t").any()
+        rows = np.flatnonzero(c["wall"] == 0)
+        touching = np.isin(c["id1"][rows], list(on_cut))
+        both += int(touching.sum())
+        assert not known(e, rows[touching], "u_t").any()
+        before = floor_rows(expected, c["id1"][rows])
+        np.testing.assert_array_equal(known(e, rows[~touching], "u_t"), known(ee, before[~touching], "u_t"))
+        np.testing.assert_array_equal(e.u_t[rows[~touching]], ee.u_t[before[~touching]])
+        assert (REASONS["unstored_wall"] in frame.notes) == bool(touching.any())
+    assert cut > 5 and both > 0
