@@ -26,9 +26,10 @@ ids, int32 for types); DataFrames are only built at the user-facing edges.
     normal force), ``ftx fty ftz`` (N, elastic tangential force), ``shearx
     sheary shearz`` (m, LIGGGHTS tangential spring history), ``kn ks kno kso``
     (stiffnesses the simulator stored), ``cpx cpy cpz`` (m, the simulator's own
-    contact point), ``history_unknown`` (int8, 1 where the simulator never wrote the
-    contact's history, e.g. LIGGGHTS primitive walls: the law's history-dependent modes
-    are then "not computed" for that row).
+    contact point), ``history_unknown`` (int8, the ``not_computed`` bits of the modes whose history
+    the simulator never wrote for the contact, :data:`~demsplit.physics.modes.HISTORY_LOST` for all of
+    them, e.g. LIGGGHTS primitive walls: the law's modes that read a history are then "not computed" for
+    that row where their bit is set).
 """
 
 from __future__ import annotations

@@ -145,6 +145,7 @@ def check_run(input: str | Path, **reader_options) -> tuple[str, bool]:
                      f"--allow-missing {w.name}" for w in scene.walls if w.missing]
         types: set[int] = set()
         first: Frame | None = None
+        notes: list[str] = []  # every frame's, once (what a frame could not give, and why)
         out.append("  frame  step        particles  contacts  wall contacts  overlap bound")
         for k in range(len(run)):
             try:
@@ -154,6 +155,7 @@ def check_run(input: str | Path, **reader_options) -> tuple[str, bool]:
                 problems.append(str(exc))
                 continue
             first = first or frame
+            notes += [note for note in frame.notes if note not in notes]
             types.update(np.unique(frame.particles["type"]).tolist())
             bound = frame.overlap_error
             out.append(f"  {k:>5}  {frame.step:<10}  {frame.n_particles:>9}  {frame.n_contacts:>8}  "
@@ -162,7 +164,7 @@ def check_run(input: str | Path, **reader_options) -> tuple[str, bool]:
             problems += _check_overlaps(run, frame)
         problems += _check_materials(scene, types)
         if first is not None:
-            lines, missing = _what_run_computes(run, first)
+            lines, missing = _what_run_computes(run, first, notes)
             out += lines
             problems += missing
     finally:
@@ -222,10 +224,11 @@ def _check_materials(scene, types: set[int]) -> list[str]:
     return problems
 
 
-def _what_run_computes(run, frame: Frame) -> tuple[list[str], list[str]]:
+def _what_run_computes(run, frame: Frame, notes: list[str]) -> tuple[list[str], list[str]]:
     """What ``demsplit run`` would compute from which columns (from the first readable frame):
     each law's one-line description, the modes a law does not have (0), and, as problems, the modes
-    the run has but whose columns were not dumped (``run`` refuses them without ``--allow-missing``)."""
+    the run has but whose columns were not dumped (``run`` refuses them without ``--allow-missing``);
+    the run's notes and every frame's ``notes``."""
     from .physics.partition import contact_energies
 
     scene = run.scene
@@ -245,7 +248,7 @@ def _what_run_computes(run, frame: Frame) -> tuple[list[str], list[str]]:
                             f"--allow-missing {what} (its values are then marked not computed).")
     except DemsplitError as exc:
         problems.append(str(exc))
-    for note in run.notes + frame.notes:
+    for note in run.notes + [n for n in notes if n not in run.notes]:
         lines.append(f"  note: {note}")
     lines.append(f"  walls:       {len(scene.walls)} ({_walls(scene)})")
     return lines, problems

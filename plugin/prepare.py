@@ -18,7 +18,14 @@ requires of the contact computes):
   already writes one; LIGGGHTS checks a ``f_`` column when it reads the dump command, so the
   fix behind it, which a liquid-bridge model creates only when the first run starts, is
   created just before (:meth:`~demsplit.physics.laws._liggghts.LiggghtsNormalModel.dump_setup`;
-  checked in Debian's LIGGGHTS: the trajectory is bit for bit the same).
+  checked in Debian's LIGGGHTS: the trajectory is bit for bit the same);
+- for primitive walls, whose contact history LIGGGHTS never writes: ``store_force yes`` on every
+  primitive ``fix wall/gran`` (appended to its line), and in the atom dump the torques ``tqx tqy tqz``
+  and each such fix's stored force ``f_force_<ID>[1] [2] [3]``, from which the reader rebuilds that
+  history (:mod:`demsplit.readers.liggghts_wallforce`; ``store_force`` leaves the trajectory bit for
+  bit the same: sample_dumps/liggghts/walls/measure.py --packing). A fix defined after the part's
+  first run, or removed by ``unfix`` (LIGGGHTS stops a dump that names a removed fix's column), gets
+  no column: its contacts' history stays not computed, and a note says so.
 
 A mesh wall fix placed after a ``run`` cannot get its contact compute in the
 same LIGGGHTS session (LIGGGHTS accepts ``wall/gran/local`` only before the
@@ -46,12 +53,14 @@ from pathlib import Path
 from .errors import ScriptError
 from .physics.laws import ContactLaw
 from .readers.lammps_input import logical_lines, strip_comment
-from .readers.liggghts_script import LiggghtsScript, local_layout, read_script
+from .readers.liggghts_script import DumpSpec, LiggghtsScript, local_layout, read_script
+from .readers.liggghts_wallforce import BALANCE_COLUMNS, stored_force_columns
 
 KEYWORDS = ["pos", "vel", "id", "force", "force_normal", "force_tangential", "torque", "history", "contactArea",
             "delta", "contactPoint"]
 """Keywords of the contact computes prepare adds (``history`` dropped when the law keeps none)."""
 ATOM_COLUMNS = "id type x y z vx vy vz fx fy fz omegax omegay omegaz radius mass"
+STORE_FORCE = "store_force yes"
 DEFAULT_EVERY = 1000
 RESTART = "ds_split{k}.restart"
 """The restart file between part k and part k + 1 of a split script."""
@@ -99,13 +108,13 @@ def _commands(path: Path) -> list[tuple[int, list[str]]]:
     return out
 
 
-def _has_full_atom_dump(script: LiggghtsScript, declared: set[str], needed: list[str]) -> int | None:
-    """The ``every`` of a full-precision atom dump (among the dump ids ``declared``) with what demsplit
-    reads (``id type x y z radius`` and the ``needed`` columns of the laws), or None."""
+def _full_atom_dump(script: LiggghtsScript, declared: set[str], needed: list[str]) -> DumpSpec | None:
+    """A full-precision atom dump (among the dump ids ``declared``) with what demsplit reads (``id type x y z
+    radius`` and the ``needed`` columns of the laws), or None."""
     for d in script.dumps:
         if d.id in declared and d.style == "custom" and d.full_precision and \
                 {"id", "type", "x", "y", "z", "radius", *needed} <= set(d.keywords):
-            return d.every
+            return d
     return None
 
 
@@ -137,6 +146,40 @@ def _mesh_names(words: list[str]) -> list[str]:
     return words[at:at + n]
 
 
+def _is_primitive_wall_fix(words: list[str]) -> bool:
+    return words[0] == "fix" and len(words) > 3 and words[3] == "wall/gran" and "primitive" in words
+
+
+def _stores_force(words: list[str]) -> bool:
+    return any(a == "store_force" and b == "yes" for a, b in zip(words, words[1:]))
+
+
+def _store_forces(lines: list[str], commands: list[tuple[int, list[str]]]) -> tuple[list[str], list[str]]:
+    """``store_force yes`` appended to every primitive ``fix wall/gran`` command that lacks it (its last physical
+    line, before a comment), in ``lines`` and in ``commands`` (in place); the fix ids changed."""
+    changed = []
+    for k, (line, words) in enumerate(commands):
+        if not _is_primitive_wall_fix(words) or _stores_force(words):
+            continue
+        last = line - 1
+        while lines[last].rstrip().endswith("&"):
+            last += 1
+        code = strip_comment(lines[last]).rstrip()
+        lines[last] = code + f" {STORE_FORCE}" + lines[last][len(code):]
+        commands[k] = (line, [*words, *STORE_FORCE.split()])
+        changed.append(words[1])
+    return lines, changed
+
+
+def _stored_force_fixes(commands: list[tuple[int, list[str]]], at: int) -> tuple[list[str], list[str]]:
+    """The primitive wall fixes with ``store_force yes`` whose force an atom dump placed before line ``at`` may name
+    (defined before it: earlier parts' fixes are replayed; and never removed by ``unfix``), and those it may not."""
+    unfixed = {words[1] for _, words in commands if words[0] == "unfix" and len(words) > 1}
+    fixes = [(line, words[1]) for line, words in commands if _is_primitive_wall_fix(words) and _stores_force(words)]
+    dumped = [fid for line, fid in fixes if line < at and fid not in unfixed]
+    return list(dict.fromkeys(dumped)), [fid for _, fid in fixes if fid not in dumped]
+
+
 def split_points(commands: list[tuple[int, list[str]]]) -> list[int]:
     """Lines of the mesh wall fixes where the script must be split: each one that follows a ``run``
     of the part it would otherwise belong to (module docstring)."""
@@ -162,7 +205,7 @@ def prepare_script(path: str | Path) -> Prepared:
     if not any(words[0] == "run" for _, words in commands):
         raise ScriptError("the script has no 'run' command: there is nothing to dump.", file=path,
                           fix="pass the script that runs the simulation.")
-    lines = path.read_text().split("\n")
+    lines, stored = _store_forces(path.read_text().split("\n"), commands)
     points = split_points(commands)
     if points:
         _check_splittable(path, commands, points)
@@ -177,6 +220,10 @@ def prepare_script(path: str | Path) -> Prepared:
                                    header, footer))
     for part, after in zip(parts, parts[1:]):
         part.part2 = after
+    if stored:
+        parts[0].notes.insert(0, f"primitive walls: store_force yes added to the fix{'es' if len(stored) > 1 else ''} "
+                              f"{', '.join(stored)}: the force each applies, dumped with the torques, gives back "
+                              "their contacts' history (the trajectory is the same).")
     if points:
         parts[0].notes.insert(0, f"split: the mesh wall fix{'es' if len(points) > 1 else ''} on line"
                               f"{'s' if len(points) > 1 else ''} {', '.join(map(str, points))} come"
@@ -232,6 +279,7 @@ def _prepare_part(path: Path, script: LiggghtsScript, histories: dict[str, list[
     history columns of the pair and the wall compute (``'pair'``, ``'wall'``)."""
     suffix = f".part{k}" if k > 1 else ""
     label = f"part {k}: " if k else ""
+    original = path.read_text().split("\n")
     law = script.scene.model.contact_law
     keywords = {kind: [w for w in KEYWORDS if w != "history" or history] for kind, history in histories.items()}
     needed = {"id1", "id2", "delta", *law.needs()}
@@ -242,8 +290,32 @@ def _prepare_part(path: Path, script: LiggghtsScript, histories: dict[str, list[
     notes, block = [], []
     laws = _laws(script)
     extra = list(dict.fromkeys(c for law in laws for c in law.particle_columns if c not in ATOM_COLUMNS.split()))
-    every = _has_full_atom_dump(script, declared, extra)
-    if every is None:
+    own = _full_atom_dump(script, declared, extra)
+    forces, undumped = _stored_force_fixes(commands, runs[0] if runs else end)
+    place = None
+    if forces and own is not None:  # a dump beside the script's own: its interval, its place, so its frames
+        place = max(line for line, words in commands if words[:2] == ["dump", own.id] and line < end)
+        if place >= start:
+            forces, undumped = _stored_force_fixes(commands, place)
+        else:
+            place = None
+    wall_columns = [*BALANCE_COLUMNS, *(c for fid in forces for c in stored_force_columns(fid))] if forces else []
+    extra = list(dict.fromkeys(c for c in [*extra, *wall_columns] if c not in ATOM_COLUMNS.split()))
+    if undumped:
+        notes.append(f"{label}primitive walls {', '.join(undumped)}: defined after the atom dump, or removed by "
+                     "unfix, so no atom dump holds their stored force: their contacts' history stays not computed.")
+    beside: list[str] = []
+    if own is not None and set(wall_columns) <= set(own.keywords):
+        every = own.every
+        notes.append(f"{label}atoms: the script's full-precision atom dump (every {every} steps) is used.")
+    elif place is not None:
+        every = own.every
+        columns = " ".join([ATOM_COLUMNS, *extra])
+        beside = [f"dump dsAtoms all custom {every} ds_atoms{suffix}.txt {columns}",
+                  'dump_modify dsAtoms format "%d %d' + " %.17g" * (len(columns.split()) - 2) + '" sort id']
+        notes.append(f"{label}atoms: a full-precision atom dump with the torques and the primitive walls' stored "
+                     f"forces beside the script's own {own.id} (every {every} steps, ds_atoms{suffix}.txt).")
+    else:
         every = DEFAULT_EVERY
         columns = " ".join([ATOM_COLUMNS, *extra])
         fixes = {words[1] for line, words in commands if line < end and words[0] == "fix" and len(words) > 1}
@@ -256,8 +328,6 @@ def _prepare_part(path: Path, script: LiggghtsScript, histories: dict[str, list[
             notes.append(f"{label}atoms: {' and '.join(extra)} from the fix the cohesion model creates at the first "
                          "run, created just before the dump (LIGGGHTS checks a dump's f_ columns when it reads "
                          "it); the run is the same.")
-    else:
-        notes.append(f"{label}atoms: the script's full-precision atom dump (every {every} steps) is used.")
     if _has_local_dump(script, declared, "pair", needed):
         notes.append(f"{label}pairs: the script's full-precision pair dump holds every column the law needs.")
     else:
@@ -271,17 +341,30 @@ def _prepare_part(path: Path, script: LiggghtsScript, histories: dict[str, list[
                      f"(ds_walls{suffix}.txt).")
     elif not mesh:
         notes.append(f"{label}walls: no mesh wall, so no wall/gran/local compute (LIGGGHTS refuses it with "
-                     "primitive walls only); primitive-wall contacts are rebuilt from positions.")
+                     "primitive walls only); primitive-wall contacts are rebuilt from positions, their history from "
+                     "the walls' stored forces.")
     if not runs:
-        block = []
+        block, beside = [], []
         notes.append(f"{label}no 'run': nothing to dump.")
-    if not block and not header and not footer:
+    if not block and not beside and not header and not footer and body == original[start - 1:end - 1]:
         return Prepared(path.read_text(), [], notes + ["nothing to add: the script writes everything demsplit needs."])
     at = runs[0] - start if block else len(body)  # just before the part's first run: after every fix so far
-    added = ["", "# --- added by 'demsplit prepare': the contact output demsplit reads (docs/liggghts-output.md) ---",
-             *block, "# --- end of the lines added by demsplit ---", ""] if block else []
-    text = "\n".join(header + body[:at] + added + body[at:] + footer)
-    return Prepared(text if text.endswith("\n") else text + "\n", header + block + footer, notes)
+    insertions = [(at, _added(block))]
+    if beside:  # right after the script's own atom dump (its last physical line)
+        last = place - 1
+        while lines[last].rstrip().endswith("&"):
+            last += 1
+        insertions.append((last + 1 - (start - 1), _added(beside)))
+    for position, added in sorted(insertions, key=lambda x: x[0], reverse=True):
+        body = body[:position] + added + body[position:]
+    text = "\n".join(header + body + footer)
+    return Prepared(text if text.endswith("\n") else text + "\n", header + beside + block + footer, notes)
+
+
+def _added(block: list[str]) -> list[str]:
+    """Lines prepare adds, between the comments that mark them."""
+    return ["", "# --- added by 'demsplit prepare': the contact output demsplit reads (docs/liggghts-output.md) ---",
+            *block, "# --- end of the lines added by demsplit ---", ""] if block else []
 
 
 def _local(kind: str, cid: str, keywords: list[str], history: list[str], every: int, suffix: str = "") -> list[str]:

@@ -30,13 +30,14 @@ import numpy as np
 
 from ..errors import DemsplitError, InputFormatError
 from ..frame import Frame, describe_steps
+from ..physics.laws import simulator_words
 from ..scene import Material, Scene
 from .base import MATERIALS, OVERLAP_TOLERANCE, Option, Run
 from .dump_series import DumpSeries, series_files
 from .lammps_dump import HEADER_LINES, DumpFile, DumpFrame, open_dump
-from .liggghts_join import ATOM_COLUMNS, StepJoin
-from ..physics.laws import simulator_words
+from .liggghts_join import ATOM_COLUMNS, PRIMITIVE_HISTORY_UNKNOWN, StepJoin
 from .liggghts_script import TANGENTIAL, DumpSpec, LiggghtsScript, read_script
+from .liggghts_wallforce import BALANCE_COLUMNS, WallForce, stored_force_columns, wall_force_of
 from .liggghts_vtk import vtk_dump_note
 
 DEFAULT_OVERLAP_TOLERANCE = 1e-3
@@ -127,13 +128,24 @@ MESH_WALL_NOT_LAST = (
 
 
 def _candidates(script: LiggghtsScript, kind: str) -> list:
-    """The script's dumps of one kind, full precision first."""
+    """The script's dumps of one kind, full precision first; of the atom dumps, those with more of the columns the
+    rebuilding of the primitive walls' history reads (:func:`force_route_columns`) first among them."""
     if kind == "atoms":
         specs = [d for d in script.dumps
                  if d.style == "custom" and all(c in d.keywords for c in ATOM_COLUMNS)]
-    else:
-        specs = [d for d in script.dumps if d.layout is not None and d.layout.kind == kind]
+        wanted = force_route_columns(script)
+        return sorted(specs, key=lambda d: (not d.full_precision, -len(set(wanted) & set(d.keywords))))
+    specs = [d for d in script.dumps if d.layout is not None and d.layout.kind == kind]
     return sorted(specs, key=lambda d: not d.full_precision)
+
+
+def force_route_columns(script: LiggghtsScript) -> list[str]:
+    """The atom-dump columns that let a run's primitive-wall contacts be rebuilt from their stored forces
+    (:mod:`.liggghts_wallforce`): none without a primitive wall fix with ``store_force yes``."""
+    if not script.stored_force:
+        return []
+    return [*BALANCE_COLUMNS, *(c for fix in dict.fromkeys(script.stored_force.values())
+                                for c in stored_force_columns(fix))]
 
 def _series(script: LiggghtsScript, spec) -> DumpSeries | None:
     """The dump of ``spec`` when it writes one file per timestep (``*``; see
@@ -220,6 +232,23 @@ def walls_present(script: LiggghtsScript, dump: DumpSpec | None, step: int) -> t
         runs = [len(script.runs) - 1]
     k = runs[0]
     return tuple(i for i, (start, end) in enumerate(script.wall_runs) if start <= k and (end is None or k < end))
+
+
+def frame_kind(script: LiggghtsScript, dump: DumpSpec | None, step: int) -> tuple[bool | None, float | None]:
+    """Whether ``dump`` (None: a dump from the first run on) wrote its frame of timestep ``step`` at the setup of a
+    run, and that run's timestep (s); (None, the timestep) where the script cannot tell: a run after a
+    ``read_restart``, whose timesteps the restart file sets.
+
+    A dump writes at the setup of a run only a step it has not written yet (LIGGGHTS' ``output.cpp:229-231``): its
+    first frame when it is defined between runs, or the first step of its first run; the step where one of its runs
+    ends and the next starts was written at the end of the first (mid-run)."""
+    first = dump.first_run if dump is not None else 0
+    runs = [k for k, (start, end) in enumerate(script.runs) if k >= first and start <= step <= end]
+    if not runs or (script.restart_run is not None and runs[0] >= script.restart_run):
+        after = set(script.run_timesteps[script.restart_run or 0:]) or {script.timestep}
+        return None, after.pop() if len(after) == 1 else None
+    k = runs[0]
+    return step == script.runs[k][0], script.run_timesteps[k]
 
 
 def _script(path: str | Path | None, *, variables, materials, atoms, contacts, walls,
@@ -325,6 +354,7 @@ class LiggghtsRun(Run):
         if script is None:
             self.notes.append("no input script: primitive walls (never dumped by LIGGGHTS) are unknown, "
                               "so contacts with them are not included")
+        self.wall_force, primitive_note = self._wall_force(dumped)
         for dump in (self.atoms, self.pairs, self.walls):
             if dump is not None:
                 _refuse_repeated_steps(dump)
@@ -335,7 +365,34 @@ class LiggghtsRun(Run):
         self.join = StepJoin(self.scene, self.script.periodic, self.script.timestep, self._atom_columns(),
                              self._pair_names, self._wall_names, self._law_columns(),
                              list(self.script.dumped_mesh_walls), self.walls is not None, self.overlap_tolerance,
-                             self.force_positions)
+                             self.force_positions, self.wall_force, primitive_note)
+
+    def _wall_force(self, dumped: set[int]) -> tuple[WallForce | None, str]:
+        """The rebuilding of the primitive walls' history from their stored forces (None where the run does not
+        allow it) and the note that says what becomes of that history."""
+        if self.script_text is not None:
+            return None, PRIMITIVE_HISTORY_UNKNOWN
+        route, why = wall_force_of(self.script, self.scene, dumped)
+        columns = set(self.atoms.columns or [])
+        if route is not None:  # a wall whose force the atom dump lacks stays unknown, as one without store_force
+            route.stored = {k: fix for k, fix in route.stored.items() if set(stored_force_columns(fix)) <= columns}
+            missing = [c for c in BALANCE_COLUMNS if c not in columns]
+            if missing or not route.stored:
+                route, why = None, f"the atom dump lacks the columns {missing or 'f_force_<ID>[1..3]'}"
+        if route is None:
+            return None, f"{PRIMITIVE_HISTORY_UNKNOWN} Their fixes' stored forces cannot stand in for it: {why} " \
+                         "('demsplit prepare' adds store_force yes and the columns; docs/liggghts-output.md)."
+        names = [self.scene.walls[k].name for k in route.stored]
+        rest = [w.name for k, w in enumerate(self.scene.walls) if w.kind in ("plane", "cylinder")
+                and k not in route.stored]
+        note = (f"the history of the primitive-wall contacts of {', '.join(names)} (tangential and rolling springs, "
+                "elasto-plastic normal state) is rebuilt from each wall fix's stored force (store_force yes), checked "
+                "by every particle's force and torque balance; where it cannot be, it is NOT COMPUTED and a note says "
+                "why (docs/liggghts-output.md)")
+        if rest:
+            note += f"; the walls {', '.join(rest)} have no stored force in the atom dump (store_force yes and its " \
+                    f"f_force_<ID> columns): {PRIMITIVE_HISTORY_UNKNOWN}"
+        return route, note
 
     @classmethod
     def first_frame_rows(cls, path: Path | None, *, atoms: str | Path | None = None,
@@ -422,7 +479,8 @@ class LiggghtsRun(Run):
         af = self.atoms.frame(k, columns=self._atom_columns())
         pf = self._local_at(self.pairs, step, self._pair_names)
         wf = self._local_at(self.walls, step, self._wall_names) if self.walls is not None else None
-        return self.join.frame(af, pf, wf, walls_present(self.script, self._atom_spec, step))
+        return self.join.frame(af, pf, wf, walls_present(self.script, self._atom_spec, step),
+                               frame_kind(self.script, self._atom_spec, step))
 
     def __iter__(self) -> Iterator[Frame]:
         """Stream the three dumps side by side (one decompression each)."""
@@ -431,13 +489,16 @@ class LiggghtsRun(Run):
         for af in self.atoms.frames(columns=self._atom_columns()):
             pf = self._advance(pairs, af.step, self.pairs)
             wf = self._advance(walls, af.step, self.walls) if walls is not None else None
-            yield self.join.frame(af, pf, wf, walls_present(self.script, self._atom_spec, af.step))
+            yield self.join.frame(af, pf, wf, walls_present(self.script, self._atom_spec, af.step),
+                                  frame_kind(self.script, self._atom_spec, af.step))
 
     def _atom_columns(self) -> list[str]:
         cols = list(ATOM_COLUMNS)
         models = [self.scene.model] + [w.model for w in self.scene.walls if w.model is not None]
         for model in models:  # what the laws need of the particles (mass for hooke, the liquid content of bridges)
             cols += [c for c in model.contact_law.particle_columns if c not in cols]
+        if self.wall_force is not None:  # the particles' balance and the stored forces
+            cols += [c for c in self.wall_force.particle_columns() if c not in cols]
         missing = [c for c in cols if c not in (self.atoms.columns or [])]
         if missing:
             raise InputFormatError(f"the atom dump lacks the columns {missing}.", file=self.atoms.path,
@@ -477,6 +538,8 @@ class LiggghtsRun(Run):
     def _wanted(self, names: dict[str, str]) -> list[str]:
         """Dump tokens of the contact columns the join needs and the laws read."""
         keep = ["id1", "id2", "mesh_index", "tri_id", "delta", "cpx", "cpy", "cpz", "wall_cpx", "wall_cpy", "wall_cpz"]
+        if self.wall_force is not None:  # a pair across a periodic boundary is applied from each side
+            keep.append("periodic")
         keep += [c for c in self._law_columns() if c not in keep]
         return [names[c] for c in keep if c in names]
 

@@ -22,10 +22,12 @@ import numpy as np
 
 from ..errors import ContactError, InputFormatError, MaterialError, PrecisionError
 from ..frame import Box, Frame, ParticleIndex, Table
+from ..physics.modes import HISTORY_LOST
 from ..physics.shares import contact_point
 from ..runtime import threads
 from ..scene import Scene
 from .lammps_dump import DumpFrame
+from .liggghts_wallforce import REASONS, WallForce
 from .liggghts_walls import primitive_wall_contacts
 from .precision import position_error, printed_step, relative_rounding
 
@@ -53,6 +55,10 @@ class StepJoin:
     mesh_walls : the scene's wall index of each mesh of the dumped mesh ``fix wall/gran`` (its ``mesh_index``).
     has_wall_dump : the run has a mesh-wall contact dump.
     overlap_tolerance, force_positions : the printed-positions policy (module docstring, point 3).
+    wall_force : the rebuilding of the primitive-wall contacts' history from their fixes' stored forces
+        (:mod:`.liggghts_wallforce`), None when the run does not allow it.
+    primitive_note : what the run's notes say of the primitive-wall contacts' history (whether and how it is
+        rebuilt), added to every frame with primitive-wall contacts of a law that reads a history.
     """
 
     scene: Scene
@@ -66,10 +72,15 @@ class StepJoin:
     has_wall_dump: bool
     overlap_tolerance: float
     force_positions: bool
+    wall_force: WallForce | None = None
+    primitive_note: str = PRIMITIVE_HISTORY_UNKNOWN
 
-    def frame(self, af: DumpFrame, pf: DumpFrame, wf: DumpFrame | None, walls: tuple[int, ...] | None) -> Frame:
+    def frame(self, af: DumpFrame, pf: DumpFrame, wf: DumpFrame | None, walls: tuple[int, ...] | None,
+              kind: tuple[bool | None, float | None] = (None, None)) -> Frame:
         """The Frame of one timestep's atom, pair and mesh-wall dump frames; ``walls``: the scene's walls
-        that exist at this step (None: every one), the primitive ones rebuilt only where they exist."""
+        that exist at this step (None: every one), the primitive ones rebuilt only where they exist; ``kind``:
+        whether the frame was written at the setup of a run (None: unknown) and that run's timestep (s), for the
+        rebuilding of the primitive walls' history (:attr:`wall_force`)."""
         step = af.step
         box = Box(af.box.lo, af.box.hi, tuple(p or q for p, q in zip(af.box.periodic, self.periodic)),
                   af.box.tilt)
@@ -133,16 +144,36 @@ class StepJoin:
             for c in history:  # columns every part must have; the flag below says they are unknown here
                 primitive[c] = np.zeros(len(primitive["delta"]))
             if history:
-                primitive["history_unknown"] = np.ones(len(primitive["delta"]), dtype=np.int8)
+                primitive["history_unknown"] = np.full(len(primitive["delta"]), HISTORY_LOST, dtype=np.int8)
+                if self.wall_force is not None:
+                    notes += self._rebuild(primitive, history, particles, parts, af, pf, wf, box, kind)
             parts.append(primitive)
         if history:
-            notes.append(PRIMITIVE_HISTORY_UNKNOWN)
+            notes.insert(0, self.primitive_note)
         contacts = {c: np.concatenate([p[c] for p in parts]) if len(parts) > 1 else parts[0][c] for c in parts[0]}
         source, error = self._overlap_policy(contacts, contacts.pop("bound"), af, pf, step)
         time = None if self.timestep is None else step * self.timestep
         return Frame(step=step, particles=particles, contacts=contacts, box=box, time=time,
                      source=(str(af.file), str(pf.file)) + ((str(wf.file),) if wf is not None else ()),
                      overlap_source=source, overlap_error=error, notes=notes, walls=walls)
+
+    def _rebuild(self, primitive: Table, history: list[str], particles: Table, parts: list[Table], af: DumpFrame,
+                 pf: DumpFrame, wf: DumpFrame | None, box: Box, kind: tuple[bool | None, float | None]) -> list[str]:
+        """The primitive-wall rows' history rebuilt from the stored forces (:attr:`wall_force`), in place; the
+        notes of the reasons of what stays unknown."""
+        setup, dt = kind
+        pairs = {**parts[0], "periodic": pf.columns[self.pair_names["periodic"]]}
+        atom_digits = [af.digits.get(c) for c in ("x", "y", "z", "radius", *self.wall_force.particle_columns())]
+        local_digits = [f.digits.get(names[c]) for f, names in ((pf, self.pair_names), (wf, self.wall_names))
+                        if f is not None for c in (*history, "delta") if c in names]
+        print_rtol = max(relative_rounding(d) for d in atom_digits + local_digits)
+        rebuilt = self.wall_force.rebuild(particles, pairs, parts[1] if wf is not None else None, primitive, box,
+                                          setup, dt, print_rtol, "delta" in self.wall_names)
+        for c in history:
+            if c in rebuilt.columns:
+                primitive[c] = rebuilt.columns[c]
+        primitive["history_unknown"] = rebuilt.unknown
+        return [REASONS[r] for r in rebuilt.reasons]
 
     def _pairs(self, pf: DumpFrame, index: ParticleIndex, xyzr: np.ndarray, h: np.ndarray | None,
                box: Box) -> Table:

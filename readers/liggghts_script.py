@@ -241,6 +241,11 @@ class WallFix:
     is_mesh: bool
     first_run: int
     end_run: int | None = None
+    store_force: bool = False
+    """``store_force yes``: the fix keeps the force it applied to each particle in the step, the ``fix
+    property/atom`` vector ``force_<ID>`` (``f_force_<ID>[1..3]`` in a ``dump custom``)."""
+    moving: str | None = None
+    """The keyword that moves the wall (``shear``, ``wiggle``), None for a wall at rest."""
 
 
 @dataclass
@@ -281,6 +286,24 @@ class LiggghtsScript:
     warnings: list[str]
     included: list[Path] = field(default_factory=list)
     """Every file an ``include`` line read, in order."""
+    stored_force: dict[int, str] = field(default_factory=dict)
+    """Index in ``scene.walls`` of each primitive wall whose ``fix wall/gran`` has ``store_force yes`` -> that
+    fix's id (its force is the atom dump's ``f_force_<ID>[1..3]``)."""
+    moving_walls: dict[int, str] = field(default_factory=dict)
+    """Index in ``scene.walls`` of each wall moved by its fix (``shear``, ``wiggle``) -> the keyword."""
+    pair_settings: dict[str, str] = field(default_factory=dict)
+    """The on/off settings of the ``pair_style gran`` line (``tangential_damping off``, ``limitForce on``, ...)."""
+    wall_settings: list[dict[str, str]] = field(default_factory=list)
+    """The on/off settings of the ``fix wall/gran`` line of each wall of ``scene.walls``."""
+    run_timesteps: list[float | None] = field(default_factory=list)
+    """The timestep (s) in effect during each ``run`` of :attr:`runs`."""
+    restart_run: int | None = None
+    """The index of the first ``run`` after a ``read_restart``, whose timesteps the script does not tell
+    (the restart file sets them); None without one."""
+    unmodelled_forces: list[str] = field(default_factory=list)
+    """The commands that change the particles' forces or their integration beyond what demsplit models
+    (``fix gravity`` of the whole group, the contacts, ``fix nve/sphere``): ``fix ID STYLE`` of a drag, an added or
+    set force, a freeze, a velocity limit; a gravity it cannot read; the lack of ``fix nve/sphere``."""
     local_histories: dict[str, list[str]] = field(default_factory=dict)
     """The ``history`` block a ``compute pair/gran/local`` (``'pair'``: the pair_style's model) or
     ``wall/gran/local`` (``'wall'``: the last mesh ``fix wall/gran``'s) would write, column names in
@@ -378,6 +401,14 @@ _BENIGN_FIXES = {"nve/sphere", "nve", "nve/limit", "property/atom", "particledis
                  "insert/pack", "insert/stream", "insert/rate/region", "print", "ave/time", "ave/atom",
                  "ave/histo", "ave/spatial", "ave/euler", "check/timestep/gran", "viscous", "freeze",
                  "enforce2d", "momentum", "heat/gran", "heat/gran/conduction", "property/global"}
+_BALANCE_NEUTRAL_FIXES = {"nve/sphere", "property/atom", "property/global", "print", "check/timestep/gran",
+                          "heat/gran", "heat/gran/conduction", "mesh/surface", "mesh/surface/stress", "wall/gran",
+                          "gravity", "particledistribution/discrete", "insert/pack", "insert/stream",
+                          "insert/rate/region", "ave/time", "ave/atom", "ave/histo", "ave/spatial", "ave/euler"}
+"""Fix styles that leave each particle's force, torque and Verlet integration as the contacts, gravity (read apart)
+and ``fix nve/sphere`` make them (a ``particletemplate/...`` too)."""
+_MOVING_WALL_KEYWORDS = ("shear", "wiggle")
+"""``fix wall/gran`` keywords that move a primitive wall."""
 _PLANES = {"xplane": 0, "yplane": 1, "zplane": 2}
 _CYLINDERS = {"xcylinder": 0, "ycylinder": 1, "zcylinder": 2}
 _MATERIAL_PROPERTIES = ("youngsModulus", "poissonsRatio")
@@ -429,6 +460,11 @@ class _Reader:
         self.timestep: float | None = None
         self.run_steps: list[int] = []
         self.runs: list[tuple[int, int]] = []
+        self.run_timesteps: list[float | None] = []
+        self.restart_run: int | None = None
+        self.unmodelled_forces: list[str] = []
+        self.integrated = False
+        self.gravity_fixes = 0
         self.step = 0
         self.type_uses: list[tuple[int, str, Where]] = []
         self.contact_distance_factor: float | None = None
@@ -547,7 +583,12 @@ class _Reader:
         self.run_steps.append(n)
         end = n if "upto" in args[1:] else self.step + n  # 'run N upto' runs to timestep N
         self.runs.append((self.step, end))
+        self.run_timesteps.append(self.timestep)
         self.step = end
+
+    def cmd_read_restart(self, args: list[str], where: Where) -> None:
+        if self.restart_run is None:
+            self.restart_run = len(self.runs)
 
     def cmd_reset_timestep(self, args: list[str], where: Where) -> None:
         self.need(args, 1, where, "reset_timestep", "reset_timestep N")
@@ -588,6 +629,10 @@ class _Reader:
                              "washino/capillary/viscous bridges take its per-triangle liquid content, which LIGGGHTS "
                              "does not dump.", where, "use a dry mesh (fix ID all mesh/surface ...).")
         elif style == "gravity":
+            self.gravity_fixes += 1
+            if args[1] != "all" or self.gravity_fixes > 1:
+                self.unmodelled_forces.append(f"fix {fid} gravity of group {args[1]}"
+                                              + (" (a second gravity fix)" if self.gravity_fixes > 1 else ""))
             self.fix_gravity(rest, where)
         elif style.startswith("particletemplate/"):
             if style != "particletemplate/sphere":
@@ -601,6 +646,10 @@ class _Reader:
         elif style not in _BENIGN_FIXES:
             self.warnings.append(f"{where.file}:{where.line}: fix style {style} ({fid}) is not "
                                  "interpreted by demsplit; check that it does not change the contacts.")
+        if style == "nve/sphere":
+            self.integrated = True
+        elif style not in _BALANCE_NEUTRAL_FIXES and not style.startswith("particletemplate/"):
+            self.unmodelled_forces.append(f"fix {fid} {style}")
 
     def property_global(self, fid: str, rest: list[str], where: Where) -> None:
         self.need(rest, 2, where, f"fix {fid} property/global", "NAME STYLE VALUES")
@@ -634,6 +683,7 @@ class _Reader:
         if rest[1] != "vector" or len(rest) < 5:
             self.warnings.append(f"{where.file}:{where.line}: fix gravity style {excerpt(rest[1])} is not read; "
                                  "script.gravity is None.")
+            self.unmodelled_forces.append(f"fix gravity of style {rest[1]} (not read)")
             return
         try:
             g = float(rest[0])
@@ -643,6 +693,7 @@ class _Reader:
         except ValueError:
             self.warnings.append(f"{where.file}:{where.line}: fix gravity with a variable "
                                  f"({' '.join(rest)}) is not read; script.gravity is None.")
+            self.unmodelled_forces.append(f"fix gravity {' '.join(rest)} (a variable, not read)")
             return
         norm = float(np.linalg.norm(d))
         if norm == 0.0:
@@ -736,10 +787,13 @@ class _Reader:
         # fix wall/gran takes its on/off settings after the geometry (measured:
         # 'computeElasticPotential on' before 'mesh' is "wrong keyword order")
         spec.settings.update({a: b for a, b in zip(tail, tail[1:]) if b in ("on", "off")})
+        store_force = any(a == "store_force" and b == "yes" for a, b in zip(tail, tail[1:]))
+        moving = next((w for w in tail if w in _MOVING_WALL_KEYWORDS), None)
         for fix in self.walls:  # a fix defined again under its id replaces the one that exists
             if fix.id == fid and fix.end_run is None:
                 fix.end_run = len(self.runs)
-        self.walls.append(WallFix(fid, walls, spec, rest[i] == "mesh", len(self.runs)))
+        self.walls.append(WallFix(fid, walls, spec, rest[i] == "mesh", len(self.runs), store_force=store_force,
+                                  moving=moving))
 
     def cmd_compute(self, args: list[str], where: Where) -> None:
         self.need(args, 3, where, "compute", "compute ID GROUP STYLE ...")
@@ -910,11 +964,20 @@ class _Reader:
         walls: list[Wall] = []
         wall_runs: list[tuple[int, int | None]] = []
         mesh_fix, dumped_mesh_walls = None, []
+        stored_force: dict[int, str] = {}
+        moving_walls: dict[int, str] = {}
+        wall_settings: list[dict[str, str]] = []
         for fix in self.walls:
             model = self.model(fix.spec)
             first = len(walls)
             walls += [replace(wall, model=None if model == pair_model else model) for wall in fix.walls]
             wall_runs += [(fix.first_run, fix.end_run)] * len(fix.walls)
+            wall_settings += [dict(fix.spec.settings)] * len(fix.walls)
+            for k in range(first, len(walls)):
+                if fix.store_force and not fix.is_mesh:
+                    stored_force[k] = fix.id
+                if fix.moving is not None:
+                    moving_walls[k] = fix.moving
             if fix.is_mesh:
                 mesh_fix = (fix.id, fix.spec)
                 dumped_mesh_walls = list(range(first, len(walls)))
@@ -939,7 +1002,11 @@ class _Reader:
             gravity=self.gravity, coefficients=coefficients, ntypes=self.ntypes, timestep=self.timestep,
             run_steps=self.run_steps, runs=self.runs, wall_runs=wall_runs, local_computes=layouts,
             dumped_mesh_walls=dumped_mesh_walls,
-            variables=variables, warnings=self.warnings, included=self.included,
+            variables=variables, warnings=self.warnings, included=self.included, stored_force=stored_force,
+            moving_walls=moving_walls, pair_settings=dict(self.pair.settings) if self.pair else {},
+            wall_settings=wall_settings, run_timesteps=self.run_timesteps, restart_run=self.restart_run,
+            unmodelled_forces=self.unmodelled_forces + ([] if self.integrated or not self.runs
+                                                         else ["no fix nve/sphere"]),
             local_histories={kind: history_columns(self.model(spec).contact_law, kind,
                                                    elastic_potential=spec.on("computeElasticPotential"))
                              for kind, spec in (("pair", self.pair), ("wall", mesh_fix[1] if mesh_fix else None))

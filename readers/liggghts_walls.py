@@ -36,7 +36,8 @@ def wall_distance(x: np.ndarray, wall: Wall) -> tuple[np.ndarray, np.ndarray]:
     if wall.kind == "cylinder":
         a, b = _OTHER_AXES[wall.axis]
         rho = np.stack([x[:, a] - wall.center[0], x[:, b] - wall.center[1]], axis=-1)
-        dist = np.hypot(rho[:, 0], rho[:, 1])
+        # LIGGGHTS' own arithmetic (calcRadialDistance), bit for bit: the overlap of a stored force's contact
+        dist = np.sqrt(rho[:, 0] * rho[:, 0] + rho[:, 1] * rho[:, 1])
         with np.errstate(invalid="ignore", divide="ignore"):
             radial = np.where(dist[:, None] > 0, rho / dist[:, None], 0.0)
         outward = np.where(dist < wall.radius, 1.0, -1.0)[:, None]  # inside: the surface lies outward

@@ -17,6 +17,7 @@ from demsplit.physics.bodies import FrameContacts, LawRows
 from demsplit.physics.laws import law_class, make, supported
 from demsplit.physics.laws._liggghts import (rolling_spring_energy, sjkr2_area_integral, sjkr_area,
                                               sjkr_area_integral)
+from demsplit.physics.modes import HISTORY_LOST
 from demsplit.physics.partition import contact_energies, partition, per_particle
 from demsplit.scene import ContactModel, Material, Scene, Wall
 from liggghts_bridges import BRIDGE_MODELS, liggghts_capillary
@@ -313,7 +314,8 @@ def bridge_contacts(delta: list[float], id2: list[int], flag: list[float], lost:
     contacts = {"id1": np.ones(n, dtype=np.int64), "id2": id2, "wall": np.where(id2 < 0, 0, -1),
                 "delta": np.array(delta), "r1": np.full(n, 1e-3), "r2": np.where(id2 < 0, np.inf, 1.5e-3),
                 "nx": np.zeros(n), "ny": np.zeros(n), "nz": np.ones(n), "x1": np.zeros(n), "y1": np.zeros(n),
-                "z1": np.zeros(n), "liquid_bridge": np.array(flag, dtype=float), "history_unknown": np.array(lost),
+                "z1": np.zeros(n), "liquid_bridge": np.array(flag, dtype=float),
+                "history_unknown": np.array(lost, dtype=np.int8) * np.int8(HISTORY_LOST),
                 **{f"shear{c}": np.full(n, 1e-6) for c in "xyz"}}
     return particles, contacts
 

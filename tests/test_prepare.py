@@ -66,11 +66,14 @@ def test_primitive_walls_only(tmp_path):
                          "fix wfloor all wall/gran model hertz tangential history primitive type 4 zplane 0.0")
     script = user_script(tmp_path, primitive)
     out = prepared_run(script)
-    assert "wall/gran/local" not in out.read_text()  # LIGGGHTS refuses it with primitive walls only
+    text = out.read_text()
+    assert "wall/gran/local" not in text  # LIGGGHTS refuses it with primitive walls only
+    assert "primitive type 4 zplane 0.0 store_force yes" in text and "f_force_wfloor[3]" in text
     assert main(["run", str(out), "-o", str(tmp_path / "r.h5"), "-q"]) == 0
     res = demsplit.load_results(tmp_path / "r.h5")
     floor = res.contacts[res.contacts["wall"] == 0]
-    assert len(floor) and np.all(floor["not_computed"] == 2)  # u_t of primitive-wall contacts: unknowable
+    # u_t of the primitive floor's contacts, rebuilt from its stored force: every one known
+    assert len(floor) and np.all(floor["not_computed"] == 0) and floor["u_t"].notna().all()
 
 
 @pytest.mark.simulator

@@ -101,6 +101,11 @@ of its modes could not be computed; a particle's or a wall's, which modes of at 
 contacts."""
 
 
+HISTORY_LOST = sum(NOT_COMPUTED_BITS.values())
+"""The ``history_unknown`` value of a contact whose history the simulator never wrote: every mode that reads a
+history is unknown (a reader that rebuilt part of it sets only the bits of the modes still unknown)."""
+
+
 def not_computed_modes(bits: int) -> list[str]:
     """The mode columns named by a ``not_computed`` value (``6`` -> ``["u_t", "u_r"]``)."""
     return [mode for mode, bit in NOT_COMPUTED_BITS.items() if int(bits) & bit]

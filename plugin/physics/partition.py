@@ -55,7 +55,8 @@ class ContactLawEnergy(_ByMode):
     not compute from the data given (their columns were not dumped), with why; ``not_computed``: per
     contact, the bits (:data:`~demsplit.physics.modes.NOT_COMPUTED_BITS`) of the modes whose value is
     unknown (``missing`` modes, and history-dependent modes of contacts whose history the simulator
-    never wrote, flagged by the reader with the contact column ``history_unknown``; 0: known). A law may
+    never wrote, flagged by the reader with the bits of those modes in the contact column ``history_unknown``;
+    0: known). A law may
     decide itself which of its rows are unknown (``LawEnergy.unknown``), e.g. a liquid bridge apart from a
     primitive wall, whose state LIGGGHTS never writes, while the same contact touching holds one for certain.
     An unknown value is 0 in ``u`` and ``u_adh``, never an estimate."""
@@ -162,7 +163,8 @@ def law_energies(frame: FrameContacts, *, compiled: bool = True) -> ContactLawEn
     u_adh = np.zeros(n) if with_adhesion else None
     skipped: dict[str, str] = {}
     missing: dict[str, str] = {}
-    unknown = np.asarray(contacts["history_unknown"]) != 0 if "history_unknown" in contacts else None
+    # the bits of the modes whose history the simulator never wrote, per contact
+    unknown = np.asarray(contacts["history_unknown"]).astype(np.int32) if "history_unknown" in contacts else None
     not_computed = np.zeros(n, dtype=np.int32)
     for law, rows in groups:
         result = law.energies(LawRows(frame, rows, law.key), compiled=compiled)
@@ -184,7 +186,7 @@ def law_energies(frame: FrameContacts, *, compiled: bool = True) -> ContactLawEn
         if bits or decided or (unknown is not None and bits_without_history):
             not_computed[rows] |= bits
             if unknown is not None and bits_without_history:
-                not_computed[rows] |= np.where(unknown[rows], bits_without_history, 0).astype(np.int32)
+                not_computed[rows] |= unknown[rows] & np.int32(bits_without_history)
             for m, mask in decided.items():
                 not_computed[rows] |= np.where(mask, NOT_COMPUTED_BITS[m], 0).astype(np.int32)
     if not_computed.any():  # an unknown value is 0 with its bit, never what the law made of no data

@@ -50,6 +50,7 @@ import numpy as np
 from ...errors import ContactError, InputFormatError, UnsupportedModelError
 from ..elastic import history_spring_energy, overlap
 from ..moduli import effective_radius
+from ..modes import NOT_COMPUTED_BITS
 from ._liquid_bridge import BRIDGE_MODELS, FORMED_ON_TOUCH, WASHINO_FRACTION, LiquidBridges
 from .base import ContactLaw, ContactRows, LawEnergy
 
@@ -274,6 +275,20 @@ class LiggghtsNormalModel(ContactLaw):
     normal_history: tuple[str, ...] = ()
     """Contact columns of the normal model's own history values, in LIGGGHTS' order."""
 
+    applied_force: bool = False
+    """The law gives the damped force LIGGGHTS applies (:meth:`damping`), which lets a wall fix's stored force
+    give back the springs of its contacts (:mod:`._liggghts_force`)."""
+
+    def damping(self, rows: ContactRows, restitution: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
+        """The damping coefficients gamma_n, gamma_t (kg/s) of every row, with the per-row coefficient of
+        restitution ``restitution``: a law with :attr:`applied_force` gives them."""
+        raise UnsupportedModelError(f"{self.key}: demsplit does not model the damped force this normal model applies.")
+
+    def normal_history_of_force(self, rows: ContactRows, f: np.ndarray) -> dict[str, np.ndarray]:
+        """The normal model's history columns (:attr:`normal_history`) of every row whose elastic normal force is
+        ``f`` (N): none for a model whose force follows from the overlap alone."""
+        return {}
+
     @abstractmethod
     def normal_energy(self, rows: ContactRows) -> np.ndarray:
         """``u_n`` of every row (J)."""
@@ -334,13 +349,14 @@ class LiggghtsNormalModel(ContactLaw):
                 if m in modes:
                     modes[m] = np.where(touching, modes[m], 0.0)
         unknown = {}
-        lost = rows.column("history_unknown") != 0 if rows.has("history_unknown") else None
+        lost = rows.column("history_unknown").astype(np.int64) if rows.has("history_unknown") else None
         if lost is not None and lost.any():  # no history written: only a touching contact's history modes unknown
-            unknown = {m: lost & touching for m in self.mode_columns if m not in skipped}
+            unknown = {m: ((lost & NOT_COMPUTED_BITS[m]) != 0) & touching for m in self.mode_columns
+                       if m not in skipped}
         if self.params["cohesion"] != "off" and "u_adh" not in skipped:
             modes["u_adh"], unknown_adh = self._cohesion(rows, work=True)
             if lost is not None and lost.any():
-                unknown["u_adh"] = lost & unknown_adh
+                unknown["u_adh"] = ((lost & NOT_COMPUTED_BITS["u_adh"]) != 0) & unknown_adh
         if self.has_pull_off() and "u_adh" not in skipped:  # the constant pull-off force's work f0 delta
             work = rows.type_pair(self.params["pull_off_force"]) * overlap(rows.delta)
             modes["u_adh"] = modes.get("u_adh", 0.0) + work

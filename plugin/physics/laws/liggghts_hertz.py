@@ -5,6 +5,10 @@ F_n = (4/3) E* sqrt(R*) delta^(3/2), energy u_n = (8/15) E* sqrt(R* delta) delta
 (eq. 13). The model sets kt = 8 G* sqrt(R* delta) for ``tangential history``:
 u_t = kt |shear|^2 / 2. E*, G*, R* as LIGGGHTS builds them from the two types'
 youngsModulus and poissonsRatio and the radii (``global_properties.cpp``).
+
+The force it applies is damped (:meth:`LiggghtsHertz.damping`, ``normal_model_hertz.h:231-263``):
+gamma = -2 sqrt(5/6) beta sqrt(S m*), S_n = 2 E* sqrt(R* delta), S_t = kt, with
+beta = ln e/sqrt(ln^2 e + pi^2) of the coefficient of restitution e (``global_properties.cpp:516, 539``).
 """
 
 from __future__ import annotations
@@ -18,6 +22,18 @@ from . import register
 from ._liggghts import SHEAR, LiggghtsNormalModel
 from .base import ContactRows
 
+SQRT_FIVE_OVER_SIX = 0.91287092917527685576161630466800355658790782499663875
+"""sqrt(5/6), as ``normal_model_hertz.h`` writes it."""
+
+
+def hertz_damping(stiffness: np.ndarray, m_eff: np.ndarray, restitution: np.ndarray | float) -> np.ndarray:
+    """LIGGGHTS hertz's damping coefficient (kg/s) of a stiffness S (N/m; S_n = 2 E* sqrt(R* delta) for the normal
+    force, S_t = kt for the tangential one): -2 sqrt(5/6) beta sqrt(S m*), beta = ln e/sqrt(ln^2 e + pi^2), with
+    m* (kg) and the coefficient of restitution e."""
+    log_e = np.log(restitution)
+    beta = log_e / np.sqrt(log_e**2 + np.pi**2)
+    return -2.0 * SQRT_FIVE_OVER_SIX * beta * np.sqrt(stiffness * m_eff)
+
 
 @register
 class LiggghtsHertz(LiggghtsNormalModel):
@@ -25,6 +41,7 @@ class LiggghtsHertz(LiggghtsNormalModel):
     summary = ("Hertz u_n = (8/15) E* sqrt(R* delta) delta^2; tangential history u_t = kt |shear|^2/2 with "
                "kt = 8 G* sqrt(R* delta)")
     compiled = True
+    applied_force = True
 
     def normal_and_tangential(self, rows: ContactRows, with_shear: bool, compiled: bool) -> dict[str, np.ndarray]:
         if compiled:  # one pass over the contacts (demsplit.kernels)
@@ -56,6 +73,12 @@ class LiggghtsHertz(LiggghtsNormalModel):
         """kt = 8 G* sqrt(R* delta) (N/m), ``normal_model_hertz.h``."""
         return hertz_kt_formula(overlap(rows.delta), effective_radius(rows.r1, rows.r2),
                                 rows.per_pair(effective_shear_modulus))
+
+    def damping(self, rows: ContactRows, restitution: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
+        """gamma_n, gamma_t (kg/s) of :func:`hertz_damping` (module docstring)."""
+        m_eff = rows.reduced_mass()
+        s_n = 2.0 * rows.per_pair(effective_modulus) * np.sqrt(effective_radius(rows.r1, rows.r2) * overlap(rows.delta))
+        return hertz_damping(s_n, m_eff, restitution), hertz_damping(self.kt(rows), m_eff, restitution)
 
     def normal_force(self, rows: ContactRows) -> np.ndarray:
         return hertz_force_from_moduli(rows.delta, effective_radius(rows.r1, rows.r2),

@@ -7,7 +7,8 @@ materials, the radii, the masses and the ``characteristicVelocity`` V:
 
 m* = m1 m2/(m1 + m2) (m* = m1 on a wall); u_n = kn delta^2 / 2. With
 ``tangential history`` kt = kn (``ktToKnUser on``: kt = 2/7 kn) and
-u_t = kt |shear|^2 / 2.
+u_t = kt |shear|^2 / 2. The force it applies is damped with
+gamma_n = gamma_t = sqrt(4 m* kn ln^2 e/(ln^2 e + pi^2)) (``normal_model_hooke.h:269-292``).
 """
 
 from __future__ import annotations
@@ -30,6 +31,13 @@ def liggghts_hooke_kn(R_eff: ArrayLike, E_eff: ArrayLike, m_eff: ArrayLike, v_ch
     return (16.0 / 15.0) * sqR * E_eff * (15.0 * f64(m_eff) * v_char**2 / (16.0 * sqR * E_eff)) ** 0.2
 
 
+def hooke_damping(kn: np.ndarray, m_eff: np.ndarray, restitution: np.ndarray | float) -> np.ndarray:
+    """LIGGGHTS hooke's damping coefficient (kg/s) for both the normal and the tangential force:
+    sqrt(4 m* kn ln^2 e/(ln^2 e + pi^2)), kn (N/m), m* (kg), e the coefficient of restitution."""
+    log_e_sq = np.log(restitution) ** 2
+    return np.sqrt(4.0 * m_eff * kn * log_e_sq / (log_e_sq + np.pi * np.pi))
+
+
 @register
 class LiggghtsHooke(LiggghtsNormalModel):
     key = "liggghts:hooke"
@@ -42,6 +50,7 @@ class LiggghtsHooke(LiggghtsNormalModel):
         "kt_to_kn": (1.0, "kt/kn: 1, or 2/7 with ktToKnUser on"),
     }
     example_params = {"characteristic_velocity": 1.0}
+    applied_force = True
 
     def kn(self, rows: ContactRows) -> np.ndarray:
         """Normal stiffness of every row (N/m)."""
@@ -57,3 +66,8 @@ class LiggghtsHooke(LiggghtsNormalModel):
 
     def normal_force(self, rows: ContactRows) -> np.ndarray:
         return self.kn(rows) * overlap(rows.delta)
+
+    def damping(self, rows: ContactRows, restitution: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
+        """gamma_n = gamma_t (kg/s) of :func:`hooke_damping`."""
+        gamma = hooke_damping(self.kn(rows), rows.reduced_mass(), restitution)
+        return gamma, gamma

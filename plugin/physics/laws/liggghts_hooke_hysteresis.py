@@ -5,7 +5,10 @@ stiffness kn(E*, R*, m*, characteristicVelocity), k2Max = kn
 coefficientMaxElasticStiffness, kc = kn coefficientAdhesionStiffness and
 delta_lim = k2Max/(k2Max - kn) coefficientPlasticityDepth 2 R*; the history holds
 delta_max. u_n = f^2/(2 k2) (the energy given back unloading along the current
-k2 line); the tangential stiffness is kt = kn, u_t = kt |shear|^2/2.
+k2 line); the tangential stiffness is kt = kn, u_t = kt |shear|^2/2. The force it
+applies is damped with gamma_n = gamma_t = sqrt(4 m* kn/(1 + (pi/ln e)^2)), hooke's coefficient as
+``normal_model_hooke_hysteresis.h:139-200`` writes it. The elastic force f of a contact gives its
+delta_max back (:func:`~._hysteresis.delta_max_of_force`).
 """
 
 from __future__ import annotations
@@ -14,10 +17,17 @@ import numpy as np
 
 from ..moduli import effective_modulus, effective_radius
 from . import register
-from ._hysteresis import DELTA_MAX, hysteresis_of, unloading_energy
+from ._hysteresis import DELTA_MAX, delta_max_of_force, hysteresis_of, hysteresis_parameters, unloading_energy
 from ._liggghts import LiggghtsNormalModel
 from .base import ContactLaw, ContactRows
 from .liggghts_hooke import liggghts_hooke_kn
+
+
+def hooke_hysteresis_damping(kn: np.ndarray, m_eff: np.ndarray, restitution: np.ndarray | float) -> np.ndarray:
+    """LIGGGHTS hooke/hysteresis's damping coefficient (kg/s), normal and tangential:
+    sqrt(4 m* kn/(1 + (pi/ln e)^2)), kn (N/m), m* (kg), e the coefficient of restitution."""
+    ratio = np.pi / np.log(restitution)
+    return np.sqrt(4.0 * m_eff * kn / (1.0 + ratio * ratio))
 
 
 @register
@@ -37,6 +47,7 @@ class LiggghtsHookeHysteresis(LiggghtsNormalModel):
     }
     example_params = {"characteristic_velocity": 1.0, "max_elastic_stiffness": 2.0, "adhesion_stiffness": 0.0,
                       "plasticity_depth": 0.05}
+    applied_force = True
 
     def check(self) -> None:
         super().check()
@@ -61,3 +72,17 @@ class LiggghtsHookeHysteresis(LiggghtsNormalModel):
 
     def normal_force(self, rows: ContactRows) -> np.ndarray:
         return self.force_and_k2(rows)[0]
+
+    def damping(self, rows: ContactRows, restitution: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
+        """gamma_n = gamma_t (kg/s) of :func:`hooke_hysteresis_damping`."""
+        gamma = hooke_hysteresis_damping(self.kn(rows), rows.reduced_mass(), restitution)
+        return gamma, gamma
+
+    def normal_history_of_force(self, rows: ContactRows, f: np.ndarray) -> dict[str, np.ndarray]:
+        """delta_max (m) of every row whose elastic normal force is ``f`` (N):
+        :func:`~._hysteresis.delta_max_of_force`."""
+        p = self.params
+        k1 = self.kn(rows)
+        k2max, _, lim = hysteresis_parameters(rows, k1, p["max_elastic_stiffness"], p["adhesion_stiffness"],
+                                              p["plasticity_depth"])
+        return {DELTA_MAX: delta_max_of_force(f, rows.delta, k1, k2max, lim)}
