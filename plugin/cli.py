@@ -199,6 +199,16 @@ def cmd_report(args: argparse.Namespace) -> int:
     return 0
 
 
+def _positive(text: str) -> int:
+    try:
+        n = int(text)
+        if n <= 0:
+            raise ValueError
+        return n
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive number of timesteps, got {text!r}") from None
+
+
 def _type_name(text: str) -> tuple[int, str]:
     t, sep, name = text.partition("=")
     try:
@@ -243,10 +253,11 @@ def _yade_states(inputs: str | list[str]) -> bool:
 def cmd_prepare(args: argparse.Namespace) -> int:
     from .outputs import check_output_path
     from .prepare import prepare_script
+    from .readers.lammps_input import read_text
 
     script = Path(args.input)
     out = Path(args.output or script.with_name(script.name + ".demsplit"))
-    prepared = prepare_script(script)
+    prepared = prepare_script(script, every=args.every)
     parts = [prepared]
     while parts[-1].part2 is not None:
         parts.append(parts[-1].part2)
@@ -263,14 +274,14 @@ def cmd_prepare(args: argparse.Namespace) -> int:
     try:
         for part, path in zip(parts, paths):
             with atomic_path(path) as tmp:
-                Path(tmp).write_text(part.text)
+                Path(tmp).write_bytes(part.data)
             written.append(path)
     except BaseException:  # all parts or none
         for path in written:
             path.unlink(missing_ok=True)
         raise
     if not args.quiet:
-        print(prepared.diff(script.read_text(), str(script)))
+        print(prepared.diff(read_text(script), str(script)))
         where = f"in {out.parent}" if len(paths) == 1 else f"one after the other in {out.parent}"
         print(f"wrote {', '.join(map(str, paths))}: run {'it' if len(paths) == 1 else 'them'} with "
               f"{'; '.join(f'liggghts -in {p.name}' for p in paths)} {where}, then "
@@ -383,6 +394,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("input", help="the LIGGGHTS input script")
     p.add_argument("-o", "--output", help="prepared script (default: INPUT.demsplit next to the input; a script "
                    "split at a mesh wall fix after a run also gets OUTPUT.part2, ...)")
+    p.add_argument("--every", type=_positive, metavar="N",
+                   help="timesteps between the frames of the dumps prepare adds (default: the interval of the "
+                   "script's own dumps, else of its thermo output, else 100 frames over its runs)")
     p.set_defaults(func=cmd_prepare)
 
     p = add("convert", "write a run's dumps once to an HDF5 ingest cache read much faster later")

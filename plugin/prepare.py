@@ -45,14 +45,19 @@ from pathlib import Path
 
 from .errors import ScriptError
 from .physics.laws import ContactLaw
-from .readers.lammps_input import logical_lines, strip_comment
+from .physics.modes import MODES
+from .readers.lammps_input import logical_lines, read_text, strip_comment
+from .readers.liggghts import PREPARED_MARK
 from .readers.liggghts_script import LiggghtsScript, local_layout, read_script
 
 KEYWORDS = ["pos", "vel", "id", "force", "force_normal", "force_tangential", "torque", "history", "contactArea",
             "delta", "contactPoint"]
 """Keywords of the contact computes prepare adds (``history`` dropped when the law keeps none)."""
 ATOM_COLUMNS = "id type x y z vx vy vz fx fy fz omegax omegay omegaz radius mass"
-DEFAULT_EVERY = 1000
+GIVEN = "as given (--every)"
+"""Why the added dumps have the interval they have when the user gave it."""
+FRAMES_WITHOUT_OUTPUT = 100
+"""Frames over the script's runs when it writes no output whose interval the added dumps could follow."""
 RESTART = "ds_split{k}.restart"
 """The restart file between part k and part k + 1 of a split script."""
 BEFORE_READ_RESTART = frozenset({"units", "atom_style", "atom_modify", "boundary", "newton", "communicate",
@@ -78,15 +83,22 @@ class Prepared:
     part2: Prepared | None = None
     """When the script was split at a mesh wall fix after a run, the rest of it (this is then part 1)."""
 
+    @property
+    def data(self) -> bytes:
+        """The prepared script's bytes: the original's own bytes (:func:`~demsplit.readers.lammps_input.read_text`)
+        where it is not changed."""
+        return self.text.encode("utf-8", errors="surrogateescape")
+
     def diff(self, original: str, name: str) -> str:
-        """A unified diff from the original script to the prepared one (to each part in turn when split)."""
+        """A unified diff from the original script to the prepared one (to each part in turn when split), for
+        the terminal: a byte that is not UTF-8 shows as ``\\xNN``."""
         out, part, k = [], self, 1
         while part is not None:
             label = f"{name} (prepared by demsplit" + (f", part {k})" if self.part2 is not None else ")")
             out += difflib.unified_diff(original.splitlines(True), part.text.splitlines(True), fromfile=name,
                                         tofile=label)
             part, k = part.part2, k + 1
-        return "".join(out)
+        return "".join(out).encode("utf-8", errors="surrogateescape").decode("utf-8", errors="backslashreplace")
 
 
 def _commands(path: Path) -> list[tuple[int, list[str]]]:
@@ -150,9 +162,30 @@ def split_points(commands: list[tuple[int, list[str]]]) -> list[int]:
     return points
 
 
-def prepare_script(path: str | Path) -> Prepared:
+def output_interval(script: LiggghtsScript, commands: list[tuple[int, list[str]]],
+                    every: int | None = None) -> tuple[int, str]:
+    """The interval (timesteps) of the dumps prepare adds, and why: ``every`` when given; else the script's
+    own output, the smallest interval of its dumps, else of its ``thermo`` lines (a run whose output the user
+    sized should not get frames far more often, which costs disk and time in proportion); else
+    :data:`FRAMES_WITHOUT_OUTPUT` frames over its runs."""
+    if every is not None:
+        return every, GIVEN
+    if script.dumps:
+        d = min(script.dumps, key=lambda d: d.every)
+        return d.every, f"the interval of the script's own dump {d.id}"
+    thermo = [int(words[1]) for _, words in commands if words[0] == "thermo" and len(words) > 1
+              and words[1].isdigit() and int(words[1]) > 0]
+    if thermo:
+        return min(thermo), "the interval of the script's thermo output"
+    steps = sum(end - start for start, end in script.runs)
+    return max(1, -(-steps // FRAMES_WITHOUT_OUTPUT)), (f"{FRAMES_WITHOUT_OUTPUT} frames over the script's "
+                                                         f"{steps} steps of runs (it writes no output to follow)")
+
+
+def prepare_script(path: str | Path, every: int | None = None) -> Prepared:
     """The script at ``path`` with the computes and dumps demsplit needs, split where a mesh wall fix
-    follows a run (module docstring)."""
+    follows a run (module docstring); the dumps it adds write every ``every`` steps (default: the script's own
+    output interval, :func:`output_interval`)."""
     path = Path(path)
     script = read_script(path)
     law = script.scene.model.contact_law
@@ -162,8 +195,9 @@ def prepare_script(path: str | Path) -> Prepared:
     if not any(words[0] == "run" for _, words in commands):
         raise ScriptError("the script has no 'run' command: there is nothing to dump.", file=path,
                           fix="pass the script that runs the simulation.")
-    lines = path.read_text().split("\n")
+    lines = read_text(path).split("\n")
     points = split_points(commands)
+    interval = output_interval(script, commands, every)
     if points:
         _check_splittable(path, commands, points)
     bounds = [1, *points, len(lines) + 1]
@@ -174,7 +208,7 @@ def prepare_script(path: str | Path) -> Prepared:
         header = _replayed(commands, start, k + 1)
         footer = [] if last else ["", f"write_restart {RESTART.format(k=k + 1)}"]
         parts.append(_prepare_part(path, script, histories, commands, lines, start, end, k + 1 if points else 0,
-                                   header, footer))
+                                   header, footer, interval))
     for part, after in zip(parts, parts[1:]):
         part.part2 = after
     if points:
@@ -226,10 +260,11 @@ def _renamed_dump(words: list[str], k: int) -> list[str]:
 
 def _prepare_part(path: Path, script: LiggghtsScript, histories: dict[str, list[str]],
                   commands: list[tuple[int, list[str]]], lines: list[str], start: int, end: int, k: int,
-                  header: list[str], footer: list[str]) -> Prepared:
+                  header: list[str], footer: list[str], interval: tuple[int, str]) -> Prepared:
     """Lines ``start``..``end - 1`` of the script (part ``k``; 0 when not split) with ``header`` and
     ``footer`` and, before the part's first run, the computes and dumps it lacks; ``histories``: the
-    history columns of the pair and the wall compute (``'pair'``, ``'wall'``)."""
+    history columns of the pair and the wall compute (``'pair'``, ``'wall'``); ``interval``: the added dumps'
+    interval and why (:func:`output_interval`)."""
     suffix = f".part{k}" if k > 1 else ""
     label = f"part {k}: " if k else ""
     law = script.scene.model.contact_law
@@ -244,20 +279,23 @@ def _prepare_part(path: Path, script: LiggghtsScript, histories: dict[str, list[
     extra = list(dict.fromkeys(c for law in laws for c in law.particle_columns if c not in ATOM_COLUMNS.split()))
     every = _has_full_atom_dump(script, declared, extra)
     if every is None:
-        every = DEFAULT_EVERY
+        every, why = interval
         columns = " ".join([ATOM_COLUMNS, *extra])
         fixes = {words[1] for line, words in commands if line < end and words[0] == "fix" and len(words) > 1}
         setup = [c for c in dict.fromkeys(c for law in laws for c in law.dump_setup()) if c.split()[1] not in fixes]
         block += [*setup, f"dump dsAtoms all custom {every} ds_atoms{suffix}.txt {columns}",
                   'dump_modify dsAtoms format "%d %d' + " %.17g" * (len(columns.split()) - 2) + '" sort id']
-        notes.append(f"{label}atoms: a full-precision atom dump every {every} steps (ds_atoms{suffix}.txt); change "
-                     "the interval to the output you want.")
+        notes.append(f"{label}atoms: a full-precision atom dump every {every} steps ({why}; another with --every N) "
+                     f"in ds_atoms{suffix}.txt.")
         if setup:
             notes.append(f"{label}atoms: {' and '.join(extra)} from the fix the cohesion model creates at the first "
                          "run, created just before the dump (LIGGGHTS checks a dump's f_ columns when it reads "
                          "it); the run is the same.")
     else:
-        notes.append(f"{label}atoms: the script's full-precision atom dump (every {every} steps) is used.")
+        notes.append(f"{label}atoms: the script's full-precision atom dump (every {every} steps) is used, and the "
+                     "contact dumps follow its interval"
+                     + (f" (--every {interval[0]} does not apply: the contacts are read at the atom dump's "
+                        "timesteps)." if interval[1] == GIVEN and interval[0] != every else "."))
     if _has_local_dump(script, declared, "pair", needed):
         notes.append(f"{label}pairs: the script's full-precision pair dump holds every column the law needs.")
     else:
@@ -272,16 +310,37 @@ def _prepare_part(path: Path, script: LiggghtsScript, histories: dict[str, list[
     elif not mesh:
         notes.append(f"{label}walls: no mesh wall, so no wall/gran/local compute (LIGGGHTS refuses it with "
                      "primitive walls only); primitive-wall contacts are rebuilt from positions.")
+    notes += [f"{label}{note}" for note in _primitive_history_notes(script)]
     if not runs:
         block = []
         notes.append(f"{label}no 'run': nothing to dump.")
     if not block and not header and not footer:
-        return Prepared(path.read_text(), [], notes + ["nothing to add: the script writes everything demsplit needs."])
+        return Prepared("\n".join(lines), [], notes + ["nothing to add: the script writes everything demsplit needs."])
     at = runs[0] - start if block else len(body)  # just before the part's first run: after every fix so far
-    added = ["", "# --- added by 'demsplit prepare': the contact output demsplit reads (docs/liggghts-output.md) ---",
+    added = ["", f"{PREPARED_MARK}: the contact output demsplit reads (docs/liggghts-output.md) ---",
              *block, "# --- end of the lines added by demsplit ---", ""] if block else []
     text = "\n".join(header + body[:at] + added + body[at:] + footer)
     return Prepared(text if text.endswith("\n") else text + "\n", header + block + footer, notes)
+
+
+def _primitive_history_notes(script: LiggghtsScript) -> list[str]:
+    """What will not be computed because LIGGGHTS never writes the contact history of a primitive wall: per
+    wall law, the modes that read a history (the tangential spring, rolling...), and the walls concerned. Said
+    before the simulation, when the user can still replace them by mesh walls."""
+    groups: dict[str, tuple[list[str], list[str]]] = {}
+    for w in script.scene.walls:
+        if w.kind not in ("plane", "cylinder"):
+            continue
+        law = (w.model or script.scene.model).contact_law
+        history = set(law.history_columns())
+        modes = [m.name for m in MODES if history & set(law.mode_columns.get(m.column, ()))]
+        if modes:
+            groups.setdefault(law.key, (modes, []))[1].append(w.name)
+    return [f"primitive walls ({', '.join(names)}): LIGGGHTS never writes their contacts' history, so the wall "
+            f"contacts' {' and '.join(modes)} energies of {key} will be NOT COMPUTED (their normal energy is "
+            "rebuilt from positions). To have them, replace each by a mesh wall: 'fix mesh/surface' of the same "
+            "plane or cylinder (an STL file) with a mesh 'fix wall/gran', before running."
+            for key, (modes, names) in groups.items()]
 
 
 def _local(kind: str, cid: str, keywords: list[str], history: list[str], every: int, suffix: str = "") -> list[str]:

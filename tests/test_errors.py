@@ -292,8 +292,13 @@ def test_unsupported_model_in_the_script(run_dir):
 
 
 def test_script_that_is_not_text(run_dir):
+    """Bytes that are not UTF-8 in a comment (a Latin-1 accent) are read, as LIGGGHTS reads them; a control
+    character (a binary file) is refused with its line."""
     script = run_dir / "in.packing"
-    script.write_bytes(script.read_bytes()[:100] + b"\x89\xff" + script.read_bytes()[100:])
+    text = script.read_bytes()
+    script.write_bytes(text[:100] + b"\x89\xff" + text[100:])
+    assert open_run(script).scene.walls
+    script.write_bytes(text[:100] + b"\x01\x89" + text[100:])
     with pytest.raises(ScriptError) as info:
         open_run(script)
     assert_where(info.value, "in.packing", None, 2)
