@@ -201,3 +201,35 @@ def test_a_wall_law_without_the_pair_law_cohesion_is_named(tmp_path, capsys):
     assert res.frames["u_adh"].iloc[-1] < 0  # the pairs' cohesion work
     note = next(line for line in printed.splitlines() if line.startswith("note: u_adh is 0"))
     assert "walls 'floor', 'wxlo', 'wxhi', 'wylo', 'wyhi'" in note and "the particle pairs is computed" in note
+
+
+@pytest.mark.simulator
+def test_one_material_the_report_says_it_is_the_50_50_split(tmp_path, capsys):
+    """Particles and walls of one material, one radius: the material law is the 50/50 split (off by 0), and
+    the radius split's whole error is its wall contacts' (a wall, r = inf, gives the particle all of each)."""
+    from demsplit.results.report import split_headline
+
+    script = tmp_path / "in.user"
+    script.write_bytes(HEAD.replace(b"PAIR_EXTRA", b"").replace(b"primitive type 2", b"primitive type 1")
+                       + b"run 30000\n")
+    assert main(["prepare", str(script), "-q"]) == 0
+    out = script.with_name("in.user.demsplit")
+    liggghts_run(out)
+    assert main(["run", str(out), "-o", str(tmp_path / "r.h5"), "-q"]) == 0
+    res = demsplit.load_results(tmp_path / "r.h5")
+    one = res.frame(int(res.steps.max()))
+    table, sentences = split_headline(one, {})
+    row = table.iloc[0]
+    assert len(table) == 1 and abs(row["equal_off_pct"]) < 1e-9 and row["radius_off_pct"] > 1
+    assert row["radius_off_walls_pct"] == pytest.approx(row["radius_off_pct"], rel=1e-9)
+    said = " ".join(sentences)
+    assert "One particle material (E = 2e+07 Pa, nu = 0.25)" in said and "it is the 50/50 split" in said
+    assert "(the walls too are of this material)" in said and "against a wall it gives the particle" in said
+    assert main(["report", str(tmp_path / "r.h5"), "-o", str(tmp_path / "r.html"), "-q"]) == 0
+    box = (tmp_path / "r.html").read_text()
+    box = box[box.index("<div class='summary'"):box.index("<h2>Energy per mode</h2>")]
+    assert "it is the 50/50 split" in box and "radius off by walls" in box
+    assert main(["report", str(tmp_path / "r.h5")]) == 0
+    text = capsys.readouterr().out.splitlines()
+    assert text[1].startswith("  Against the material law, the 50/50 split agrees with it and the radius split gives "
+                              "type 1 ")
