@@ -233,13 +233,17 @@ def cmd_export(args: argparse.Namespace) -> int:
     for fmt, directory in (("parquet", args.parquet), ("csv", args.csv)):
         if directory:
             written += export_tables(results, directory, fmt=fmt, inputs=[args.results])
-    if args.vtk:
-        written += export_vtk(results, args.vtk, inputs=[args.results])
     if args.dump:
         written.append(export_dump(results, args.dump, inputs=[args.results]))
     if not args.quiet:
         for path in written:
             print(f"wrote {path}")
+    if args.vtk:  # one line for the whole series, not one per file
+        vtk = export_vtk(results, args.vtk, inputs=[args.results], progress=False if args.quiet else None)
+        if not args.quiet:
+            series = [p.name for p in vtk if p.suffix == ".pvd"]
+            print(f"wrote {len(vtk) - len(series)} VTK files of {len(results.steps)} frame(s) in {args.vtk}: open "
+                  f"{', '.join(series)} in ParaView")
     return 0
 
 
@@ -380,8 +384,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--parquet", metavar="DIR", help="one Parquet file per table (units in the field metadata)")
     p.add_argument("--csv", metavar="DIR", help="one CSV file per table")
     p.add_argument("--vtk", metavar="DIR",
-                   help="one VTK file per frame for particles and contacts, and a .pvd series of each "
-                        "(needs the vtk extra: pip install 'demsplit[vtk]')")
+                   help="one VTK file per frame for particles (points), contacts (lines between the bodies) and "
+                        "walls (surfaces), and a .pvd series of each (needs the vtk extra: pip install "
+                        "'demsplit[vtk]')")
     p.add_argument("--dump", metavar="FILE",
                    help="the per-particle table as a LAMMPS-style dump (positions, radius, energies), "
                         "which OVITO opens directly")
