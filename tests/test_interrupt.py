@@ -205,13 +205,17 @@ for k in range(random_kills):  # SIGKILL at a random instant of close(), inside 
     ready, go = os.pipe()
     pid = os.fork()
     if pid == 0:
-        w = store.ResultWriter(out, PROVENANCE, walls_meta=WALLS_META)
+        os.close(ready)
+        w = writer.ResultWriter(out, PROVENANCE, walls_meta=WALLS_META)
         for s in steps:
             w.append(synthetic_frame(s, n_particles=3000, n_pairs=5000))
         os.write(go, b"x")
         w.close()
         os._exit(0)
-    os.read(ready, 1)
+    os.close(go)  # a child that dies before it writes ends the read (EOF) instead of blocking it
+    if os.read(ready, 1) != b"x":
+        sys.exit(f"the writer process {pid} died before close()")
+    os.close(ready)
     time.sleep(random.Random(k).uniform(0, 0.03))
     os.kill(pid, signal.SIGKILL)
     os.waitpid(pid, 0)
@@ -223,7 +227,7 @@ while True:
     os.makedirs(os.path.dirname(out))
     pid = os.fork()
     if pid == 0:  # write every frame, then close, killed at the k-th distinct statement close() reaches
-        w = store.ResultWriter(out, PROVENANCE, walls_meta=WALLS_META)
+        w = writer.ResultWriter(out, PROVENANCE, walls_meta=WALLS_META)
         for s in steps:
             w.append(synthetic_frame(s, n_particles=300, n_pairs=500))
         seen = []
