@@ -858,6 +858,15 @@ def _frames_summary(pf: pd.DataFrame) -> str:
             + _table(rows))
 
 
+def _shown_path(text: str) -> str:
+    """A run's source for the page's first lines: relative to the current directory when it is a file below it
+    (the provenance, folded at the bottom, keeps the absolute path)."""
+    path = Path(text)
+    if path.is_absolute() and path.is_file() and path.is_relative_to(Path.cwd()):
+        return str(path.relative_to(Path.cwd()))
+    return text
+
+
 def write_html(results: Results, path: str | Path, step: int | None = None,
                names: Mapping[int, str] | None = None) -> Path:
     """Write the HTML report of frame ``step`` (default: the last) and the per-frame series to ``path``
@@ -879,7 +888,7 @@ def write_html(results: Results, path: str | Path, step: int | None = None,
     source = (prov.get("scene") or {}).get("source")
     model = prov.get("model") or {}
     if source or model:
-        head.append(f"<br>Run: {esc(str(source or '?'))}; contact law {esc(str(model.get('law', '?')))}.")
+        head.append(f"<br>Run: {esc(_shown_path(str(source or '?')))}; contact law {esc(str(model.get('law', '?')))}.")
     head.append(f"<br>{int(fr['n_particles'])} particles, {int(fr['n_contacts'])} contacts "
                 f"({int(fr['n_wall_contacts'])} with walls).</p>")
     u_total = sum(fr[m] for m in elastic_columns(one.raw.frames))
