@@ -62,10 +62,21 @@ def test_one_state_by_name_and_by_glob(states, tmp_path):
     assert demsplit.load_results(tmp_path / "list.h5").steps.tolist() == [10000, 20000]
 
 
-def cli(*args: str, path: str | None = None) -> subprocess.CompletedProcess:
+def cli(*args: str, path: str | None = None, address_space: int | None = None) -> subprocess.CompletedProcess:
+    """``demsplit ARGS`` in a process of its own; ``address_space``: its limit (bytes, RLIMIT_AS), which the YADE
+    it starts inherits."""
+    import resource
+
     env = {**os.environ, **({"PATH": path} if path is not None else {})}
+    limit = None if address_space is None else lambda: resource.setrlimit(resource.RLIMIT_AS, (address_space,) * 2)
     return subprocess.run([sys.executable, "-m", "demsplit.cli", *args], capture_output=True, text=True, env=env,
-                          timeout=600)
+                          timeout=600, preexec_fn=limit)
+
+
+DAMAGED_STATE_MEMORY = 3 << 30
+"""Address space (bytes) of the process that converts a damaged state: YADE's loader, reading the lengths of a
+cut file, allocated 8.6 GB of it before it gave up; with the limit the allocation fails instead, the same
+error."""
 
 
 def test_info_describes_a_state(states, tmp_path):
@@ -94,7 +105,8 @@ def test_a_damaged_state_is_one_clear_error(states, tmp_path):
     data = (states / "state-010000.yade.gz").read_bytes()
     cut = tmp_path / "cut.yade.gz"
     cut.write_bytes(data[: len(data) // 2])
-    proc = cli("run", str(cut), "-o", str(tmp_path / "x.h5"), "-q", "--state-cache", str(tmp_path / "cache"))
+    proc = cli("run", str(cut), "-o", str(tmp_path / "x.h5"), "-q", "--state-cache", str(tmp_path / "cache"),
+               address_space=DAMAGED_STATE_MEMORY)
     assert proc.returncode == 2 and "could not load" in proc.stderr and "Traceback" not in proc.stderr
     assert not (tmp_path / "x.h5").exists()
     assert not list((tmp_path / "cache").iterdir())  # nothing half-converted is cached
