@@ -239,11 +239,14 @@ def cmd_export(args: argparse.Namespace) -> int:
         for path in written:
             print(f"wrote {path}")
     if args.vtk:  # one line for the whole series, not one per file
-        vtk = export_vtk(results, args.vtk, inputs=[args.results], progress=False if args.quiet else None)
+        not_drawn: list[str] = []
+        vtk = export_vtk(results, args.vtk, inputs=[args.results], progress=False if args.quiet else None,
+                         not_drawn=not_drawn)
         if not args.quiet:
             series = [p.name for p in vtk if p.suffix == ".pvd"]
             print(f"wrote {len(vtk) - len(series)} VTK files of {len(results.steps)} frame(s) in {args.vtk}: open "
-                  f"{', '.join(series)} in ParaView")
+                  f"{', '.join(series)} in ParaView" + (f" (walls not drawn: {'; '.join(not_drawn)})"
+                                                        if not_drawn else ""))
     return 0
 
 

@@ -15,6 +15,7 @@ from demsplit.results import load_results
 from demsplit.results.tables import with_not_computed_as_nan
 
 vtk_numpy = pytest.importorskip("vtkmodules.util.numpy_support")
+meshio = pytest.importorskip("meshio")
 from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader  # noqa: E402
 
 SAMPLES = Path(__file__).resolve().parent.parent / "sample_dumps"
@@ -35,9 +36,12 @@ def read_grid(path: Path):
     return reader.GetOutput()
 
 
-def field_strings(grid, name: str) -> list[str]:
-    array = grid.GetFieldData().GetAbstractArray(name)
-    return [array.GetValue(k) for k in range(array.GetNumberOfValues())] if array is not None else []
+def units_of(grid, data) -> dict[str, str]:
+    """The UNITS_LABEL information key of every array of ``data`` (a grid's point or cell data)."""
+    from vtkmodules.vtkCommonCore import vtkDataArray
+
+    arrays = [data.GetArray(k) for k in range(data.GetNumberOfArrays())]
+    return {a.GetName(): a.GetInformation().Get(vtkDataArray.UNITS_LABEL()) for a in arrays}
 
 
 @pytest.fixture(scope="module")
@@ -135,6 +139,15 @@ def test_vtk_walls_are_drawn_with_their_energies(exported):
         assert np.isnan(arrays["u"][of == 1]).all()  # a primitive wall's u_t is not computed
 
 
+def _points_data(grid):
+    """The grid's points array as a one-array collection, for :func:`units_of`."""
+    from vtkmodules.vtkCommonDataModel import vtkFieldData
+
+    data = vtkFieldData()
+    data.AddArray(grid.GetPoints().GetData())
+    return data
+
+
 @pytest.mark.parametrize("series", ["particles", "contacts", "walls"])
 def test_every_vtk_array_has_its_unit(exported, series):
     store, vtk, _ = exported("liggghts/packing/in.packing")
@@ -142,11 +155,14 @@ def test_every_vtk_array_has_its_unit(exported, series):
     assert len(files) == len(load_results(store).steps)
     for path in files:
         grid = read_grid(path)
-        units = dict(zip(field_strings(grid, "quantity"), field_strings(grid, "unit")))
+        units = units_of(grid, grid.GetPointData() if series == "particles" else grid.GetCellData())
         _, arrays = read_vtu(path)
         assert set(units) == set(arrays) and all(units.values()), units
         column, unit = {"particles": ("radius", "m"), "contacts": ("delta", "m"), "walls": ("n_contacts", "1")}[series]
         assert units["u"] == "J" and units[column] == unit
+        assert units_of(grid, _points_data(grid)) == {"Points": "m"}
+        mesh = meshio.read(path)  # meshio, which reads no string array, reads the files
+        assert len(mesh.points) == grid.GetNumberOfPoints()
 
 
 def test_vtk_files_carry_the_material_names(tmp_path):

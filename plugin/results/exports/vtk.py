@@ -12,19 +12,22 @@
 - ``walls_<step>.vtu``: each wall as triangles (:mod:`demsplit.results.exports.walls`: mesh walls from their
   STL file, primitive planes clipped to the box, cylinders as surfaces, YADE's axis-aligned walls) with the
   wall's energies of that frame as cell data (``wall u u_n u_t n_contacts ...``); a wall the store has no
-  geometry of (a YADE facet or box) is left out and named in the file's field data (``not_drawn``);
+  geometry of (a YADE facet or box) is left out, and said (``not_drawn``);
 
 plus ``particles.pvd``, ``contacts.pvd`` and ``walls.pvd``: ParaView opens a ``.pvd`` as one time series.
-Units are SI (m, J); every file's field data carries each array's unit as two parallel string arrays,
-``quantity`` and ``unit`` (``1``: a count or a ratio). A value that was not computed (the row's
-``not_computed`` bits, which are written too) is NaN, never the store's 0. Where types have material names
-(YADE's material labels, ``demsplit run --type-name``), the field data carries them as two parallel arrays,
-``type_id`` (integers) and ``material`` (strings). The files are VTK XML unstructured grids written by
-meshio: pure Python and a small fraction of VTK's size (docs/performance.md, "Standing decisions").
+Units are SI (m, J): every array carries its unit as VTK's ``UNITS_LABEL`` information key (VTK's XML
+``<InformationKey name="UNITS_LABEL">``, which VTK's reader gives back as
+``array.GetInformation().Get(vtkDataArray.UNITS_LABEL())``; ``1``: a count or a ratio), where meshio, which
+reads no string array, still reads the file. A value that was not computed (the row's ``not_computed`` bits,
+which are written too) is NaN, never the store's 0. Where types have material names (YADE's material labels,
+``demsplit run --type-name``), the field data carries them as two parallel arrays, ``type_id`` (integers) and
+``material`` (strings). The files are VTK XML unstructured grids written by meshio: pure Python and a small
+fraction of VTK's size (docs/performance.md, "Standing decisions").
 """
 
 from __future__ import annotations
 
+import re
 import sys
 from collections.abc import Iterable, Mapping
 from pathlib import Path
@@ -50,9 +53,10 @@ EXTRA_UNITS = {"u": "J"}
 
 
 def export_vtk(results: Results, directory: str | Path, inputs: Iterable[str | Path] = (),
-               progress: bool | None = None) -> list[Path]:
+               progress: bool | None = None, not_drawn: list[str] | None = None) -> list[Path]:
     """Write the VTK series of ``results`` into ``directory`` (module docstring); return the files written.
-    No file is written over one of ``inputs``. ``progress``: a bar on stderr (None: when it is a terminal)."""
+    No file is written over one of ``inputs``. ``progress``: a bar on stderr (None: when it is a terminal);
+    ``not_drawn``: filled with the walls left out of the walls series, and why, once each."""
     try:
         import meshio
     except ImportError:
@@ -85,19 +89,23 @@ def export_vtk(results: Results, directory: str | Path, inputs: Iterable[str | P
         box = _box(frames.loc[step] if step in frames.index else None, tables["particles"], extent)
         for name in series:
             if name == "particles":
-                points, cells, data, where, not_drawn = _particles(tables["particles"])
+                points, cells, data, where, left_out = _particles(tables["particles"])
             elif name == "contacts":
-                points, cells, data, where, not_drawn = _contacts(tables["contacts"], tables["particles"], box, step)
+                points, cells, data, where, left_out = _contacts(tables["contacts"], tables["particles"], box, step)
             else:
-                points, cells, data, where, not_drawn = _walls(tables["walls"], walls, box, meshes)
+                points, cells, data, where, left_out = _walls(tables["walls"], walls, box, meshes)
+            if not_drawn is not None:
+                not_drawn += [wall for wall in left_out if wall not in not_drawn]
             mesh = meshio.Mesh(points, cells, **{f"{where}_data": data if where == "point" else
                                                  {c: [v] for c, v in data.items()}})
             path = dict(plan[name])[step]
-            field = names + _units_field_data(data) + _strings_field_data("not_drawn", not_drawn)
             with atomic_path(path) as tmp:
                 meshio.write(tmp, mesh, file_format="vtu", binary=True, compression=None)
-                grid = b"<UnstructuredGrid>"
-                tmp.write_bytes(tmp.read_bytes().replace(grid, grid + b"<FieldData>" + field + b"</FieldData>", 1))
+                text = _with_units(tmp.read_bytes(), data)
+                if names:
+                    grid = b"<UnstructuredGrid>"
+                    text = text.replace(grid, grid + b"<FieldData>" + names + b"</FieldData>", 1)
+                tmp.write_bytes(text)
             written.append(path)
     for name in series:
         rows = "\n".join(f'    <DataSet timestep="{step}" part="0" file={quoteattr(path.name)}/>'
@@ -192,14 +200,20 @@ def _strings(name: str, values: list[str]) -> bytes:
             "</Array>").encode("ascii")
 
 
-def _strings_field_data(name: str, values: list[str]) -> bytes:
-    return _strings(name, values) if values else b""
+_DATA_ARRAY = re.compile(rb'(<DataArray[^>]*\bName="([^"]*)"[^>]*>)([^<]*)(</DataArray>)')
 
 
-def _units_field_data(data: Mapping[str, np.ndarray]) -> bytes:
-    """The unit of every data array, as the parallel string arrays ``quantity`` and ``unit``."""
-    names = list(data)
-    return _strings("quantity", names) + _strings("unit", [EXTRA_UNITS.get(n, UNITS.get(n, "")) for n in names])
+def _with_units(text: bytes, data: Mapping[str, np.ndarray]) -> bytes:
+    """The VTK XML ``text`` with a ``UNITS_LABEL`` information key in each data array of ``data`` and in the
+    points (m), as VTK's own XML writer writes one."""
+    def unit(match: re.Match) -> bytes:
+        name = match.group(2).decode()
+        if name != "Points" and name not in data:
+            return match.group(0)
+        label = "m" if name == "Points" else EXTRA_UNITS.get(name, UNITS.get(name, ""))
+        key = f'<InformationKey name="UNITS_LABEL" location="vtkDataArray">{label}</InformationKey>'.encode()
+        return match.group(1) + match.group(3) + key + match.group(4)
+    return _DATA_ARRAY.sub(unit, text)
 
 
 def _material_field_data(names: dict[int, str]) -> bytes:
