@@ -321,6 +321,7 @@ def test_a_number_of_the_script_that_is_not_finite_is_refused(run_dir, old, new,
 
 # --- the command: one message, no traceback, exit 2 ----------------------------------------
 
+@pytest.mark.slow
 def test_cli_prints_one_message_for_bad_input(run_dir, tmp_path):
     set_token(run_dir / "pairs.txt", 10 + 8, 13, b"9999")
     out = tmp_path / "out.h5"
@@ -383,6 +384,7 @@ def test_a_damaged_column_name_in_the_wall_dump_header_is_refused(run_dir):
     (lambda line: b" " + line, "starts with a space"),
     (lambda line: line.replace(b" ", b"  ", 1), "two spaces in a row before value 2"),
 ])
+@pytest.mark.slow
 def test_row_shape_faults_are_named_as_what_they_are(run_dir, change, message):
     """They were 'row 1 has 17 values, expected 16' (CR LF) and '41 values, expected 41' (a leading space)."""
     edit_lines(run_dir / "pairs.txt", lambda lines: lines.__setitem__(13 - 1, change(lines[13 - 1])))

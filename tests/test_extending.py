@@ -103,6 +103,7 @@ def test_a_law_defined_here_keeps_the_registry_wide_properties(key):
         check(key)
 
 
+@pytest.mark.slow
 def test_the_toy_reader_and_law_are_read_computed_stored_and_exported(tmp_path):
     path = toy_file(tmp_path / "run.toy")
     with open_run(path) as run:
@@ -122,6 +123,7 @@ def test_the_toy_reader_and_law_are_read_computed_stored_and_exported(tmp_path):
     np.testing.assert_array_equal(back["u_n"].to_numpy(), res.contacts["u_n"].to_numpy())
 
 
+@pytest.mark.slow
 def test_a_liggghts_law_is_found_by_its_word_and_reads_its_script_property(tmp_path):
     """``pair_style gran model toy_spring`` in a copy of the packing sample: the pairs are the new law's, with
     k from the script; the walls keep their own hertz fixes."""

@@ -110,6 +110,7 @@ def assert_same_results(a: demsplit.Results, b: demsplit.Results) -> None:
     (signal.SIGTERM, 143, "terminated (SIGTERM); run again with --resume"),
     (signal.SIGINT, 130, "interrupted; run again with --resume"),
 ])
+@pytest.mark.slow
 def test_interrupted_run_resumes_to_the_same_results(long_run, reference, tmp_path, sig, code, words):
     out = tmp_path / "out.h5"
     proc = demsplit_run(long_run, out)

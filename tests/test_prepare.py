@@ -135,6 +135,7 @@ def dump_frames(path: Path) -> dict[int, str]:
     return frames
 
 
+@pytest.mark.slow
 @pytest.mark.simulator
 def test_a_wall_fix_after_a_run_splits_the_script_with_the_same_physics(tmp_path, capsys):
     """prepare splits the script at the late wall fix (write_restart / read_restart); both parts run in
@@ -193,6 +194,7 @@ def test_prepare_never_writes_over_its_input(tmp_path, capsys):
     assert "input" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 @pytest.mark.simulator
 def test_a_moving_mesh_wall_created_after_a_run_is_refused_then_prepared(tmp_path, capsys):
     """The moving-mesh tutorial's shape: a mesh moved by fix move/mesh, its wall fix created after the first
@@ -236,6 +238,7 @@ BRIDGE_PROPERTIES = "".join(f"fix b{k} all property/global {p}\n" for k, p in en
     1))
 
 
+@pytest.mark.slow
 @pytest.mark.simulator
 def test_liquid_bridges_get_their_liquid_content_with_the_same_physics(tmp_path):
     """A liquid-bridge cohesion model: prepare's atom dump writes the liquid content f_surfaceLiquidContent, and

@@ -57,6 +57,7 @@ def test_text_summary_shows_the_last_frame_per_type():
         text_summary(Results.from_frames([]))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("simulator_point, n_figures", [(True, 10), (False, 9)])
 def test_html_has_every_figure_and_is_self_contained(tmp_path, simulator_point, n_figures):
     out = write_html(results(simulator_point), tmp_path / "report.html")
@@ -74,6 +75,7 @@ def test_html_has_every_figure_and_is_self_contained(tmp_path, simulator_point, 
     assert [p.name for p in tmp_path.iterdir()] == ["report.html"]
 
 
+@pytest.mark.slow
 def test_html_provenance_is_folded_and_nothing_missing_is_said(tmp_path):
     page = write_html(results(), tmp_path / "r.html").read_text()
     folded = re.search(r"<details id='provenance'><summary>Provenance[^<]*</summary><pre>(.*?)</pre></details>",
@@ -83,6 +85,7 @@ def test_html_provenance_is_folded_and_nothing_missing_is_said(tmp_path):
     assert "Not computed: nothing" in page and "class='missing'" not in page
 
 
+@pytest.mark.slow
 def test_not_computed_is_stated_at_the_top(tmp_path):
     prov = {**PROVENANCE, "not_computed": {"u_tw": "the law has no twisting spring", "floor": {"missing": True}},
             "skipped": {"u_r": "hertz without rolling friction"},
@@ -105,6 +108,7 @@ def test_not_computed_is_stated_at_the_top(tmp_path):
     assert text[at + 5] == "    - wall 'lid': no wall dump"
 
 
+@pytest.mark.slow
 def test_every_energy_column_is_shown(tmp_path):
     """Modes are found from the columns: a rolling u_r and the signed cohesion work u_adh appear in the
     mode table and the per-frame table without being named in the report's code."""
@@ -119,6 +123,7 @@ def test_every_energy_column_is_shown(tmp_path):
     assert "<th>u_r (J)</th>" in frames and "<th>u_adh (J)</th>" in frames
 
 
+@pytest.mark.slow
 def test_material_names_and_step(tmp_path):
     prov = {**PROVENANCE, "scene": {"materials": {"1": {"E": 1e7, "nu": 0.3, "name": "soft"},
                                                   "2": {"E": 5e7, "nu": 0.25}}}}
@@ -138,6 +143,7 @@ def test_material_names_and_step(tmp_path):
         write_html(res, tmp_path / "x.html", step=7)
 
 
+@pytest.mark.slow
 def test_report_command_options(tmp_path, capsys):
     from demsplit import cli
 
@@ -203,6 +209,7 @@ def packing_store(tmp_path_factory) -> Path:
 UNIT_HEADER = re.compile(r".* \((J|m|s|Pa|1|%)\)$")
 
 
+@pytest.mark.slow
 def test_the_report_opens_with_the_headline(packing_store, tmp_path):
     """The first screen: per material the material-law energy and how far the 50/50 and radius splits are off
     (recomputed here from the stored particles), the part of that error the wall contacts make (recomputed
@@ -248,6 +255,7 @@ def test_the_report_opens_with_the_headline(packing_store, tmp_path):
     assert text.index(next(line for line in text if line.startswith("  NOT COMPUTED"))) > 4
 
 
+@pytest.mark.slow
 def test_the_report_renders_in_a_browser(packing_store, tmp_path):
     """The report of the LIGGGHTS sample in headless Chromium: every figure decodes, no console message."""
     from demsplit import cli
@@ -283,6 +291,7 @@ def test_run_summary_reads_one_frame_and_equals_the_full_summary(packing_store):
     assert (pf["u_particles"] - per_step).abs().max() <= 1e-15 * pf["u_contacts"].max()
 
 
+@pytest.mark.slow
 def test_a_run_without_contacts_or_comparison_is_reported(tmp_path):
     """run --no-contacts --no-compare: no contacts table, no u_equal/u_radius; the report leaves out what
     needs them."""

@@ -86,6 +86,7 @@ def inserted(tmp_path_factory) -> Path:
     return script
 
 
+@pytest.mark.slow
 @pytest.mark.simulator
 def test_allow_missing_in_a_run_that_inserts_particles(inserted, tmp_path, capsys):
     blocks = (inserted.parent / "pairs.txt").read_text().split("ITEM: NUMBER OF ENTRIES\n")[1:]
@@ -130,6 +131,7 @@ def test_check_of_printed_positions_does_not_call_them_full_precision(inserted, 
 LATIN1 = "# Modèle de référence, écrit sous Windows\n".encode("latin-1")
 
 
+@pytest.mark.slow
 @pytest.mark.simulator
 def test_latin1_prepare_then_check_before_and_after_liggghts(tmp_path, capsys):
     script = tmp_path / "in.user"
@@ -188,6 +190,7 @@ def test_prepare_says_what_primitive_walls_leave_uncomputed(tmp_path, capsys):
     assert "mesh" in note
 
 
+@pytest.mark.slow
 @pytest.mark.simulator
 def test_a_wall_law_without_the_pair_law_cohesion_is_named(tmp_path, capsys):
     script = tmp_path / "in.user"
@@ -203,6 +206,7 @@ def test_a_wall_law_without_the_pair_law_cohesion_is_named(tmp_path, capsys):
     assert "walls 'floor', 'wxlo', 'wxhi', 'wylo', 'wyhi'" in note and "the particle pairs is computed" in note
 
 
+@pytest.mark.slow
 @pytest.mark.simulator
 def test_one_material_the_report_says_it_is_the_50_50_split(tmp_path, capsys):
     """Particles and walls of one material, one radius: the material law is the 50/50 split (off by 0), and

@@ -191,6 +191,7 @@ def test_the_export_never_writes_over_its_store(tmp_path, capsys):
     assert sorted(p.name for p in (tmp_path / "vtk").iterdir()) == ["particles.pvd"]  # nothing written
 
 
+@pytest.mark.slow
 @pytest.mark.simulator
 def test_a_mesh_wall_is_drawn_where_liggghts_put_it(tmp_path):
     """A floor STL scaled, rotated by 8 degrees and moved on its fix line, in a LIGGGHTS run: every contact

@@ -33,6 +33,7 @@ def states(tmp_path_factory) -> Path:
     return out
 
 
+@pytest.mark.slow
 def test_saved_states_give_the_in_run_snapshot(states, tmp_path):
     in_run = demsplit.analyze(states / "saved_states.h5")
     saved = demsplit.analyze(states, state_cache=tmp_path / "cache")  # a directory of states
@@ -44,11 +45,13 @@ def test_saved_states_give_the_in_run_snapshot(states, tmp_path):
             np.testing.assert_array_equal(b[c].to_numpy(), a[c].to_numpy(), err_msg=f"{table}.{c}")
 
 
+@pytest.mark.slow
 def test_run_keeps_converted_states_next_to_the_output(states, tmp_path):
     assert main(["run", str(states / "state-010000.yade.gz"), "-o", str(tmp_path / "r.h5"), "-q"]) == 0
     assert len(list((tmp_path / "r.h5.states").glob("*.npys"))) == 1
 
 
+@pytest.mark.slow
 def test_one_state_by_name_and_by_glob(states, tmp_path):
     cache = tmp_path / "cache"
     assert main(["run", str(states / "state-010000.yade.gz"), "-o", str(tmp_path / "one.h5"), "-q",
@@ -79,6 +82,7 @@ cut file, allocated 8.6 GB of it before it gave up; with the limit the allocatio
 error."""
 
 
+@pytest.mark.slow
 def test_info_describes_a_state(states, tmp_path):
     proc = cli("info", str(states / "state-020000.xml.bz2"))
     assert proc.returncode == 0, proc.stderr
@@ -87,6 +91,7 @@ def test_info_describes_a_state(states, tmp_path):
         assert word in proc.stdout, word
 
 
+@pytest.mark.slow
 def test_a_second_run_reads_the_cache_without_yade(states, tmp_path):
     cache = tmp_path / "cache"
     no_yade = str(Path(sys.executable).parent)  # this Python's bin: no yade on this PATH
@@ -101,6 +106,7 @@ def test_a_second_run_reads_the_cache_without_yade(states, tmp_path):
     assert again.returncode == 0, again.stderr
 
 
+@pytest.mark.slow
 def test_a_damaged_state_is_one_clear_error(states, tmp_path):
     data = (states / "state-010000.yade.gz").read_bytes()
     cut = tmp_path / "cut.yade.gz"
@@ -116,6 +122,7 @@ def test_site_is_where_demsplit_is_installed():
     assert Path(SITE).is_dir()
 
 
+@pytest.mark.slow
 class TestSavedStates(ReaderContract):
     reader = YadeStateRun
 
@@ -125,6 +132,7 @@ class TestSavedStates(ReaderContract):
         return states
 
 
+@pytest.mark.slow
 def test_a_state_saved_by_yade_mpfr150_is_read_by_that_build(tmp_path):
     """yade cannot load it; demsplit falls back to the high-precision build that can."""
     mpfr = require_program("yade-mpfr150")
