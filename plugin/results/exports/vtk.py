@@ -18,11 +18,11 @@ plus ``particles.pvd``, ``contacts.pvd`` and ``walls.pvd``: ParaView opens a ``.
 Units are SI (m, J): every array carries its unit as VTK's ``UNITS_LABEL`` information key (VTK's XML
 ``<InformationKey name="UNITS_LABEL">``, which VTK's reader gives back as
 ``array.GetInformation().Get(vtkDataArray.UNITS_LABEL())``; ``1``: a count or a ratio), not as a string array,
-which meshio cannot read. A value that was not computed (the row's ``not_computed`` bits,
-which are written too) is NaN, never the store's 0. Where types have material names (YADE's material labels,
-``demsplit run --type-name``), the field data carries them as two parallel arrays, ``type_id`` (integers) and
-``material`` (strings; VTK's reader reads them, meshio does not). The files are VTK XML unstructured grids written by meshio: pure Python and a small
-fraction of VTK's size (docs/performance.md, "Standing decisions").
+which meshio cannot read. A value that was not computed (the row's ``not_computed`` bits, which are written too)
+is NaN, never the store's 0. Where types have material names (YADE's material labels, ``demsplit run
+--type-name``), the field data carries them as two parallel arrays, ``type_id`` (integers) and ``material``
+(strings; VTK's reader reads them, meshio does not). The files are VTK XML unstructured grids written by
+meshio: pure Python and a small fraction of VTK's size (docs/performance.md, "Standing decisions").
 """
 
 from __future__ import annotations
