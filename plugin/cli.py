@@ -184,6 +184,16 @@ def cmd_report(args: argparse.Namespace) -> int:
     return 0
 
 
+def _positive(text: str) -> int:
+    try:
+        n = int(text)
+        if n <= 0:
+            raise ValueError
+        return n
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive number of timesteps, got {text!r}") from None
+
+
 def _type_name(text: str) -> tuple[int, str]:
     t, sep, name = text.partition("=")
     try:
@@ -208,23 +218,31 @@ def cmd_export(args: argparse.Namespace) -> int:
     for fmt, directory in (("parquet", args.parquet), ("csv", args.csv)):
         if directory:
             written += export_tables(results, directory, fmt=fmt, inputs=[args.results])
-    if args.vtk:
-        written += export_vtk(results, args.vtk, inputs=[args.results])
     if args.dump:
         written.append(export_dump(results, args.dump, inputs=[args.results]))
     if not args.quiet:
         for path in written:
             print(f"wrote {path}")
+    if args.vtk:  # one line for the whole series, not one per file
+        not_drawn: list[str] = []
+        vtk = export_vtk(results, args.vtk, inputs=[args.results], progress=False if args.quiet else None,
+                         not_drawn=not_drawn)
+        if not args.quiet:
+            series = [p.name for p in vtk if p.suffix == ".pvd"]
+            print(f"wrote {len(vtk) - len(series)} VTK files of {len(results.steps)} frame(s) in {args.vtk}: open "
+                  f"{', '.join(series)} in ParaView" + (f" (walls not drawn: {'; '.join(not_drawn)})"
+                                                        if not_drawn else ""))
     return 0
 
 
 def cmd_prepare(args: argparse.Namespace) -> int:
     from .outputs import check_output_path
     from .prepare import prepare_script
+    from .readers.lammps_input import read_text
 
     script = Path(args.input)
     out = Path(args.output or script.with_name(script.name + ".demsplit"))
-    prepared = prepare_script(script)
+    prepared = prepare_script(script, every=args.every)
     parts = [prepared]
     while parts[-1].part2 is not None:
         parts.append(parts[-1].part2)
@@ -241,14 +259,14 @@ def cmd_prepare(args: argparse.Namespace) -> int:
     try:
         for part, path in zip(parts, paths):
             with atomic_path(path) as tmp:
-                Path(tmp).write_text(part.text)
+                Path(tmp).write_bytes(part.data)
             written.append(path)
     except BaseException:  # all parts or none
         for path in written:
             path.unlink(missing_ok=True)
         raise
     if not args.quiet:
-        print(prepared.diff(script.read_text(), str(script)))
+        print(prepared.diff(read_text(script), str(script)))
         where = f"in {out.parent}" if len(paths) == 1 else f"one after the other in {out.parent}"
         print(f"wrote {', '.join(map(str, paths))}: run {'it' if len(paths) == 1 else 'them'} with "
               f"{'; '.join(f'liggghts -in {p.name}' for p in paths)} {where}, then "
@@ -347,8 +365,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--parquet", metavar="DIR", help="one Parquet file per table (units in the field metadata)")
     p.add_argument("--csv", metavar="DIR", help="one CSV file per table")
     p.add_argument("--vtk", metavar="DIR",
-                   help="one VTK file per frame for particles and contacts, and a .pvd series of each "
-                        "(needs the vtk extra: pip install 'demsplit[vtk]')")
+                   help="one VTK file per frame for particles (points), contacts (lines between the bodies) and "
+                        "walls (surfaces), and a .pvd series of each (needs the vtk extra: pip install "
+                        "'demsplit[vtk]')")
     p.add_argument("--dump", metavar="FILE",
                    help="the per-particle table as a LAMMPS-style dump (positions, radius, energies), "
                         "which OVITO opens directly")
@@ -361,6 +380,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("input", help="the LIGGGHTS input script")
     p.add_argument("-o", "--output", help="prepared script (default: INPUT.demsplit next to the input; a script "
                    "split at a mesh wall fix after a run also gets OUTPUT.part2, ...)")
+    p.add_argument("--every", type=_positive, metavar="N",
+                   help="timesteps between the frames of the dumps prepare adds (default: the interval of the "
+                   "script's own dumps, else of its thermo output, else 100 frames over its runs)")
     p.set_defaults(func=cmd_prepare)
 
     p = add("convert", "write a run's dumps once to an HDF5 ingest cache read much faster later")

@@ -164,6 +164,10 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = DEFAULT_OPTIONS)
         "overlap_max_rel_error": np.array([UNKNOWN if err is None or len(err) == 0 else
                                            min(float(np.max(err)), UNBOUNDED)]),
     }
+    if frame.box is not None:  # the simulation box: where the VTK export draws primitive walls (m)
+        for k, axis in enumerate("xyz"):
+            tables["frames"][f"box_{axis}lo"] = np.array([frame.box.lo[k]])
+            tables["frames"][f"box_{axis}hi"] = np.array([frame.box.hi[k]])
     return tables
 
 

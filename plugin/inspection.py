@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import ContactError, DemsplitError, InputFormatError, MaterialError, StoreError
+from .errors import ContactError, DemsplitError, InputFormatError, MaterialError, PrecisionError, StoreError
 from .fingerprint import DIGEST
 from .frame import Frame, describe_steps
 
@@ -144,8 +144,10 @@ def check_run(input: str | Path, **reader_options) -> tuple[str, bool]:
         problems += [f"wall {w.name!r} ({w.kind}): {w.missing}; 'demsplit run' refuses the run unless given "
                      f"--allow-missing {w.name}" for w in scene.walls if w.missing]
         types: set[int] = set()
-        first: Frame | None = None
+        first: Frame | None = None  # the first frame with contacts, else the first readable one
         notes: list[str] = []  # every frame's, once (what a frame could not give, and why)
+        sources: dict[str, int] = {}  # overlap source -> frames with contacts that use it
+        imprecise = 0  # frames refused because their printed positions are too coarse for the overlaps
         out.append("  frame  step        particles  contacts  wall contacts  overlap bound")
         for k in range(len(run)):
             try:
@@ -153,8 +155,12 @@ def check_run(input: str | Path, **reader_options) -> tuple[str, bool]:
             except DemsplitError as exc:
                 out.append(f"  {k:>5}  unreadable: see problems")
                 problems.append(str(exc))
+                imprecise += isinstance(exc, PrecisionError)
                 continue
-            first = first or frame
+            if first is None or (first.n_contacts == 0 and frame.n_contacts > 0):
+                first = frame
+            if frame.n_contacts:
+                sources[frame.overlap_source] = sources.get(frame.overlap_source, 0) + 1
             notes += [note for note in frame.notes if note not in notes]
             types.update(np.unique(frame.particles["type"]).tolist())
             bound = frame.overlap_error
@@ -164,7 +170,7 @@ def check_run(input: str | Path, **reader_options) -> tuple[str, bool]:
             problems += _check_overlaps(run, frame)
         problems += _check_materials(scene, types)
         if first is not None:
-            lines, missing = _what_run_computes(run, first, notes)
+            lines, missing = _what_run_computes(run, first, sources, imprecise, notes)
             out += lines
             problems += missing
     finally:
@@ -224,16 +230,24 @@ def _check_materials(scene, types: set[int]) -> list[str]:
     return problems
 
 
-def _what_run_computes(run, frame: Frame, notes: list[str]) -> tuple[list[str], list[str]]:
-    """What ``demsplit run`` would compute from which columns (from the first readable frame):
-    each law's one-line description, the modes a law does not have (0), and, as problems, the modes
-    the run has but whose columns were not dumped (``run`` refuses them without ``--allow-missing``);
-    the run's notes and every frame's ``notes``."""
+def _what_run_computes(run, frame: Frame, sources: dict[str, int], imprecise: int,
+                      notes: list[str]) -> tuple[list[str], list[str]]:
+    """What ``demsplit run`` would compute from which columns (from ``frame``, the first readable frame with
+    contacts: a frame without any, e.g. before particles are inserted, shows no column a contact needs): where
+    the overlaps come from in the frames with contacts (``sources``: source -> frames; ``imprecise``: frames
+    refused for printed positions too coarse), each law's one-line description, the modes a law does not have
+    (0), and, as problems, the modes the run has but whose columns were not dumped (``run`` refuses them without
+    ``--allow-missing``); the run's notes and every frame's ``notes``."""
     from .physics.partition import contact_energies
 
     scene = run.scene
+    shown = [f"{source} ({n} frame{'s' if n > 1 else ''})" if len(sources) > 1 or imprecise else source
+             for source, n in sources.items() if source]
+    if imprecise:
+        shown.append(f"positions printed with too few digits ({imprecise} frame{'s' if imprecise > 1 else ''} "
+                     "refused: see the problems)")
     lines = ["run would compute:",
-             f"  overlaps:    {frame.overlap_source or 'as the reader gives them'}"]
+             f"  overlaps:    {'; '.join(shown) or frame.overlap_source or 'as the reader gives them'}"]
     models = [scene.model]
     models += [w.model for w in scene.walls if w.model is not None and w.model not in models]
     lines += [f"  law:         {model.describe()}" for model in models]

@@ -74,11 +74,14 @@ _ATTR_CLASSES = {
 
 
 def _box_lo(path: Path, offset: int) -> np.ndarray:
-    """(xlo, ylo, zlo) of the frame starting at byte ``offset``, computed as
-    MDAnalysis does (for triclinic boxes, from the bounding box and the tilts)."""
-    with open(path, "rb") as f:
+    """(xlo, ylo, zlo) of the frame at ``offset`` (m), computed as MDAnalysis does (for triclinic boxes,
+    from the bounding box and the tilts). The file is opened the way MDAnalysis indexed it
+    (``anyopen``: a ``.gz`` or ``.bz2`` dump decompressed), so that its offsets point into the same text."""
+    from MDAnalysis.lib.util import anyopen
+
+    with anyopen(str(path)) as f:
         f.seek(offset)
-        head = [f.readline().decode() for _ in range(8)]
+        head = [f.readline() for _ in range(8)]
     if not head[0].startswith("ITEM: TIMESTEP") or not head[4].startswith("ITEM: BOX BOUNDS"):
         raise InputFormatError("cannot find the frame header MDAnalysis indexed.", file=path,
                                fix="check that the file is an unmodified LAMMPS/LIGGGHTS dump.")

@@ -52,7 +52,8 @@ from pathlib import Path
 
 from .errors import ScriptError
 from .physics.laws import ContactLaw
-from .readers.lammps_input import logical_lines, strip_comment
+from .readers.lammps_input import logical_lines, read_text, strip_comment
+from .readers.liggghts import PREPARED_MARK
 from .readers.liggghts_script import DumpSpec, LiggghtsScript, local_layout, read_script
 from .readers.liggghts_wallforce import BALANCE_COLUMNS, stored_force_columns
 
@@ -61,7 +62,10 @@ KEYWORDS = ["pos", "vel", "id", "force", "force_normal", "force_tangential", "to
 """Keywords of the contact computes prepare adds (``history`` dropped when the law keeps none)."""
 ATOM_COLUMNS = "id type x y z vx vy vz fx fy fz omegax omegay omegaz radius mass"
 STORE_FORCE = "store_force yes"
-DEFAULT_EVERY = 1000
+GIVEN = "as given (--every)"
+"""Why the added dumps have the interval they have when the user gave it."""
+FRAMES_WITHOUT_OUTPUT = 100
+"""Frames over the script's runs when it writes no output whose interval the added dumps could follow."""
 RESTART = "ds_split{k}.restart"
 """The restart file between part k and part k + 1 of a split script."""
 BEFORE_READ_RESTART = frozenset({"units", "atom_style", "atom_modify", "boundary", "newton", "communicate",
@@ -87,15 +91,22 @@ class Prepared:
     part2: Prepared | None = None
     """When the script was split at a mesh wall fix after a run, the rest of it (this is then part 1)."""
 
+    @property
+    def data(self) -> bytes:
+        """The prepared script's bytes: the original's own bytes (:func:`~demsplit.readers.lammps_input.read_text`)
+        where it is not changed."""
+        return self.text.encode("utf-8", errors="surrogateescape")
+
     def diff(self, original: str, name: str) -> str:
-        """A unified diff from the original script to the prepared one (to each part in turn when split)."""
+        """A unified diff from the original script to the prepared one (to each part in turn when split), for
+        the terminal: a byte that is not UTF-8 shows as ``\\xNN``."""
         out, part, k = [], self, 1
         while part is not None:
             label = f"{name} (prepared by demsplit" + (f", part {k})" if self.part2 is not None else ")")
             out += difflib.unified_diff(original.splitlines(True), part.text.splitlines(True), fromfile=name,
                                         tofile=label)
             part, k = part.part2, k + 1
-        return "".join(out)
+        return "".join(out).encode("utf-8", errors="surrogateescape").decode("utf-8", errors="backslashreplace")
 
 
 def _commands(path: Path) -> list[tuple[int, list[str]]]:
@@ -193,9 +204,30 @@ def split_points(commands: list[tuple[int, list[str]]]) -> list[int]:
     return points
 
 
-def prepare_script(path: str | Path) -> Prepared:
+def output_interval(script: LiggghtsScript, commands: list[tuple[int, list[str]]],
+                    every: int | None = None) -> tuple[int, str]:
+    """The interval (timesteps) of the dumps prepare adds, and why: ``every`` when given; else the script's
+    own output, the smallest interval of its dumps, else of its ``thermo`` lines (a run whose output the user
+    sized should not get frames far more often, which costs disk and time in proportion); else
+    :data:`FRAMES_WITHOUT_OUTPUT` frames over its runs."""
+    if every is not None:
+        return every, GIVEN
+    if script.dumps:
+        d = min(script.dumps, key=lambda d: d.every)
+        return d.every, f"the interval of the script's own dump {d.id}"
+    thermo = [int(words[1]) for _, words in commands if words[0] == "thermo" and len(words) > 1
+              and words[1].isdigit() and int(words[1]) > 0]
+    if thermo:
+        return min(thermo), "the interval of the script's thermo output"
+    steps = sum(end - start for start, end in script.runs)
+    return max(1, -(-steps // FRAMES_WITHOUT_OUTPUT)), (f"{FRAMES_WITHOUT_OUTPUT} frames over the script's "
+                                                         f"{steps} steps of runs (it writes no output to follow)")
+
+
+def prepare_script(path: str | Path, every: int | None = None) -> Prepared:
     """The script at ``path`` with the computes and dumps demsplit needs, split where a mesh wall fix
-    follows a run (module docstring)."""
+    follows a run (module docstring); the dumps it adds write every ``every`` steps (default: the script's own
+    output interval, :func:`output_interval`)."""
     path = Path(path)
     script = read_script(path)
     law = script.scene.model.contact_law
@@ -205,8 +237,9 @@ def prepare_script(path: str | Path) -> Prepared:
     if not any(words[0] == "run" for _, words in commands):
         raise ScriptError("the script has no 'run' command: there is nothing to dump.", file=path,
                           fix="pass the script that runs the simulation.")
-    lines, stored = _store_forces(path.read_text().split("\n"), commands)
+    lines, stored = _store_forces(read_text(path).split("\n"), commands)
     points = split_points(commands)
+    interval = output_interval(script, commands, every)
     if points:
         _check_splittable(path, commands, points)
     bounds = [1, *points, len(lines) + 1]
@@ -217,7 +250,7 @@ def prepare_script(path: str | Path) -> Prepared:
         header = _replayed(commands, start, k + 1)
         footer = [] if last else ["", f"write_restart {RESTART.format(k=k + 1)}"]
         parts.append(_prepare_part(path, script, histories, commands, lines, start, end, k + 1 if points else 0,
-                                   header, footer))
+                                   header, footer, interval))
     for part, after in zip(parts, parts[1:]):
         part.part2 = after
     if stored:
@@ -273,13 +306,14 @@ def _renamed_dump(words: list[str], k: int) -> list[str]:
 
 def _prepare_part(path: Path, script: LiggghtsScript, histories: dict[str, list[str]],
                   commands: list[tuple[int, list[str]]], lines: list[str], start: int, end: int, k: int,
-                  header: list[str], footer: list[str]) -> Prepared:
+                  header: list[str], footer: list[str], interval: tuple[int, str]) -> Prepared:
     """Lines ``start``..``end - 1`` of the script (part ``k``; 0 when not split) with ``header`` and
     ``footer`` and, before the part's first run, the computes and dumps it lacks; ``histories``: the
-    history columns of the pair and the wall compute (``'pair'``, ``'wall'``)."""
+    history columns of the pair and the wall compute (``'pair'``, ``'wall'``); ``interval``: the added dumps'
+    interval and why (:func:`output_interval`)."""
     suffix = f".part{k}" if k > 1 else ""
     label = f"part {k}: " if k else ""
-    original = path.read_text().split("\n")
+    original = read_text(path).split("\n")
     law = script.scene.model.contact_law
     keywords = {kind: [w for w in KEYWORDS if w != "history" or history] for kind, history in histories.items()}
     needed = {"id1", "id2", "delta", *law.needs()}
@@ -307,7 +341,10 @@ def _prepare_part(path: Path, script: LiggghtsScript, histories: dict[str, list[
     beside: list[str] = []
     if own is not None and set(wall_columns) <= set(own.keywords):
         every = own.every
-        notes.append(f"{label}atoms: the script's full-precision atom dump (every {every} steps) is used.")
+        notes.append(f"{label}atoms: the script's full-precision atom dump (every {every} steps) is used, and the "
+                     "contact dumps follow its interval"
+                     + (f" (--every {interval[0]} does not apply: the contacts are read at the atom dump's "
+                        "timesteps)." if interval[1] == GIVEN and interval[0] != every else "."))
     elif place is not None:
         every = own.every
         columns = " ".join([ATOM_COLUMNS, *extra])
@@ -316,14 +353,14 @@ def _prepare_part(path: Path, script: LiggghtsScript, histories: dict[str, list[
         notes.append(f"{label}atoms: a full-precision atom dump with the torques and the primitive walls' stored "
                      f"forces beside the script's own {own.id} (every {every} steps, ds_atoms{suffix}.txt).")
     else:
-        every = DEFAULT_EVERY
+        every, why = interval
         columns = " ".join([ATOM_COLUMNS, *extra])
         fixes = {words[1] for line, words in commands if line < end and words[0] == "fix" and len(words) > 1}
         setup = [c for c in dict.fromkeys(c for law in laws for c in law.dump_setup()) if c.split()[1] not in fixes]
         block += [*setup, f"dump dsAtoms all custom {every} ds_atoms{suffix}.txt {columns}",
                   'dump_modify dsAtoms format "%d %d' + " %.17g" * (len(columns.split()) - 2) + '" sort id']
-        notes.append(f"{label}atoms: a full-precision atom dump every {every} steps (ds_atoms{suffix}.txt); change "
-                     "the interval to the output you want.")
+        notes.append(f"{label}atoms: a full-precision atom dump every {every} steps ({why}; another with --every N) "
+                     f"in ds_atoms{suffix}.txt.")
         if setup:
             notes.append(f"{label}atoms: {' and '.join(extra)} from the fix the cohesion model creates at the first "
                          "run, created just before the dump (LIGGGHTS checks a dump's f_ columns when it reads "
@@ -363,7 +400,7 @@ def _prepare_part(path: Path, script: LiggghtsScript, histories: dict[str, list[
 
 def _added(block: list[str]) -> list[str]:
     """Lines prepare adds, between the comments that mark them."""
-    return ["", "# --- added by 'demsplit prepare': the contact output demsplit reads (docs/liggghts-output.md) ---",
+    return ["", f"{PREPARED_MARK}: the contact output demsplit reads (docs/liggghts-output.md) ---",
             *block, "# --- end of the lines added by demsplit ---", ""] if block else []
 
 

@@ -5,9 +5,11 @@ sees it (``input.cpp``), independent of what the commands mean:
 
 * :func:`logical_lines`: a line whose last non-blank character is ``&``
   continues on the next one (the ``&`` is dropped, the next line appended as
-  is). The file must be UTF-8 text without control characters (tab, form feed
-  and CR are blanks); anything else is refused as "not an input script" with
-  its line, never quoted.
+  is). The file is text without control characters (tab, form feed and CR
+  are blanks); anything else is refused as "not an input script" with its
+  line, never quoted. It is read as UTF-8, and a byte that is not UTF-8 (a
+  Latin-1 "é" in a comment, which LIGGGHTS reads as it reads any byte) is kept
+  as itself (:func:`read_text`).
 * :func:`strip_comment`: ``#`` outside quotes starts a comment.
 * :func:`substitute`: ``$x``, ``${name}`` and ``$(expr)`` are replaced outside
   quotes (``Input::substitute``); ``${name}`` of an equal-style variable
@@ -54,7 +56,7 @@ from pathlib import Path
 
 from ..errors import ScriptError
 
-__all__ = ["Where", "Unevaluable", "excerpt", "logical_lines", "strip_comment", "split_words", "Variables",
+__all__ = ["Where", "Unevaluable", "excerpt", "read_text", "logical_lines", "strip_comment", "split_words", "Variables",
            "substitute", "TOKEN", "FUNCTIONS", "CONSTANTS"]
 
 
@@ -83,25 +85,29 @@ _CONTROL = re.compile(r"[\x00-\x08\x0e-\x1f\x7f-\x9f]")
 """Characters no input script holds (tab, LF, VT, FF and CR are blanks to LAMMPS)."""
 
 
+def read_text(path: Path) -> str:
+    """The text of the input script ``path``: UTF-8, each byte that is not UTF-8 kept as its surrogate escape
+    (Python's ``surrogateescape``), as LIGGGHTS, which reads bytes, keeps it. The text encodes back to the same
+    bytes (``text.encode("utf-8", "surrogateescape")``), a file name in it opens the file of those bytes, and
+    :func:`excerpt` shows such a byte escaped. Raises :class:`OSError` when the file cannot be read."""
+    return path.read_bytes().decode("utf-8", errors="surrogateescape")
+
+
 def logical_lines(path: Path) -> Iterator[tuple[int, str]]:
     """(first physical line number, text) of each command: a line whose last
     non-blank character is ``&`` continues on the next one (``input.cpp``
     ``file()``: the ``&`` is dropped, the next line appended as is). Lines end
     at LF only, as for ``fgets``; a CR before it is a blank.
 
-    A file that cannot be read, is not UTF-8 or holds a control character is
-    refused with a :class:`ScriptError` naming the file and the line, before
-    any of its commands is read and without quoting it."""
+    A file that cannot be read or holds a control character is refused with a
+    :class:`ScriptError` naming the file and the line, before any of its
+    commands is read and without quoting it (:func:`read_text`: bytes that are
+    not UTF-8 are kept)."""
     try:
-        text = path.read_bytes().decode("utf-8")
+        text = read_text(path)
     except OSError as exc:
         raise ScriptError(f"cannot read the input script ({exc.strerror}).", file=path,
                           fix="check the path.") from None
-    except UnicodeDecodeError as exc:
-        line = exc.object[: exc.start].count(b"\n") + 1
-        raise ScriptError(f"byte 0x{exc.object[exc.start]:02x} at offset {exc.start} is not UTF-8 text; "
-                          "expected a LIGGGHTS input script.", file=path, line=line,
-                          fix="pass the input script (a text file), or remove the damaged bytes.") from None
     bad = _CONTROL.search(text)
     if bad:
         line = text.count("\n", 0, bad.start()) + 1

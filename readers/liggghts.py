@@ -20,6 +20,7 @@ or ``.xz`` copy is found too) unless given as ``atoms=``, ``contacts=``,
 
 from __future__ import annotations
 
+import os
 import re
 import tempfile
 from collections.abc import Iterator
@@ -44,6 +45,10 @@ DEFAULT_OVERLAP_TOLERANCE = 1e-3
 """Largest accepted relative error bound of an overlap recomputed from printed positions."""
 
 _COMPRESSED = (".gz", ".bz2", ".xz")
+
+PREPARED_MARK = "# --- added by 'demsplit prepare'"
+"""How the lines ``demsplit prepare`` adds to a script begin (:mod:`demsplit.prepare`): a script holding it is
+prepared, and a missing dump of it is one LIGGGHTS has not written yet, not one to add."""
 _LOCAL_TOKEN = re.compile(r"^c_(\w+)\[(\d+)\]$")
 
 
@@ -178,6 +183,8 @@ def _open_atoms(script: LiggghtsScript, given) -> tuple[DumpFile, DumpSpec | Non
         path = existing_file(spec.file)
         if path is not None:
             return open_dump(path, columns=spec.keywords), spec
+    if _candidates(script, "atoms"):
+        raise _not_written(script, _candidates(script, "atoms"), "atoms")
     raise InputFormatError(
         "no atom dump found: the script has no 'dump ... custom' with id type x y z radius whose file exists."
         + vtk_dump_note(script.dumps), file=script.path,
@@ -197,6 +204,8 @@ def _open_local(script: LiggghtsScript, given, kind: str) -> DumpFile | None:
         path = existing_file(spec.file)
         if path is not None:
             return open_dump(path)
+    if kind == "pair" and _candidates(script, kind):
+        raise _not_written(script, _candidates(script, kind), "contacts")
     if kind == "pair":
         raise InputFormatError(
             "no pair contact dump found: the script has no 'dump ... local' of a compute pair/gran/local "
@@ -206,6 +215,19 @@ def _open_local(script: LiggghtsScript, given, kind: str) -> DumpFile | None:
                 "'dump dc all local N pairs.txt c_cpgl[1] ...' to the script, or pass --contacts FILE.")
     return None
 
+
+def _not_written(script: LiggghtsScript, specs: list[DumpSpec], option: str) -> InputFormatError:
+    """The error of a script whose dump lines for a table exist but none of whose files does: LIGGGHTS has not
+    run it here yet (a script ``demsplit prepare`` wrote, typically), so the fix is to run it, not to add dumps."""
+    path = Path(script.path)
+    files = ", ".join(f"{os.path.relpath(d.file, path.parent)} (dump {d.id})" for d in specs)
+    prepared = PREPARED_MARK in path.read_text(encoding="utf-8", errors="replace")
+    return InputFormatError(
+        f"the script {'is prepared for demsplit' if prepared else 'has the dumps demsplit reads'} but its "
+        f"{'atom' if option == 'atoms' else 'pair contact'} dump does not exist yet: {files} not found in "
+        f"{path.parent}. LIGGGHTS has not run this script here.", file=path,
+        fix=f"run it first (cd {path.parent} && liggghts -in {path.name}), then demsplit again; "
+            f"or pass --{option} FILE where the dump was written elsewhere.")
 
 
 def _open_dumps(script: LiggghtsScript, atoms, contacts,

@@ -29,6 +29,13 @@ def require_program(name: str) -> str:
     return path
 
 
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """A test that runs a simulator is slow: ``pytest -m "not slow"`` (the quick suite) leaves it out."""
+    for item in items:
+        if item.get_closest_marker("simulator") is not None and item.get_closest_marker("slow") is None:
+            item.add_marker(pytest.mark.slow)
+
+
 @pytest.fixture
 def liggghts() -> str:
     return require_program("liggghts")

@@ -20,6 +20,7 @@ def material():
     return analyze(PACKING)
 
 
+@pytest.mark.slow
 def test_contact_radius_ratios_and_expected_error(material):
     c = material.contacts  # (ids and delta; the radii come from the particles table)
     p = material.particles.set_index(["step", "id"])
@@ -47,6 +48,7 @@ def test_particle_errors_add_up_to_the_wall_side(material):
         assert pt.loc[pt["step"] == step, "u_n_error"].sum() == pytest.approx(on_walls, rel=1e-9, abs=1e-25)
 
 
+@pytest.mark.slow
 def test_corrected_split_moves_exactly_the_expected_error(material):
     corrected = analyze(PACKING, options=Options(split="corrected"))
     np.testing.assert_allclose(corrected.particles["u"], material.particles["u"] + material.particles["u_n_error"],
@@ -58,6 +60,7 @@ def test_corrected_split_moves_exactly_the_expected_error(material):
     assert np.all(np.abs(f["u_particles"] + f["u_walls"] - total) <= 1e-12 * total)
 
 
+@pytest.mark.slow
 def test_summary_says_how_far_the_split_can_be_trusted(tmp_path, capsys):
     out = tmp_path / "r.h5"
     assert main(["run", str(PACKING), "-o", str(out), "-q"]) == 0

@@ -26,6 +26,7 @@ def assert_same_frames(a, b) -> None:
         assert_frames_equal(a.frame(k), b.frame(k))
 
 
+@pytest.mark.slow
 class TestCacheOfTheYadeSample(ReaderContract):
     """The cache as a reader of its own (the contract's round trip covers every other reader's cache)."""
 
@@ -53,6 +54,7 @@ def _repack(src, dst, **dataset_options) -> None:
         a.visititems(copy)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("layout", [{"chunks": True, "compression": "gzip"}, {"byteorder": ">"}])
 def test_a_repacked_cache_is_read_through_hdf5(layout, samples, tmp_path):
     """Columns that are not contiguous, native-endian datasets (chunked and
@@ -67,6 +69,7 @@ def test_a_repacked_cache_is_read_through_hdf5(layout, samples, tmp_path):
     assert_same_frames(open_run(cache), open_run(repacked))
 
 
+@pytest.mark.slow
 def test_a_column_past_the_end_of_the_cache_is_refused_with_its_name(samples, tmp_path):
     """A dataset whose bytes the file does not hold (a cache cut short) is an
     error naming the file, not an array of garbage."""
@@ -78,6 +81,7 @@ def test_a_column_past_the_end_of_the_cache_is_refused_with_its_name(samples, tm
     run.close()
 
 
+@pytest.mark.slow
 def test_cache_results_equal_text_results_and_work_in_workers(samples, tmp_path, monkeypatch):
     from demsplit.runtime import threads
 
@@ -120,6 +124,7 @@ def test_refused_frames_are_kept_as_their_error(run_dir, tmp_path):
     assert str(again.value) == str(direct.value)
 
 
+@pytest.mark.slow
 def test_reader_options_are_refused_and_foreign_hdf5_is_not_a_cache(samples, tmp_path):
     cache = convert_run(samples / "yade" / "mindlin_box.h5", tmp_path / "cache.h5")
     with pytest.raises(InputFormatError, match="fixed when it was written"):

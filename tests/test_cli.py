@@ -34,6 +34,7 @@ def damage_atom_row(run_dir: Path, frame: int) -> int:
     return line
 
 
+@pytest.mark.slow
 def test_bad_input_is_one_message_and_exit_2(run_dir, tmp_path):
     line = damage_atom_row(run_dir, 0)
     proc = demsplit_cli("run", run_dir / "in.packing", "-o", tmp_path / "o.h5")
@@ -43,6 +44,7 @@ def test_bad_input_is_one_message_and_exit_2(run_dir, tmp_path):
     assert f"atoms_full.txt:{line}, timestep 200000" in proc.stderr and "'oops'" in proc.stderr
 
 
+@pytest.mark.slow
 def test_debug_shows_the_traceback(run_dir, tmp_path):
     damage_atom_row(run_dir, 0)
     proc = demsplit_cli("run", run_dir / "in.packing", "-o", tmp_path / "o.h5", "--debug")
@@ -51,6 +53,7 @@ def test_debug_shows_the_traceback(run_dir, tmp_path):
     assert proc.stderr.rstrip().splitlines()[-1].startswith("demsplit: error: ")
 
 
+@pytest.mark.slow
 def test_damaged_store_is_one_message(tmp_path):
     """A store file with the format mark but no tables: report and info say so, exit 2."""
     import h5py
@@ -93,6 +96,7 @@ def test_a_bug_is_an_internal_error_exit_3(monkeypatch, capsys):
     (PACKING / "in.packing", ["LIGGGHTS input script", "liggghts:hertz (tangential='history')", "1: E=1e+08 Pa nu=0.25",
                               "wpost (cylinder, type 3)", "dpair17", "full precision"]),
 ])
+@pytest.mark.slow
 def test_info_on_each_kind_of_file(path, words):
     proc = demsplit_cli("info", path)
     assert proc.returncode == 0, proc.stderr
@@ -100,6 +104,7 @@ def test_info_on_each_kind_of_file(path, words):
         assert w in proc.stdout, w
 
 
+@pytest.mark.slow
 def test_info_on_a_result_store(tmp_path):
     out = tmp_path / "r.h5"
     assert demsplit_cli("run", PACKING / "in.packing", "-o", out, "-q").returncode == 0
@@ -111,6 +116,7 @@ def test_info_on_a_result_store(tmp_path):
     assert f"{script}  ({script.stat().st_size} bytes, blake3 {file_digest(script)[:12]}...)" in proc.stdout
 
 
+@pytest.mark.slow
 def test_info_shows_the_sha256_of_a_store_written_before_blake3(tmp_path):
     """Stores written before the provenance moved to BLAKE3 name their inputs' sha256: info shows that."""
     import json
@@ -130,11 +136,13 @@ def test_info_shows_the_sha256_of_a_store_written_before_blake3(tmp_path):
     assert "bytes, sha256 abababababab..." in proc.stdout and "blake3" not in proc.stdout
 
 
+@pytest.mark.slow
 def test_info_on_a_missing_file(tmp_path):
     proc = demsplit_cli("info", tmp_path / "nope.txt")
     assert proc.returncode == 2 and "no such file" in proc.stderr
 
 
+@pytest.mark.slow
 def test_check_ok(run_dir):
     proc = demsplit_cli("check", run_dir / "in.packing")
     assert proc.returncode == 0, proc.stdout + proc.stderr
@@ -145,12 +153,14 @@ def test_check_ok(run_dir):
     assert "of primitive-wall contacts are NOT COMPUTED" in proc.stdout
 
 
+@pytest.mark.slow
 def test_check_ok_on_yade():
     proc = demsplit_cli("check", SAMPLES / "yade" / "cundall_periodic.npys")
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert "YADE penetrationDepth" in proc.stdout
 
 
+@pytest.mark.slow
 def test_check_lists_every_problem(run_dir):
     """A damaged row in frame 1, a contact listed twice in frame 0, a wall frame
     missing: all listed, each with file, timestep and line."""
@@ -171,6 +181,7 @@ def test_check_lists_every_problem(run_dir):
     assert "4 problem(s):" in out and "OK" not in out
 
 
+@pytest.mark.slow
 def test_check_missing_material(run_dir):
     atoms = run_dir / "atoms_full.txt"
     lines = atoms.read_bytes().split(b"\n")
@@ -185,6 +196,7 @@ def test_check_missing_material(run_dir):
     assert fixed.returncode == 0, fixed.stdout
 
 
+@pytest.mark.slow
 def test_check_overlap_out_of_range(run_dir):
     pairs = run_dir / "pairs.txt"
     lines = pairs.read_bytes().split(b"\n")
@@ -197,6 +209,7 @@ def test_check_overlap_out_of_range(run_dir):
     assert "pairs.txt:15, timestep 200000" in proc.stdout and "delta <= 0" in proc.stdout
 
 
+@pytest.mark.slow
 def test_check_bad_script_is_a_problem_not_a_crash(run_dir):
     script = run_dir / "in.packing"
     script.write_text(script.read_text().replace("poissonsRatio peratomtype 0.25", "poissonsRatio peratomtype 0.7"))
@@ -204,6 +217,7 @@ def test_check_bad_script_is_a_problem_not_a_crash(run_dir):
     assert proc.returncode == 1 and "0.7" in proc.stdout and "in.packing:" in proc.stdout
 
 
+@pytest.mark.slow
 def test_on_bad_frame_skip(run_dir, tmp_path):
     line = damage_atom_row(run_dir, 1)
     out = tmp_path / "o.h5"

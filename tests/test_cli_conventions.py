@@ -61,6 +61,7 @@ def commands(store, tmp_path) -> dict[str, list[str]]:
     }
 
 
+@pytest.mark.slow
 def test_quiet_silences_every_command(store, tmp_path, capsys):
     loud, quiet = tmp_path / "loud", tmp_path / "quiet"
     loud.mkdir()

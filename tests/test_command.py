@@ -51,6 +51,7 @@ def test_is_command_only_for_the_console_script_and_the_cli_module(monkeypatch, 
     assert command.is_command() is expected
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc's mallopt and ru_minflt")
 def test_the_command_keeps_freed_memory_one_blas_thread_and_rare_collections():
     as_command, as_library = _probe("demsplit"), _probe("analysis.py")
@@ -61,10 +62,12 @@ def test_the_command_keeps_freed_memory_one_blas_thread_and_rare_collections():
     assert as_command["kept"] and not as_library["kept"]  # what the first frame's warm-up asks of the process
 
 
+@pytest.mark.slow
 def test_a_blas_thread_count_the_user_set_is_kept():
     assert _probe("demsplit", OPENBLAS_NUM_THREADS="2")["blas"] == "2"
 
 
+@pytest.mark.slow
 def test_the_command_asks_for_no_huge_pages_only_on_a_guest_that_reports_free_memory():
     as_command, as_library = _probe("demsplit"), _probe("analysis.py")
     assert as_command["pages"] == ("0" if command.guest_reports_free_memory() else None)
@@ -97,6 +100,7 @@ command()
 """
 
 
+@pytest.mark.slow
 def test_the_command_ends_without_teardown_but_runs_atexit_and_flushes(tmp_path):
     """The console script's end (cli.command, command.exit_now): its output complete when stdout is a pipe,
     the atexit handlers run, the interpreter's finalization (a module global's __del__) skipped, the
@@ -129,6 +133,7 @@ print(json.dumps({"loaded_at_import": loaded, "blas": arraymath._HAVE_BLAS,
 """
 
 
+@pytest.mark.slow
 def test_the_command_loads_numba_without_its_blas_probe_and_scipy_imports_after():
     """demsplit.runtime.jit.load_registries_without_blas_probe: in the command's process numba's registries load
     when demsplit.runtime.jit is imported, without importing scipy.linalg; scipy.linalg still imports and works

@@ -45,6 +45,7 @@ def per_step(tmp_path):
     return tmp_path / "in.packing"
 
 
+@pytest.mark.slow
 def test_a_dump_per_timestep_gives_the_results_of_one_file(per_step):
     whole = analyze(PACKING / "in.packing")
     series = analyze(per_step)
@@ -55,6 +56,7 @@ def test_a_dump_per_timestep_gives_the_results_of_one_file(per_step):
     assert written <= names and len(written) == 3 * len(whole.frames)  # every file fingerprinted
 
 
+@pytest.mark.slow
 def test_an_error_names_the_file_of_the_frame(per_step, capsys):
     last = sorted(per_step.parent.glob("atoms_full_*.txt"), key=lambda p: int(p.stem.rsplit("_", 1)[1]))[-1]
     last.write_text(last.read_text().replace("ITEM: NUMBER OF ATOMS\n", "ITEM: NUMBER OF ATOMS\n1", 1))
@@ -62,12 +64,14 @@ def test_an_error_names_the_file_of_the_frame(per_step, capsys):
     assert last.name in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_one_file_per_processor_is_refused(per_step, capsys):
     per_step.write_text(per_step.read_text().replace(" atoms_full_*.txt ", " atoms_full_%.txt "))
     assert main(["run", str(per_step), "-o", str(per_step.parent / "out.h5"), "-q"]) == 2
     assert "one file per processor" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 @pytest.mark.simulator
 def test_liggghts_per_step_dumps_equal_its_single_file_dumps(tmp_path):
     """Debian's LIGGGHTS writing the same output both ways: demsplit's results are identical."""

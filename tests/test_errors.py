@@ -292,8 +292,13 @@ def test_unsupported_model_in_the_script(run_dir):
 
 
 def test_script_that_is_not_text(run_dir):
+    """Bytes that are not UTF-8 in a comment (a Latin-1 accent) are read, as LIGGGHTS reads them; a control
+    character (a binary file) is refused with its line."""
     script = run_dir / "in.packing"
-    script.write_bytes(script.read_bytes()[:100] + b"\x89\xff" + script.read_bytes()[100:])
+    text = script.read_bytes()
+    script.write_bytes(text[:100] + b"\x89\xff" + text[100:])
+    assert open_run(script).scene.walls
+    script.write_bytes(text[:100] + b"\x01\x89" + text[100:])
     with pytest.raises(ScriptError) as info:
         open_run(script)
     assert_where(info.value, "in.packing", None, 2)
@@ -316,6 +321,7 @@ def test_a_number_of_the_script_that_is_not_finite_is_refused(run_dir, old, new,
 
 # --- the command: one message, no traceback, exit 2 ----------------------------------------
 
+@pytest.mark.slow
 def test_cli_prints_one_message_for_bad_input(run_dir, tmp_path):
     set_token(run_dir / "pairs.txt", 10 + 8, 13, b"9999")
     out = tmp_path / "out.h5"
@@ -378,6 +384,7 @@ def test_a_damaged_column_name_in_the_wall_dump_header_is_refused(run_dir):
     (lambda line: b" " + line, "starts with a space"),
     (lambda line: line.replace(b" ", b"  ", 1), "two spaces in a row before value 2"),
 ])
+@pytest.mark.slow
 def test_row_shape_faults_are_named_as_what_they_are(run_dir, change, message):
     """They were 'row 1 has 17 values, expected 16' (CR LF) and '41 values, expected 41' (a leading space)."""
     edit_lines(run_dir / "pairs.txt", lambda lines: lines.__setitem__(13 - 1, change(lines[13 - 1])))

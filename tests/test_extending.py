@@ -103,6 +103,7 @@ def test_a_law_defined_here_keeps_the_registry_wide_properties(key):
         check(key)
 
 
+@pytest.mark.slow
 def test_the_toy_reader_and_law_are_read_computed_stored_and_exported(tmp_path):
     path = toy_file(tmp_path / "run.toy")
     with open_run(path) as run:
@@ -137,6 +138,7 @@ def test_the_command_line_takes_a_readers_options_from_the_reader(tmp_path, caps
     assert "--toy-stiffness does not apply to a LIGGGHTS input script" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_a_liggghts_law_is_found_by_its_word_and_reads_its_script_property(tmp_path):
     """``pair_style gran model toy_spring`` in a copy of the packing sample: the pairs are the new law's, with
     k from the script; the walls keep their own hertz fixes."""

@@ -65,6 +65,7 @@ doubles = st.floats(allow_nan=False, allow_infinity=False) | st.floats(min_value
                        2.0 ** 53 + 2, 9007199254740993.0, 1e22, 1e23, 1e-22, 1e-23])
 
 
+@pytest.mark.slow
 @settings(max_examples=400, deadline=None)
 @given(x=doubles, f=st.sampled_from(FORMATS))
 def test_kernel_real_is_pythons_float_or_not_converted(x, f):
@@ -84,6 +85,7 @@ def test_kernel_real_is_pythons_float_or_not_converted(x, f):
 @settings(max_examples=300, deadline=None)
 @given(m=st.integers(0, 2 ** 53 + 64) | st.integers(0, 10 ** 19), e=st.integers(-26, 26),
        point=st.integers(0, 20), neg=st.booleans(), e_char=st.sampled_from("eE"))
+@pytest.mark.slow
 def test_kernel_real_near_the_fast_path_bounds(m, e, point, neg, e_char):
     """Mantissas around 2**53 and exponents around +-22, with the decimal point
     anywhere: converted exactly as float() does, or listed as slow."""
@@ -113,6 +115,7 @@ def test_kernel_fast_path_covers_g_format():
 @given(token=st.text("0123456789.eE+-", min_size=1, max_size=30) | doubles.map(lambda x: "%.17g" % x)
        | st.sampled_from(["12345678", "1234567.", "0.1234567890123456789", "00000000012345", "9007199254740993",
                           "0.000000000000000000001234", "123456789012345678901234", "1." + "0" * 18]))
+@pytest.mark.slow
 def test_word_wise_real_equals_byte_wise(token):
     """The word-at-a-time reader of a real returns what the byte-by-byte one does, bit for bit (where the
     bytes are not a decimal literal, only that)."""
@@ -189,6 +192,7 @@ def reference_shape(text: bytes, ncols: int, trailing: bool, max_rows: int) -> t
     return True, len(rows) - 1
 
 
+@pytest.mark.slow
 @settings(max_examples=600, deadline=None)
 @given(data=st.data(), ncols=st.integers(1, 40), trailing=st.booleans())
 def test_kernel_shape_check_equals_the_rule(data, ncols, trailing):
@@ -274,6 +278,7 @@ def test_bytes_below_flags_each_byte():
             assert int(below(a, i, bound)) == int(np.bitwise_or.reduce(bits)), (i, bound)
 
 
+@pytest.mark.slow
 def test_scan_chunk_finds_markers_and_newlines():
     text = b"x\nITEM: TIMESTEP\n1\n" + b"1 2\n" * 50 + b"ITEM: TIMESTEP\n2\nITEM: TIMESTE" + b"I\n" * 30
     a = np.frombuffer(text, dtype=np.uint8)
@@ -330,6 +335,7 @@ def local_dump(rows: list[str], ncols: int, step: int = 1) -> str:
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(xs=st.lists(doubles, min_size=1, max_size=60), f=st.sampled_from(FORMATS),
        first=st.integers(0, 10 ** 6))
+@pytest.mark.slow
 def test_reader_equals_pythons_float_per_token(xs, f, first):
     """Fast path + float() for slow tokens + polars fallback: always float(token)."""
     tokens = [fmt(x, f) for x in xs]
@@ -393,6 +399,7 @@ def sample_files() -> list[Path]:
     return sorted(p for p in SAMPLES.glob("*/*.txt*"))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path", sample_files(), ids=lambda p: f"{p.parent.name}/{p.name}")
 def test_fast_path_equals_polars_path_on_samples(path, monkeypatch):
     fast, d = read_all(path)
@@ -404,6 +411,7 @@ def test_fast_path_equals_polars_path_on_samples(path, monkeypatch):
     assert_same_frames(fast, slow)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["atoms.txt", "pairs.txt"])
 def test_fast_path_equals_polars_path_on_generated_run(generated, name, monkeypatch):
     fast, d = read_all(generated / name)
@@ -500,6 +508,7 @@ def test_integer_column_turning_real_in_a_later_block(tmp_path, monkeypatch):
     assert f.columns["c2"].tolist() == [10.0 if k == 20 else k * 0.5 for k in range(40)]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("block", [60, 1000, 1 << 24])   # rows longer than a block, several blocks, one
 def test_threaded_parse_equals_serial(generated, monkeypatch, block):
     path = generated / "pairs.txt"
@@ -515,6 +524,7 @@ def test_threaded_parse_equals_serial(generated, monkeypatch, block):
     assert_same_frames(serial, threaded)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("margin", [200, 1 << 16])
 def test_slices_equal_blocks(generated, monkeypatch, margin):
     """A plain file read in slices cut at the index's checkpoints (each read and parsed by one
@@ -552,6 +562,7 @@ def test_compressed_dump_uses_the_fast_path(tmp_path):
     assert f.columns["c3"].tolist() == [float(f"{k * 1e-3:g}") for k in range(300)]
 
 
+@pytest.mark.slow
 def test_kernels_load_from_the_cache():
     """A fresh process loads the compiled kernels instead of compiling them
     (the first one may have had to compile them)."""

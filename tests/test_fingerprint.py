@@ -130,6 +130,7 @@ def test_the_hashing_thread_runs_on_idle_cores_and_a_waiter_does_not_wait_for_it
     gate.set()
 
 
+@pytest.mark.slow
 def test_a_run_stores_the_digest_of_every_input(tmp_path):
     """demsplit run hashes its inputs in the background while it computes the
     first frame; the store's provenance holds the files' own BLAKE3 digest."""

@@ -34,6 +34,7 @@ def test_text_mutations_change_the_file(kind):
     assert fuzz.mutate(data, kind, 0.7, 3, 0) != data
 
 
+@pytest.mark.slow
 def test_an_input_is_the_same_for_its_seed_and_index(bases, tmp_path):
     root, base = bases
     for family in fuzz.FAMILIES:
@@ -45,6 +46,7 @@ def test_an_input_is_the_same_for_its_seed_and_index(bases, tmp_path):
 
 @settings(max_examples=140, deadline=None, derandomize=True,
           suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@pytest.mark.slow
 @given(family=st.sampled_from(fuzz.FAMILIES), seed=st.integers(0, 2**31), index=st.integers(0, 2**31))
 def test_generated_inputs_keep_the_promise(bases, family, seed, index):
     root, base = bases
@@ -53,6 +55,7 @@ def test_generated_inputs_keep_the_promise(bases, family, seed, index):
     assert fuzz.kept(outcome), f"{family} input {index} of seed {seed}: {case.what}\n{outcome}: {detail}"
 
 
+@pytest.mark.slow
 def test_a_hang_a_crash_and_too_much_memory_are_reported_with_their_input(bases, monkeypatch):
     """The worker child per batch: an input past the time limit is a HANG (its child killed), one that kills
     its process a CRASH, one that allocates past RLIMIT_AS a broken promise; the inputs after them still run."""

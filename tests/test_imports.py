@@ -87,6 +87,7 @@ def cycles(edges: dict[str, set[str]]) -> list[list[str]]:
     return out
 
 
+@pytest.mark.slow
 def test_no_import_cycle():
     assert cycles(import_graph()) == []
 

@@ -34,6 +34,7 @@ def block(monkeypatch, module: str) -> None:
     ("distributed", ["run", str(SAMPLES / "yade" / "mindlin_box.h5"), "-o", "{tmp}/d.h5", "--dask", "local:1"],
      "dask"),
 ])
+@pytest.mark.slow
 def test_a_missing_extra_is_named(store, tmp_path, monkeypatch, capsys, module, argv, extra):
     capsys.readouterr()
     block(monkeypatch, module)

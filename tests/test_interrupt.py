@@ -110,6 +110,7 @@ def assert_same_results(a: demsplit.Results, b: demsplit.Results) -> None:
     (signal.SIGTERM, 143, "terminated (SIGTERM); run again with --resume"),
     (signal.SIGINT, 130, "interrupted; run again with --resume"),
 ])
+@pytest.mark.slow
 def test_interrupted_run_resumes_to_the_same_results(long_run, reference, tmp_path, sig, code, words):
     out = tmp_path / "out.h5"
     proc = demsplit_run(long_run, out)
@@ -205,13 +206,17 @@ for k in range(random_kills):  # SIGKILL at a random instant of close(), inside 
     ready, go = os.pipe()
     pid = os.fork()
     if pid == 0:
-        w = store.ResultWriter(out, PROVENANCE, walls_meta=WALLS_META)
+        os.close(ready)
+        w = writer.ResultWriter(out, PROVENANCE, walls_meta=WALLS_META)
         for s in steps:
             w.append(synthetic_frame(s, n_particles=3000, n_pairs=5000))
         os.write(go, b"x")
         w.close()
         os._exit(0)
-    os.read(ready, 1)
+    os.close(go)  # a child that dies before it writes ends the read (EOF) instead of blocking it
+    if os.read(ready, 1) != b"x":
+        sys.exit(f"the writer process {pid} died before close()")
+    os.close(ready)
     time.sleep(random.Random(k).uniform(0, 0.03))
     os.kill(pid, signal.SIGKILL)
     os.waitpid(pid, 0)
@@ -223,7 +228,7 @@ while True:
     os.makedirs(os.path.dirname(out))
     pid = os.fork()
     if pid == 0:  # write every frame, then close, killed at the k-th distinct statement close() reaches
-        w = store.ResultWriter(out, PROVENANCE, walls_meta=WALLS_META)
+        w = writer.ResultWriter(out, PROVENANCE, walls_meta=WALLS_META)
         for s in steps:
             w.append(synthetic_frame(s, n_particles=300, n_pairs=500))
         seen = []

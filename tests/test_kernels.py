@@ -217,6 +217,7 @@ def test_a_ranges_constants_from_the_contacts_own_types_and_once_the_frames_arra
 @given(seed=st.integers(0, 2**32 - 1), n_particles=st.integers(0, 40), n_contacts=st.integers(0, 120),
        n_walls=st.integers(0, 3), n_types=st.integers(1, 3), normal=st.sampled_from(["hertz", "hooke"]),
        dense_ids=st.booleans(), rigid_walls=st.booleans())
+@pytest.mark.slow
 def test_random_frames_match_numpy(seed, n_particles, n_contacts, n_walls, n_types, normal, dense_ids, rigid_walls):
     rng = np.random.default_rng(seed)
     contacts, particles = random_frame(rng, n_particles, n_contacts, n_walls, n_types, dense_ids, hard=True)
@@ -224,6 +225,7 @@ def test_random_frames_match_numpy(seed, n_particles, n_contacts, n_walls, n_typ
     check_against_reference(contacts, scene, particles, n_walls=n_walls)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", range(4))
 def test_frames_computed_in_pieces_are_the_frames_in_one(seed, monkeypatch):
     """The per-contact loops and the accuracy columns run in pieces on the pool's threads
@@ -348,6 +350,7 @@ def test_hertz_from_codes_equals_per_contact_values():
     assert bad == 0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("pieces", [1, 3])
 def test_the_first_bad_contact_is_found_in_any_piece(pieces, monkeypatch):
     """contact_rows and hertz_history_energies report the first contact naming an unknown id or with
@@ -402,6 +405,7 @@ def reference_repeated_pair(id1, id2):
     return min(candidates, key=lambda rows: rows[1]) if candidates else (-1, -1)
 
 
+@pytest.mark.slow
 @settings(max_examples=300, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 30), m=st.integers(0, 60), no_self=st.booleans())
 def test_repeated_pair_matches_lexsort(seed, n, m, no_self):
@@ -412,6 +416,7 @@ def test_repeated_pair_matches_lexsort(seed, n, m, no_self):
     assert tuple(kernels.repeated_pair(a, b, n)) == reference_repeated_pair(a, b)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("pieces", [1, 3])
 @pytest.mark.parametrize("periodic", [(False, False, False), (True, True, True), (True, False, True)])
 def test_pair_geometry_matches_numpy(periodic, pieces, monkeypatch):

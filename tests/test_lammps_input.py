@@ -95,6 +95,7 @@ def _compose(inner):
         inner.map(lambda t: f"-({t})"))
 
 
+@pytest.mark.slow
 @settings(max_examples=400, deadline=None)
 @given(st.recursive(_LEAVES, _compose, max_leaves=16))
 def test_every_formula_gives_a_finite_number_or_a_script_error(formula):

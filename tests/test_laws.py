@@ -215,6 +215,7 @@ def test_a_mode_the_law_lacks_is_zero_and_said(key):
             assert np.all(e.u[k] == 0) and mode in e.skipped
 
 
+@pytest.mark.slow
 def test_no_model_name_outside_the_laws_and_the_readers():
     """The core (plugin/ outside physics/laws/) never compares a law's name: a string constant equal to a
     registry key or to a simulator's own word for a law is allowed only in the laws and the readers

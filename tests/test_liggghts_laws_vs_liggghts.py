@@ -116,6 +116,7 @@ def contact_keys(c: dict) -> list[tuple[int, int]]:
     return [(int(a), int(b) if w < 0 else -1 - int(w)) for a, b, w in zip(c["id1"], c["id2"], c["wall"])]
 
 
+@pytest.mark.slow
 def test_forces_and_torques_are_liggghts_own(model_run):
     name, script = model_run
     run = open_run(script)
@@ -353,6 +354,7 @@ def referenced_run(request, tmp_path_factory) -> tuple[str, Path]:
     return liggghts_run(request.param, tmp_path_factory)
 
 
+@pytest.mark.slow
 def test_totals_equal_an_independent_recomputation(referenced_run):
     """Per frame and mode, demsplit's total over the dumped contacts equals the sum of :func:`reference_energies`
     to 1e-12."""
@@ -443,6 +445,7 @@ def test_every_model_has_an_independent_reference():
     assert set(REFERENCED) == set(make_run.MODELS)
 
 
+@pytest.mark.slow
 def test_a_mesh_wall_with_its_own_model(tmp_path):
     """The mesh wall's fix without the pairs' rolling friction: LIGGGHTS accepts it, and its wall compute then
     writes 41 columns against the pairs' 44. demsplit reads both, the wall's contacts under the wall's own law

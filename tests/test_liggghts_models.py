@@ -42,6 +42,7 @@ def hooke_run(tmp_path_factory, request):
     return work / "in.hooke"
 
 
+@pytest.mark.slow
 def test_hooke_energy_is_half_kn_delta_squared_with_liggghts_kn(hooke_run):
     run = open_run(hooke_run)
     assert run.scene.model.law == "liggghts:hooke" and run.scene.model.params["characteristic_velocity"] == V

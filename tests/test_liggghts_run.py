@@ -47,6 +47,7 @@ from reader_contract import ReaderContract
 SAMPLES = Path(__file__).resolve().parent.parent / "sample_dumps" / "liggghts"
 
 
+@pytest.mark.slow
 class TestPackingSample(ReaderContract):
     reader = LiggghtsRun
     path = SAMPLES / "packing" / "in.packing"
@@ -445,6 +446,7 @@ def test_analytic_stacks_match_the_closed_form():
     check_closed_form(SAMPLES / "analytic")
 
 
+@pytest.mark.slow
 @pytest.mark.simulator
 def test_analytic_stacks_through_liggghts(liggghts, tmp_path):
     """Run LIGGGHTS on the analytic scene (about 3 s) and check the fresh dumps."""

@@ -435,6 +435,7 @@ def test_analytic_closed_form():
 # --------------------------------------------------------------------- simulator
 
 
+@pytest.mark.slow
 @pytest.mark.simulator
 def test_tiny_packing_writes_the_expected_dumps(liggghts, tmp_path):
     """Run in.packing with 60 particles and a short settle; check every dump's headers."""

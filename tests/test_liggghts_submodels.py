@@ -97,6 +97,7 @@ def frame(n: int = 40, seed: int = 3):
 MU_R = ((0.1, 0.2), (0.2, 0.3))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("rolling, factor", [("epsd", 2.25), ("epsd3", 0.7)])
 def test_rolling_energy_uses_the_models_stiffness(rolling, factor):
     particles, contacts = frame()
@@ -265,6 +266,7 @@ def test_edinburgh_stiffness_uses_the_given_stiffness():
 @pytest.mark.parametrize("model", BRIDGE_MODELS)
 @pytest.mark.parametrize("rj, ci, cj", [(1.6e-3, 0.01, 0.004), (0.7e-3, 2e-5, 0.03), (None, 0.01, 0.0),
                                          (None, 3e-6, 0.0)])
+@pytest.mark.slow
 def test_bridge_work_is_the_integral_of_liggghts_capillary_force(model, rj, ci, cj):
     """u_adh(delta) = int_{-s_rup}^delta F of LIGGGHTS' own force, by 40-digit quadrature of its transcription,
     touching and apart; its derivative is the force, which equals LIGGGHTS'; 0 from rupture on."""

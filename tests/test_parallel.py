@@ -69,6 +69,7 @@ def test_jobs_beyond_the_cores_run_serially_with_a_note(samples, monkeypatch):
     assert any(n.startswith("--jobs 2 on 2 cores: the frames computed in this process") for n in notes)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["liggghts-packing", "yade-mindlin_box", "yade-cundall_periodic"])
 def test_worker_processes_equal_serial(name, serial, samples, four_cores, monkeypatch):
     import demsplit.pipeline as pipeline
@@ -90,6 +91,7 @@ def cluster():
         yield c
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["liggghts-packing", "yade-mindlin_box"])
 def test_dask_cluster_equals_serial(name, serial, samples, cluster):
     """A scheduler address (tcp://...) as a user would pass to --dask."""
@@ -97,6 +99,7 @@ def test_dask_cluster_equals_serial(name, serial, samples, cluster):
     assert_same_results(remote, serial[name])
 
 
+@pytest.mark.slow
 def test_dask_local_store_equals_serial_store(samples, tmp_path):
     """The CLI's --dask local:2 path, through the HDF5 store."""
     script = _runs(samples)["liggghts-packing"]

@@ -247,6 +247,7 @@ def test_other_laws():
     assert ds.shear_spring_energy(np.array([[3e-6, 4e-6, 0]]), 1e4)[0] == pytest.approx(0.5 * 1e4 * 25e-12)
 
 
+@pytest.mark.slow
 def test_ten_million_contacts_memory():
     n = 10**7
     rng = np.random.default_rng(1)

@@ -4,6 +4,7 @@ happens without a size."""
 
 from __future__ import annotations
 
+import threading
 import time
 from pathlib import Path
 
@@ -35,11 +36,29 @@ def test_a_block_is_written_page_by_page_then_freed():
     block.release()  # twice: nothing
 
 
-def test_release_stops_the_thread_before_the_block_is_written_whole():
-    n = 1 << 33  # 8 GiB of address space, of which a piece or two get written before the stop
-    block = prefault.Prefault(n)
-    block.release()
-    assert block._thread is None and block.mapped < n
+def test_release_stops_the_thread_before_the_block_is_written_whole(monkeypatch):
+    """release() during the first piece: the thread finishes that piece and writes no other. The piece waits
+    until release() has asked it to stop, so the test writes one piece, whatever the machine's load (the thread
+    left to race release() on an 8 GiB block wrote all of it on a busy machine: an 8.6 GB test)."""
+    inside, go_on = threading.Event(), threading.Event()
+    memset = prefault.ctypes.memset
+
+    def first_piece_waits(*args):
+        inside.set()
+        assert go_on.wait(60)
+        return memset(*args)
+
+    monkeypatch.setattr(prefault.ctypes, "memset", first_piece_waits)
+    block = prefault.Prefault(64 * prefault.PIECE)  # address space; one piece of it is written
+    assert inside.wait(60)
+    stopping = threading.Thread(target=block.release)
+    stopping.start()
+    deadline = time.monotonic() + 60
+    while not block._stop.is_set() and time.monotonic() < deadline:
+        time.sleep(0.001)
+    go_on.set()
+    stopping.join(60)
+    assert block._thread is None and block.mapped == prefault.PIECE
 
 
 def test_nothing_is_allocated_for_no_rows():

@@ -89,6 +89,7 @@ def test_the_readme_has_the_commands_this_test_runs():
     assert any(map(needs_simulator, commands)) and not all(map(needs_simulator, commands))
 
 
+@pytest.mark.slow
 def test_every_readme_command_runs_on_the_samples(scratch):
     """In README order; the cluster loop's command runs for one script on a local Dask cluster in place
     of the scheduler file (no scheduler is started)."""
@@ -110,6 +111,7 @@ def test_every_readme_command_runs_on_the_samples(scratch):
     assert (scratch / "results" / "packing.h5").exists() and (scratch / "tables" / "units.csv").exists()
 
 
+@pytest.mark.slow
 def test_the_readme_python_block_runs(scratch):
     (python,) = blocks("python")
     assert run(".venv/bin/demsplit run sample_dumps/liggghts/packing/in.packing -o packing.h5 -q",
@@ -119,6 +121,7 @@ def test_the_readme_python_block_runs(scratch):
     assert proc.returncode == 0, proc.stderr[-2000:]
 
 
+@pytest.mark.slow
 @pytest.mark.simulator
 def test_readme_commands_that_need_a_simulator(scratch):
     """The YADE saved-state run (a state saved by Debian's YADE) and the prepare block, liggghts included."""

@@ -44,8 +44,9 @@ def test_text_summary_shows_the_last_frame_per_type():
     text = text_summary(res)
     assert "frame at timestep 200" in text and "contact law: liggghts:hertz (tangential='history')" in text
     per_type = res.per_type().query("step == 200").set_index("type")
+    table = text[text.index("Energy per particle type"):].splitlines()
     for t, row in per_type.iterrows():
-        line = next(l for l in text.splitlines() if re.match(rf"\s*{t}\s+{int(row['count'])}\s", l))
+        line = next(l for l in table if re.match(rf"\s*{t}\s+{int(row['count'])}\s", l))
         assert f"{row['total']:.4g}" in line and f"{row['gini']:.4g}" in line
     assert "floor" in text and "drum" in text
     assert "|cp - cp_simulator| / overlap" in text
@@ -56,6 +57,7 @@ def test_text_summary_shows_the_last_frame_per_type():
         text_summary(Results.from_frames([]))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("simulator_point, n_figures", [(True, 10), (False, 9)])
 def test_html_has_every_figure_and_is_self_contained(tmp_path, simulator_point, n_figures):
     out = write_html(results(simulator_point), tmp_path / "report.html")
@@ -73,6 +75,7 @@ def test_html_has_every_figure_and_is_self_contained(tmp_path, simulator_point, 
     assert [p.name for p in tmp_path.iterdir()] == ["report.html"]
 
 
+@pytest.mark.slow
 def test_html_provenance_is_folded_and_nothing_missing_is_said(tmp_path):
     page = write_html(results(), tmp_path / "r.html").read_text()
     folded = re.search(r"<details id='provenance'><summary>Provenance[^<]*</summary><pre>(.*?)</pre></details>",
@@ -82,6 +85,7 @@ def test_html_provenance_is_folded_and_nothing_missing_is_said(tmp_path):
     assert "Not computed: nothing" in page and "class='missing'" not in page
 
 
+@pytest.mark.slow
 def test_not_computed_is_stated_at_the_top(tmp_path):
     prov = {**PROVENANCE, "not_computed": {"u_tw": "the law has no twisting spring", "floor": {"missing": True}},
             "skipped": {"u_r": "hertz without rolling friction"},
@@ -97,10 +101,14 @@ def test_not_computed_is_stated_at_the_top(tmp_path):
     assert items[4] == "wall &#x27;lid&#x27;: no wall dump" and len(items) == 5
     assert "an ordinary note" not in box.group(1) and "an ordinary note" in page
     text = text_summary(res).splitlines()
-    assert text[1].startswith("  NOT COMPUTED") and text[2] == "    - u_tw: the law has no twisting spring"
-    assert text[6] == "    - wall 'lid': no wall dump"
+    at = next(k for k, line in enumerate(text) if line.startswith("  NOT COMPUTED"))
+    assert text[1].startswith("  Against the material law")  # the headline first, then what was not computed
+    assert at < next(k for k, line in enumerate(text) if line.startswith("Energy per particle type"))
+    assert text[at + 1] == "    - u_tw: the law has no twisting spring"
+    assert text[at + 5] == "    - wall 'lid': no wall dump"
 
 
+@pytest.mark.slow
 def test_every_energy_column_is_shown(tmp_path):
     """Modes are found from the columns: a rolling u_r and the signed cohesion work u_adh appear in the
     mode table and the per-frame table without being named in the report's code."""
@@ -112,9 +120,10 @@ def test_every_energy_column_is_shown(tmp_path):
     last = res.frames.iloc[-1]
     assert rows[2][2] == f"{last['u_r']:.4g}" and rows[3][2] == f"{last['u_adh']:.4g}" and last["u_adh"] < 0
     frames = page[page.index("<h2>Frames</h2>"):]
-    assert "<th>u_r</th>" in frames and "<th>u_adh</th>" in frames
+    assert "<th>u_r (J)</th>" in frames and "<th>u_adh (J)</th>" in frames
 
 
+@pytest.mark.slow
 def test_material_names_and_step(tmp_path):
     prov = {**PROVENANCE, "scene": {"materials": {"1": {"E": 1e7, "nu": 0.3, "name": "soft"},
                                                   "2": {"E": 5e7, "nu": 0.25}}}}
@@ -134,6 +143,7 @@ def test_material_names_and_step(tmp_path):
         write_html(res, tmp_path / "x.html", step=7)
 
 
+@pytest.mark.slow
 def test_report_command_options(tmp_path, capsys):
     from demsplit import cli
 
@@ -186,12 +196,71 @@ def browser_check(page: Path, tmp_path: Path) -> tuple[int, int, list[str]]:
     return int(found.group(1)), int(found.group(2)), console
 
 
-def test_the_report_renders_in_a_browser(tmp_path):
+@pytest.fixture(scope="module")
+def packing_store(tmp_path_factory) -> Path:
+    """The LIGGGHTS packing sample's result store (two particle materials, a mesh floor, primitive walls)."""
+    from demsplit import cli
+
+    out = tmp_path_factory.mktemp("packing") / "o.h5"
+    assert cli.main(["run", str(SAMPLES / "liggghts" / "packing" / "in.packing"), "-o", str(out), "-q"]) == 0
+    return out
+
+
+UNIT_HEADER = re.compile(r".* \((J|m|s|Pa|1|%)\)$")
+
+
+@pytest.mark.slow
+def test_the_report_opens_with_the_headline(packing_store, tmp_path):
+    """The first screen: per material the material-law energy and how far the 50/50 and radius splits are off
+    (recomputed here from the stored particles), the part of that error the wall contacts make (recomputed
+    from the contacts: 50/50 gives the particle u/2, the radius split against a LIGGGHTS wall all of u), the
+    expected error, what was not computed; the per-frame table folded; a unit on every number column."""
+    from demsplit.results.report import LABEL_COLUMNS, split_headline
+
+    res = load_results(packing_store)
+    step = int(res.steps.max())
+    one = res.frame(step)
+    page = write_html(res, tmp_path / "r.html").read_text()
+    start = page.index("<div class='summary' id='summary'>")
+    assert start < page.index("<figure>") and start < page.index("<h2>Energy per mode</h2>")
+    box = page[start:page.index("<h2>Energy per mode</h2>")]
+    assert "id='not-computed'" in box and "expected share error" in box
+    p, c = one.raw.particles, one.raw.contacts
+    u, equal, radius = (p.groupby("type")[col].sum() for col in ("u", "u_equal", "u_radius"))
+    lead = re.search(r"<p class='lead'>(.*?)</p>", box).group(1)
+    worst = ((equal - u) / u * 100).abs().idxmax()
+    assert f"the 50/50 split gives type {worst} {abs((equal - u) / u * 100)[worst]:.3g} % too" in lead
+    rows = re.findall(r"<tr>\s*" + r"\s*".join([r"<td>([^<]*)</td>"] * 11), box)
+    assert [int(r[0]) for r in rows] == u.index.tolist() == [1, 2]
+    for r in rows:
+        t = int(r[0])
+        assert int(r[1]) == (p["type"] == t).sum() and r[2] == f"{u[t]:.4g}"
+        assert r[5] == f"{(equal[t] - u[t]) / u[t] * 100:+.3g}" and r[8] == f"{(radius[t] - u[t]) / u[t] * 100:+.3g}"
+    table, _ = split_headline(one, {})
+    walls = c[c["wall"] >= 0]
+    of_type = p.set_index("id").loc[walls["id1"], "type"].to_numpy()
+    for t in (1, 2):
+        w = walls[of_type == t]
+        row = table.set_index("type").loc[t]
+        np.testing.assert_allclose(row["equal_off_walls_pct"], ((w["u1"] + w["u2"]) / 2 - w["u1"]).sum() / u[t] * 100,
+                                   rtol=1e-9)
+        np.testing.assert_allclose(row["radius_off_walls_pct"], w["u2"].sum() / u[t] * 100, rtol=1e-9)
+    folded = re.search(r"<details id='frames-table'><summary>The per-frame table \((\d+) rows\)</summary>(.*?)"
+                       r"</details>", page, re.S)
+    assert folded and int(folded.group(1)) == len(res.steps) == folded.group(2).count("<tr>")  # header: <tr style
+    headers = [h for h in re.findall(r"<th>([^<]*)</th>", page) if h not in LABEL_COLUMNS]
+    assert headers and all(UNIT_HEADER.match(h) for h in headers), [h for h in headers if not UNIT_HEADER.match(h)]
+    text = text_summary(res).splitlines()
+    assert text[1] == "  " + re.sub(r"<[^>]+>", "", lead)
+    assert text.index(next(line for line in text if line.startswith("  NOT COMPUTED"))) > 4
+
+
+@pytest.mark.slow
+def test_the_report_renders_in_a_browser(packing_store, tmp_path):
     """The report of the LIGGGHTS sample in headless Chromium: every figure decodes, no console message."""
     from demsplit import cli
 
-    out = tmp_path / "o.h5"
-    assert cli.main(["run", str(SAMPLES / "liggghts" / "packing" / "in.packing"), "-o", str(out), "-q"]) == 0
+    out = packing_store
     page = tmp_path / "report.html"
     assert cli.main(["report", str(out), "-o", str(page), "-q"]) == 0
     images, decoded, console = browser_check(page, tmp_path)
@@ -204,19 +273,13 @@ def test_the_report_renders_in_a_browser(tmp_path):
     assert (images, decoded) == (10, 9) and len(console) == 1 and "undefinedFunction" in console[0]
 
 
-def test_run_summary_reads_one_frame_and_equals_the_full_summary(tmp_path):
+def test_run_summary_reads_one_frame_and_equals_the_full_summary(packing_store):
     """demsplit run prints its summary from the last frame's tables and the
     frames table (memory independent of the number of frames): the same text
     as from the whole store, and only the last frame's particles are read."""
-    from pathlib import Path
-
-    from demsplit import cli
-    from demsplit.results import load_results
     from demsplit.results.store import read_last_frame
 
-    script = Path(__file__).resolve().parent.parent / "sample_dumps" / "liggghts" / "packing" / "in.packing"
-    out = tmp_path / "o.h5"
-    assert cli.main(["run", str(script), "-o", str(out), "-q"]) == 0
+    out = packing_store
     full, last = load_results(out), read_last_frame(out)
     step = int(full.steps[-1])
     assert len(full.steps) == 3 and last.steps.tolist() == full.steps.tolist()
@@ -228,6 +291,7 @@ def test_run_summary_reads_one_frame_and_equals_the_full_summary(tmp_path):
     assert (pf["u_particles"] - per_step).abs().max() <= 1e-15 * pf["u_contacts"].max()
 
 
+@pytest.mark.slow
 def test_a_run_without_contacts_or_comparison_is_reported(tmp_path):
     """run --no-contacts --no-compare: no contacts table, no u_equal/u_radius; the report leaves out what
     needs them."""

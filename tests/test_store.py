@@ -96,6 +96,7 @@ def test_exception_mid_run_leaves_no_store_and_parts_resume(tmp_path):
     assert_same(load_results(out), Results.from_frames(fs, PROVENANCE, WALLS_META))
 
 
+@pytest.mark.slow
 def test_sigkill_mid_run_then_resume(tmp_path):
     """A writer killed with SIGKILL after two frames: no store, two frames to resume."""
     out = tmp_path / "out.h5"
@@ -436,6 +437,7 @@ w.close()
 # contacts and 131 frame 3's particles, each with chunks written past the last commit.
 @pytest.mark.parametrize("target, at", [("TableSink._write", 5), ("TableSink._write", 54), ("TableSink._write", 99),
                                         ("TableSink._write", 131), ("_write_records", 1), ("_write_records", 4)])
+@pytest.mark.slow
 def test_killed_at_any_point_of_a_frame_resumes_to_the_same_store(tmp_path, target, at):
     """SIGKILL inside a frame (between chunk writes, or with the commit record
     half written): the resumed run equals an uninterrupted one."""
@@ -512,6 +514,7 @@ def test_small_tables_get_small_chunks(tmp_path):
     assert_same(read_store(tmp_path / "o.h5"), Results.from_frames(frames_small, PROVENANCE, WALLS_META))
 
 
+@pytest.mark.slow
 def test_a_commit_record_replaced_while_it_is_read_is_read_whole(tmp_path):
     """A reader (``committed_steps``, a resume) that opens the commit record
     while the running writer renames its next one into place reads one record

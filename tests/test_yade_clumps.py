@@ -68,6 +68,7 @@ def clump_run(yade, tmp_path):
     return tmp_path / "clumps.npys", clumps, layout["free"]
 
 
+@pytest.mark.slow
 @pytest.mark.simulator
 def test_clump_energies_are_member_sums(clump_run):
     path, clumps, free = clump_run
@@ -112,6 +113,7 @@ def test_clump_energies_are_member_sums(clump_run):
     assert (pc["u"] > 0).all() and (pc["u_t"] > 0).any()
 
 
+@pytest.mark.slow
 @pytest.mark.simulator
 def test_clump_scene_normal_energy_matches_normElastEnergy(clump_run):
     path, clumps, free = clump_run
@@ -126,6 +128,7 @@ def test_clump_scene_normal_energy_matches_normElastEnergy(clump_run):
         assert u_n == pytest.approx(reference, rel=1e-10)
 
 
+@pytest.mark.slow
 @pytest.mark.simulator
 def test_the_clump_table_is_exported_next_to_the_spheres(clump_run, tmp_path):
     import pandas as pd

@@ -58,6 +58,7 @@ def independent(law: str, t: dict) -> dict[str, float]:
     raise KeyError(law)
 
 
+@pytest.mark.slow
 def test_totals_per_mode_equal_yades_own_or_an_independent_sum(law_run):
     law, path = law_run
     run = open_yade_snapshot(path)

@@ -28,6 +28,7 @@ def run_yade(program: str, script: Path, out: Path, **env: str) -> str:
     return proc.stdout
 
 
+@pytest.mark.slow
 @pytest.mark.simulator
 def test_mindlin_normal_energy_matches_normElastEnergy(yade, tmp_path):
     run_yade(yade, SAMPLE_SCRIPTS / "mindlin_box.py", tmp_path, DEMSPLIT_ITER="16000", DEMSPLIT_EVERY="4000")
@@ -44,6 +45,7 @@ def test_mindlin_normal_energy_matches_normElastEnergy(yade, tmp_path):
         assert n_wall > 0
 
 
+@pytest.mark.slow
 @pytest.mark.simulator
 def test_cundallstrack_energy_matches_elastPotential(yade, tmp_path):
     run_yade(yade, SAMPLE_SCRIPTS / "cundall_periodic.py", tmp_path, DEMSPLIT_ITER="6000", DEMSPLIT_EVERY="2000")
@@ -89,6 +91,7 @@ O.run(1, True)
 """
 
 
+@pytest.mark.slow
 @pytest.mark.simulator
 def test_shares_of_pair_wall_facet_box_by_hand(yade, tmp_path):
     script = tmp_path / "shares.py"
@@ -166,6 +169,7 @@ def per_particle_energy(path: Path) -> list[np.ndarray]:
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.simulator
 def test_mpfr150_build_gives_the_same_per_particle_energies(yade, tmp_path):
     mpfr = require_program("yade-mpfr150")

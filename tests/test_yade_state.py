@@ -35,6 +35,7 @@ def states(tmp_path_factory) -> Path:
     return out
 
 
+@pytest.mark.slow
 def test_saved_states_give_the_in_run_snapshot(states, tmp_path):
     in_run = demsplit.analyze(states / "saved_states.h5")
     saved = demsplit.analyze(states, state_cache=tmp_path / "cache")  # a directory of states
@@ -51,11 +52,13 @@ def test_saved_states_give_the_in_run_snapshot(states, tmp_path):
                                            err_msg=f"{table}.{c}")
 
 
+@pytest.mark.slow
 def test_run_keeps_converted_states_next_to_the_output(states, tmp_path):
     assert main(["run", str(states / "state-010000.yade.gz"), "-o", str(tmp_path / "r.h5"), "-q"]) == 0
     assert len(list((tmp_path / "r.h5.states").glob("*.npys"))) == 1
 
 
+@pytest.mark.slow
 def test_one_state_by_name_and_by_glob(states, tmp_path):
     cache = tmp_path / "cache"
     assert main(["run", str(states / "state-010000.yade.gz"), "-o", str(tmp_path / "one.h5"), "-q",
@@ -69,12 +72,24 @@ def test_one_state_by_name_and_by_glob(states, tmp_path):
     assert demsplit.load_results(tmp_path / "list.h5").steps.tolist() == [10000, 20000]
 
 
-def cli(*args: str, path: str | None = None) -> subprocess.CompletedProcess:
+def cli(*args: str, path: str | None = None, address_space: int | None = None) -> subprocess.CompletedProcess:
+    """``demsplit ARGS`` in a process of its own; ``address_space``: its limit (bytes, RLIMIT_AS), which the YADE
+    it starts inherits."""
+    import resource
+
     env = {**os.environ, **({"PATH": path} if path is not None else {})}
+    limit = None if address_space is None else lambda: resource.setrlimit(resource.RLIMIT_AS, (address_space,) * 2)
     return subprocess.run([sys.executable, "-m", "demsplit.cli", *args], capture_output=True, text=True, env=env,
-                          timeout=600)
+                          timeout=600, preexec_fn=limit)
 
 
+DAMAGED_STATE_MEMORY = 3 << 30
+"""Address space (bytes) of the process that converts a damaged state: YADE's loader, reading the lengths of a
+cut file, allocated 8.6 GB of it before it gave up; with the limit the allocation fails instead, the same
+error."""
+
+
+@pytest.mark.slow
 def test_info_describes_a_state(states, tmp_path):
     proc = cli("info", str(states / "state-020000.xml.bz2"))
     assert proc.returncode == 0, proc.stderr
@@ -83,6 +98,7 @@ def test_info_describes_a_state(states, tmp_path):
         assert word in proc.stdout, word
 
 
+@pytest.mark.slow
 def test_a_second_run_reads_the_cache_without_yade(states, tmp_path):
     cache = tmp_path / "cache"
     no_yade = str(Path(sys.executable).parent)  # this Python's bin: no yade on this PATH
@@ -97,11 +113,13 @@ def test_a_second_run_reads_the_cache_without_yade(states, tmp_path):
     assert again.returncode == 0, again.stderr
 
 
+@pytest.mark.slow
 def test_a_damaged_state_is_one_clear_error(states, tmp_path):
     data = (states / "state-010000.yade.gz").read_bytes()
     cut = tmp_path / "cut.yade.gz"
     cut.write_bytes(data[: len(data) // 2])
-    proc = cli("run", str(cut), "-o", str(tmp_path / "x.h5"), "-q", "--state-cache", str(tmp_path / "cache"))
+    proc = cli("run", str(cut), "-o", str(tmp_path / "x.h5"), "-q", "--state-cache", str(tmp_path / "cache"),
+               address_space=DAMAGED_STATE_MEMORY)
     assert proc.returncode == 2 and "could not load" in proc.stderr and "Traceback" not in proc.stderr
     assert not (tmp_path / "x.h5").exists()
     assert not list((tmp_path / "cache").iterdir())  # nothing half-converted is cached
@@ -111,6 +129,7 @@ def test_site_is_where_demsplit_is_installed():
     assert Path(SITE).is_dir()
 
 
+@pytest.mark.slow
 class TestSavedStates(ReaderContract):
     reader = YadeStateRun
 
@@ -120,6 +139,7 @@ class TestSavedStates(ReaderContract):
         return states
 
 
+@pytest.mark.slow
 def test_a_state_saved_by_yade_mpfr150_is_read_by_that_build(tmp_path):
     """yade cannot load it; demsplit falls back to the high-precision build that can."""
     mpfr = require_program("yade-mpfr150")

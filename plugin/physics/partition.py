@@ -153,10 +153,18 @@ def law_energies(frame: FrameContacts, *, compiled: bool = True) -> ContactLawEn
     contacts, scene = frame.contacts, frame.scene
     n = len(frame)
     _refuse_rigid_pairs(frame)
-    groups = [(model.contact_law, rows) for model, rows in law_groups(contacts, scene)]
+    models = [scene.model] + [w.model for w in scene.walls if w.model is not None]
+    by_model = law_groups(contacts, scene)
+    # every law of the scene, also one without a contact in this frame (rows: none), so that what its columns
+    # lack is known from the first frame on, before particles touch (a run that inserts them): a refusal then
+    # comes before any frame is stored, and every frame says the same
+    for model in models:
+        if not any(model == m for m, _ in by_model):
+            by_model.append((model, np.empty(0, dtype=np.intp)))
+    groups = [(model.contact_law, rows) for model, rows in by_model]
     # the modes of every law of the scene, whether or not this frame has contacts it acts on: every frame
     # of a run has the same columns (a frame without contacts had only u_n and u_t)
-    laws = [scene.model.contact_law] + [w.model.contact_law for w in scene.walls if w.model is not None]
+    laws = [model.contact_law for model in models]
     modes = scene_modes(c for law in laws for c in law.modes)
     u = np.zeros((len(modes), n))
     with_adhesion = any(ADHESION_COLUMN in law.modes for law in laws)
@@ -166,18 +174,24 @@ def law_energies(frame: FrameContacts, *, compiled: bool = True) -> ContactLawEn
     # the bits of the modes whose history the simulator never wrote, per contact
     unknown = np.asarray(contacts["history_unknown"]).astype(np.int32) if "history_unknown" in contacts else None
     not_computed = np.zeros(n, dtype=np.int32)
-    for law, rows in groups:
+    several = any(m != scene.model for m in models)  # a wall with a law of its own: say whose law lacks a mode
+    for (model, _), (law, rows) in zip(by_model, groups):
         result = law.energies(LawRows(frame, rows, law.key), compiled=compiled)
+        whose = f" of {_served(model, scene)}" if several else ""
         for k, mode in enumerate(modes):
             if mode.column in result.modes:
                 u[k, rows] = result.modes[mode.column]
             elif mode.column not in result.skipped:
-                skipped.setdefault(mode.column, f"the contact law {law.key} has no {mode.name} energy (0)")
+                skipped.setdefault(mode.column, f"the contact law {law.key}{whose} has no {mode.name} energy (0 for "
+                                   f"{'these' if several else 'its'} contacts)")
         if u_adh is not None:
             if ADHESION_COLUMN in result.modes:
                 u_adh[rows] = result.modes[ADHESION_COLUMN]
             elif ADHESION_COLUMN not in result.skipped:
-                skipped.setdefault(ADHESION_COLUMN, f"the contact law {law.key} has no cohesion (0)")
+                others = _with_mode(models, laws, scene, ADHESION_COLUMN) if several else ""
+                skipped.setdefault(ADHESION_COLUMN, f"the contact law {law.key}{whose} has no cohesion (0 for "
+                                   f"{'these' if several else 'its'} contacts)"
+                                   + (f"; the cohesion of {others} is computed" if others else ""))
         missing.update(result.skipped)  # modes the law has, whose columns the data lacks
         bits = sum(NOT_COMPUTED_BITS[m] for m in result.skipped)
         bits_without_history = sum(NOT_COMPUTED_BITS[m] for m in law.mode_columns
@@ -195,6 +209,24 @@ def law_energies(frame: FrameContacts, *, compiled: bool = True) -> ContactLawEn
         if u_adh is not None:
             u_adh[(not_computed & NOT_COMPUTED_BITS[ADHESION_COLUMN]) != 0] = 0.0
     return ContactLawEnergy(u, skipped, modes, u_adh, missing, not_computed)
+
+
+def _served(model, scene: Scene) -> str:
+    """Which contacts ``model`` acts on, for a message: the walls whose own law it is, or the particle pairs
+    (and the walls without a law of their own) for the scene's law."""
+    own = [w.name for w in scene.walls if w.model is not None and w.model == model and model != scene.model]
+    if own:
+        return f"wall{'s' if len(own) > 1 else ''} {', '.join(repr(n) for n in own)}"
+    rest = [w.name for w in scene.walls if w.model is None or w.model == scene.model]
+    return "the particle pairs" + (f" and wall{'s' if len(rest) > 1 else ''} {', '.join(map(repr, rest))}"
+                                   if rest else "")
+
+
+def _with_mode(models, laws, scene: Scene, column: str) -> str:
+    """The contacts whose law has the mode ``column`` (:func:`_served`), for a message; ``models`` and
+    ``laws``: the scene's law then the walls' own, as :func:`law_energies` lists them."""
+    served = dict.fromkeys(_served(m, scene) for m, law in zip(models, laws) if column in law.modes)
+    return " and ".join(served)
 
 
 def _refuse_rigid_pairs(frame: FrameContacts) -> None:

@@ -33,7 +33,7 @@ import pandas as pd
 from ..outputs import atomic_path
 from ..errors import StoreError
 from .aggregate import elastic_columns
-from .schema import UNBOUNDED, known
+from .schema import UNBOUNDED, UNITS, known
 from .tables import NOT_COMPUTED_TEXT, Results, not_computed_mask
 
 MODE_NAMES = {"u_n": "normal", "u_t": "tangential", "u_r": "rolling", "u_tw": "twisting",
@@ -103,12 +103,14 @@ def _fmt(df: pd.DataFrame, unknown: Mapping[str, np.ndarray] | None = None) -> p
 
 def _mode_total(frame: pd.Series, contacts: pd.DataFrame, mode: str) -> str:
     """A frame's total of ``mode`` for display (J), followed by how many contacts it leaves out as not
-    computed (their ``not_computed`` bit of that mode)."""
+    computed (their ``not_computed`` bit of that mode); "not computed" when that is every contact."""
     from ..physics.modes import NOT_COMPUTED_BITS
 
     text = f"{frame[mode]:.6g} J"
     if "not_computed" in contacts and mode in NOT_COMPUTED_BITS:
         n = int(((contacts["not_computed"].to_numpy(dtype=np.int64) & NOT_COMPUTED_BITS[mode]) != 0).sum())
+        if n and n == len(contacts):
+            return f"not computed (in all {n} contacts)"
         if n:
             text += f" without {n} contact(s) not computed"
     return text
@@ -155,6 +157,147 @@ def simulator_energies(results: Results, step: int, frame: pd.Series) -> list[st
     return lines
 
 
+SPLIT_NAMES = {"equal": "50/50", "radius": "radius"}
+"""The simpler splits the headline measures, by their particle column ``u_<rule>``."""
+
+
+def split_headline(one: Results, names: Mapping[int, str]) -> tuple[pd.DataFrame, list[str]]:
+    """The tool's headline for the frame of ``one``: per material type, the elastic energy its particles hold
+    under the material law (J) and how far the 50/50 and the radius splits put it off,
+    (u_split - u)/u in percent, with the part of that error the wall contacts alone make (percentage points:
+    the rest comes from the particle pairs, computed contact by contact from the stored shares and radii), and
+    the material law's expected error (finite-element model). Then sentences that explain the numbers: with
+    one particle material the material law gives each particle of a pair half (it is the 50/50 split there);
+    against a wall (r = inf) the radius split r1/(r1 + r2) gives the particle the whole contact. Values not
+    computed are left out of the sums (the raw tables' 0), as in every total of the report."""
+    p = one.raw.particles
+    rules = [rule for rule in SPLIT_NAMES if f"u_{rule}" in p]
+    per_type = p.groupby("type")
+    table = pd.DataFrame({"type": list(per_type.groups), "particles": per_type.size().to_numpy()})
+    if names:
+        table.insert(1, "material", [names.get(int(t), "") for t in table["type"]])
+    u = per_type["u"].sum().to_numpy()
+    total = u.sum()
+    table["material_law"] = u
+    table["share_pct"] = u / total * 100 if total > 0 else np.nan
+    walls_part = _wall_parts(one, rules, table["type"].to_numpy()) if rules else {}
+    for rule in rules:
+        other = per_type[f"u_{rule}"].sum().to_numpy()
+        table[rule] = other
+        with np.errstate(invalid="ignore", divide="ignore"):
+            table[f"{rule}_off_pct"] = (other - u) / u * 100
+            if rule in walls_part:
+                table[f"{rule}_off_walls_pct"] = walls_part[rule] / u * 100
+    errors = one.per_type()
+    if "expected_error" in errors:
+        table["expected_error_pct"] = errors.set_index("type").loc[table["type"], "expected_error"].to_numpy() * 100
+    return table, _headline_sentences(one, rules, walls_part)
+
+
+def _wall_parts(one: Results, rules: list[str], types: np.ndarray) -> dict[str, np.ndarray]:
+    """Per particle type (``types``' order), the energy (J) each simpler split moves to or from the type's
+    particles through their wall contacts: the split's total error less the part of the particle pairs,
+    recomputed from each pair's material-law shares ``u1``, ``u2`` and the radii (50/50: u/2 each; radius:
+    r1/(r1 + r2) of u to body 1). Empty without the per-contact table or the particle radii."""
+    c, p = one.raw.contacts, one.raw.particles
+    if not {"id1", "id2", "wall", "u1", "u2"} <= set(c.columns) or "radius" not in p or not len(c):
+        return {}
+    index = pd.Index(p["id"].to_numpy())
+    pairs = c[c["wall"].to_numpy() < 0]
+    rows1, rows2 = index.get_indexer(pairs["id1"].to_numpy()), index.get_indexer(pairs["id2"].to_numpy())
+    if (rows1 < 0).any() or (rows2 < 0).any():
+        return {}
+    u1, u2 = pairs["u1"].to_numpy(), pairs["u2"].to_numpy()
+    r = p["radius"].to_numpy()
+    s1 = {"equal": np.full(len(pairs), 0.5), "radius": r[rows1] / (r[rows1] + r[rows2])}
+    type_row = pd.Index(types).get_indexer(p["type"].to_numpy())
+    out = {}
+    for rule in rules:
+        moved = np.zeros(len(types))
+        np.add.at(moved, type_row[rows1], s1[rule] * (u1 + u2) - u1)
+        np.add.at(moved, type_row[rows2], (1 - s1[rule]) * (u1 + u2) - u2)
+        error = (p.groupby("type")[f"u_{rule}"].sum() - p.groupby("type")["u"].sum()).reindex(types).to_numpy()
+        out[rule] = error - moved
+    return out
+
+
+def _headline_sentences(one: Results, rules: list[str], walls_part: Mapping[str, np.ndarray]) -> list[str]:
+    """What the headline's numbers mean for this run (:func:`split_headline`)."""
+    materials = (one.provenance.get("scene") or {}).get("materials") or {}
+    present = {int(t) for t in one.raw.particles["type"].unique()}
+    elastic = {(m.get("E"), m.get("nu")) for t, m in materials.items() if int(t) in present}
+    walled = len(one.raw.walls) > 0
+    wall_types = {str(w.get("type")) for w in one.walls_meta or []}
+    other_walls = {(m.get("E"), m.get("nu")) for t, m in materials.items() if t in wall_types} - elastic
+    out = []
+    if not rules:
+        out.append("The 50/50 and radius splits were not computed (demsplit run --no-compare).")
+    if len(elastic) == 1 and len(present) >= 1:
+        (E, nu), = elastic
+        out.append(f"One particle material (E = {E:g} Pa, nu = {nu:g}): between two particles the material law "
+                   "splits by compliance, (1 - nu^2)/E, which is the same for both, so it gives each half: there it "
+                   "is the 50/50 split"
+                   + (", and the difference to 50/50 above comes from the wall contacts, whose material differs."
+                      if walled and other_walls else " (the walls too are of this material)." if walled else "."))
+    if "radius" in rules:
+        out.append("The radius split gives body 1 the share r1/(r1 + r2) of a contact (the split behind LIGGGHTS' "
+                   "contact point and Aspherix): between particles it favours the larger one, which the material "
+                   "law, by compliance, does not"
+                   + ("; against a wall it gives the particle r1/(r1 + r_wall), the whole contact where the wall is "
+                      "flat (r_wall = inf, LIGGGHTS' walls), where the material law gives the wall its compliance's "
+                      "share: 'radius off by walls' is that part of the error, in percentage points."
+                      if walled and "radius" in walls_part else "."))
+    return out
+
+
+def _headline_shown(table: pd.DataFrame) -> pd.DataFrame:
+    """The headline table for display: energies in 4 significant digits, percentages signed in 3, the headers
+    with their units (:data:`HEADLINE_COLUMNS`)."""
+    out = _fmt(table)
+    for column in table.columns:
+        if column.endswith("_pct") and column != "share_pct":
+            out[column] = [UNDEFINED_TEXT if not np.isfinite(v) else f"{v:+.3g}" for v in table[column]]
+    return out.rename(columns=HEADLINE_COLUMNS)
+
+
+AGREES_PCT = 1e-6
+"""A split off by less than this (%) agrees with the material law (rounding: one material, where both are 1/2)."""
+
+
+def headline_lead(table: pd.DataFrame, names: Mapping[int, str]) -> str:
+    """One sentence: how far each simpler split is off at worst, and for which material (:func:`split_headline`)."""
+    parts = []
+    for rule, label in SPLIT_NAMES.items():
+        off = table.get(f"{rule}_off_pct")
+        if off is None or not np.isfinite(off.to_numpy(dtype=float)).any():
+            continue
+        k = int(np.nanargmax(np.abs(off.to_numpy(dtype=float))))
+        who = _type_label(table["type"].iloc[k], names)
+        if abs(off.iloc[k]) < AGREES_PCT:
+            parts.append(f"the {label} split agrees with it")
+            continue
+        parts.append(f"the {label} split gives {who} {abs(off.iloc[k]):.3g} % too "
+                     f"{'much' if off.iloc[k] > 0 else 'little'} energy")
+    return ("Against the material law, " + " and ".join(parts) + " (the worst material of each).") if parts else ""
+
+
+def _headline_text(one: Results, names: Mapping[int, str]) -> list[str]:
+    """The headline as the terminal summary's first lines."""
+    table, sentences = split_headline(one, names)
+    lead = headline_lead(table, names)
+    return ([f"  {lead}" if lead else "  Energy per material under the material law:"]
+            + ["    " + line for line in _headline_shown(table).to_string(index=False).splitlines()]
+            + [f"  {sentence}" for sentence in sentences])
+
+
+HEADLINE_COLUMNS = {"particles": "particles (1)", "material_law": "material law (J)", "share_pct": "share (%)",
+                    "equal": "50/50 (J)", "equal_off_pct": "50/50 off (%)",
+                    "equal_off_walls_pct": "50/50 off by walls (%)", "radius": "radius (J)",
+                    "radius_off_pct": "radius off (%)", "radius_off_walls_pct": "radius off by walls (%)",
+                    "expected_error_pct": "expected error (%)"}
+"""The headline table's column headers, with their units."""
+
+
 def text_summary(results: Results, step: int | None = None, names: Mapping[int, str] | None = None) -> str:
     """The per-type summary of frame ``step`` (default: the last), as plain text; ``names``: material
     names of types (added to the provenance's, see :meth:`Results.type_names`)."""
@@ -169,6 +312,8 @@ def text_summary(results: Results, step: int | None = None, names: Mapping[int, 
         f"demsplit results: {len(results.steps)} frame(s); frame at timestep {step}"
         + (f" (t = {fr['time']:.6g} s)" if known(fr.get("time")) else ""),
     ]
+    if u_total > 0:
+        lines += _headline_text(one, names)
     missing = not_computed(results, fr)
     if missing:
         lines += ["  NOT COMPUTED (these values are unknown, not 0; they are left out of every total below):"]
@@ -565,11 +710,53 @@ td,th{border:1px solid #bbb;padding:2px 6px;text-align:right}
 th{background:#eee}figure{margin:1em 0}figcaption{font-size:0.85em;color:#555}img{max-width:100%}
 pre{background:#f6f6f6;padding:0.5em;font-size:0.8em;overflow-x:auto}
 .missing{border:2px solid #c60;background:#fff4e8;padding:0.5em 1em}.ok{color:#060}
+.summary{border:2px solid #246;background:#f2f6fb;padding:0.2em 1em 0.5em;margin-bottom:1.5em}
+.summary table{font-size:0.95em}.summary td{white-space:nowrap}.lead{font-size:1.15em;font-weight:bold}
 details{margin:1em 0}summary{cursor:pointer;font-weight:bold}"""
 
 
-def _table(df: pd.DataFrame, unknown: Mapping[str, np.ndarray] | None = None) -> str:
-    return _fmt(df, unknown).to_html(index=False, border=0, escape=True)
+LABEL_COLUMNS = frozenset({"step", "type", "material", "wall", "name", "kind", "mode", "column", "split",
+                           "size_class", "frame"})
+"""Columns that name or number a row: shown without a unit."""
+
+STAT_UNITS = {**dict.fromkeys(("total", "mean", "std", "p05", "p25", "p50", "p75", "p95", "u_contacts"), "J"),
+              **dict.fromkeys(("count", "share_of_total", "top1_share", "top10_share", "gini", "expected_error",
+                               "share", "balance_rel_error", "nu"), "1"),
+              "r_lo": "m", "r_hi": "m", "E": "Pa"}
+"""Units of the report's derived columns (the statistics of the per-type, per-size and per-frame tables, the
+materials'); the stored columns' are :data:`~demsplit.results.schema.UNITS`."""
+
+
+def column_unit(column: str, units: Mapping[str, str] | None = None) -> str:
+    """The unit of a report table's ``column``: ``units`` (the table's own, where a name means something else
+    than elsewhere), ``%`` for ``*_pct``, :data:`STAT_UNITS`, the store's :data:`~demsplit.results.schema.UNITS`,
+    then a statistic of one split (``total_radius``: that of ``total``). An unknown column is a KeyError: every
+    table the report shows gives every number its unit."""
+    if units and column in units:
+        return units[column]
+    if column.endswith("_pct"):
+        return "%"
+    if column in STAT_UNITS:
+        return STAT_UNITS[column]
+    if column in UNITS:
+        return UNITS[column]
+    base, _, rule = column.rpartition("_")
+    if rule in ("material", *SPLIT_NAMES, "springs") and base in STAT_UNITS:
+        return STAT_UNITS[base]
+    raise KeyError(f"the report has no unit for the column {column!r}")
+
+
+def _table(df: pd.DataFrame, unknown: Mapping[str, np.ndarray] | None = None,
+           units: Mapping[str, str] | None = None) -> str:
+    """``df`` as an HTML table (:func:`_fmt`), each number column's header with its unit (:func:`column_unit`)."""
+    out = _fmt(df, unknown)
+    out.columns = [c if c in LABEL_COLUMNS else f"{c} ({column_unit(c, units)})" for c in out.columns]
+    return out.to_html(index=False, border=0, escape=True)
+
+
+RELATIVE_UNITS = {c: "1" for c in ("particles", "p05", "median", "p95", "max", "max_abs", "beyond_10pct", "n_missing",
+                                   "print_bound_median")}
+"""Units of the misattribution and contact-point tables, whose statistics are of relative values."""
 
 
 def _mode_table(one: Results) -> pd.DataFrame:
@@ -638,8 +825,67 @@ def _energy_sections(one: Results, step: int, names: Mapping[int, str]) -> list[
                     "Per-particle misattribution (u_split - u)/u of the simpler splits, over the particles with "
                     "u &gt; 0 (values beyond the 99.5th percentile are gathered in the last bin). -1: the split "
                     "gives the particle nothing; +1: twice its energy.", "Per-particle misattribution"),
-            _table(misattribution_table(one.raw.particles))]
+            _table(misattribution_table(one.raw.particles), units=RELATIVE_UNITS)]
     return body
+
+
+def _summary_box(results: Results, one: Results, step: int, names: Mapping[int, str], u_total: float) -> list[str]:
+    """The report's first screen: per material, the material-law energy and how far the 50/50 and radius
+    splits are off (:func:`split_headline`), what they mean, the expected error of the material law, then
+    what was not computed."""
+    esc = html.escape
+    fr = one.raw.frames.iloc[0]
+    out = ["<div class='summary' id='summary'>",
+           f"<h2>Summary: the elastic energy per material, timestep {step}</h2>"]
+    if u_total > 0:
+        table, sentences = split_headline(one, names)
+        lead = headline_lead(table, names)
+        out += [f"<p class='lead'>{esc(lead)}</p>" if lead else "",
+                f"<p>{u_total:.4g} J of elastic energy in {int(fr['n_contacts'])} contacts, held by the particles "
+                "as the material law (Feng &amp; Gao) splits it, and where the two simpler splits other tools use "
+                "put it instead (off: (split &minus; material law)/material law).</p>",
+                _headline_shown(table).to_html(index=False, border=0, escape=True),
+                *(f"<p>{esc(sentence)}</p>" for sentence in sentences)]
+        split = (results.provenance.get("options") or {}).get("split", "material")
+        out.append(f"<p>{esc(accuracy_line(one.raw.contacts, split))}</p>" if "share_n1_error" in one.raw.contacts
+                   else "<p>The expected error of the split was not computed (demsplit run --no-accuracy, or a "
+                   "store without contacts).</p>")
+    else:
+        out.append(f"<p>{esc(EMPTY_FRAME)}</p>")
+    missing = not_computed(results, fr)
+    if missing:
+        out += ["<div class='missing' id='not-computed'><h3>Not computed</h3><p>These values are unknown, not 0; "
+                "they are left out of every total below.</p><ul>",
+                *(f"<li>{esc(m)}</li>" for m in missing), "</ul></div>"]
+    else:
+        out.append("<p class='ok' id='not-computed'>Not computed: nothing (the store records no mode, wall or "
+                   "contact left out).</p>")
+    return [*out, "</div>"]
+
+
+def _frames_summary(pf: pd.DataFrame) -> str:
+    """The per-frame series in three rows (the first frame, the last, the one of most elastic energy), for the
+    page; the whole table is folded below it."""
+    if not len(pf):
+        return ""
+    picks = {"first": 0, "last": len(pf) - 1, "most energy": int(np.argmax(pf["u_contacts"].to_numpy()))}
+    cols = [c for c in ("step", "time", "n_particles", "n_contacts", "u_contacts", "u_walls", "balance_rel_error")
+            if c in pf]
+    rows = pf.iloc[list(picks.values())][cols].reset_index(drop=True)
+    rows.insert(0, "frame", list(picks))
+    worst = pf["balance_rel_error"].max() if "balance_rel_error" in pf else np.nan
+    return (f"<p>{len(pf)} frames; largest energy balance error |sum particles + sum walls &minus; sum contacts| / "
+            f"sum contacts: {'-' if not np.isfinite(worst) else f'{worst:.3g}'}.</p>"
+            + _table(rows))
+
+
+def _shown_path(text: str) -> str:
+    """A run's source for the page's first lines: relative to the current directory when it is a file below it
+    (the provenance, folded at the bottom, keeps the absolute path)."""
+    path = Path(text)
+    if path.is_absolute() and path.is_file() and path.is_relative_to(Path.cwd()):
+        return str(path.relative_to(Path.cwd()))
+    return text
 
 
 def write_html(results: Results, path: str | Path, step: int | None = None,
@@ -663,45 +909,43 @@ def write_html(results: Results, path: str | Path, step: int | None = None,
     source = (prov.get("scene") or {}).get("source")
     model = prov.get("model") or {}
     if source or model:
-        head.append(f"<br>Run: {esc(str(source or '?'))}; contact law {esc(str(model.get('law', '?')))}.")
+        head.append(f"<br>Run: {esc(_shown_path(str(source or '?')))}; contact law {esc(str(model.get('law', '?')))}.")
     head.append(f"<br>{int(fr['n_particles'])} particles, {int(fr['n_contacts'])} contacts "
                 f"({int(fr['n_wall_contacts'])} with walls).</p>")
-    missing = not_computed(results, fr)
-    if missing:
-        head += ["<div class='missing' id='not-computed'><h2>Not computed</h2><p>These values are unknown, not 0; "
-                 "they are left out of every total below.</p><ul>",
-                 *(f"<li>{esc(m)}</li>" for m in missing), "</ul></div>"]
-    else:
-        head.append("<p class='ok' id='not-computed'>Not computed: nothing (the store records no mode, wall or "
-                    "contact left out).</p>")
+    u_total = sum(fr[m] for m in elastic_columns(one.raw.frames))
+    head += _summary_box(results, one, step, names, u_total)
     other = [n for n in prov.get("notes", []) if "NOT COMPUTED" not in n]
     if other:
         head += ["<details><summary>Notes of the run</summary><ul>", *(f"<li>{esc(n)}</li>" for n in other),
                  "</ul></details>"]
     body = [*head, "<h2>Energy per mode</h2>",
             "<p>Totals of this frame (J). The elastic modes sum to the elastic total; the cohesion work "
-            "<code>u_adh</code>, where present, is signed and kept apart.</p>", _table(_mode_table(one))]
+            "<code>u_adh</code>, where present, is signed and kept apart.</p>",
+            _table(_mode_table(one), units={"contacts": "J", "particles": "J", "walls": "J",
+                                            "contacts_not_computed": "1"})]
     own = simulator_energies(results, step, fr)
     if own:
         body += ["<p id='simulator-energies'>The simulator's own numbers of this instant:</p><ul>",
                  *(f"<li>{esc(line)}</li>" for line in own), "</ul>"]
     if "share_n1_error" in one.raw.contacts:
         body.append(f"<p>{esc(accuracy_line(one.raw.contacts, prov.get('options', {}).get('split', 'material')))}</p>")
-    u_total = sum(fr[m] for m in elastic_columns(one.raw.frames))
     body += _energy_sections(one, step, names) if u_total > 0 else [f"<p>{esc(EMPTY_FRAME)}</p>"]
     frame_cols = ["step", "time", "n_particles", "n_contacts", "n_wall_contacts", "u_contacts", *energy_modes(pf),
                   "u_walls", "balance_rel_error", "gini"]
     body += ["<h2>Frames</h2>", _figure(_fig_frames(pf), "Elastic total, every energy mode and the energy held by "
                                         "walls per frame, on a log axis so that small terms are visible.",
                                         "Energy per frame"),
-             _table(pf[[c for c in dict.fromkeys(frame_cols) if c in pf]])]
+             _frames_summary(pf),
+             f"<details id='frames-table'><summary>The per-frame table ({len(pf)} rows)</summary>",
+             _table(pf[[c for c in dict.fromkeys(frame_cols) if c in pf]]), "</details>"]
     if len(one.raw.walls):
         we = one.wall_energy()
         body += ["<h2>Walls</h2>", _table(_with_names(we, names), not_computed_mask(we))]
     if {"cpx_sim", "cpy_sim", "cpz_sim"} <= set(one.raw.contacts.columns) and len(one.raw.contacts):
         body += ["<h2>Contact point</h2>", _figure(
             _fig_cp(one.raw.contacts, step), "Distance between the material-weighted contact point and the simulator's "
-            "own, in units of the overlap.", "Contact point shift"), _table(one.contact_point_shift())]
+            "own, in units of the overlap.", "Contact point shift"),
+            _table(one.contact_point_shift(), units=RELATIVE_UNITS)]
     materials = (prov.get("scene") or {}).get("materials") or {}
     if materials or names:
         rows = {int(t): {k: v for k, v in (m or {}).items() if k != "name"} for t, m in materials.items()}

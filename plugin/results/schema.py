@@ -28,7 +28,7 @@ TABLES = ("particles", "contacts", "walls", "frames")
 _ENERGY = {c: "J" for c in ("u", "u_n", "u_t", "u_r", "u_tw", "u_adh", "u_n_error", "u_equal", "u_radius",
                             "u_springs", "u1", "u2", "u_particles", "u_walls")}
 _LENGTH = {c: "m" for c in ("x", "y", "z", "radius", "delta", "depth1", "cpx", "cpy", "cpz", "cpx_sim", "cpy_sim",
-                             "cpz_sim")}
+                             "cpz_sim", *(f"box_{a}{end}" for a in "xyz" for end in ("lo", "hi")))}
 _COUNT = {c: "1" for c in ("step", "id", "clump", "n_members", "id1", "id2", "wall", "type", "n_contacts",
                            "n_particles", "n_wall_contacts", "n_not_computed", "share_n1", "share_t1", "share_r1",
                            "share_tw1", "not_computed", "overlap_max_rel_error", "a_over_r1", "a_over_r2",

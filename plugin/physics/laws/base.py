@@ -194,4 +194,4 @@ class ContactLaw(ABC):
         if rows.has(*cols):
             return None
         return (f"the contact data has no {' '.join(cols)} columns, so the {mode} energy of {self.key} "
-                "is not computed (0)")
+                "cannot be computed")
