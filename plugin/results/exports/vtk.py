@@ -24,56 +24,56 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 
 from ...errors import StoreError
-from ...outputs import atomic_path, check_output_path
+from ...outputs import OutputFolder
 from ..tables import Results
 
 POSITIONS = {"particles": ("x", "y", "z"), "contacts": ("cpx", "cpy", "cpz")}
 """Where each table's rows are drawn: the particle centre, the contact point (m)."""
 
 
-def export_vtk(results: Results, directory: str | Path, inputs: Iterable[str | Path] = ()) -> list[Path]:
+def export_vtk(results: Results, directory: str | Path, inputs: Iterable[str | Path] = (), *,
+               overwrite: bool = False) -> list[Path]:
     """Write the VTK series of ``results`` into ``directory`` (module docstring); return the files written.
-    No file is written over one of ``inputs``."""
+    The files are written together, all or none, into a new or empty folder or over an earlier VTK export,
+    whose series is replaced whole; never over one of ``inputs`` (:class:`demsplit.outputs.OutputFolder`;
+    ``overwrite``: into a folder holding other files too)."""
     try:
         import meshio
     except ImportError:
         raise StoreError("the VTK export needs meshio, which is not installed.",
                          fix="pip install 'demsplit[vtk]'.") from None
-    directory = Path(directory)
-    if directory.exists() and not directory.is_dir():
-        raise StoreError("the export directory is a file.", file=directory, fix="give a directory name.")
-    directory.mkdir(parents=True, exist_ok=True)
     tables = {name: getattr(results, name) for name, position in POSITIONS.items()
               if not getattr(results, name).empty and set(position) <= set(getattr(results, name).columns)}
-    plan = {name: [(int(step), directory / f"{name}_{int(step):012d}.vtu") for step in df["step"].unique()]
+    plan = {name: [(int(step), f"{name}_{int(step):012d}.vtu") for step in df["step"].unique()]
             for name, df in tables.items()}
-    for name, files in plan.items():  # every path checked before anything is written
-        for _, path in [*files, (None, directory / f"{name}.pvd")]:
-            check_output_path(path, inputs)
+    names = [f for name, files in plan.items() for f in [*dict(files).values(), f"{name}.pvd"]]
+    folder = OutputFolder(directory, names, inputs, kind="vtk", overwrite=overwrite)
     field_data = _material_field_data(results.type_names())
     written = []
-    for name, df in tables.items():
-        position = POSITIONS[name]
-        path_of = dict(plan[name])
-        for step, frame in df.groupby("step", sort=False):
-            path = path_of[int(step)]
-            points = frame[list(position)].to_numpy(dtype=np.float64)
-            data = {c: frame[c].to_numpy() for c in frame.columns if c not in (*position, "step")}
-            mesh = meshio.Mesh(points, [("vertex", np.arange(len(points)).reshape(-1, 1))], point_data=data)
-            with atomic_path(path) as tmp:
-                meshio.write(tmp, mesh, file_format="vtu", binary=True, compression=None)
-                if field_data:
-                    grid = b"<UnstructuredGrid>"
-                    tmp.write_bytes(tmp.read_bytes().replace(grid, grid + field_data, 1))
-            written.append(path)
-        rows = "\n".join(f'    <DataSet timestep="{step}" part="0" file={quoteattr(path.name)}/>'
-                         for step, path in plan[name])
-        pvd = directory / f"{name}.pvd"
-        with atomic_path(pvd) as tmp:
-            tmp.write_text('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n  <Collection>\n'
-                           f"{rows}\n  </Collection>\n</VTKFile>\n")
-        written.append(pvd)
+    with folder:
+        for name, df in tables.items():
+            position = POSITIONS[name]
+            file_of = dict(plan[name])
+            for step, frame in df.groupby("step", sort=False):
+                points = frame[list(position)].to_numpy(dtype=np.float64)
+                data = {c: frame[c].to_numpy() for c in frame.columns if c not in (*position, "step")}
+                mesh = meshio.Mesh(points, [("vertex", np.arange(len(points)).reshape(-1, 1))], point_data=data)
+                written.append(folder.write(file_of[int(step)], lambda tmp, m=mesh: _write_vtu(meshio, tmp, m,
+                                                                                                 field_data)))
+            rows = "\n".join(f'    <DataSet timestep="{step}" part="0" file={quoteattr(file)}/>'
+                             for step, file in plan[name])
+            text = ('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n  <Collection>\n'
+                    f"{rows}\n  </Collection>\n</VTKFile>\n")
+            written.append(folder.write(f"{name}.pvd", lambda tmp, t=text: tmp.write_text(t)))
     return written
+
+
+def _write_vtu(meshio, tmp: Path, mesh, field_data: bytes) -> None:
+    """One frame's ``.vtu`` at ``tmp``, with the material names' field data."""
+    meshio.write(tmp, mesh, file_format="vtu", binary=True, compression=None)
+    if field_data:
+        grid = b"<UnstructuredGrid>"
+        tmp.write_bytes(tmp.read_bytes().replace(grid, grid + field_data, 1))
 
 
 def _material_field_data(names: dict[int, str]) -> bytes:
