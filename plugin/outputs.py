@@ -70,11 +70,18 @@ def hdf5_kind(name: str, format_name: str) -> OutputKind:
 
         try:
             with h5py.File(path, "r") as h5:
-                return h5.attrs.get("format") == format_name
+                return text_attribute(h5, "format") == format_name
         except Exception:  # a damaged or foreign HDF5 file, whatever h5py makes of it, is not ours
             return False
 
     return OutputKind(name, ours)
+
+
+def text_attribute(h5, name: str) -> str | None:
+    """The attribute ``name`` of an open HDF5 object when it is text, else None (a damaged or foreign file's
+    attribute may be an array, a number or bytes)."""
+    value = h5.attrs.get(name)
+    return value if isinstance(value, str) else None
 
 
 def marked_kind(name: str, marker: bytes) -> OutputKind:
@@ -309,8 +316,8 @@ class OutputFolder:
                              fix="give a folder you can read and write.") from None
         self.earlier = read_manifest(self.directory)
         listed = self.earlier["files"] if self.earlier is not None else []
-        ours = {EXPORT_MANIFEST, temporary(Path(EXPORT_MANIFEST)).name, *listed,
-                *(temporary(Path(n)).name for n in listed)}
+        ours = {temporary(Path(EXPORT_MANIFEST)).name, *listed, *(temporary(Path(n)).name for n in listed),
+                *([EXPORT_MANIFEST] if self.earlier is not None else [])}  # a manifest not ours is foreign
         foreign = [e for e in entries if e not in ours or os.path.islink(self.directory / e)
                    or not os.path.isfile(self.directory / e)]
         if overwrite:
@@ -355,8 +362,9 @@ class OutputFolder:
             return
         with output_errors(self.directory / EXPORT_MANIFEST):
             for name in self.earlier["files"] if self.earlier is not None else []:
-                if name not in self.names:
-                    (self.directory / name).unlink(missing_ok=True)
+                path = self.directory / name
+                if name not in self.names and (path.is_symlink() or path.is_file()):  # (--overwrite: a folder of
+                    path.unlink()  # the same name is another's, and kept)
             self._write_manifest(self.names)
 
     def _restore(self) -> None:

@@ -48,9 +48,9 @@ import h5py
 import numpy as np
 
 from .. import errors
-from ..errors import ContactError, DemsplitError, InputFormatError, plain
+from ..errors import ContactError, DemsplitError, InputFormatError
 from ..frame import CONTACT_REQUIRED, PARTICLE_REQUIRED, Box, Frame, ParticleIndex, require_columns
-from ..outputs import HDF5_SIGNATURE, atomic_path, check_output_path, hdf5_kind, output_errors
+from ..outputs import HDF5_SIGNATURE, atomic_path, check_output_path, hdf5_kind, output_errors, text_attribute
 from ..scene import scene_from_dict, scene_to_dict
 from ..runtime.threads import pool
 from .base import Run
@@ -60,6 +60,8 @@ from .hdf5_inputs import refuse_foreign_storage
 FORMAT = "demsplit-ingest-cache"
 VERSION = 2
 """2: the scene's contact model is (law, params) of the law registry; 1 (normal, tangential) is not read."""
+H5_FAULTS = (OSError, RuntimeError, KeyError, ValueError, TypeError)
+"""What h5py raises on a file whose metadata or chunks are damaged (and json on a damaged attribute)."""
 CACHE = hdf5_kind("demsplit ingest cache", FORMAT)
 """The output kind of ``convert``: an existing cache is replaced by a new one, any other file is not."""
 
@@ -135,7 +137,7 @@ def is_cache(path: str | Path) -> bool:
     """True when ``path`` is an HDF5 file written by :func:`convert_run`."""
     try:
         with h5py.File(path, "r") as h5:
-            return h5.attrs.get("format") == FORMAT
+            return text_attribute(h5, "format") == FORMAT
     except OSError:
         return False
 
@@ -168,6 +170,10 @@ class CacheRun(Run):
             raise self._damaged("it is not a readable HDF5 file.") from None
         try:
             self._open()
+        except H5_FAULTS as exc:
+            self._h5.close()
+            raise self._damaged(f"it cannot be read ({type(exc).__name__}: {' '.join(str(exc).split())[:200]}).") \
+                from None
         except BaseException:
             self._h5.close()
             raise
@@ -182,9 +188,8 @@ class CacheRun(Run):
     def _open(self) -> None:
         """Check the cache's attributes and frame groups (what :func:`convert_run` writes) and read the scene."""
         attrs = self._h5.attrs
-        if attrs.get("format") != FORMAT:
-            found = plain(attrs.get("format"))
-            raise InputFormatError(f"not a demsplit ingest cache (format attribute {found!r}).",
+        if text_attribute(self._h5, "format") != FORMAT:
+            raise InputFormatError(f"not a demsplit ingest cache (its format attribute is not {FORMAT!r}).",
                                    file=self.path, fix="write one with 'demsplit convert RUN -o CACHE.h5'.")
         version = attrs.get("version")
         if not isinstance(version, (int, np.integer)):
@@ -220,7 +225,7 @@ class CacheRun(Run):
     def _json(self, attrs, name: str, kind: type, item: type | None = None, k: int | None = None):
         """The attribute ``name`` (JSON) as a ``kind`` (of ``item``s)."""
         try:
-            value = json.loads(attrs[name])
+            value = json.loads(attrs[name], parse_constant=_no_constant)
         except (KeyError, TypeError, ValueError):
             value = None
         if not isinstance(value, kind) or (item is not None and not all(isinstance(v, item) for v in value)):
@@ -238,6 +243,15 @@ class CacheRun(Run):
         if not -len(self) <= k < len(self):
             raise IndexError(f"{self.path}: frame {k} out of range ({len(self)} frames)")
         k %= len(self)
+        try:
+            frame = self._frame(k)
+        except H5_FAULTS as exc:  # what h5py raises on damaged metadata or chunks
+            raise self._damaged(f"it cannot be read ({type(exc).__name__}: {' '.join(str(exc).split())[:200]}).",
+                                k, int(self.steps[k])) from None
+        self._check(frame, k)
+        return frame
+
+    def _frame(self, k: int) -> Frame:
         g = self._frames[f"{k:06d}"]
         a = g.attrs
         step = int(self.steps[k])
@@ -259,9 +273,12 @@ class CacheRun(Run):
         except (KeyError, TypeError, ValueError) as exc:
             raise self._damaged(f"an attribute is missing or of another kind ({type(exc).__name__}: {exc}).",
                                 k, step) from None
-        datasets = {(name, col): self._dataset(g, name, col, k, step) for name in ("particles", "contacts")
-                    for col in self._json(g[name].attrs if isinstance(g.get(name), h5py.Group) else {}, "order",
-                                          list, str, k)}  # in the order the reader built them
+        datasets = {}
+        for name in ("particles", "contacts"):
+            order = self._json(g[name].attrs if isinstance(g.get(name), h5py.Group) else {}, "order", list, str, k)
+            if sorted(order) != sorted(g[name]):
+                raise self._damaged(f"the {name} table's columns are not those its order attribute lists.", k, step)
+            datasets.update({(name, col): self._dataset(g, name, col, k, step) for col in order})  # the reader's order
         if "overlap_error" in g:
             datasets["overlap_error", None] = self._dataset(g, "overlap_error", None, k, step)
         arrays = self._read(datasets)
@@ -271,7 +288,6 @@ class CacheRun(Run):
                       time=None if np.isnan(time) else time, source=tuple(self._json(a, "source", list, str, k=k)),
                       overlap_source=overlap_source, overlap_error=arrays.get(("overlap_error", None)),
                       notes=self._json(a, "notes", list, str, k=k), walls=walls)
-        self._check(frame, k)
         return frame
 
     def _dataset(self, g, name: str, col: str | None, k: int, step: int):
@@ -360,6 +376,11 @@ class CacheRun(Run):
                 raise InputFormatError(f"the cache ends inside a dataset (byte {offset + done}).", file=self.path,
                                        fix="the file was cut short: convert the run again.")
             done += got
+
+
+def _no_constant(name: str):
+    """JSON's NaN and Infinity: no attribute convert writes holds them."""
+    raise ValueError(f"{name} in JSON")
 
 
 def _walls(attrs) -> tuple[int, ...] | None:

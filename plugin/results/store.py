@@ -27,7 +27,7 @@ import numpy as np
 
 from ..errors import StoreError
 from ..fingerprint import file_fingerprint
-from ..outputs import hdf5_kind
+from ..outputs import hdf5_kind, text_attribute
 from ..scene import scene_to_dict
 from .schema import TABLES, UNKNOWN, UNKNOWN_COLUMNS, Table, canonical_dtype, to_dataframe
 from .tables import Results
@@ -157,7 +157,7 @@ def _check_layout(h5, path: Path, refuse_foreign_storage) -> _Layout:
 
     from ..errors import InputFormatError
 
-    if h5.attrs.get("format") != FORMAT:
+    if text_attribute(h5, "format") != FORMAT:
         raise StoreError(f"not a demsplit result store (its format attribute is not {FORMAT!r}).", file=path,
                          fix="point to a store written by demsplit run.")
     version = h5.attrs.get("format_version")
@@ -177,11 +177,14 @@ def _check_layout(h5, path: Path, refuse_foreign_storage) -> _Layout:
     for key, kind in (("inputs", dict), ("bad_frames", dict), ("notes", str), ("named_files", str)):
         if any(not isinstance(v, kind) for v in provenance.get(key) or []):
             raise _damaged(path, f"an item of its provenance entry {key!r} is not a JSON {kind.__name__}.")
+    _check_names(provenance, path)
     walls_meta = _json_attr(h5, "walls_meta", list, path)
     for w in walls_meta:
-        if not (isinstance(w, dict) and isinstance(w.get("wall"), int) and isinstance(w.get("name"), str)
-                and isinstance(w.get("kind"), str)):
-            raise _damaged(path, "an entry of its walls_meta attribute is not {wall: integer, name, kind}.")
+        if not (isinstance(w, dict) and _small_int(w.get("wall")) and w["wall"] >= 0 and isinstance(w.get("name"), str)
+                and isinstance(w.get("kind"), str) and (w.get("type") is None or _small_int(w["type"]))):
+            raise _damaged(path, "an entry of its walls_meta attribute is not {wall: index, name, kind, type}.")
+    if len({w["wall"] for w in walls_meta}) != len(walls_meta):
+        raise _damaged(path, "its walls_meta attribute lists a wall twice.")
     index = h5.get("index")
     if not isinstance(index, h5py.Group):
         raise _damaged(path, "it has no index group.")
@@ -213,15 +216,41 @@ def _check_layout(h5, path: Path, refuse_foreign_storage) -> _Layout:
     return _Layout(steps, offsets, columns, provenance, walls_meta)
 
 
+def _small_int(value) -> bool:
+    """Whether a JSON value is an integer of 32 bits (an index, a material type; not a bool)."""
+    return isinstance(value, int) and not isinstance(value, bool) and -2**31 <= value < 2**31
+
+
+def _check_names(provenance: dict, path: Path) -> None:
+    """The material names the readers of a store look up by type: ``type_names`` and the scene's materials,
+    keyed by the decimal text of a type."""
+    scene = provenance.get("scene") or {}
+    if not isinstance(scene.get("walls") or [], list) or not isinstance(scene.get("source") or "", str):
+        raise _damaged(path, "its provenance's scene has walls that are not a list, or a source that is not text.")
+    materials = scene.get("materials")
+    for what, names in (("type_names", provenance.get("type_names") or {}), ("scene materials", materials or {})):
+        if not isinstance(names, dict) or not all(
+                isinstance(t, str) and t.lstrip("-").isdecimal() and _small_int(int(t)) for t in names):
+            raise _damaged(path, f"its provenance's {what} are not keyed by material type.")
+    if any(not isinstance(n, str) for n in (provenance.get("type_names") or {}).values()) or \
+            any(not isinstance(m, dict) for m in (materials or {}).values()):
+        raise _damaged(path, "its provenance's material names are not text, or its materials not JSON objects.")
+
+
 def _json_attr(h5, name: str, kind: type, path: Path):
     text = h5.attrs.get(name)
     try:
-        value = json.loads(text) if isinstance(text, (str, bytes)) else None
+        value = json.loads(text, parse_constant=_no_constant) if isinstance(text, (str, bytes)) else None
     except ValueError:
         value = None
     if not isinstance(value, kind):
         raise _damaged(path, f"its {name} attribute is not a JSON {kind.__name__}.")
     return value
+
+
+def _no_constant(name: str):
+    """JSON's NaN and Infinity: no stored number is one."""
+    raise ValueError(f"{name} in JSON")
 
 
 def _index_column(index, name: str, path: Path) -> np.ndarray:
