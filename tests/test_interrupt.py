@@ -205,7 +205,7 @@ for k in range(random_kills):  # SIGKILL at a random instant of close(), inside 
     ready, go = os.pipe()
     pid = os.fork()
     if pid == 0:
-        w = store.ResultWriter(out, PROVENANCE, walls_meta=WALLS_META)
+        w = writer.ResultWriter(out, PROVENANCE, walls_meta=WALLS_META)
         for s in steps:
             w.append(synthetic_frame(s, n_particles=3000, n_pairs=5000))
         os.write(go, b"x")
@@ -223,7 +223,7 @@ while True:
     os.makedirs(os.path.dirname(out))
     pid = os.fork()
     if pid == 0:  # write every frame, then close, killed at the k-th distinct statement close() reaches
-        w = store.ResultWriter(out, PROVENANCE, walls_meta=WALLS_META)
+        w = writer.ResultWriter(out, PROVENANCE, walls_meta=WALLS_META)
         for s in steps:
             w.append(synthetic_frame(s, n_particles=300, n_pairs=500))
         seen = []
