@@ -19,6 +19,7 @@ import argparse
 import signal
 import sys
 import traceback
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -129,7 +130,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     report, _ = run_to_store(args.input, args.output, options=_options(args), jobs=args.jobs, dask=args.dask,
                              resume=args.resume, on_bad_frame=args.on_bad_frame,
                              compression=None if args.compression == "none" else args.compression,
-                             progress=False if args.quiet else None,
+                             progress=False if args.quiet else None, overwrite=args.overwrite,
                              type_names=dict(args.type_name or ()), **options)
     if not args.quiet:
         from .results.report import text_summary
@@ -168,13 +169,13 @@ def cmd_check(args: argparse.Namespace) -> int:
 def cmd_report(args: argparse.Namespace) -> int:
     from .results import load_results
     from .results.report import text_summary, write_html
+    from .results.store import protected_files
 
-    if args.output:
-        check_output_path(args.output, [args.results])
     results = load_results(args.results)
     names = dict(args.type_name or ())
     if args.output:
-        write_html(results, args.output, step=args.step, names=names)
+        write_html(results, args.output, step=args.step, names=names,
+                   inputs=protected_files(args.results, results.provenance), overwrite=args.overwrite)
         if not args.quiet:
             print(f"wrote {args.output}")
     else:
@@ -207,26 +208,33 @@ def _type_name(text: str) -> tuple[int, str]:
 def cmd_export(args: argparse.Namespace) -> int:
     from .results import load_results
     from .results.exports.tables import export_tables
+    from .results.store import protected_files
 
     from .results.exports.dump import export_dump
     from .results.exports.vtk import export_vtk
 
-    if not (args.parquet or args.csv or args.vtk or args.dump):
+    folders = [(fmt, d) for fmt, d in (("parquet", args.parquet), ("csv", args.csv), ("vtk", args.vtk)) if d]
+    if not folders and not args.dump:
         raise DemsplitError("nothing to export to.", fix="give --parquet DIR, --csv DIR, --vtk DIR or --dump FILE.")
+    same = [fmt for fmt, d in folders if sum(Path(d).absolute() == Path(o).absolute() for _, o in folders) > 1]
+    if same:
+        raise DemsplitError(f"--{same[0]} and --{same[1]} name the same folder: an export folder holds one export.",
+                            file=dict(folders)[same[0]], fix="give each format its own folder.")
     results = load_results(args.results)
+    inputs = protected_files(args.results, results.provenance)
     written = []
-    for fmt, directory in (("parquet", args.parquet), ("csv", args.csv)):
-        if directory:
-            written += export_tables(results, directory, fmt=fmt, inputs=[args.results])
+    for fmt, directory in folders:
+        if fmt != "vtk":
+            written += export_tables(results, directory, fmt=fmt, inputs=inputs, overwrite=args.overwrite)
     if args.dump:
-        written.append(export_dump(results, args.dump, inputs=[args.results]))
+        written.append(export_dump(results, args.dump, inputs=inputs, overwrite=args.overwrite))
     if not args.quiet:
         for path in written:
             print(f"wrote {path}")
     if args.vtk:  # one line for the whole series, not one per file
         not_drawn: list[str] = []
-        vtk = export_vtk(results, args.vtk, inputs=[args.results], progress=False if args.quiet else None,
-                         not_drawn=not_drawn)
+        vtk = export_vtk(results, args.vtk, inputs=inputs, overwrite=args.overwrite,
+                         progress=False if args.quiet else None, not_drawn=not_drawn)
         if not args.quiet:
             series = [p.name for p in vtk if p.suffix == ".pvd"]
             print(f"wrote {len(vtk) - len(series)} VTK files of {len(results.steps)} frame(s) in {args.vtk}: open "
@@ -236,9 +244,10 @@ def cmd_export(args: argparse.Namespace) -> int:
 
 
 def cmd_prepare(args: argparse.Namespace) -> int:
-    from .outputs import check_output_path
+    from .outputs import PREPARED_SCRIPT, output_errors, output_files, stamp_script
     from .prepare import prepare_script
     from .readers.lammps_input import read_text
+    from .readers.liggghts_script import read_script
 
     script = Path(args.input)
     out = Path(args.output or script.with_name(script.name + ".demsplit"))
@@ -247,24 +256,17 @@ def cmd_prepare(args: argparse.Namespace) -> int:
     while parts[-1].part2 is not None:
         parts.append(parts[-1].part2)
     paths = [out] + [out.with_name(f"{out.name}.part{k}") for k in range(2, len(parts) + 1)]
+    protected = [script, *read_script(script).named_files()]
     for path in paths:  # every path checked before anything is written
-        check_output_path(path, [script])
+        check_output_path(path, protected, kind=PREPARED_SCRIPT, overwrite=args.overwrite)
     if not args.quiet:
         print("\n".join(note for part in parts for note in part.notes))
     if not prepared.added:
         return 0
-    from .outputs import atomic_path
-
-    written = []
-    try:
+    with output_files(paths) as tmps:  # all parts or none
         for part, path in zip(parts, paths):
-            with atomic_path(path) as tmp:
-                Path(tmp).write_bytes(part.data)
-            written.append(path)
-    except BaseException:  # all parts or none
-        for path in written:
-            path.unlink(missing_ok=True)
-        raise
+            with output_errors(path):
+                tmps[path].write_bytes(stamp_script(part.data))
     if not args.quiet:
         print(prepared.diff(read_text(script), str(script)))
         where = f"in {out.parent}" if len(paths) == 1 else f"one after the other in {out.parent}"
@@ -277,7 +279,7 @@ def cmd_prepare(args: argparse.Namespace) -> int:
 def cmd_convert(args: argparse.Namespace) -> int:
     from .readers.cache import convert_run
 
-    path = convert_run(args.input, args.output, **_reader_options(args))
+    path = convert_run(args.input, args.output, overwrite=args.overwrite, **_reader_options(args))
     if not args.quiet:
         print(f"wrote {path}")
     return 0
@@ -291,6 +293,12 @@ def cmd_yade_path(args: argparse.Namespace) -> int:
     if not args.quiet:
         print(sysconfig.get_paths()["purelib"])
     return 0
+
+
+def _add_overwrite(p: argparse.ArgumentParser, what: str) -> None:
+    p.add_argument("--overwrite", action="store_true",
+                   help=f"replace {what} (by default only a file of the kind the command writes is replaced; a "
+                   "file of the run is never replaced)")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -313,6 +321,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = add("run", "per-particle energies of every frame, written to an HDF5 store")
     _add_input(p)
     p.add_argument("-o", "--output", required=True, help="output HDF5 file")
+    _add_overwrite(p, "an existing file that is not a result store")
     p.add_argument("--jobs", "-j", type=int, default=1, help="worker processes (frames in parallel)")
     p.add_argument("--dask", metavar="ADDRESS",
                    help="run on a Dask cluster: tcp://HOST:PORT, a scheduler file, or local:N")
@@ -354,6 +363,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = add("report", "summary of a result file: text, or a self-contained HTML page with -o")
     p.add_argument("results", help="a store written by demsplit run")
     p.add_argument("-o", "--output", help="HTML file to write (default: the text summary on the terminal)")
+    _add_overwrite(p, "an existing file that is not a demsplit report")
     p.add_argument("--step", type=int, metavar="N", help="the timestep of the detailed frame (default: the last)")
     p.add_argument("--type-name", action="append", type=_type_name, metavar="T=NAME",
                    help="name material type T NAME in the tables and figures (repeatable; overrides the names "
@@ -371,6 +381,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--dump", metavar="FILE",
                    help="the per-particle table as a LAMMPS-style dump (positions, radius, energies), "
                         "which OVITO opens directly")
+    _add_overwrite(p, "files that are not a demsplit export of the format (in a folder: its other files are "
+                   "kept; an earlier export in it is replaced)")
     p.set_defaults(func=cmd_export)
 
     p = add("yade-path", "print the directory to site.addsitedir() inside YADE so that 'import demsplit.yade' works")
@@ -383,11 +395,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--every", type=_positive, metavar="N",
                    help="timesteps between the frames of the dumps prepare adds (default: the interval of the "
                    "script's own dumps, else of its thermo output, else 100 frames over its runs)")
+    _add_overwrite(p, "an existing file that is not a script prepare wrote, or one edited since")
     p.set_defaults(func=cmd_prepare)
 
     p = add("convert", "write a run's dumps once to an HDF5 ingest cache read much faster later")
     _add_input(p)
     p.add_argument("-o", "--output", required=True, help="cache file (.h5)")
+    _add_overwrite(p, "an existing file that is not an ingest cache")
     p.set_defaults(func=cmd_convert)
     return parser
 
@@ -399,7 +413,9 @@ def main(argv: list[str] | None = None) -> int:
         args.input = None if not args.input else args.input[0] if len(args.input) == 1 else args.input
     previous = signal.signal(signal.SIGTERM, _raise_terminated)
     try:
-        with np.errstate(all="ignore"):  # every number is checked explicitly (demsplit.validate): no warnings
+        with np.errstate(all="ignore"), warnings.catch_warnings():  # every number is checked explicitly
+            if args.quiet:  # (demsplit.validate); a library's warning (matplotlib's, say) is shown unless -q
+                warnings.simplefilter("ignore")
             return args.func(args)
     except DemsplitError as exc:
         if args.debug:

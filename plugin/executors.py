@@ -118,7 +118,12 @@ def worker_processes(jobs: int) -> int:
 
 
 def _worker_init(parent: int, threads_per_worker: int) -> None:
-    """Worker initializer: its share of the cores, and an end with its parent (:func:`_exit_with_parent`)."""
+    """Worker initializer: its share of the cores, an end with its parent (:func:`_exit_with_parent`), and
+    numpy's floating-point warnings off, as in the command's process (every number is checked explicitly:
+    :mod:`demsplit.validate`)."""
+    import numpy as np
+
+    np.seterr(all="ignore")
     threads.limit(threads_per_worker)
     _exit_with_parent(parent)
 

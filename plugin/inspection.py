@@ -18,12 +18,11 @@ which columns. Every problem names its file, timestep and line.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
 
-from .errors import ContactError, DemsplitError, InputFormatError, MaterialError, PrecisionError, StoreError
+from .errors import ContactError, DemsplitError, InputFormatError, MaterialError, PrecisionError
 from .fingerprint import DIGEST
 from .frame import Frame, describe_steps
 
@@ -62,50 +61,34 @@ def describe_file(path: str | Path) -> str:
 
 def _is_store(path: Path, head: bytes) -> bool:
     """True for an HDF5 file whose ``format`` attribute says it is a result store."""
-    from .results.store import FORMAT as STORE_FORMAT
-    from .yade import HDF5_SIGNATURE
+    from .results.store import STORE
 
-    if not head.startswith(HDF5_SIGNATURE):
-        return False
-    import h5py
-
-    try:
-        with h5py.File(path, "r") as h5:
-            return h5.attrs.get("format") == STORE_FORMAT
-    except OSError:
-        return False
+    return STORE.ours(path)
 
 
 def _describe_store(path: Path) -> str:
-    import h5py
+    """The store's frames, tables, model, inputs, options and notes, from its checked layout
+    (:func:`~demsplit.results.store.open_store`)."""
+    from .results.store import open_store
 
-    try:
-        with h5py.File(path, "r") as h5:
-            return _store_lines(path, h5)
-    except (OSError, KeyError, ValueError) as exc:  # unreadable file, or a group/attribute missing
-        raise StoreError(f"not a readable result store ({type(exc).__name__}: {exc}).", file=path,
-                         fix="the file is damaged or still being written; rerun demsplit run to rewrite it.") from None
-
-
-def _store_lines(path: Path, h5) -> str:
-    steps = h5["index/step"][()]
-    prov = json.loads(h5.attrs.get("provenance", "{}"))
-    lines = [f"{path}: demsplit result store (format version {int(h5.attrs['format_version'])}, "
-             f"written by demsplit {h5.attrs.get('demsplit_version', '?')})",
-             f"  frames:   {len(steps)}, steps {describe_steps(steps)}",
-             "  tables:"]
-    for name in ("particles", "contacts", "walls", "frames"):
-        if name in h5:
-            cols = json.loads(h5[name].attrs["columns"])
-            n = h5[name][cols[0]].shape[0] if cols else 0
-            lines.append(f"    {name:<10} {n:>9} rows  {' '.join(cols)}")
-    model = prov.get("model", {})
+    h5, layout = open_store(path)
+    with h5:
+        prov = layout.provenance
+        steps = layout.steps
+        lines = [f"{path}: demsplit result store (format version {int(h5.attrs['format_version'])}, "
+                 f"written by demsplit {_plain_text(h5.attrs.get('demsplit_version', '?'))})",
+                 f"  frames:   {len(steps)}, steps {describe_steps(steps)}",
+                 "  tables:"]
+        for name in ("particles", "contacts", "walls", "frames"):
+            cols = layout.columns[name]
+            lines.append(f"    {name:<10} {int(layout.offsets[name][-1]):>9} rows  {' '.join(cols)}")
+    model = prov.get("model") or {}
     lines.append(f"  model:    {model.get('law')} {model.get('params', {})}")
-    for f in prov.get("inputs", []):
+    for f in prov.get("inputs") or []:
         # stores written before the fingerprint became BLAKE3 hold sha256 digests
         algo = next((a for a in (DIGEST, "sha256") if a in f), DIGEST)
         lines.append(f"  input:    {f.get('path')}  ({f.get('size')} bytes, {algo} {str(f.get(algo))[:12]}...)")
-    options = prov.get("options", {})
+    options = prov.get("options") or {}
     if options:
         lines.append("  options:  " + ", ".join(f"{k}={v}" for k, v in options.items()))
     bad = prov.get("bad_frames") or []
@@ -115,6 +98,13 @@ def _store_lines(path: Path, h5) -> str:
     for note in prov.get("notes") or []:
         lines.append(f"  note: {note}")
     return "\n".join(lines)
+
+
+def _plain_text(value) -> str:
+    """An attribute's text as a message shows it: bounded and printable."""
+    from .readers.lammps_input import excerpt
+
+    return excerpt(value.decode("utf-8", "replace") if isinstance(value, bytes) else str(value))[1:-1]
 
 
 def _walls(scene) -> str:

@@ -143,6 +143,18 @@ def _type_names(names: Mapping[int, str] | None) -> dict[str, str]:
     return {str(int(t)): str(n) for t, n in (names or {}).items()}
 
 
+def _given_files(path: str | Path | list | None, reader_options: Mapping) -> list[str | Path]:
+    """The run's files named on the command line: the input (one or several) and the dumps given as options."""
+    given = list(path) if isinstance(path, (list, tuple)) else [] if path is None else [path]
+    return given + [reader_options[k] for k in ("atoms", "contacts", "walls") if reader_options.get(k)]
+
+
+def _absolute(paths) -> list[str]:
+    """``paths`` as absolute path strings, each once: the provenance's ``named_files``, the files of the run that
+    ``report`` and ``export`` never write over."""
+    return list(dict.fromkeys(str(Path(p).absolute()) for p in paths))
+
+
 def _report_provenance(run: Run, report: RunReport) -> dict:
     return {"run": run.describe(), "bad_frames": report.bad_frames, "notes": report.notes}
 
@@ -163,7 +175,8 @@ def _first_frame_rows(path: str | Path | list | None, options: Mapping) -> tuple
 def run_to_store(path: str | Path, out: str | Path, *, options: Options = DEFAULT_OPTIONS, jobs: int = 1,
                  dask: str | None = None, resume: bool = False, on_bad_frame: str = "stop",
                  progress: bool | None = None, compression: str | None = "auto",
-                 type_names: Mapping[int, str] | None = None, **reader_options) -> tuple[RunReport, Scene]:
+                 type_names: Mapping[int, str] | None = None, overwrite: bool = False,
+                 **reader_options) -> tuple[RunReport, Scene]:
     """Analyse a run and stream the results into the HDF5 store ``out``
     (written to a temporary name and renamed when complete; ``resume``
     continues an interrupted run from its last complete frame).
@@ -173,24 +186,30 @@ def run_to_store(path: str | Path, out: str | Path, *, options: Options = DEFAUL
         slowest), ``"lzf"`` (h5py only) or ``"none"``/``None`` (fastest,
         largest); see ``docs/performance.md``, "Standing decisions", for the measured cost of each.
     type_names : material names of particle types, as for :func:`analyze`.
+    overwrite : replace ``out`` when it is an existing file that is not a result store (never one of the
+        run's files: :mod:`demsplit.outputs`).
     """
     from .readers import open_run
     from .results import walls_meta_from_scene
-    from .results.store import build_provenance
+    from .results.store import STORE, build_provenance
     from .results.writer import ResultWriter, check_output
 
-    check_output(out, resume=resume)  # before any work: no output directory, or an unresumed interrupted run
+    # before any work: an unwritable output, an interrupted run; whether an existing file is one of the run's
+    # files or a foreign one is known once the run is open (the files its script names), and checked then
+    check_output(out, resume=resume, overwrite=True, inputs=_given_files(path, reader_options))
     in_process = command.FREED_MEMORY_KEPT and not dask and worker_processes(jobs) == 1  # frames computed here
     with first_frame_prefaulted(_first_frame_rows(path, reader_options) if in_process else None):
         run = open_run(path, **reader_options)
     try:
         sources = run.sources
-        check_output_path(out, run.named_files())  # before anything is written: never over a file of the run
+        named = run.named_files()
+        check_output_path(out, named, kind=STORE, overwrite=overwrite)  # before anything is written
         report = RunReport()
         hash_in_background(sources)  # on idle cores; the writer fills the digests in when they are known
         provenance = build_provenance(sources, scene=run.scene, options=asdict(options), run=run.describe(),
-                                      type_names=_type_names(type_names), wait=False)
-        with ResultWriter(out, provenance, resume=resume, walls_meta=walls_meta_from_scene(run.scene),
+                                      type_names=_type_names(type_names), named_files=_absolute(named), wait=False)
+        with ResultWriter(out, provenance, resume=resume, overwrite=overwrite,
+                          walls_meta=walls_meta_from_scene(run.scene),
                           compression=compression, final_step=int(run.steps[-1]) if len(run.steps) else None) as writer:
             for tables in process_run(run, options, jobs=jobs, dask=dask, on_bad_frame=on_bad_frame,
                                       skip_steps=writer.done_steps, progress=progress, report=report):

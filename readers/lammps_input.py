@@ -41,6 +41,14 @@ is made by one function, :meth:`_Evaluator.apply`, which is where these faults
 are caught. Messages quote input text only as an :func:`excerpt`: bounded and
 printable, whatever file it comes from.
 
+The interpreter's work is bounded, whatever the script: a logical line is at most :data:`MAX_LINE`
+characters before and after substitution, a script (with its includes) hands at most :data:`MAX_CHARACTERS`
+characters of lines and substituted values to the commands, and its formulas take at most
+:data:`MAX_OPERATIONS` operations (an equal-style variable is evaluated once per definition of the
+variables, however often a formula refers to it). Past a bound the script is refused with one
+:class:`~demsplit.errors.ScriptError` naming the file and the line. The text of ``getenv`` variables
+comes from the environment, not the script: it is never quoted in a message.
+
 The LIGGGHTS semantics of the commands are in :mod:`demsplit.readers.liggghts_script`.
 """
 
@@ -57,7 +65,16 @@ from pathlib import Path
 from ..errors import ScriptError
 
 __all__ = ["Where", "Unevaluable", "excerpt", "read_text", "logical_lines", "strip_comment", "split_words", "Variables",
-           "substitute", "TOKEN", "FUNCTIONS", "CONSTANTS"]
+           "substitute", "TOKEN", "FUNCTIONS", "CONSTANTS", "MAX_LINE", "MAX_CHARACTERS", "MAX_OPERATIONS"]
+
+MAX_LINE = 1 << 20
+"""Characters of one logical line, before and after its variables are substituted."""
+MAX_CHARACTERS = 64 << 20
+"""Characters of lines and substituted values one script (with its includes) hands to its commands."""
+MAX_OPERATIONS = 1_000_000
+"""Operations (numbers, variables, arithmetic) the formulas of one script may take to evaluate."""
+_FIX_BOUND = ("a LIGGGHTS input script is far smaller: check that this is the run's script, and that its "
+              "variables do not grow by referring to each other.")
 
 
 @dataclass(frozen=True)
@@ -104,6 +121,10 @@ def logical_lines(path: Path) -> Iterator[tuple[int, str]]:
     commands is read and without quoting it (:func:`read_text`: bytes that are
     not UTF-8 are kept)."""
     try:
+        if path.stat().st_size > MAX_CHARACTERS:
+            raise ScriptError(f"the file is {path.stat().st_size} bytes, more than the {MAX_CHARACTERS} an input "
+                              "script may be.", file=path, fix="give the run's input script, and check its include "
+                              "lines.")
         text = read_text(path)
     except OSError as exc:
         raise ScriptError(f"cannot read the input script ({exc.strerror}).", file=path,
@@ -118,31 +139,40 @@ def logical_lines(path: Path) -> Iterator[tuple[int, str]]:
     physical = text.split("\n")
     if physical[-1] == "":
         physical.pop()
-    start, pending = 0, ""
+    start, pending = 0, []
     for number, raw in enumerate(physical, start=1):
         body = raw.rstrip()
         if not pending:
             start = number
+        if len(body) > MAX_LINE or sum(map(len, pending)) + len(body) > MAX_LINE:
+            raise ScriptError(f"the command that starts here is longer than {MAX_LINE} characters.", file=path,
+                              line=start, fix=_FIX_BOUND)
         if body.endswith("&"):
-            pending += body[:-1]
+            pending.append(body[:-1])
             continue
-        yield start, pending + body
-        pending = ""
+        yield start, "".join(pending) + body
+        pending = []
     if pending:
-        yield start, pending
+        yield start, "".join(pending)
+
+
+_COMMENT_OR_QUOTE = re.compile(r"[#\"']")
+_WORD = re.compile(r"\S+")
 
 
 def strip_comment(text: str) -> str:
     """``text`` up to a ``#`` outside quotes."""
-    quote = ""
-    for i, ch in enumerate(text):
-        if ch == "#" and not quote:
-            return text[:i]
-        if ch == quote:
-            quote = ""
-        elif not quote and ch in "\"'":
-            quote = ch
-    return text
+    i = 0
+    while True:
+        found = _COMMENT_OR_QUOTE.search(text, i)
+        if found is None:
+            return text
+        if found.group() == "#":
+            return text[:found.start()]
+        end = text.find(found.group(), found.end())
+        if end < 0:
+            return text
+        i = end + 1
 
 
 def split_words(text: str, where: Where) -> list[str]:
@@ -150,10 +180,10 @@ def split_words(text: str, where: Where) -> list[str]:
     A quote must be closed, and followed by a blank or the end of the line."""
     words, i, n = [], 0, len(text)
     while True:
-        while i < n and text[i].isspace():
-            i += 1
-        if i >= n:
+        found = _WORD.search(text, i)
+        if found is None:
             return words
+        i = found.start()
         if text[i] in "\"'":
             stop = text.find(text[i], i + 1)
             if stop < 0:
@@ -165,11 +195,8 @@ def split_words(text: str, where: Where) -> list[str]:
             words.append(text[i + 1:stop])
             i = stop + 1
         else:
-            j = i
-            while j < n and not text[j].isspace():
-                j += 1
-            words.append(text[i:j])
-            i = j
+            words.append(found.group())
+            i = found.end()
 
 
 # --------------------------------------------------------------------------
@@ -216,6 +243,28 @@ class Variables:
     def __init__(self, cli: dict[str, str]) -> None:
         self.values: dict[str, tuple[str, str]] = {k: ("index", str(v)) for k, v in cli.items()}
         self.cli = set(cli)
+        self.characters = 0  # handed to the commands so far (MAX_CHARACTERS)
+        self.operations = 0  # of formulas so far (MAX_OPERATIONS)
+        self._evaluated: dict[str, str] = {}  # equal-style values since the last definition
+
+    def charge(self, characters: int, where: Where) -> None:
+        """Count ``characters`` more handed to the commands; past :data:`MAX_CHARACTERS` the script is refused."""
+        self.characters += characters
+        if self.characters > MAX_CHARACTERS:
+            raise ScriptError(f"the script and its includes, with their variables substituted, pass "
+                              f"{MAX_CHARACTERS} characters here.", file=where.file, line=where.line, fix=_FIX_BOUND)
+
+    def operation(self, where: Where) -> None:
+        """Count one operation of a formula; past :data:`MAX_OPERATIONS` the script is refused."""
+        self.operations += 1
+        if self.operations > MAX_OPERATIONS:
+            raise ScriptError(f"the script's formulas take more than {MAX_OPERATIONS} operations to evaluate "
+                              "(equal-style variables that refer to each other many times).", file=where.file,
+                              line=where.line, fix=_FIX_BOUND)
+
+    def environment(self) -> list[str]:
+        """The values of the ``getenv`` variables (text from the environment, never quoted in a message)."""
+        return [v for style, v in self.values.values() if style == "getenv" and v]
 
     def define(self, words: list[str], where: Where) -> None:
         """The ``variable NAME STYLE ARGS`` command (``words`` without ``variable``).
@@ -225,6 +274,7 @@ class Variables:
             raise ScriptError(f"variable command needs NAME STYLE ARGS, got {excerpt(' '.join(words))}.",
                               file=where.file, line=where.line, fix="complete the variable command.")
         name, style, args = words[0], words[1], words[2:]
+        self._evaluated.clear()  # a definition may change any equal-style value
         if name in self.cli:
             return
         if style == "delete":
@@ -257,11 +307,13 @@ class Variables:
             shown = name if _NAME.fullmatch(name) and len(name) <= 60 else "NAME"
             raise ScriptError(
                 f"variable {excerpt(name)} is used but not defined.", file=where.file, line=where.line,
-                fix=f"define it in the script ('variable {shown} index VALUE') or pass "
-                f"variables={{'{shown}': VALUE}} (LIGGGHTS: -var {shown} VALUE).")
+                fix=f"define it in the script ('variable {shown} index VALUE') or pass it with --var {shown} VALUE "
+                "(LIGGGHTS: -var).")
         style, value = self.values[name]
         if style == "equal":
-            return f"{self.evaluate(value, where, depth + 1):.15g}"
+            if name not in self._evaluated:
+                self._evaluated[name] = f"{self.evaluate(value, where, depth + 1):.15g}"
+            return self._evaluated[name]
         if style not in _COPIED:
             raise Unevaluable(f"variable {name} is {style}-style")
         return value
@@ -353,6 +405,7 @@ class _Evaluator:
     def take(self) -> tuple[str, str]:
         if self.i >= len(self.tokens):
             raise Unevaluable("formula ends too early")
+        self.vars.operation(self.where)
         self.i += 1
         return self.tokens[self.i - 1]
 
@@ -429,42 +482,59 @@ class _Evaluator:
         return value
 
 
+_DOLLAR_OR_QUOTE = re.compile(r"[$\"']")
+_PAREN = re.compile(r"[()]")
+
+
 def substitute(text: str, variables: Variables, where: Where) -> str:
     """Replace ``${name}``, ``$x`` and ``$(expr)`` outside quotes (``Input::substitute``):
     ``${name}`` and ``$x`` by :meth:`Variables.retrieve`, ``$(expr)`` by
-    :meth:`Variables.evaluate` in ``%.20g``."""
-    out, i, quote, n = [], 0, "", len(text)
-    while i < n:
-        ch = text[i]
-        if ch == "$" and not quote:
-            if text.startswith("{", i + 1):
-                end = text.find("}", i + 2)
-                if end < 0:
-                    raise ScriptError(f"'${{' without '}}' in: {excerpt(text)}.", file=where.file,
-                                      line=where.line, fix="close the variable name with '}'.")
-                out.append(variables.retrieve(text[i + 2:end], where))
-                i = end + 1
-            elif text.startswith("(", i + 1):
-                level, j = 0, i + 2
-                while j < n and not (text[j] == ")" and level == 0):
-                    level += {"(": 1, ")": -1}.get(text[j], 0)
-                    j += 1
-                if j >= n:
-                    raise ScriptError(f"'$(' without ')' in: {excerpt(text)}.", file=where.file,
-                                      line=where.line, fix="close the immediate variable with ')'.")
-                out.append(f"{variables.evaluate(text[i + 2:j], where):.20g}")
-                i = j + 1
-            elif i + 1 < n:
-                out.append(variables.retrieve(text[i + 1], where))
-                i += 2
-            else:
-                raise ScriptError("'$' at the end of a line.", file=where.file, line=where.line,
-                                  fix="remove the '$' or name a variable after it.")
+    :meth:`Variables.evaluate` in ``%.20g``. The result is at most :data:`MAX_LINE` characters, and counts
+    towards the script's :data:`MAX_CHARACTERS`."""
+    out, i, n, size = [], 0, len(text), 0
+    while True:
+        found = _DOLLAR_OR_QUOTE.search(text, i)
+        if found is None:
+            out.append(text[i:])
+            break
+        j = found.start()
+        if found.group() != "$":  # a quoted part is copied as it is
+            end = text.find(found.group(), j + 1)
+            stop = n if end < 0 else end + 1
+            out.append(text[i:stop])
+            i = stop
             continue
-        if ch == quote:
-            quote = ""
-        elif not quote and ch in "\"'":
-            quote = ch
-        out.append(ch)
-        i += 1
-    return "".join(out)
+        out.append(text[i:j])
+        if text.startswith("{", j + 1):
+            end = text.find("}", j + 2)
+            if end < 0:
+                raise ScriptError(f"'${{' without '}}' in: {excerpt(text)}.", file=where.file,
+                                  line=where.line, fix="close the variable name with '}'.")
+            value = variables.retrieve(text[j + 2:end], where)
+            i = end + 1
+        elif text.startswith("(", j + 1):
+            level, k = 0, j + 2
+            for paren in _PAREN.finditer(text, j + 2):
+                if paren.group() == ")" and level == 0:
+                    k = paren.start()
+                    break
+                level += 1 if paren.group() == "(" else -1
+            else:
+                raise ScriptError(f"'$(' without ')' in: {excerpt(text)}.", file=where.file,
+                                  line=where.line, fix="close the immediate variable with ')'.")
+            value = f"{variables.evaluate(text[j + 2:k], where):.20g}"
+            i = k + 1
+        elif j + 1 < n:
+            value = variables.retrieve(text[j + 1], where)
+            i = j + 2
+        else:
+            raise ScriptError("'$' at the end of a line.", file=where.file, line=where.line,
+                              fix="remove the '$' or name a variable after it.")
+        out.append(value)
+        size += len(value)
+        if size + len(text) > MAX_LINE:
+            raise ScriptError(f"with its variables substituted, the command is longer than {MAX_LINE} characters.",
+                              file=where.file, line=where.line, fix=_FIX_BOUND)
+    result = "".join(out)
+    variables.charge(len(result), where)
+    return result

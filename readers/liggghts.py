@@ -37,14 +37,12 @@ from .base import MATERIALS, OVERLAP_TOLERANCE, Option, Run
 from .dump_series import DumpSeries, series_files
 from .lammps_dump import HEADER_LINES, DumpFile, DumpFrame, open_dump
 from .liggghts_join import ATOM_COLUMNS, PRIMITIVE_HISTORY_UNKNOWN, StepJoin
-from .liggghts_script import TANGENTIAL, DumpSpec, LiggghtsScript, read_script
+from .liggghts_script import COMPRESSED_SUFFIXES, TANGENTIAL, DumpSpec, LiggghtsScript, read_script
 from .liggghts_wallforce import BALANCE_COLUMNS, WallForce, stored_force_columns, wall_force_of
 from .liggghts_vtk import vtk_dump_note
 
 DEFAULT_OVERLAP_TOLERANCE = 1e-3
 """Largest accepted relative error bound of an overlap recomputed from printed positions."""
-
-_COMPRESSED = (".gz", ".bz2", ".xz")
 
 PREPARED_MARK = "# --- added by 'demsplit prepare'"
 """How the lines ``demsplit prepare`` adds to a script begin (:mod:`demsplit.prepare`): a script holding it is
@@ -55,7 +53,7 @@ _LOCAL_TOKEN = re.compile(r"^c_(\w+)\[(\d+)\]$")
 def existing_file(path: str | Path) -> Path | None:
     """``path`` if it exists, else its compressed copy (.gz/.bz2/.xz), else None."""
     path = Path(path)
-    for candidate in (path, *(path.with_name(path.name + s) for s in _COMPRESSED)):
+    for candidate in (path, *(path.with_name(path.name + s) for s in COMPRESSED_SUFFIXES)):
         if candidate.is_file():
             return candidate
     return None
@@ -432,22 +430,11 @@ class LiggghtsRun(Run):
         return dumps[0].head_rows, sum(d.head_rows for d in dumps[1:3] if d is not None)
 
     def named_files(self) -> list[Path]:
-        """The files read, and every other file the script names: its includes, its mesh files and the
-        file (and compressed copies) of every dump it writes, a per-step or per-processor pattern's
-        existing files included."""
+        """The files read, and every other file the script names (:meth:`LiggghtsScript.named_files`)."""
         files = [Path(s) for s in self.sources]
         if self.script_text is not None:  # no script of the user's: the dumps given are the run
             return files
-        files += self.script.included
-        files += [Path(w.file) for w in self.script.scene.walls if w.kind == "mesh" and w.file]
-        for dump in self.script.dumps:
-            name = Path(dump.file)
-            if "*" in name.name or "%" in name.name:
-                pattern = name.name.replace("%", "*")
-                files += [p for suffix in ("", *_COMPRESSED) for p in name.parent.glob(pattern + suffix)]
-            else:
-                files += [name, *(name.with_name(name.name + suffix) for suffix in _COMPRESSED)]
-        return files
+        return files + self.script.named_files()
 
     def _local_names(self, dump: DumpFile | None, kind: str) -> dict[str, str]:
         """Canonical name -> header token for every column of a local dump, from

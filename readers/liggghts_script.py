@@ -310,6 +310,25 @@ class LiggghtsScript:
     order (:func:`history_columns`, ``computeElasticPotential`` included): what ``demsplit prepare``
     dumps whole."""
 
+    def named_files(self) -> list[Path]:
+        """Every file the script names: itself, its includes, its mesh files and the file (and compressed
+        copies) of every dump it writes, a per-step or per-processor pattern's existing files included;
+        what no output of demsplit may replace (:mod:`demsplit.outputs`)."""
+        files = [self.path, *self.included]
+        files += [Path(w.file) for w in self.scene.walls if w.kind == "mesh" and w.file]
+        for dump in self.dumps:
+            name = Path(dump.file)
+            if "*" in name.name or "%" in name.name:
+                pattern = name.name.replace("%", "*")
+                files += [p for suffix in ("", *COMPRESSED_SUFFIXES) for p in name.parent.glob(pattern + suffix)]
+            else:
+                files += [name, *(name.with_name(name.name + suffix) for suffix in COMPRESSED_SUFFIXES)]
+        return files
+
+
+COMPRESSED_SUFFIXES = (".gz", ".bz2", ".xz")
+"""The compressed copies of a dump file that are read in its place."""
+
 
 # --------------------------------------------------------------------------
 # Lines, quotes, substitution
@@ -319,6 +338,9 @@ class LiggghtsScript:
 # --------------------------------------------------------------------------
 # Contact models
 # --------------------------------------------------------------------------
+
+MAX_INCLUDE_DEPTH = 64
+"""Files included inside each other, at most (LIGGGHTS has no bound; demsplit's reader recurses)."""
 
 TANGENTIAL = TANGENTIAL_MODELS
 """LIGGGHTS ``tangential`` words, passed to the law as its ``tangential`` parameter."""
@@ -483,6 +505,28 @@ class _Reader:
         self.include_stack.pop()
 
     def command(self, text: str, where: Where) -> None:
+        """Substitute and run one logical line; an error or a warning never quotes the text of a ``getenv``
+        variable (it comes from the environment: :meth:`_hidden`)."""
+        warned = len(self.warnings)
+        try:
+            self._command(text, where)
+        except DemsplitError as exc:
+            hidden = self._hidden(exc.message), self._hidden(exc.fix)
+            if hidden == (exc.message, exc.fix):
+                raise
+            raise type(exc)(hidden[0], file=exc.file, step=exc.step, line=exc.line, fix=hidden[1]) from None
+        finally:
+            self.warnings[warned:] = [self._hidden(w) for w in self.warnings[warned:]]
+
+    def _hidden(self, text: str | None) -> str | None:
+        """``text`` with the value of every ``getenv`` variable replaced by its name (``${NAME}``)."""
+        if text:
+            for name, (style, value) in sorted(self.vars.values.items(), key=lambda item: -len(item[1][1])):
+                if style == "getenv" and value:
+                    text = text.replace(value, "${" + name + "}")
+        return text
+
+    def _command(self, text: str, where: Where) -> None:
         stripped = strip_comment(text)
         words0 = stripped.split()
         if not words0:
@@ -500,7 +544,7 @@ class _Reader:
             if words0[0] in _INTERPRETED:
                 raise ScriptError(f"{exc}: its value is only known while LIGGGHTS runs.",
                                   file=where.file, line=where.line,
-                                  fix="replace it by a number, or pass the value with variables=.") from None
+                                  fix="replace it by a number, or pass the value with --var NAME VALUE.") from None
             self.warnings.append(f"{where.file}:{where.line}: {excerpt(words0[0])} ignored ({exc}).")
             return
         if not words:
@@ -552,6 +596,9 @@ class _Reader:
         if not target.is_file():
             raise self.error(ScriptError, f"include: no file {target}.", where,
                              "check the path (relative paths are taken from the main script's directory).")
+        if len(self.include_stack) >= MAX_INCLUDE_DEPTH:
+            raise self.error(ScriptError, f"include: files include each other more than {MAX_INCLUDE_DEPTH} deep.",
+                             where, "include files from the main script, or fewer levels deep.")
         self.included.append(target)
         self.read(target)
 

@@ -92,7 +92,8 @@ SAMPLES = REPO / "sample_dumps"
 PACKING = SAMPLES / "liggghts" / "packing"
 YADE = SAMPLES / "yade"
 
-FAMILIES = ("liggghts_text", "liggghts_binary", "compressed", "script", "yade_npys", "yade_h5", "output_path")
+FAMILIES = ("liggghts_text", "liggghts_binary", "compressed", "script", "yade_npys", "yade_h5", "output_path", "store",
+            "cache", "export", "prepare")
 TIME_LIMIT = 30.0
 """Seconds one input may take (the samples take 0.03-0.2 s)."""
 MEMORY_LIMIT = 6 << 30
@@ -595,6 +596,31 @@ def mutate_npys_raw(rng: random.Random, data: bytes) -> tuple[bytes, str]:
     return data + data[at: at + rng.randrange(1, 3000)], f"part of the record at byte {at} appended"
 
 
+FOREIGN_STORAGE = ("external", "link", "virtual", "soft", "hardlink")
+"""Ways an HDF5 dataset can hold data that is not its own (:func:`foreign_storage`)."""
+
+
+def foreign_storage(rng: random.Random, kind: str, target, col: str, secret: Path) -> None:
+    """Make ``target[col]`` (removed first) data outside the file (``secret``: external storage, an external
+    link, a virtual dataset), a soft link (to itself or another column) or a hard link to another column."""
+    import h5py
+
+    if kind == "external":
+        secret.write_bytes(b"root:x:0:0:root:/root:/bin/bash\n" * 256)
+        target.create_dataset(col, shape=(64,), dtype="f8", external=[(str(secret), 0, 512)])
+    elif kind == "link":
+        target[col] = h5py.ExternalLink(str(secret), "/x")
+    elif kind == "virtual":
+        layout = h5py.VirtualLayout(shape=(4,), dtype="f8")
+        layout[:] = h5py.VirtualSource(str(secret), "x", shape=(4,))
+        target.create_virtual_dataset(col, layout)
+    elif kind == "soft":
+        others = sorted(target)
+        target[col] = h5py.SoftLink(target[rng.choice(others)].name if others else f"{target.name}/{col}")
+    elif others := sorted(target):
+        target[col] = target[rng.choice(others)]
+
+
 def mutate_h5_file(rng: random.Random, path: Path) -> str:
     """An HDF5-level change of the snapshot file ``path``, in place."""
     import h5py
@@ -615,21 +641,8 @@ def mutate_h5_file(rng: random.Random, path: Path) -> str:
         secret = path.with_name("secret.bin")
         if kind in ("external", "virtual", "link", "soft", "hardlink", "scalar", "group", "filter"):
             del target[col]
-        if kind == "external":
-            secret.write_bytes(b"root:x:0:0:root:/root:/bin/bash\n" * 256)
-            target.create_dataset(col, shape=(64,), dtype="f8", external=[(str(secret), 0, 512)])
-        elif kind == "link":
-            target[col] = h5py.ExternalLink(str(secret), "/x")
-        elif kind == "virtual":
-            layout = h5py.VirtualLayout(shape=(4,), dtype="f8")
-            layout[:] = h5py.VirtualSource(str(secret), "x", shape=(4,))
-            target.create_virtual_dataset(col, layout)
-        elif kind == "soft":
-            other = rng.choice(sorted(target))
-            target[col] = h5py.SoftLink(target[other].name)
-        elif kind == "hardlink":
-            other = rng.choice(sorted(target))
-            target[col] = target[other]
+        if kind in FOREIGN_STORAGE:
+            foreign_storage(rng, kind, target, col, secret)
         elif kind == "scalar":
             target.create_dataset(col, data=rng.choice((1.0, 7, b"x")))
         elif kind == "group":
@@ -756,6 +769,14 @@ def build_case(base: Path, work: Path, seed: int, index: int, families: tuple[st
         what = f"{src.name}: {what}"
     elif family == "output_path":
         return output_case(rng, base, work, d, index, full_fs)
+    elif family == "store":
+        return store_case(rng, base, d, out_dir, index)
+    elif family == "cache":
+        return cache_case(rng, base, d, out_dir, index)
+    elif family == "export":
+        return export_case(rng, base, d, out_dir, index)
+    elif family == "prepare":
+        return prepare_case(rng, base, d, index)
     else:
         raise ValueError(family)
     if family != "yade_npys" and family != "yade_h5" and rng.random() < 0.1:
@@ -795,7 +816,7 @@ def _remove(p: Path) -> None:
 
 OUTPUT_KINDS = ("input", "input", "input", "symlink", "hardlink", "dotdot", "directory", "empty", "missing_dir",
                 "fifo", "socket", "device", "dangling", "parent_is_file", "proc", "long_name", "new", "existing",
-                "full_fs", "report", "export", "convert", "prepare", "yade_input")
+                "existing_store", "full_fs", "report", "export", "convert", "prepare", "yade_input")
 
 
 def output_case(rng: random.Random, base: Path, work: Path, d: Path, index: int, full_fs: Path | None) -> Case:
@@ -853,8 +874,14 @@ def output_case(rng: random.Random, base: Path, work: Path, d: Path, index: int,
     elif kind == "new":
         out = str(d / "new.h5")
         new_ok, expect = [Path(out)], "ok"
-    elif kind == "existing":
+    elif kind == "existing":  # a file that is not a store: replaced only with --overwrite
         (d / "old.h5").write_bytes(b"an earlier result")
+        out = str(d / "old.h5")
+        if rng.random() < 0.5:
+            command.append("--overwrite")
+            changes_ok, expect = [Path(out)], "ok"
+    elif kind == "existing_store":  # an earlier store: replaced
+        shutil.copy(base / "results.h5", d / "old.h5")
         out = str(d / "old.h5")
         changes_ok, expect = [Path(out)], "ok"
     elif kind == "full_fs":
@@ -911,6 +938,420 @@ def output_case(rng: random.Random, base: Path, work: Path, d: Path, index: int,
                 new_ok=new_ok, changes_ok=changes_ok, expect=expect)
 
 
+# ------------------------------------------------------------------ stores, ingest caches, exports, prepare
+
+H5_DTYPES = ("int8", "uint8", "int16", "int32", "uint64", "float16", "float32", "bool", "S4", "complex128", "float64",
+             "int64")
+"""Dtypes a damaged HDF5 column is rewritten in."""
+ODD_ATTRIBUTES = (np.nan, -1, 2**63 - 1, 1.5, "x", "[", "null", "{}", '["x"]', "[1e308]", '{"a": 1}', np.arange(2),
+                  np.array([np.inf, 0.0, 0.0]), np.zeros(3), b"\xff", True)
+"""Values a damaged HDF5 attribute is given."""
+EXPORT_NAME = re.compile(r"(particles|contacts|walls|frames|clumps)\.(csv|parquet)|units\.csv|provenance\.json|"
+                         r"(particles|contacts)_\d{12}\.vtu|(particles|contacts)\.pvd|demsplit-export\.json")
+"""The names of the files an export writes."""
+EXPORT_FORMATS = ("--csv", "--csv", "--vtk", "--parquet", "--dump", "--dump", "report")
+
+
+def _special_for(rng: random.Random, dtype: np.dtype):
+    if dtype.kind == "f":
+        return rng.choice(SPECIAL_REALS)
+    if dtype.kind in "iu":
+        info = np.iinfo(dtype)
+        return min(max(rng.choice(SPECIAL_INTS), info.min), info.max)
+    if dtype.kind == "b":
+        return rng.random() < 0.5
+    return rng.choice(SPECIAL_BYTES)
+
+
+def _rewrite(group, name: str, data) -> None:
+    del group[name]
+    group.create_dataset(name, data=data)
+
+
+def mutate_column(rng: random.Random, group, name: str) -> str:
+    """A column (1-D dataset) of ``group`` changed in place: a value or all of them, its dtype, its shape, or
+    removed."""
+    d = group[name]
+    data = d[()]
+    kind = rng.choice(("value", "value", "value", "values", "dtype", "shape", "drop"))
+    if kind in ("value", "values") and data.ndim == 1 and len(data):
+        rows = [rng.randrange(len(data))] if kind == "value" else slice(None)
+        value = _special_for(rng, data.dtype)
+        try:
+            data[rows] = value
+        except (ValueError, OverflowError, TypeError):
+            return f"{group.name}/{name}: {value!r} does not fit {data.dtype}"
+        d[...] = data
+        return f"{group.name}/{name}[{rows if kind == 'value' else ':'}] = {value!r}"
+    if kind == "dtype":
+        dtype = rng.choice(H5_DTYPES)
+        with np.errstate(all="ignore"):
+            _rewrite(group, name, data.astype(dtype))
+        return f"{group.name}/{name} as {dtype}"
+    if kind == "shape":
+        shape = rng.choice(("column", "short", "long", "empty", "scalar"))
+        new = {"column": lambda: data.reshape(-1, 1), "short": lambda: data[:-1],
+               "long": lambda: np.concatenate([data, data[:3]]), "empty": lambda: data[:0],
+               "scalar": lambda: data[0] if len(data) else np.float64(0)}[shape]()
+        _rewrite(group, name, new)
+        return f"{group.name}/{name} shape {shape}"
+    del group[name]
+    return f"{group.name}/{name} removed"
+
+
+def _mutate_json_attr(rng: random.Random, attrs, name: str) -> str:
+    """The JSON attribute ``name``: a value inside it changed or removed, or the whole replaced."""
+    try:
+        value = json.loads(attrs[name])
+    except (KeyError, TypeError, ValueError):
+        value = None
+    paths = _json_paths(value) if isinstance(value, (dict, list)) else []
+    if not paths or rng.random() < 0.2:
+        attrs[name] = rng.choice(ODD_ATTRIBUTES)
+        return f"attribute {name} = {attrs[name]!r}"
+    path = rng.choice(paths)
+    node = value
+    for step in path[:-1]:
+        node = node[step]
+    if rng.random() < 0.2:
+        del node[path[-1]]
+        what = "removed"
+    else:
+        node[path[-1]] = rng.choice(JSON_VALUES)
+        what = f"= {node[path[-1]]!r}"
+    attrs[name] = json.dumps(value)
+    return f"attribute {name} {list(path)} {what}"
+
+
+def mutate_store(rng: random.Random, path: Path) -> str:
+    """One change of the result store ``path``, in place: raw damage, a column, the index, the attributes,
+    data outside the file, a declared length it does not hold, or a particle listed twice."""
+    import h5py
+
+    kind = rng.choice(("flip", "truncate", "column", "column", "column", "column", "columns_attr", "index", "index",
+                       "provenance", "provenance", "walls_meta", "format", "foreign", "huge", "twice"))
+    if kind in ("flip", "truncate"):
+        data, what = flip_bytes(rng, path.read_bytes()) if kind == "flip" else cut_bytes(rng, path.read_bytes())
+        path.write_bytes(data)
+        return what
+    with h5py.File(path, "a") as f:
+        table = rng.choice(("particles", "contacts", "walls", "frames"))
+        columns = sorted(f[table])
+        if kind == "column" or (kind in ("foreign", "twice") and not columns):
+            group = f[rng.choice((table, table, table, "index"))]
+            return mutate_column(rng, group, rng.choice(sorted(group))) if len(group) else "an empty table"
+        if kind == "columns_attr":
+            cols = json.loads(f[table].attrs["columns"])
+            f[table].attrs["columns"] = rng.choice(("[", '"x"', json.dumps(cols + ["extra"]), json.dumps(cols[:-1]),
+                                                    json.dumps(cols[::-1]), "[1, 2]", json.dumps(cols + cols[:1])))
+            return f"{table} columns = {f[table].attrs['columns'][:80]}"
+        if kind == "index":
+            name = rng.choice(("step", "step", table))
+            values = f["index"][name][()]
+            how = rng.choice(("twice", "reverse", "value", "value"))
+            if how == "twice" and len(values) > 1:
+                values[-1] = values[0]
+            elif how == "reverse":
+                values = values[::-1]
+            elif len(values):
+                values[rng.randrange(len(values))] = rng.choice((-1, 0, 1, 2**40, 2**62, 7))
+            _rewrite(f["index"], name, values)
+            return f"index/{name} {how}"
+        if kind in ("provenance", "walls_meta"):
+            return _mutate_json_attr(rng, f.attrs, kind)
+        if kind == "format":
+            name = rng.choice(("format", "format_version"))
+            f.attrs[name] = rng.choice(("x", b"demsplit-results", 2, "1", -1, 1.5, np.arange(2)))
+            return f"attribute {name} = {f.attrs[name]!r}"
+        if kind == "foreign":
+            col = rng.choice(columns)
+            how = rng.choice(FOREIGN_STORAGE)
+            del f[table][col]
+            foreign_storage(rng, how, f[table], col, path.with_name("secret.bin"))
+            return f"{table}/{col}: {how}"
+        if kind == "huge":
+            rows = rng.choice((1 << 40, 1 << 31, 10**7))
+            f["index"][table][-1] = rows
+            for col in columns:
+                f[table][col].resize((rows,))
+            return f"{table}: {rows} rows declared"
+        col = rng.choice(("id", "wall", "step")) if table != "contacts" else "id1"
+        if col in f[table] and f[table][col].shape[0] > 1:
+            values = f[table][col][()]
+            values[1] = values[0]
+            f[table][col][...] = values
+        return f"{table}/{col}: row 1 = row 0"
+
+
+def mutate_cache(rng: random.Random, path: Path) -> str:
+    """One change of the ingest cache ``path``, in place: raw damage, a column of a frame, a row listed twice,
+    a frame's or the cache's attributes, a stored error, a frame removed, data outside the file."""
+    import h5py
+
+    kind = rng.choice(("flip", "truncate", "column", "column", "column", "twice", "twice", "frame_attr", "frame_attr",
+                       "root_attr", "error", "drop_frame", "order", "foreign"))
+    if kind in ("flip", "truncate"):
+        data, what = flip_bytes(rng, path.read_bytes()) if kind == "flip" else cut_bytes(rng, path.read_bytes())
+        path.write_bytes(data)
+        return what
+    with h5py.File(path, "a") as f:
+        names = sorted(f["frames"])
+        name = rng.choice(names)
+        g = f["frames"][name]
+        table = rng.choice(("particles", "contacts"))
+        if "error" in g.attrs and kind in ("column", "twice", "order", "foreign"):
+            kind = "error"
+        if kind == "column":
+            group = g[table]
+            return f"frame {name}: " + mutate_column(rng, group, rng.choice(sorted(group)))
+        if kind == "twice":
+            group = g[table]
+            n = group[next(iter(group))].shape[0] if len(group) else 0
+            if not n:
+                return f"frame {name}: {table} has no rows"
+            row = rng.randrange(n)
+            for col in list(group):
+                _rewrite(group, col, np.concatenate([group[col][()], group[col][row:row + 1]]))
+            if table == "contacts" and "overlap_error" in g:
+                _rewrite(g, "overlap_error", np.concatenate([g["overlap_error"][()], g["overlap_error"][row:row + 1]]))
+            return f"frame {name}: {table} row {row} listed twice"
+        if kind == "frame_attr":
+            attr = rng.choice(("step", "time", "box_lo", "box_hi", "box_periodic", "box_tilt", "source", "notes",
+                               "walls", "overlap_source"))
+            if rng.random() < 0.2 and attr in g.attrs:
+                del g.attrs[attr]
+                return f"frame {name}: attribute {attr} removed"
+            g.attrs[attr] = rng.choice(ODD_ATTRIBUTES)
+            return f"frame {name}: attribute {attr} = {g.attrs[attr]!r}"
+        if kind == "root_attr":
+            attr = rng.choice(("steps", "scene", "scene", "sources", "describe", "version", "n_frames", "format"))
+            if attr in ("scene", "describe", "sources"):
+                return _mutate_json_attr(rng, f.attrs, attr)
+            f.attrs[attr] = rng.choice(ODD_ATTRIBUTES + (np.array([-1, 5]), np.arange(len(names))[::-1] * 1000))
+            return f"attribute {attr} = {f.attrs[attr]!r}"
+        if kind == "error":
+            g.attrs["error"] = rng.choice(("{", "null", json.dumps({
+                "class": rng.choice(("os", "InputFormatError", "DemsplitError", "KeyError", "Path", 5, "StoreError")),
+                "message": rng.choice(("x", 5, None)), "file": rng.choice((None, 5, "f")),
+                "step": rng.choice((None, "x", 3)), "line": rng.choice((None, 1.5, 2)), "fix": None})))
+            return f"frame {name}: error = {g.attrs['error'][:100]}"
+        if kind == "drop_frame":
+            del f["frames"][name]
+            return f"frame {name} removed"
+        if kind == "order":
+            order = json.loads(g[table].attrs["order"])
+            g[table].attrs["order"] = rng.choice(("[", "null", json.dumps(order + ["extra"]), json.dumps(order[:-1]),
+                                                  json.dumps(order + order[:1]), "[1]"))
+            return f"frame {name}: {table} order = {g[table].attrs['order'][:80]}"
+        group = g[table]
+        col = rng.choice(sorted(group))
+        how = rng.choice(FOREIGN_STORAGE)
+        del group[col]
+        foreign_storage(rng, how, group, col, path.with_name("secret.bin"))
+        return f"frame {name}: {table}/{col}: {how}"
+
+
+STORE_COMMANDS = (("info",), ("report",), ("report",), ("export", "--csv"), ("export", "--csv"), ("export", "--dump"),
+                  ("export", "--dump"), ("export", "--vtk"), ("export", "--parquet"))
+"""What is done with a damaged store (``report -o`` is left to the export family: a page takes seconds)."""
+
+
+def store_case(rng: random.Random, base: Path, d: Path, out_dir: Path, index: int) -> Case:
+    """A damaged result store given to info, report or export."""
+    d.mkdir()
+    store = d / "store.h5"
+    shutil.copy(rng.choice((base / "results.h5", base / "results_packing.h5")), store)
+    what = mutate_store(rng, store)
+    command = list(rng.choice(STORE_COMMANDS))
+    target = out_dir / {"--csv": "csv", "--dump": "p.dump", "--vtk": "vtk", "--parquet": "pq"}.get(command[-1], "")
+    argv = [command[0], str(store), *command[1:], *([str(target)] if command[0] == "export" else []), "-q"]
+    return Case(index, "store", f"{what}; {' '.join(command)}", argv, d, None,
+                new_ok=[target] if command[0] == "export" else [])
+
+
+def cache_case(rng: random.Random, base: Path, d: Path, out_dir: Path, index: int) -> Case:
+    """A damaged ingest cache given to run or info."""
+    d.mkdir()
+    cache = d / "cache.h5"
+    shutil.copy(rng.choice((base / "cache_packing.h5", base / "cache_yade.h5")), cache)
+    what = mutate_cache(rng, cache)
+    out = out_dir / "out.h5"
+    if rng.random() < 0.15:
+        return Case(index, "cache", f"{what}; info", ["info", str(cache), "-q"], d)
+    return Case(index, "cache", f"{what}; run", ["run", str(cache), "-o", str(out), "-q"], d, out, new_ok=[out])
+
+
+def _store_of_the_case(base: Path, d: Path) -> Path:
+    """The packing run's store beside its files in ``d``, its provenance naming them (as a store made there)."""
+    import h5py
+
+    store = d / "results.h5"
+    shutil.copy(base / "results_packing.h5", store)
+    with h5py.File(store, "a") as f:
+        f.attrs["provenance"] = f.attrs["provenance"].replace(str(base / "packing_all"), str(d))
+    return store
+
+
+def export_case(rng: random.Random, base: Path, d: Path, out_dir: Path, index: int) -> Case:
+    """export (every format) and report -o into a folder or onto a file that is new, an earlier export, a
+    folder of other files, a file of the run (by name, link or hard link), a crafted manifest, ..."""
+    shutil.copytree(base / "packing_all", d)
+    store = _store_of_the_case(base, d)
+    fmt = rng.choice(EXPORT_FORMATS)
+    overwrite = rng.random() < 0.3 and fmt != "report"  # a report that is written takes seconds
+    victim = d / rng.choice(sorted(p.name for p in d.iterdir() if p.name != "results.h5"))
+    expect, changes_ok = None, []
+    if fmt in ("--csv", "--vtk", "--parquet"):
+        target = out_dir / "export"
+        kind = rng.choice(("new", "empty", "earlier_same", "earlier_same", "earlier_other", "foreign", "hardlink_input",
+                           "symlink_input", "manifest", "file", "run_dir", "named_like_ours", "missing_parent"))
+        name = fmt[2:]
+        ours = rng.choice(("particles.csv", "particles.parquet", "particles.pvd", "provenance.json", "units.csv",
+                           "demsplit-export.json", f"particles_{2000:012d}.vtu"))
+        if kind == "empty":
+            target.mkdir()
+        elif kind in ("earlier_same", "earlier_other"):
+            other = name if kind == "earlier_same" else rng.choice([f for f in ("csv", "vtk", "parquet") if f != name])
+            shutil.copytree(base / "exports" / other, target)
+        elif kind == "foreign":
+            target.mkdir()
+            shutil.copy(d / "floor.stl", target / "floor.stl")
+        elif kind in ("hardlink_input", "symlink_input"):
+            target.mkdir()
+            (os.link if kind == "hardlink_input" else lambda a, b: os.symlink(a, b))(victim, target / ours)
+        elif kind == "manifest":
+            target.mkdir()
+            listed = rng.choice((["../case/in.packing"], ["in.packing"], ["sub"], [".."], [ours], ["in.packing", ours]))
+            if "in.packing" in listed:
+                os.link(d / "in.packing", target / "in.packing")
+            if "sub" in listed:
+                (target / "sub").mkdir()
+            if ours in listed:
+                os.link(victim, target / ours)
+            (target / "demsplit-export.json").write_text(json.dumps({"format": "demsplit-export", "kind": name,
+                                                                     "files": listed}))
+            kind = f"manifest listing {listed}"
+        elif kind == "file":
+            target = victim
+        elif kind == "run_dir":
+            target = d
+        elif kind == "named_like_ours":
+            target.mkdir()
+            (target / ours).write_text("the user's own file\n")
+        elif kind == "missing_parent":
+            target = out_dir / "no" / "export"
+        if kind == "run_dir":
+            overwrite = False  # with --overwrite the export goes among the run's files, which it may
+        if kind in ("new", "empty", "earlier_same"):
+            expect = "ok"
+        elif kind in ("earlier_other", "foreign", "named_like_ours"):
+            expect = "ok" if overwrite else "error"
+        elif kind in ("file", "run_dir", "missing_parent") or (kind.endswith("_input") and not overwrite):
+            expect = "error"
+        if target.is_dir() and target != d and (overwrite or kind in ("earlier_same", "empty")
+                                                or kind.startswith("manifest")):
+            changes_ok = [p for p in target.rglob("*") if EXPORT_NAME.fullmatch(p.name) or kind.startswith("manifest")]
+        argv = ["export", str(store), fmt, str(target)]
+        new_ok = [target] if target not in (d, victim) else []
+    else:
+        kind = rng.choice(("new", "earlier", "foreign", "input", "input", "symlink_input", "hardlink_input",
+                           "directory", "store"))
+        target = out_dir / ("report.html" if fmt == "report" else "p.dump")
+        if kind == "earlier" and fmt == "--dump":
+            shutil.copy(base / "exports" / "p.dump", target)
+        elif kind == "foreign":
+            target.write_text("the user's notes\n")
+        elif kind == "input":
+            target = victim
+        elif kind in ("symlink_input", "hardlink_input"):
+            (os.link if kind == "hardlink_input" else lambda a, b: os.symlink(a, b))(victim, target)
+        elif kind == "directory":
+            target = out_dir
+        elif kind == "store":
+            target = store
+        if fmt == "report" and kind in ("new", "earlier", "foreign"):
+            kind = "input"  # a report that is written takes seconds: only the refusals
+            target = victim
+        expect = ("ok" if kind in ("new", "earlier") or (kind == "foreign" and overwrite) else "error")
+        if kind in ("earlier", "foreign") and expect == "ok":
+            changes_ok = [target]
+        argv = ["report", str(store), "-o", str(target)] if fmt == "report" else ["export", str(store), "--dump",
+                                                                                  str(target)]
+        new_ok = [target] if kind == "new" else []
+    argv += ["--overwrite"] * overwrite + ["-q"]
+    return Case(index, "export", f"{fmt} {kind}{' --overwrite' if overwrite else ''}: {target}"[:300], argv, d, None,
+                new_ok=new_ok, changes_ok=changes_ok, expect=expect)
+
+
+def _named_by(script: Path) -> list[Path]:
+    """The existing files other than itself that ``script`` names (none when it cannot be read)."""
+    from demsplit.errors import DemsplitError
+    from demsplit.readers.liggghts_script import read_script
+
+    try:
+        files = read_script(script).named_files()
+    except DemsplitError:
+        return []
+    return sorted({p for p in files if p.exists() and p.resolve() != script.resolve()})
+
+
+def prepare_case(rng: random.Random, base: Path, d: Path, index: int) -> Case:
+    """prepare (of the packing script, its dumps removed or not, sometimes damaged) onto a new name, its own
+    earlier output, an edited one, a foreign file, a file the script names (by name or link), ..."""
+    from demsplit.outputs import stamp_script
+
+    shutil.copytree(base / "packing_all", d)
+    script = d / "in.packing"
+    text = script.read_text()
+    what = []
+    if rng.random() < 0.7:
+        text = "".join(line for line in text.splitlines(True) if not line.startswith("dump"))
+        what.append("dumps removed")
+    if rng.random() < 0.3:
+        (d / "extra.in").write_text("variable extra equal 1\n")
+        text = "include extra.in\n" + text
+        what.append("includes extra.in")
+    script.write_text(text)
+    if rng.random() < 0.2:
+        data, how = mutate_script(rng, script.read_bytes())
+        script.write_bytes(data)
+        what.append(how)
+    overwrite = rng.random() < 0.3
+    kind = rng.choice(("default", "new", "ours", "edited", "foreign", "input", "named", "named", "symlink_input",
+                       "hardlink_input", "directory", "missing_dir"))
+    named = _named_by(script) or [d / "floor.stl"]
+    target = d / "in.packing.demsplit" if kind == "default" else d / "prepared.in"
+    expect, changes_ok = None, []
+    if kind == "ours":
+        target.write_bytes(stamp_script(b"# an earlier prepared script\n"))
+        changes_ok = [target]
+    elif kind == "edited":
+        target.write_bytes(stamp_script(b"# an earlier prepared script\n") + b"# edited\n")
+    elif kind == "foreign":
+        target.write_text("# the user's own script\n")
+    elif kind == "input":
+        target = script
+    elif kind == "named":
+        target = rng.choice(named)
+    elif kind in ("symlink_input", "hardlink_input"):
+        (os.link if kind == "hardlink_input" else lambda a, b: os.symlink(a, b))(rng.choice([script, *named]), target)
+    elif kind == "directory":
+        target = d
+    elif kind == "missing_dir":
+        target = d / "no" / "prepared.in"
+    if kind in ("edited", "foreign"):
+        expect = "error" if not overwrite else None
+        changes_ok = [target] if overwrite else []
+    elif kind in ("input", "named", "symlink_input", "hardlink_input", "directory", "missing_dir"):
+        expect = "error"
+    argv = ["prepare", str(script), *([] if kind == "default" else ["-o", str(target)])]
+    argv += ["--overwrite"] * overwrite + ["-q"]
+    parts = [target.with_name(f"{target.name}.part{k}") for k in range(2, 5)]
+    return Case(index, "prepare", f"{', '.join(what) or 'as it is'}; {kind}{' --overwrite' if overwrite else ''}",
+                argv, d, None, new_ok=[target, *parts] if kind in ("default", "new") else parts,
+                changes_ok=changes_ok, expect=expect)
+
+
 # ------------------------------------------------------------------ the promise
 
 def tree_state(directory: Path) -> dict[str, tuple]:
@@ -960,7 +1401,8 @@ def check_case(case: Case) -> tuple[str, str]:
     from demsplit import cli
     from demsplit.errors import DemsplitError
 
-    before = tree_state(case.directory)
+    sandbox = case.directory.parent  # the case's files and the output directory: nothing but outputs changes
+    before = tree_state(sandbox)
     seen: dict = {}
 
     def recording(func):
@@ -977,7 +1419,7 @@ def check_case(case: Case) -> tuple[str, str]:
         return wrapper
 
     patched = {name: getattr(cli, name) for name in ("cmd_run", "cmd_report", "cmd_export", "cmd_convert",
-                                                       "cmd_prepare")}
+                                                       "cmd_prepare", "cmd_info")}
     out, err = io.StringIO(), io.StringIO()
     try:
         for name, func in patched.items():
@@ -1006,7 +1448,7 @@ def check_case(case: Case) -> tuple[str, str]:
         return "MESSAGE numpy repr", err_text
     if rc == 0 and (err_text or out.getvalue()):
         return "MESSAGE output with -q", out.getvalue() + err_text
-    after = tree_state(case.directory)
+    after = tree_state(sandbox)
     allowed_new = [str(p) for p in case.new_ok]
     for path, state in before.items():
         if after.get(path) != state and path not in [str(p) for p in case.changes_ok]:
@@ -1014,6 +1456,8 @@ def check_case(case: Case) -> tuple[str, str]:
                 continue  # the same bytes (a new inode of the same content is fine, e.g. an atomic replace)
             return "MODIFIED input", f"{path}: {state[:2]} -> {after.get(path, ('gone',))[:2]}"
     for path in after:
+        if path.endswith(".tmp") and path not in before:
+            return "LEFTOVER", path
         if path not in before and not any(path == a or path.startswith(a + "/") for a in allowed_new):
             if rc == 2 and ".partial" in path and _resumable_work(path):
                 continue
@@ -1086,8 +1530,20 @@ def warm_up(base: Path, work: Path) -> None:
             rc = main([*argv, "-o", str(out), "-q"])
             if rc != 0:
                 raise SystemExit(f"the unmutated base does not run: {argv}")
-        if not (base / "results.h5").exists():
+        if not (base / "results.h5").exists():  # the stores, caches and exports the later families start from
             main(["run", str(base / "yade" / "mindlin_box.npys"), "-o", str(base / "results.h5"), "-q"])
+            main(["run", str(base / "packing_all" / "in.packing"), "-o", str(base / "results_packing.h5"), "-q"])
+            main(["convert", str(base / "packing_text" / "in.packing"), "-o", str(base / "cache_packing.h5"), "-q"])
+            main(["convert", str(base / "yade" / "mindlin_box.h5"), "-o", str(base / "cache_yade.h5"), "-q"])
+            (base / "exports").mkdir(exist_ok=True)
+            for fmt in ("csv", "vtk", "parquet"):
+                main(["export", str(base / "results.h5"), f"--{fmt}", str(base / "exports" / fmt), "-q"])
+            main(["export", str(base / "results.h5"), "--dump", str(base / "exports" / "p.dump"), "-q"])
+        for path in ("results_packing.h5", "cache_packing.h5", "cache_yade.h5", "exports/csv", "exports/p.dump"):
+            if not (base / path).exists():
+                raise SystemExit(f"the base {path} was not written")
+        for name in ("cache_packing.h5", "cache_yade.h5"):  # read once here: the children start warm
+            main(["run", str(base / name), "-o", str(work / "warm.h5"), "-q", "--overwrite"])
         if (work / "warm.h5").exists():
             (work / "warm.h5").unlink()
 

@@ -3,6 +3,7 @@ frames of the original reader exactly, and the pipeline the same results."""
 
 from __future__ import annotations
 
+import json
 import shutil
 from pathlib import Path
 
@@ -10,7 +11,7 @@ import h5py
 import numpy as np
 import pytest
 from demsplit.cli import main
-from demsplit.errors import DemsplitError, InputFormatError
+from demsplit.errors import DemsplitError, InputFormatError, StoreError
 from demsplit.pipeline import analyze
 from demsplit.readers import open_run, reader_for
 from demsplit.readers.cache import FORMAT, CacheRun, convert_run
@@ -95,14 +96,14 @@ def test_cache_results_equal_text_results_and_work_in_workers(samples, tmp_path,
 
 
 def test_cache_is_written_atomically(samples, tmp_path, monkeypatch):
-    """A conversion that fails leaves neither the cache nor its temporary file."""
+    """A conversion that fails leaves neither the cache nor its temporary file, and its error names the cache."""
     import demsplit.readers.cache as cache_module
 
     def fail(*args, **kwargs):
         raise OSError("disk full")
 
     monkeypatch.setattr(cache_module, "_write_frame", fail)
-    with pytest.raises(OSError):
+    with pytest.raises(StoreError, match="cache.h5: cannot write the output: disk full"):
         convert_run(samples / "liggghts" / "packing" / "in.packing", tmp_path / "cache.h5")
     assert list(tmp_path.iterdir()) == []
 
@@ -136,3 +137,58 @@ def test_reader_options_are_refused_and_foreign_hdf5_is_not_a_cache(samples, tmp
     shutil.copy(cache, tmp_path / "copy.h5")
     with h5py.File(tmp_path / "copy.h5", "r") as h5:
         assert h5.attrs["format"] == FORMAT
+
+
+def _rewrite(group, col: str, values) -> None:
+    del group[col]
+    group.create_dataset(col, data=values)
+
+
+@pytest.mark.parametrize("how", ["a contact twice", "a short column", "a NaN position", "an unknown particle",
+                                 "a wall the scene lacks", "a particle twice", "a string column",
+                                 "a stored error of another class", "a frame group missing"])
+def test_a_damaged_cache_is_one_refusal_naming_the_cache(samples, tmp_path, capsys, how):
+    """A cache is an input: a pair contact listed twice (its energy was counted twice, exit 0), a column
+    shorter than its table (exit 3), a NaN (blamed on the intact dump the frame came from), ... : exit 2,
+    one line naming the cache and the frame, nothing written."""
+    cache = convert_run(samples / "liggghts" / "packing" / "in.packing", tmp_path / "cache.h5")
+    with h5py.File(cache, "a") as h5:
+        frame = h5["frames/000001"]
+        c, p = frame["contacts"], frame["particles"]
+        pairs = np.flatnonzero(c["wall"][()] < 0)
+        if how == "a contact twice":
+            rows = np.concatenate([np.arange(c["delta"].shape[0]), pairs[:1]])
+            for col in json.loads(c.attrs["order"]):
+                _rewrite(c, col, c[col][()][rows])
+            if "overlap_error" in frame:
+                _rewrite(frame, "overlap_error", frame["overlap_error"][()][rows])
+        elif how == "a short column":
+            _rewrite(c, "delta", c["delta"][()][:-1])
+        elif how == "a NaN position":
+            x = p["x"][()]
+            x[4] = np.nan
+            p["x"][...] = x
+        elif how == "an unknown particle":
+            id1 = c["id1"][()]
+            id1[pairs[0]] = 10**9
+            c["id1"][...] = id1
+        elif how == "a wall the scene lacks":
+            wall = c["wall"][()]
+            wall[0] = 999
+            c["wall"][...] = wall
+        elif how == "a particle twice":
+            ids = p["id"][()]
+            ids[1] = ids[0]
+            p["id"][...] = ids
+        elif how == "a string column":
+            _rewrite(p, "radius", np.array([b"0.002"] * p["radius"].shape[0]))
+        elif how == "a stored error of another class":
+            frame.attrs["error"] = json.dumps({"class": "os", "message": "x"})
+        else:
+            del h5["frames/000002"]
+    out = tmp_path / "out.h5"
+    assert main(["run", str(cache), "-o", str(out), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"demsplit: error: {cache}") and "the ingest cache is damaged" in err, err
+    assert err.count("\n") == 1 and "atoms_full" not in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cache.h5"]

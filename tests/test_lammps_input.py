@@ -231,3 +231,74 @@ def test_continuation_line_number_and_unbalanced_quote(tmp_path):
     with pytest.raises(ScriptError, match="unbalanced quotes") as err:
         script(tmp_path, "dump d all custom 10 a.txt id &\n   x y\ndump_modify d format \"%d %g %g\n")
     assert err.value.line == HEADER.count("\n") + 3
+
+
+# --- the interpreter's work is bounded: one refusal naming the file and the line ----------------------------
+
+def _refusal(tmp_path: Path, lines: list[str], seconds: float = 10.0) -> ScriptError:
+    import time
+
+    path = tmp_path / "in.bounded"
+    path.write_text("\n".join(lines) + "\n")
+    t0 = time.monotonic()
+    with pytest.raises(ScriptError) as err:
+        read_script(path)
+    assert time.monotonic() - t0 < seconds
+    return err.value
+
+
+def test_string_variables_that_double_are_refused_at_the_line_that_passes_the_bound(tmp_path):
+    """817 bytes of doubling string variables took 34 s and 1.8 GB; 1.4 KB was killed by the kernel."""
+    lines = ["variable a0 string xxxxxxxxxxxxxxxx"]
+    lines += [f"variable a{i} string ${{a{i - 1}}}${{a{i - 1}}}" for i in range(1, 40)]
+    err = _refusal(tmp_path, lines)
+    assert err.file.endswith("in.bounded") and err.line == 17 and "longer than 1048576 characters" in err.message
+
+
+def test_formulas_that_refer_to_each_other_are_evaluated_once_each_and_bounded(tmp_path):
+    """v_v21 referring to v_v20 twice, and so on, took 2^21 evaluations (a hang); each variable is now
+    evaluated once per definition (40 levels: 2^40 evaluations before). A formula that still takes more than
+    MAX_OPERATIONS is refused."""
+    from demsplit.readers.lammps_input import MAX_OPERATIONS
+
+    path = tmp_path / "in.chain"
+    path.write_text(HEADER + "variable v0 equal 1\n"
+                    + "".join(f"variable v{i} equal v_v{i - 1}+v_v{i - 1}\n" for i in range(1, 41))
+                    + "timestep $(v_v40*1e-20)\n")
+    assert read_script(path).timestep == pytest.approx(2.0**40 * 1e-20)
+    long = "variable big equal " + "+".join(["1"] * (MAX_OPERATIONS // 6))
+    err = _refusal(tmp_path, [long] + [f"variable t{k} equal $(v_big)" for k in range(4)])
+    assert err.line == 5 and f"more than {MAX_OPERATIONS} operations" in err.message  # the 4th evaluation
+
+
+def test_includes_nested_too_deeply_are_one_refusal(tmp_path):
+    """600 nested includes were exit 3 (RecursionError)."""
+    from demsplit.readers.liggghts_script import MAX_INCLUDE_DEPTH
+
+    for k in range(600):
+        (tmp_path / f"f{k}.in").write_text(f"include f{k + 1}.in\n" if k < 599 else "variable z equal 1\n")
+    err = _refusal(tmp_path, ["include f0.in"])
+    assert err.file == str(tmp_path / f"f{MAX_INCLUDE_DEPTH - 2}.in") and err.line == 1
+    assert f"more than {MAX_INCLUDE_DEPTH} deep" in err.message
+
+
+def test_a_script_too_large_and_a_line_too_long_are_refused(tmp_path):
+    from demsplit.readers.lammps_input import MAX_LINE
+
+    err = _refusal(tmp_path, ["units si", "variable a string " + "x" * MAX_LINE])
+    assert err.line == 2 and "longer than" in err.message
+    err = _refusal(tmp_path, ["units si", "variable a string &", "x" * (MAX_LINE // 2) + " &", "y" * (MAX_LINE // 2)])
+    assert err.line == 2
+
+
+def test_the_value_of_an_environment_variable_is_never_quoted(tmp_path, monkeypatch):
+    """variable s getenv NAME: its value comes from the environment, not the script; a message or a warning
+    names the variable instead."""
+    monkeypatch.setenv("DEMSPLIT_TEST_SECRET", "hunter2-secret")
+    err = _refusal(tmp_path, ["variable s getenv DEMSPLIT_TEST_SECRET", "units ${s}"])
+    assert "hunter2" not in str(err) and "${s}" in str(err) and err.line == 2
+    path = tmp_path / "in.warn"
+    path.write_text(HEADER + "variable s getenv DEMSPLIT_TEST_SECRET\n"
+                    "dump d all custom 100 atoms.txt id type x y z radius\ndump_modify d ${s} yes\n")
+    warnings = "\n".join(read_script(path).warnings)
+    assert "hunter2" not in warnings

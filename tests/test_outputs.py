@@ -146,6 +146,7 @@ def test_a_full_disk_is_one_message_with_the_path_and_a_rerun_works(packing, tmp
     real, calls = writer.ResultWriter._commit, []
 
     def full(self):
+        self._fill_digests(wait=True)  # every frame committed, whatever the pace of the background hashing
         calls.append(1)
         if len(calls) == failing_commit:
             raise OSError(H5_NO_SPACE)
@@ -235,3 +236,216 @@ def test_a_read_only_file_system_and_a_device_node_are_one_message(packing, tmp_
         assert "not a regular file" in capsys.readouterr().err
     st = os.lstat(node)
     assert stat.S_ISCHR(st.st_mode) and st.st_rdev == os.makedev(1, 3)
+
+
+# --- one policy for every file a command writes (issue [6 of 7] and the outputs of [5 of 7]) --------------------
+
+
+@pytest.fixture(scope="module")
+def analysed(tmp_path_factory):
+    """The packing run (a copy) and its store, made once: ``(run directory, store)``."""
+    root = tmp_path_factory.mktemp("analysed")
+    shutil.copytree(SAMPLES / "liggghts" / "packing", root / "packing")
+    store = root / "out.h5"
+    assert main(["run", str(root / "packing" / "in.packing"), "-o", str(store), "-q"]) == 0
+    return root / "packing", store
+
+
+def tree(directory: Path) -> dict[str, str]:
+    """Every file below ``directory`` -> its sha256."""
+    return {str(p.relative_to(directory)): digest(p) for p in sorted(directory.rglob("*")) if p.is_file()}
+
+
+@pytest.mark.parametrize("argv", [["report", "{store}", "-o", "{run}/in.packing"],
+                                  ["report", "{store}", "-o", "{run}/atoms.txt"],
+                                  ["export", "{store}", "--dump", "{run}/atoms.txt"],
+                                  ["export", "{store}", "--dump", "{run}/in.packing"],
+                                  ["export", "{store}", "--dump", "{run}/floor.stl"]],
+                         ids=["report over the script", "report over a dump the script names",
+                              "export --dump over that dump", "export --dump over the script",
+                              "export --dump over the mesh"])
+@pytest.mark.parametrize("overwrite", [[], ["--overwrite"]], ids=["", "--overwrite"])
+def test_report_and_export_never_write_over_a_file_of_the_run(analysed, capsys, argv, overwrite):
+    """The run's inputs and every file its script names, as the store's provenance lists them, are never
+    written, --overwrite or not (they were turned into HTML or a dump, exit 0)."""
+    run, store = analysed
+    before = tree(run)
+    assert main([a.format(store=store, run=run) for a in argv] + overwrite + ["-q"]) == 2
+    err = capsys.readouterr().err
+    assert "one of the run's inputs or files its script names" in err and err.count("\n") == 1
+    assert tree(run) == before
+
+
+def _without_dumps(packing: Path) -> Path:
+    """The packing script with its dump lines removed: prepare then adds its own."""
+    script = packing / "in.packing"
+    script.write_text("".join(line for line in script.read_text().splitlines(True) if not line.startswith("dump")))
+    return script
+
+
+@pytest.mark.parametrize("target", ["floor.stl", "in.packing"])
+def test_prepare_never_writes_over_a_file_the_script_names(packing, capsys, target):
+    """prepare -o onto the mesh the script names (it was replaced by the prepared script, exit 0)."""
+    script = _without_dumps(packing)
+    before = tree(packing)
+    for overwrite in ([], ["--overwrite"]):
+        assert main(["prepare", str(script), "-o", str(packing / target), "-q", *overwrite]) == 2
+        assert "one of the run's inputs or files its script names" in capsys.readouterr().err
+    assert tree(packing) == before
+
+
+def test_prepare_replaces_its_own_output_but_not_an_edited_one(packing, capsys):
+    """A prepared script demsplit wrote is replaced by the next prepare; once edited, it is refused (it was
+    replaced without a word) unless --overwrite."""
+    script = _without_dumps(packing)
+    out = packing / "in.packing.demsplit"
+    assert main(["prepare", str(script), "-q"]) == 0
+    assert "compute dsPair" in out.read_text()
+    assert main(["prepare", str(script), "-q"]) == 0  # its own, unedited: replaced
+    out.write_text(out.read_text() + "# my own edit\n")
+    edited = digest(out)
+    assert main(["prepare", str(script), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "not a script written by demsplit prepare and not edited since" in err and "--overwrite" in err
+    assert digest(out) == edited
+    assert main(["prepare", str(script), "-q", "--overwrite"]) == 0
+    assert "# my own edit" not in out.read_text()
+
+
+@pytest.mark.parametrize("command", ["run", "convert", "report", "export --dump"])
+def test_an_existing_file_that_is_not_of_the_commands_kind_is_refused(analysed, tmp_path, capsys, command):
+    """-o onto a file that is no file of the run but not one demsplit writes either (the user's original
+    script, beside the prepared copy that is the run; their notes): refused, named, untouched, exit 2; with
+    --overwrite it is replaced. A file of the command's own kind is replaced without --overwrite."""
+    run, store = analysed
+    original = tmp_path / "in.original"
+    original.write_text("# the user's original script\n")
+    argv = {"run": ["run", str(run / "in.packing"), "-o"], "convert": ["convert", str(run / "in.packing"), "-o"],
+            "report": ["report", str(store), "-o"], "export --dump": ["export", str(store), "--dump"]}[command]
+    assert main([*argv, str(original), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert str(original) in err and "exists and is not a" in err and "--overwrite" in err and err.count("\n") == 1
+    assert original.read_text() == "# the user's original script\n"
+    assert main([*argv, str(original), "-q", "--overwrite"]) == 0
+    assert main([*argv, str(original), "-q"]) == 0  # now the command's own kind: replaced
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["in.original"]
+
+
+@pytest.mark.parametrize("fmt", ["--csv", "--vtk"])
+def test_an_export_into_a_folder_of_other_files_is_refused(analysed, tmp_path, capsys, fmt):
+    """export --csv DIR into a folder of STL files wrote its tables among them; refused unless --overwrite,
+    which keeps the other files."""
+    run, store = analysed
+    folder = tmp_path / "meshes"
+    folder.mkdir()
+    shutil.copy(run / "floor.stl", folder / "floor.stl")
+    assert main(["export", str(store), fmt, str(folder), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "holds files that are not a demsplit export, such as 'floor.stl'" in err and err.count("\n") == 1
+    assert sorted(p.name for p in folder.iterdir()) == ["floor.stl"]
+    assert main(["export", str(store), fmt, str(folder), "-q", "--overwrite"]) == 0
+    assert (folder / "floor.stl").read_bytes() == (run / "floor.stl").read_bytes()
+    assert len(list(folder.iterdir())) > 2
+
+
+def test_an_export_replaces_an_earlier_export_of_its_kind_whole(analysed, tmp_path, capsys):
+    """export --vtk into the folder of another run's VTK export: the new series alone is left (the other
+    run's frames were left beside it, one series of two simulations); into a CSV export, refused."""
+    _, store = analysed
+    other = tmp_path / "yade.h5"
+    assert main(["run", str(SAMPLES / "yade" / "mindlin_box.h5"), "-o", str(other), "-q"]) == 0
+    vtk = tmp_path / "vtk"
+    assert main(["export", str(other), "--vtk", str(vtk), "-q"]) == 0
+    assert main(["export", str(store), "--vtk", str(vtk), "-q"]) == 0
+    fresh = tmp_path / "fresh"
+    assert main(["export", str(store), "--vtk", str(fresh), "-q"]) == 0
+    assert tree(vtk) == tree(fresh)
+    csv = tmp_path / "csv"
+    assert main(["export", str(other), "--csv", str(csv), "-q"]) == 0
+    assert main(["export", str(store), "--vtk", str(csv), "-q"]) == 2
+    assert "holds a demsplit csv export, not a vtk one" in capsys.readouterr().err
+    assert main(["export", str(store), "--csv", str(csv), "-q"]) == 0
+    assert (csv / "particles.csv").read_bytes() == _csv_of(store, tmp_path / "csv2")
+
+
+def _csv_of(store: Path, folder: Path) -> bytes:
+    assert main(["export", str(store), "--csv", str(folder), "-q"]) == 0
+    return (folder / "particles.csv").read_bytes()
+
+
+@pytest.mark.parametrize("fmt, failing", [("--csv", 3), ("--vtk", 2)])
+def test_an_export_on_a_full_disk_leaves_the_folder_as_it_was_and_names_the_file(analysed, tmp_path, capsys,
+                                                                                  monkeypatch, fmt, failing):
+    """ENOSPC while the export writes its files: exit 2 naming the file it was writing; nothing of the new
+    export is left (half the tables were, and the message named no file), an earlier export is kept whole."""
+    import errno
+
+    import meshio
+    import pandas as pd
+
+    _, store = analysed
+    folder = tmp_path / "export"
+    assert main(["export", str(store), fmt, str(folder), "-q"]) == 0
+    before = tree(folder)
+    calls = []
+    real = pd.DataFrame.to_csv if fmt == "--csv" else meshio.write
+
+    def full(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == failing:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(*((pd.DataFrame, "to_csv") if fmt == "--csv" else (meshio, "write")), full)
+    for target in (folder, tmp_path / "new"):
+        calls.clear()
+        assert main(["export", str(store), fmt, str(target), "-q"]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith(f"demsplit: error: {target}/") and "No space left on device" in err
+        assert err.count("\n") == 1
+    assert tree(folder) == before and not (tmp_path / "new").exists()
+
+
+def test_a_refused_run_leaves_nothing_and_the_rerun_it_suggests_works(packing, tmp_path, capsys):
+    """A run refused at a later frame (%g dumps whose positions cannot give the overlaps) kept its earlier
+    frames in a hidden work directory, and the rerun with the option the message suggests was refused as the
+    resumption of an 'interrupted run', naming resume=True."""
+    out = tmp_path / "out.h5"
+    argv = ["run", str(packing / "in.packing"), "--atoms", str(packing / "atoms.txt"), "--contacts",
+            str(packing / "pairs.txt"), "--walls", str(packing / "wall.txt"), "-o", str(out), "-q"]
+    assert main(argv) == 2
+    assert "--force-positions" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["packing"]
+    assert main([*argv, "--force-positions"]) == 0
+
+
+def test_an_interrupted_run_is_told_to_resume_with_the_cli_option(tmp_path, capsys):
+    """Only an interruption keeps frames; its message names the command-line option, not Python's resume=True."""
+    from demsplit.results.writer import ResultWriter
+    from result_frames import PROVENANCE, WALLS_META, synthetic_frame
+
+    out = tmp_path / "out.h5"
+    writer = ResultWriter(out, PROVENANCE, walls_meta=WALLS_META)
+    writer.append(synthetic_frame(0))
+    writer.abandon()  # what Ctrl-C leaves
+    assert main(["run", str(SAMPLES / "yade" / "mindlin_box.h5"), "-o", str(out), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "an interrupted run left its finished frames" in err and "--resume" in err and "resume=True" not in err
+
+
+def test_warnings_obey_quiet(tmp_path):
+    """A library's warning (matplotlib's on a frame without energy) reached stderr under -q."""
+    import subprocess
+    import sys
+
+    from demsplit.results.writer import ResultWriter
+    from result_frames import PROVENANCE, WALLS_META, synthetic_frame
+
+    store = tmp_path / "empty.h5"
+    with ResultWriter(store, PROVENANCE, walls_meta=WALLS_META) as w:
+        w.append(synthetic_frame(0, n_pairs=0, n_wall_contacts=0))
+    argv = [sys.executable, "-m", "demsplit.cli", "report", str(store), "-o", str(tmp_path / "r.html")]
+    quiet = subprocess.run([*argv, "-q"], capture_output=True, text=True, timeout=300)
+    assert quiet.returncode == 0 and quiet.stdout == "" and quiet.stderr == ""
+    loud = subprocess.run(argv, capture_output=True, text=True, timeout=300)
+    assert loud.returncode == 0 and "Warning" in loud.stderr  # shown without -q

@@ -108,7 +108,7 @@ def test_every_readme_command_runs_on_the_samples(scratch):
             failures.append(f"{line}: exit {proc.returncode}: {proc.stderr.strip()[-500:]}")
     assert not failures, "\n".join(failures)
     assert (scratch / "report.html").stat().st_size > 100_000 and (scratch / "packing.h5").exists()
-    assert (scratch / "results" / "packing.h5").exists() and (scratch / "tables" / "units.csv").exists()
+    assert (scratch / "results" / "packing.h5").exists() and (scratch / "csv" / "units.csv").exists()
 
 
 @pytest.mark.slow

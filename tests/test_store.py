@@ -592,3 +592,86 @@ def test_unknown_frame_values_are_stored_as_the_documented_sentinel(tmp_path, ru
         assert np.all(h5["frames/overlap_max_rel_error"][()] == UNKNOWN) and np.all(h5["frames/time"][()] > 0)
         h5["frames/overlap_max_rel_error"][...] = np.nan  # as stores written before the sentinel hold it
     assert np.all(load_results(tmp_path / "yade.h5").frames["overlap_max_rel_error"] == UNKNOWN)
+
+
+# --- a store is an input too: checked before any value is used -----------------------------------------------
+
+@pytest.fixture(scope="module")
+def clean_store(tmp_path_factory):
+    """A store of the YADE sample, written once."""
+    from demsplit.cli import main
+
+    path = tmp_path_factory.mktemp("clean") / "store.h5"
+    assert main(["run", str(Path(__file__).parent.parent / "sample_dumps" / "yade" / "mindlin_box.h5"), "-o",
+                 str(path), "-q"]) == 0
+    return path
+
+
+def _replace(h5, name: str, **dataset) -> None:
+    del h5[name]
+    h5.create_dataset(name, **dataset)
+
+
+def _damage(h5, how: str, secret: Path) -> None:
+    n = h5["particles/u"].shape[0]
+    if how == "string column":
+        _replace(h5, "particles/u", data=np.array([b"1.0"] * n))
+    elif how == "compound column":
+        _replace(h5, "particles/u", data=np.zeros(n, dtype=[("a", "f8"), ("b", "i4")]))
+    elif how == "huge declared shape":  # every particle column 2^40 rows long, none of them stored
+        rows = 1 << 40
+        h5["index/particles"][-1] = rows
+        for col in json.loads(h5["particles"].attrs["columns"]):
+            h5["particles"][col].resize((rows,))
+    elif how == "soft-link loop":
+        del h5["particles/u"]
+        h5["particles/u"] = h5py.SoftLink("/particles/u")
+    elif how in ("nan", "inf"):
+        u = h5["particles/u"][()]
+        u[3] = np.nan if how == "nan" else np.inf
+        h5["particles/u"][...] = u
+    elif how == "external storage":
+        secret.write_bytes(np.full(n, 7.0).tobytes())
+        _replace(h5, "particles/u", shape=(n,), dtype="f8", external=[(str(secret), 0, 8 * n)])
+    elif how == "a step twice":
+        steps = h5["index/step"][()]
+        steps[-1] = steps[0]
+        h5["index/step"][...] = steps
+    elif how == "a particle twice":
+        ids = h5["particles/id"][()]
+        ids[1] = ids[0]
+        h5["particles/id"][...] = ids
+    elif how == "a short column":
+        u = h5["particles/u"][()]
+        _replace(h5, "particles/u", data=u[:-1], chunks=True, maxshape=(None,))
+    elif how == "provenance of another shape":
+        h5.attrs["provenance"] = json.dumps({"inputs": 5, "notes": "x"})
+
+
+VALUES = ("nan", "inf", "a particle twice")
+"""Damage of the values, which info (the layout) does not read."""
+DAMAGE = ["string column", "compound column", "huge declared shape", "soft-link loop", "nan", "inf",
+          "external storage", "a step twice", "a particle twice", "a short column", "provenance of another shape"]
+
+
+@pytest.mark.parametrize("how, command", [(how, command) for how in DAMAGE for command in (
+    ["report"], ["export", "--csv", "{tmp}/csv"], ["info"]) if command != ["info"] or how not in VALUES])
+def test_a_damaged_store_is_one_refusal_naming_it(clean_store, tmp_path, capsys, how, command):
+    """report, export and info read a store as an input: a column of strings or records, a declared shape
+    the file does not hold, a soft-link loop (exit 3), NaN or inf (printed, exit 0), a column stored in
+    another file (its bytes printed, exit 0), a frame or a particle listed twice, a column shorter than the
+    index: exit 2, one line naming the store and what is wrong, nothing printed or written (info checks
+    the layout it describes, not the values)."""
+    import shutil
+
+    from demsplit.cli import main
+
+    store = tmp_path / "store.h5"
+    shutil.copy(clean_store, store)
+    with h5py.File(store, "a") as h5:
+        _damage(h5, how, tmp_path / "secret.bin")
+    argv = [command[0], str(store), *(a.format(tmp=tmp_path) for a in command[1:]), "-q"]
+    assert main(argv) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.startswith(f"demsplit: error: {store}: ") and err.count("\n") == 1, err
+    assert not (tmp_path / "csv").exists()

@@ -24,13 +24,13 @@ import html
 import io
 import json
 import math
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from ..outputs import atomic_path
+from ..outputs import REPORT, REPORT_GENERATOR, check_output_path, write_output
 from ..errors import StoreError
 from .aggregate import elastic_columns
 from .schema import UNBOUNDED, UNITS, known
@@ -889,9 +889,13 @@ def _shown_path(text: str) -> str:
 
 
 def write_html(results: Results, path: str | Path, step: int | None = None,
-               names: Mapping[int, str] | None = None) -> Path:
+               names: Mapping[int, str] | None = None, *, inputs: Iterable[str | Path] = (),
+               overwrite: bool = False) -> Path:
     """Write the HTML report of frame ``step`` (default: the last) and the per-frame series to ``path``
-    (atomically: ``path.tmp``, then renamed); ``names``: material names of types (:meth:`Results.type_names`)."""
+    (atomically: ``path.tmp``, then renamed); ``names``: material names of types (:meth:`Results.type_names`).
+    ``path`` is never one of ``inputs``, nor an existing file that is not a demsplit report unless
+    ``overwrite`` (:mod:`demsplit.outputs`): checked before the page is made, and again when it is written."""
+    check_output_path(path, inputs, kind=REPORT, overwrite=overwrite)
     import matplotlib
 
     matplotlib.use("Agg")
@@ -954,9 +958,6 @@ def write_html(results: Results, path: str | Path, step: int | None = None,
     body += ["<details id='provenance'><summary>Provenance (inputs with their BLAKE3 digest, options, scene, "
              "demsplit version)</summary>",
              f"<pre>{esc(json.dumps(prov, indent=2, sort_keys=True, default=str))}</pre></details>"]
-    page = ("<!DOCTYPE html><html><head><meta charset='utf-8'><title>demsplit report</title>"
+    page = (f"<!DOCTYPE html><html><head><meta charset='utf-8'>{REPORT_GENERATOR}<title>demsplit report</title>"
             f"<style>{_CSS}</style></head><body>{''.join(body)}</body></html>")
-    path = Path(path)
-    with atomic_path(path) as tmp:
-        tmp.write_text(page, encoding="utf-8")
-    return path
+    return write_output(path, page, kind=REPORT, inputs=inputs, overwrite=overwrite)

@@ -59,6 +59,12 @@ _INT64 = ("step", "id", "clump", "n_members", "id1", "id2", "wall", "n_contacts"
 _INT32 = ("type", "not_computed")
 
 
+def canonical_dtype(name: str) -> np.dtype:
+    """The dtype a column named ``name`` is stored in: int64 for steps, ids, wall indices and counts, int32 for
+    types and the not-computed bits, float64 for everything else."""
+    return np.dtype(np.int64 if name in _INT64 else np.int32 if name in _INT32 else np.float64)
+
+
 def canonical_column(name: str, values: np.ndarray, *, table: str = "", step: int | None = None) -> np.ndarray:
     """``values`` as the canonical dtype of column ``name``: int64 for steps,
     ids, wall indices and counts, int32 for types, float64 for everything else.
@@ -67,8 +73,8 @@ def canonical_column(name: str, values: np.ndarray, *, table: str = "", step: in
     ``1.23457e+06`` count is an error, never a silent cast).
     """
     values = np.asarray(values)
-    if name in _INT64 or name in _INT32:
-        dtype = np.int64 if name in _INT64 else np.int32
+    dtype = canonical_dtype(name)
+    if dtype.kind == "i":
         if values.dtype.kind == "f":
             bad = ~np.isfinite(values) | (values != np.round(values))
             if bad.any():
@@ -91,7 +97,7 @@ def canonical_column(name: str, values: np.ndarray, *, table: str = "", step: in
             step=step,
             fix="pass numeric numpy arrays for every result column.",
         )
-    return values.astype(np.float64, copy=False)
+    return values.astype(dtype, copy=False)
 
 
 def canonical_table(name: str, table: Mapping[str, np.ndarray], *, step: int | None = None) -> Table:

@@ -22,14 +22,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import StoreError, system_error
+from ..errors import DemsplitError, StoreError, system_error
 from ..fingerprint import DIGEST, file_fingerprint
 from ..outputs import check_output_path, publish, write_atomic
 from ..runtime import threads
 from ..runtime.writeback import WriteBack
 from .chunks import CHUNK_ROWS, COMPRESSION, COMPRESSIONS, TableSink, choose_filters, chunk_rows
 from .schema import TABLES, UNKNOWN, UNKNOWN_COLUMNS, Table, canonical_table
-from .store import FORMAT, FORMAT_VERSION, demsplit_version, to_json, work_dir_of
+from .store import FORMAT, FORMAT_VERSION, STORE, demsplit_version, to_json, work_dir_of
 
 LIBVER = ("v110", "v110")
 """HDF5 file-format bounds: the 1.10 format (which SWMR needs), readable by
@@ -59,14 +59,15 @@ def resume_identity(provenance: Mapping) -> dict:
     return json.loads(to_json(ident, "provenance"))
 
 
-def check_output(path: str | Path, *, resume: bool = False) -> None:
+def check_output(path: str | Path, *, resume: bool = False, overwrite: bool = False, inputs=()) -> None:
     """Raise :class:`StoreError` when a store cannot be started at ``path``: it is not a
-    writable output (:func:`demsplit.outputs.check_output_path`: empty, a directory, a device, in a
-    missing directory), another live process writes it, or an interrupted run's committed frames are
-    there and ``resume`` is false (they are never silently discarded). A work directory that holds no
-    committed frame (a run killed before its first commit, or after its store was complete, or whose
-    first commit failed) is a leftover with nothing to resume: it is removed."""
-    path = check_output_path(path)
+    writable output for a store (:func:`demsplit.outputs.check_output_path`: empty, a directory, a device, in a
+    missing directory, one of ``inputs``, an existing file that is not a result store, unless ``overwrite``),
+    another live process writes it, or an interrupted run's committed frames are there and ``resume`` is false
+    (they are never silently discarded). A work directory that holds no committed frame (a run killed before its first
+    commit, or after its store was complete, or whose first commit failed) is a leftover with nothing to
+    resume: it is removed."""
+    path = check_output_path(path, inputs, kind=STORE, overwrite=overwrite)
     work = work_dir_of(path)
     writer = _live_writer(work)
     if writer:
@@ -76,7 +77,8 @@ def check_output(path: str | Path, *, resume: bool = False) -> None:
         shutil.rmtree(work, ignore_errors=True)
     if work.exists() and not resume:
         raise StoreError(f"an interrupted run left its finished frames in {work}.", file=path,
-                         fix=f"resume it (resume=True, demsplit run --resume), or delete {work} to start over.")
+                         fix=f"continue it: run the same command again with --resume; or delete {work} to "
+                             "start over.")
 
 
 def _resumable(work: Path) -> bool:
@@ -113,7 +115,10 @@ class ResultWriter:
     table counts as empty, and a table absent from the first frame stays
     empty). Frames are stored in step order; frames appended out of step order
     cost one more copy of the store at ``close()``. Leaving the ``with`` block
-    by an exception keeps the frames written so far and writes no store.
+    by an exception writes no store: an interruption (Ctrl-C, SIGTERM, an error of the system such as a
+    full disk) keeps the frames committed so far for ``--resume``; a refusal of the run (any other
+    :class:`~demsplit.errors.DemsplitError`: a bad frame, a bad input) leaves nothing, so that the next run
+    is not taken for the continuation of an interrupted one.
     Entries added to ``writer.provenance`` before ``close()`` (skipped frames,
     notes) are stored. ``compression`` is one of :data:`COMPRESSIONS`
     (``None`` means ``"none"``).
@@ -132,7 +137,7 @@ class ResultWriter:
 
     def __init__(self, path: str | Path, provenance: Mapping, *, resume: bool = False,
                  walls_meta: list[dict] | None = None, compression: str | None = COMPRESSION,
-                 final_step: int | None = None) -> None:
+                 final_step: int | None = None, overwrite: bool = False) -> None:
         self.path = Path(path)
         self.final_step = final_step
         self._final_frame = False  # the frame being appended is the one at final_step
@@ -142,7 +147,7 @@ class ResultWriter:
         if self.compression not in COMPRESSIONS:
             raise StoreError(f"unknown compression {compression!r}; expected one of {list(COMPRESSIONS)}.",
                              file=self.path, fix="pick one of " + ", ".join(COMPRESSIONS) + ".")
-        check_output(self.path, resume=resume)
+        check_output(self.path, resume=resume, overwrite=overwrite)
         self.work_dir = work_dir_of(self.path)
         self._store = self.work_dir / _STORE
         self._h5 = None  # the store being written, in SWMR mode, from the first frame on
@@ -270,8 +275,19 @@ class ResultWriter:
     def __exit__(self, exc_type, exc, tb) -> None:
         if exc_type is None:
             self.close()
+        elif isinstance(exc, DemsplitError) and not isinstance(exc.__cause__, OSError):
+            self.discard()  # refused: nothing to resume
         else:
             self.abandon()
+
+    def discard(self) -> None:
+        """Stop without writing the store and remove the work directory, committed frames included: the
+        run was refused, and a rerun (with other options, say) must not be taken for its continuation."""
+        if not self._closed:
+            self._closed = True
+            self._write_back.stop()
+            self._release(quiet=True)
+            shutil.rmtree(self.work_dir, ignore_errors=True)
 
     def abandon(self) -> None:
         """Stop without writing the store; the committed frames stay for a

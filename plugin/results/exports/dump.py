@@ -13,25 +13,45 @@ the particles' extent (centres +- radius), non-periodic.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
 
-from ...outputs import atomic_path, check_output_path
+from ...outputs import OutputKind, atomic_path, check_output_path, output_errors
 from ..tables import Results
 
 LEADING = ("id", "type", "x", "y", "z", "radius")
 """The columns every frame starts with, in OVITO's and LAMMPS' names."""
+_ATOMS = re.compile(rb"\AITEM: TIMESTEP\n.*?^ITEM: ATOMS " + " ".join(LEADING).encode() + rb" [^\n]*\bnot_computed\b",
+                    re.DOTALL | re.MULTILINE)
 
 
-def export_dump(results: Results, path: str | Path, inputs: Iterable[str | Path] = ()) -> Path:
-    """Write the per-particle table of every frame of ``results`` to the dump ``path`` (module docstring)."""
-    path = check_output_path(path, inputs)
+def _is_export(path: Path) -> bool:
+    """Whether ``path`` starts like a dump :func:`export_dump` wrote: a frame whose columns are demsplit's
+    (``id type x y z radius`` first, ``not_computed`` among them, which no simulator writes)."""
+    try:
+        with open(path, "rb") as f:
+            return _ATOMS.match(f.read(4096)) is not None
+    except OSError:
+        return False
+
+
+DUMP = OutputKind("per-particle dump written by demsplit export", _is_export)
+"""The output kind of ``export --dump``: an existing file is replaced only when it is one."""
+
+
+def export_dump(results: Results, path: str | Path, inputs: Iterable[str | Path] = (), *,
+                overwrite: bool = False) -> Path:
+    """Write the per-particle table of every frame of ``results`` to the dump ``path`` (module docstring).
+    ``inputs`` are never written over, nor an existing file that is not such a dump unless ``overwrite``
+    (:mod:`demsplit.outputs`)."""
+    path = check_output_path(path, inputs, kind=DUMP, overwrite=overwrite)
     df = results.particles
     columns = [*LEADING, *(c for c in df.columns if c not in (*LEADING, "step"))]
     integer = [df[c].dtype.kind in "iu" for c in columns]
-    with atomic_path(path) as tmp, open(tmp, "w") as f:
+    with output_errors(path), atomic_path(path) as tmp, open(tmp, "w") as f:
         for step, frame in df.groupby("step", sort=False):
             x = frame[["x", "y", "z"]].to_numpy()
             r = frame["radius"].to_numpy()[:, None]

@@ -37,7 +37,7 @@ import numpy as np
 import pandas as pd
 
 from ...errors import StoreError
-from ...outputs import atomic_path, check_output_path
+from ...outputs import OutputFolder
 from ..schema import UNITS
 from ..tables import Results
 from .walls import mesh_extent, wall_triangles
@@ -52,11 +52,13 @@ EXTRA_UNITS = {"u": "J"}
 """Units of the arrays the export derives (the contacts' elastic total ``u`` = u1 + u2)."""
 
 
-def export_vtk(results: Results, directory: str | Path, inputs: Iterable[str | Path] = (),
-               progress: bool | None = None, not_drawn: list[str] | None = None) -> list[Path]:
+def export_vtk(results: Results, directory: str | Path, inputs: Iterable[str | Path] = (), *,
+               overwrite: bool = False, progress: bool | None = None, not_drawn: list[str] | None = None) -> list[Path]:
     """Write the VTK series of ``results`` into ``directory`` (module docstring); return the files written.
-    No file is written over one of ``inputs``. ``progress``: a bar on stderr (None: when it is a terminal);
-    ``not_drawn``: filled with the walls left out of the walls series, and why, once each."""
+    The files are written together, all or none, into a new or empty folder or over an earlier VTK export,
+    whose series is replaced whole; never over one of ``inputs`` (:class:`demsplit.outputs.OutputFolder`;
+    ``overwrite``: into a folder holding other files too). ``progress``: a bar on stderr (None: when it is a
+    terminal); ``not_drawn``: filled with the walls left out of the walls series, and why, once each."""
     try:
         import meshio
     except ImportError:
@@ -64,18 +66,13 @@ def export_vtk(results: Results, directory: str | Path, inputs: Iterable[str | P
                          fix="pip install 'demsplit[vtk]'.") from None
     from tqdm import tqdm
 
-    directory = Path(directory)
-    if directory.exists() and not directory.is_dir():
-        raise StoreError("the export directory is a file.", file=directory, fix="give a directory name.")
-    directory.mkdir(parents=True, exist_ok=True)
     steps = [int(s) for s in results.steps]
     walls = list((results.provenance.get("scene") or {}).get("walls") or [])
     series = [name for name in SERIES if name == "particles" or (name == "contacts" and not results.contacts.empty)
               or (name == "walls" and walls)]
-    plan = {name: [(step, directory / f"{name}_{step:012d}.vtu") for step in steps] for name in series}
-    for name, files in plan.items():  # every path checked before anything is written
-        for _, path in [*files, (None, directory / f"{name}.pvd")]:
-            check_output_path(path, inputs)
+    plan = {name: [(step, f"{name}_{step:012d}.vtu") for step in steps] for name in series}
+    files = [f for name, frames in plan.items() for f in [*dict(frames).values(), f"{name}.pvd"]]
+    folder = OutputFolder(directory, files, inputs, kind="vtk", overwrite=overwrite)
     names = _material_field_data(results.type_names())
     by_step = {name: dict(tuple(getattr(results, name).groupby("step", sort=False)))
                for name in ("particles", "contacts", "walls")}
@@ -83,39 +80,41 @@ def export_vtk(results: Results, directory: str | Path, inputs: Iterable[str | P
     meshes: dict[str, np.ndarray] = {}
     extent = mesh_extent(walls, meshes)
     written = []
-    show = sys.stderr.isatty() if progress is None else progress
-    for step in tqdm(steps, unit="frame", desc="demsplit export --vtk", disable=not show):
-        tables = {name: by_step[name].get(step, _empty(getattr(results, name))) for name in by_step}
-        box = _box(frames.loc[step] if step in frames.index else None, tables["particles"], extent)
+    with folder:
+        show = sys.stderr.isatty() if progress is None else progress
+        for step in tqdm(steps, unit="frame", desc="demsplit export --vtk", disable=not show):
+            tables = {name: by_step[name].get(step, _empty(getattr(results, name))) for name in by_step}
+            box = _box(frames.loc[step] if step in frames.index else None, tables["particles"], extent)
+            for name in series:
+                if name == "particles":
+                    points, cells, data, where, left_out = _particles(tables["particles"])
+                elif name == "contacts":
+                    points, cells, data, where, left_out = _contacts(tables["contacts"], tables["particles"], box, step)
+                else:
+                    points, cells, data, where, left_out = _walls(tables["walls"], walls, box, meshes)
+                if not_drawn is not None:
+                    not_drawn += [wall for wall in left_out if wall not in not_drawn]
+                mesh = meshio.Mesh(points, cells, **{f"{where}_data": data if where == "point" else
+                                                     {c: [v] for c, v in data.items()}})
+                written.append(folder.write(dict(plan[name])[step], lambda tmp, m=mesh, d=data: _write_vtu(
+                    meshio, tmp, m, d, names)))
         for name in series:
-            if name == "particles":
-                points, cells, data, where, left_out = _particles(tables["particles"])
-            elif name == "contacts":
-                points, cells, data, where, left_out = _contacts(tables["contacts"], tables["particles"], box, step)
-            else:
-                points, cells, data, where, left_out = _walls(tables["walls"], walls, box, meshes)
-            if not_drawn is not None:
-                not_drawn += [wall for wall in left_out if wall not in not_drawn]
-            mesh = meshio.Mesh(points, cells, **{f"{where}_data": data if where == "point" else
-                                                 {c: [v] for c, v in data.items()}})
-            path = dict(plan[name])[step]
-            with atomic_path(path) as tmp:
-                meshio.write(tmp, mesh, file_format="vtu", binary=True, compression=None)
-                text = _with_units(tmp.read_bytes(), data)
-                if names:
-                    grid = b"<UnstructuredGrid>"
-                    text = text.replace(grid, grid + b"<FieldData>" + names + b"</FieldData>", 1)
-                tmp.write_bytes(text)
-            written.append(path)
-    for name in series:
-        rows = "\n".join(f'    <DataSet timestep="{step}" part="0" file={quoteattr(path.name)}/>'
-                         for step, path in plan[name])
-        pvd = directory / f"{name}.pvd"
-        with atomic_path(pvd) as tmp:
-            tmp.write_text('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n  <Collection>\n'
-                           f"{rows}\n  </Collection>\n</VTKFile>\n")
-        written.append(pvd)
+            rows = "\n".join(f'    <DataSet timestep="{step}" part="0" file={quoteattr(file)}/>'
+                             for step, file in plan[name])
+            text = ('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n  <Collection>\n'
+                    f"{rows}\n  </Collection>\n</VTKFile>\n")
+            written.append(folder.write(f"{name}.pvd", lambda tmp, t=text: tmp.write_text(t)))
     return written
+
+
+def _write_vtu(meshio, tmp: Path, mesh, data: Mapping[str, np.ndarray], names: bytes) -> None:
+    """One frame's ``.vtu`` at ``tmp``: meshio's file with each array's unit and the material names' field data."""
+    meshio.write(tmp, mesh, file_format="vtu", binary=True, compression=None)
+    text = _with_units(tmp.read_bytes(), data)
+    if names:
+        grid = b"<UnstructuredGrid>"
+        text = text.replace(grid, grid + b"<FieldData>" + names + b"</FieldData>", 1)
+    tmp.write_bytes(text)
 
 
 def _empty(table: pd.DataFrame) -> pd.DataFrame:
