@@ -94,7 +94,8 @@ def convert_run(input: str | Path, output: str | Path, **reader_options) -> Path
                     g.attrs["error"] = json.dumps({"class": type(exc).__name__, "message": exc.message,
                                                    "file": exc.file, "step": exc.step, "line": exc.line,
                                                    "fix": exc.fix})
-                    steps.append(exc.step if exc.step is not None else int(run.steps[k]))
+                    steps.append(exc.step if exc.step is not None else int(run.steps[k]) if k < len(run.steps)
+                                 else None)  # a damaged frame past the readable ones: its step is not known
                     continue
                 _write_frame(g, frame)
                 steps.append(frame.step)
@@ -179,7 +180,9 @@ class CacheRun(Run):
             self._h5.close()
             raise
         self.scene = scene_from_dict(json.loads(attrs["scene"]))
-        self.steps = np.asarray(attrs["steps"], dtype=np.int64)
+        steps = np.asarray(attrs["steps"], dtype=np.int64)
+        self._n_frames = len(steps)
+        self.steps = steps[:len(steps) - int(np.argmax(steps[::-1] >= 0)) if (steps >= 0).any() else 0]
         self.sources = [self.path] + json.loads(attrs["sources"])
         self.notes = []
         self._describe = json.loads(attrs["describe"])
@@ -187,7 +190,7 @@ class CacheRun(Run):
         self._fd = os.open(path, os.O_RDONLY)
 
     def __len__(self) -> int:
-        return len(self.steps)
+        return self._n_frames  # the damaged frames past ``steps`` (stored with step -1) included
 
     def frame(self, k: int) -> Frame:
         """Frame ``k`` exactly as the original reader built it."""

@@ -23,7 +23,9 @@ import demsplit
 import pytest
 from conftest import require_program
 from demsplit.cli import main
+from demsplit.errors import InputFormatError
 from demsplit.physics.shares import normal_share
+from demsplit.readers import open_run
 from demsplit.readers.yade_snapshot import _open_store
 from demsplit.readers.yade_state import cache_key, convert_states, state_files
 from demsplit.results.report import write_html
@@ -126,8 +128,8 @@ def test_an_iteration_given_twice(sims, tmp_path, capsys):
 def test_a_bad_file_among_the_states_is_refused_by_name_or_skipped_and_listed(sims, tmp_path, capsys):
     """In a glob of states: an empty file, a gzip stream cut in half and a gzip of text, all named like states, and
     an XML state cut in half that YADE fails to load: the run is refused naming the first, or with --on-bad-frame
-    skip each is left out and listed with why; a file not named like a state (notes.txt) is not one. An empty
-    state given alone is said to be one."""
+    skip each is left out and listed with why (an ingest cache keeps them as frames that raise it); a file not
+    named like a state (notes.txt) is not one. An empty state given alone is said to be one."""
     d = tmp_path / "states"
     d.mkdir()
     for name in ("facets-003000.yade.gz", "facets-006000.yade.gz"):
@@ -141,6 +143,12 @@ def test_a_bad_file_among_the_states_is_refused_by_name_or_skipped_and_listed(si
     err = one_error(capsys)
     assert err.startswith(f"demsplit: error: {d / 'facets-007000.yade.gz'}: the file is empty")
     assert list((tmp_path / "a").iterdir()) == []
+    ingest = tmp_path / "ingest.h5"  # the ingest cache keeps the bad states as frames that raise their error
+    assert main(["convert", str(d / "facets-*"), "-o", str(ingest), "-q", "--state-cache", str(sims / "cache")]) == 0
+    with open_run(ingest) as cached:
+        assert len(cached) == 5 and cached.steps.tolist() == [3000, 6000]
+        with pytest.raises(InputFormatError, match="facets-007000.yade.gz: the file is empty"):
+            cached.frame(2)
     text = bz2.decompress((sims / "again-006000.xml.bz2").read_bytes())
     (d / "facets-011000.xml").write_bytes(text[: len(text) // 2])
     assert run(sims, tmp_path / "b", d, extra=("--on-bad-frame", "skip")) == 0
