@@ -102,7 +102,7 @@ try:
     with open(os.environ["DEMSPLIT_STATES"]) as f:
         pairs = json.load(f)
 except BaseException as exc:
-    say("BROKEN", json.dumps("%s: %s" % (type(exc).__name__, exc)))
+    say("BROKEN", " ".join(("%s: %s" % (type(exc).__name__, exc)).split()))
     os._exit(1)
 for k, (src, dst) in enumerate(pairs):
     say("START", k)
@@ -111,7 +111,7 @@ for k, (src, dst) in enumerate(pairs):
         meta, tables = demsplit.yade.collect(loaded=True)  # as saved: nothing runs
         demsplit.yade.write_snapshot(dst, meta, tables, format="npy")
     except BaseException as exc:
-        say("FAILED", k, json.dumps("%s: %s" % (type(exc).__name__, exc)))
+        say("FAILED", k, " ".join(("%s: %s" % (type(exc).__name__, exc)).split()))
     else:
         say("CONVERTED", k)
 os._exit(0)
@@ -403,18 +403,19 @@ def _run_converter(build: str, script: Path, pairs: list[tuple[str, str]],
                 rest = rest[-(1 << 16):]
                 for line in (raw.decode("utf-8", "replace") for raw in lines):
                     word, _, arg = line.partition(" ")
-                    if word == "DEMSPLIT-START":
-                        current, deadline = int(arg), time.monotonic() + timeout
-                    elif word == "DEMSPLIT-CONVERTED":
-                        done[int(arg)], current = None, None
+                    index, _, text = arg.partition(" ")
+                    k = int(index) if index.isdigit() and int(index) < len(pairs) else None
+                    if word == "DEMSPLIT-START" and k is not None:
+                        current, deadline = k, time.monotonic() + timeout
+                    elif word == "DEMSPLIT-CONVERTED" and k is not None:
+                        done[k], current = None, None
                         if show:
                             sys.stderr.write(f"demsplit: {build} converted state {len(done)}/{len(pairs)}: "
-                                             f"{pairs[int(arg)][0]}\n")
-                    elif word == "DEMSPLIT-FAILED":
-                        k, _, text = arg.partition(" ")
-                        done[int(k)], current = " ".join(json.loads(text).split())[:300], None
+                                             f"{pairs[k][0]}\n")
+                    elif word == "DEMSPLIT-FAILED" and k is not None:
+                        done[k], current = " ".join(text.split())[:300], None
                     elif word == "DEMSPLIT-BROKEN":
-                        broken = " ".join(json.loads(arg).split())[:300]
+                        broken = " ".join(arg.split())[:300]
                     elif line.strip():
                         tail = [*tail[-4:], " ".join(line.split())[:200]]
     finally:
@@ -550,11 +551,12 @@ class Simulation:
                     f"{_body(self.bodies, old, before)} in {earlier}: the states are of two simulations.",
                     file=state, step=int(meta["iter"]), fix=fix)
             new = ~shared
-            merged = {c: np.concatenate([self.bodies[c], columns[c][new]]) for c in columns}
-            first = np.concatenate([self.first, np.full(int(new.sum()), k)])
-            order = np.argsort(merged["id"], kind="stable")
-            self.bodies = {c: v[order] for c, v in merged.items()}
-            self.first = first[order]
+            if new.any():  # bodies added since the earlier states
+                merged = {c: np.concatenate([self.bodies[c], columns[c][new]]) for c in columns}
+                first = np.concatenate([self.first, np.full(int(new.sum()), k)])
+                order = np.argsort(merged["id"], kind="stable")
+                self.bodies = {c: v[order] for c, v in merged.items()}
+                self.first = first[order]
         else:
             order = np.argsort(ids, kind="stable")
             self.bodies = {c: v[order] for c, v in columns.items()}
