@@ -83,9 +83,9 @@ DEFAULT_TIMEOUT = 900.0
 """Seconds YADE has to load and convert one state (``--yade-timeout``)."""
 FIX_BAD = ("leave it out of the states given, or skip it with --on-bad-frame skip; a state cut short (a full disk, "
            "an interrupted copy) must be saved or copied again.")
-IDENTITY = ("shape_class", "material", "radius", "clump", "wall_axis")
+IDENTITY = ("shape_class", "material", "radius", "wall_axis")
 """What makes a body the same body in two states of one simulation (with its id): its shape, its material, its
-radius (spheres) and its clump."""
+radius (spheres) and a Wall's axis; not its clump (a script may clump bodies, or release them, as it runs)."""
 
 CONVERTER = r'''
 import json, os, site, sys
@@ -490,7 +490,7 @@ def _material(m: dict) -> str:
 
 class Simulation:
     """The union of the states of one simulation, built state by state in iteration order (:meth:`add`): every
-    body any state has (its id and :data:`IDENTITY`, and its position where it first appears), every material
+    body any state has (its id and :data:`IDENTITY`, and its clump and position where it first appears), every material
     (by id), the law and whether the cell is periodic. A state of another simulation is refused (module
     docstring)."""
 
@@ -509,7 +509,7 @@ class Simulation:
         the same simulation."""
         k = len(self.states)
         fix = ("give the states of one simulation (one run of one script): bodies may be added and erased, but a "
-               "body keeps its id, shape, material, radius and clump, and the law, the materials and the periodic "
+               "body keeps its id, shape, material and radius, and the law, the materials and the periodic "
                "cell stay; the states of another simulation are analysed in a run of their own.")
         if self.states and model != self.model:
             raise InputFormatError(f"its contact law ({model.law} {model.params}) is not that of {self.states[0]} "
@@ -530,7 +530,7 @@ class Simulation:
             self.material_from.setdefault(t, k)
         names = {int(m["id"]): str(m.get("label") or m.get("class")) for m in meta["materials"]}
         ids = bodies["id"]
-        columns = {c: bodies[c] for c in ("id", "kind", *IDENTITY, "x", "y", "z")}
+        columns = {c: bodies[c] for c in ("id", "kind", *IDENTITY, "clump", "x", "y", "z")}
         if self.states:
             union = self.bodies["id"]
             at = np.clip(np.searchsorted(union, ids), 0, max(len(union) - 1, 0))
