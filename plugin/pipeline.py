@@ -66,6 +66,9 @@ def process_run(run: Run, options: Options = DEFAULT_OPTIONS, *, jobs: int = 1, 
     wanted = set(steps) if steps is not None else None
     indices = [k for k, s in enumerate(all_steps)
                if (wanted is None or s in wanted) and not (skip_steps and s in skip_steps)]
+    damaged = [k for k in indices if all_steps[k] is None]
+    if damaged and on_bad_frame == "stop":  # known bad at opening: the run is refused before any frame is computed
+        run.frame(damaged[0])  # raises that frame's error
     report.frames_resumed = len(skip_steps or ())
     workers = worker_processes(jobs)
     if workers < jobs and not dask:

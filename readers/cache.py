@@ -99,7 +99,8 @@ def convert_run(input: str | Path, output: str | Path, *, overwrite: bool = Fals
                     g.attrs["error"] = json.dumps({"class": type(exc).__name__, "message": exc.message,
                                                    "file": exc.file, "step": exc.step, "line": exc.line,
                                                    "fix": exc.fix})
-                    steps.append(exc.step if exc.step is not None else int(run.steps[k]))
+                    steps.append(exc.step if exc.step is not None else int(run.steps[k]) if k < len(run.steps)
+                                 else None)  # a damaged frame past the readable ones: its step is not known
                     continue
                 _write_frame(g, frame)
                 steps.append(frame.step)
@@ -203,7 +204,9 @@ class CacheRun(Run):
         steps = attrs.get("steps")
         if not (isinstance(steps, np.ndarray) and steps.ndim == 1 and steps.dtype.kind in "iu"):
             raise self._damaged("its steps attribute is not a list of integers.")
-        self.steps = steps.astype(np.int64)
+        steps = steps.astype(np.int64)
+        self._n_frames = len(steps)  # a damaged frame past the readable ones is stored with step -1
+        self.steps = steps[:len(steps) - int(np.argmax(steps[::-1] >= 0)) if (steps >= 0).any() else 0]
         self.sources = [self.path] + self._json(attrs, "sources", list, str)
         self._describe = self._json(attrs, "describe", dict)
         try:
@@ -214,11 +217,11 @@ class CacheRun(Run):
             raise self._damaged(f"its scene attribute cannot be read ({type(exc).__name__}).") from None
         self.notes = []
         frames = self._h5.get("frames")
-        names = [f"{k:06d}" for k in range(len(self.steps))]
+        names = [f"{k:06d}" for k in range(self._n_frames)]
         if not isinstance(frames, h5py.Group) or sorted(frames) != names or \
                 not all(isinstance(frames[n], h5py.Group) for n in names):
-            raise self._damaged(f"its frames group does not hold one group per frame ({len(self.steps)}).")
-        if attrs.get("n_frames", len(self.steps)) != len(self.steps):
+            raise self._damaged(f"its frames group does not hold one group per frame ({self._n_frames}).")
+        if attrs.get("n_frames", self._n_frames) != self._n_frames:
             raise self._damaged("its n_frames attribute is not the number of its frames.")
         self._frames = frames
 
@@ -234,7 +237,7 @@ class CacheRun(Run):
         return value
 
     def __len__(self) -> int:
-        return len(self.steps)
+        return self._n_frames  # the damaged frames past ``steps`` (stored with step -1) included
 
     def frame(self, k: int) -> Frame:
         """Frame ``k`` exactly as the original reader built it, after the checks the pipeline makes of every
@@ -247,14 +250,18 @@ class CacheRun(Run):
             frame = self._frame(k)
         except H5_FAULTS as exc:  # what h5py raises on damaged metadata or chunks
             raise self._damaged(f"it cannot be read ({type(exc).__name__}: {' '.join(str(exc).split())[:200]}).",
-                                k, int(self.steps[k])) from None
+                                k, self._step(k)) from None
         self._check(frame, k)
         return frame
+
+    def _step(self, k: int) -> int | None:
+        """Frame ``k``'s step; None for a damaged frame past the readable ones."""
+        return int(self.steps[k]) if k < len(self.steps) else None
 
     def _frame(self, k: int) -> Frame:
         g = self._frames[f"{k:06d}"]
         a = g.attrs
-        step = int(self.steps[k])
+        step = self._step(k)
         if "error" in a:
             raise self._error(self._json(a, "error", dict, k=k), k)
         try:
@@ -337,7 +344,7 @@ class CacheRun(Run):
         fields = {"file": str, "step": int, "line": int, "fix": str}
         if not (isinstance(cls, type) and issubclass(cls, DemsplitError) and isinstance(e.get("message"), str)
                 and all(e.get(f) is None or isinstance(e.get(f), t) for f, t in fields.items())):
-            raise self._damaged("its stored error is not one demsplit wrote.", k, int(self.steps[k]))
+            raise self._damaged("its stored error is not one demsplit wrote.", k, self._step(k))
         return cls(e["message"], **{f: e.get(f) for f in fields})
 
     def describe(self) -> dict:

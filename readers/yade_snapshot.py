@@ -296,6 +296,21 @@ def _open_store(path: Path):
     return _Hdf5Store(path) if fmt == "hdf5" else _NpyStore(path)
 
 
+def raw_snapshot(path: Path, k: int = 0) -> RawSnapshot:
+    """Snapshot ``k`` of a snapshot file as checked metadata and typed tables, without building its scene: what
+    can be described of a snapshot whose law or materials demsplit does not analyse (``demsplit info``)."""
+    store = _open_store(path)
+    try:
+        problem = store.problem(k) if k < len(store) else f"the file holds no snapshot {k}"
+        if problem:
+            raise InputFormatError(f"{problem}.", file=path, fix=FIX_DAMAGED)
+        meta, tables = store.snapshot(k)
+        meta = checked_meta(meta, path=path, k=k)
+        return meta, checked_tables(tables, meta, path=path, k=k)
+    finally:
+        store.close()
+
+
 # --------------------------------------------------------------------------
 # Scene and frames
 # --------------------------------------------------------------------------
@@ -776,7 +791,7 @@ class YadeSnapshotRun(Run):
         if len(self._store) == 0:
             raise InputFormatError("the snapshot file holds no snapshot.", file=self.path,
                                    fix="run the simulation until the snapshot PyRunner has fired.")
-        meta, tables = self._read(0)
+        meta, tables = self.read(0)
         if int(meta.get("format_version", 0)) > FORMAT_VERSION:
             raise InputFormatError(
                 f"snapshot format version {meta['format_version']} is newer than this reader ({FORMAT_VERSION}).",
@@ -818,7 +833,8 @@ class YadeSnapshotRun(Run):
                 file=self.path, fix="rerun or resume the simulation to rewrite the snapshot file; "
                 "the complete snapshots before it are read normally.")
 
-    def _read(self, k: int) -> RawSnapshot:
+    def read(self, k: int) -> RawSnapshot:
+        """Snapshot ``k`` as checked metadata and typed tables (:func:`checked_meta`, :func:`checked_tables`)."""
         self._check(k)
         meta, tables = self._store.snapshot(k)
         meta = checked_meta(meta, path=self.path, k=k)
@@ -830,7 +846,7 @@ class YadeSnapshotRun(Run):
         return checked_meta(self._store.meta(k), path=self.path, k=k)
 
     def frame(self, k: int) -> Frame:
-        return self._frame(*self._read(k))[0]
+        return self._frame(*self.read(k))[0]
 
     def _frame(self, meta: dict, tables: dict[str, Table]) -> tuple[Frame, np.ndarray]:
         ids = tables["bodies"]["id"][np.isin(_text(tables["bodies"]["kind"]), list(WALL_KINDS))]
@@ -845,7 +861,7 @@ class YadeSnapshotRun(Run):
     def depth_text(self, k: int) -> np.ndarray | None:
         """penetrationDepth of the contacts of frame ``k`` as decimal strings at
         the build's full precision (high-precision builds only, else None)."""
-        meta, tables = self._read(k)
+        meta, tables = self.read(k)
         if "depth_text" not in tables["interactions"]:
             return None
         _, rows = self._frame(meta, tables)

@@ -23,6 +23,12 @@ defect, in one of these families:
     row, the metadata or the snapshot list changed and the file rewritten
     valid (checksums and all); HDF5 links, external storage and virtual
     datasets.
+``yade_states`` (run only when named: ``--families yade_states``)
+    YADE saved states of ``sample_dumps/yade/simulations.py`` (YADE runs it once per session): a state's bytes
+    damaged (cut, flipped, garbage appended, the gzip stream twice), its boost archive damaged inside a valid
+    gzip stream, a token of an XML state replaced, an empty or a foreign file named like a state, a state of
+    another simulation, a changed or an identical copy of a state, an entry of the converted-state cache
+    damaged, odd YADE options. Each input may start YADE (seconds): a few hundred make a run.
 ``output_path``
     ``-o`` onto an input of the run (its script, any of its dumps, its STL, a
     YADE snapshot, a store for ``report``/``export``) by name, symbolic link,
@@ -94,8 +100,20 @@ YADE = SAMPLES / "yade"
 
 FAMILIES = ("liggghts_text", "liggghts_binary", "compressed", "script", "yade_npys", "yade_h5", "output_path", "store",
             "cache", "export", "prepare")
+NAMED_FAMILIES = ("yade_states",)
+"""Families run only when named (``--families``): each input of ``yade_states`` may start YADE."""
 TIME_LIMIT = 30.0
 """Seconds one input may take (the samples take 0.03-0.2 s)."""
+TIME_LIMITS = {"yade_states": 120.0}
+"""Seconds one input of these families may take: a YADE conversion or two (YADE's builds in turn), each given
+STATE_TIMEOUT s."""
+STATE_TIMEOUT = "20"
+"""``--yade-timeout`` of the ``yade_states`` inputs: a YADE that hangs on a damaged state is killed well before
+the input's time limit."""
+STATE_KINDS = ("bytes", "bytes", "archive", "archive", "xml", "xml", "xml", "not_a_state", "other", "cache",
+               "options")
+FOREIGN = (b"", b"ITEM: TIMESTEP\n0\n", b"\x00" * 64, b"serialization::archive", b"<!DOCTYPE boost_serialization>",
+           b"<?xml version='1.0'?>\n<html/>\n", bytes(range(256)) * 8)
 MEMORY_LIMIT = 6 << 30
 """Address space of a worker child (RLIMIT_AS), bytes: the samples need well under 1 GB of memory, but the
 numba/LLVM runtime and the thread stacks reserve address space they never touch."""
@@ -163,9 +181,12 @@ def make_run(directory: Path) -> Path:
     return directory / "in.packing"
 
 
-def make_bases(root: Path) -> Path:
-    """Every family's base files under ``root/base`` (made once per fuzz session)."""
+def make_bases(root: Path, families: tuple[str, ...] = FAMILIES) -> Path:
+    """Every family's base files under ``root/base`` (made once per fuzz session; the saved states only for
+    ``yade_states``)."""
     base = root / "base"
+    if "yade_states" in families:
+        state_bases(base)
     if (base / "done").exists():
         return base
     make_run(base / "packing_text")
@@ -196,6 +217,28 @@ def make_bases(root: Path) -> Path:
         store.close()
     (base / "done").write_text("")
     return base
+
+
+def state_bases(base: Path) -> Path:
+    """The ``yade_states`` base: the states of sample_dumps/yade/simulations.py (YADE runs it) in
+    ``base/yade_states``, each converted once into its ``cache``."""
+    d = base / "yade_states"
+    if (d / "done").exists():
+        return d
+    import subprocess
+    import sysconfig
+
+    from demsplit.readers.yade_state import convert_states, state_files
+
+    d.mkdir(parents=True, exist_ok=True)
+    env = {**os.environ, "DEMSPLIT_OUT": str(d), "DEMSPLIT_SITE": sysconfig.get_paths()["purelib"]}
+    subprocess.run(["yade", "-n", "-j1", "-x", str(YADE / "simulations.py")], cwd=d, env=env, capture_output=True,
+                   check=True, timeout=600)
+    converted, failed = convert_states(state_files(d), d / "cache")
+    if failed or not converted:
+        raise SystemExit(f"the saved states of simulations.py do not convert: {failed}")
+    (d / "done").write_text("")
+    return d
 
 
 def yade_bases(base: Path, suffix: str) -> list[Path]:
@@ -688,6 +731,7 @@ class Case:
     new_ok: list[Path] = field(default_factory=list)  # paths that may appear (the output and what it makes)
     changes_ok: list[Path] = field(default_factory=list)  # existing files that may change (not inputs)
     expect: str | None = None  # "error": the output must be refused; "ok": it must be written
+    caches: list[Path] = field(default_factory=list)  # directories of converted YADE states the input may write
 
 
 def case_rng(seed: int, index: int) -> random.Random:
@@ -777,11 +821,120 @@ def build_case(base: Path, work: Path, seed: int, index: int, families: tuple[st
         return export_case(rng, base, d, out_dir, index)
     elif family == "prepare":
         return prepare_case(rng, base, d, index)
+    elif family == "yade_states":
+        return state_case(rng, base, d, out, index)
     else:
         raise ValueError(family)
     if family != "yade_npys" and family != "yade_h5" and rng.random() < 0.1:
         argv += ["--compression", rng.choice(("none", "gzip", "lzf"))]
     return Case(index, family, what, [*argv, "-o", str(out), "-q"], d, out, new_ok=[out])
+
+
+def state_case(rng: random.Random, base: Path, d: Path, out: Path, index: int) -> Case:
+    """A ``yade_states`` input: the facet box's four states (iterations 3000 to 12000) in ``d`` with one defect
+    (:data:`STATE_KINDS`), given as a glob, the directory or the list of files, read with the session's cache of
+    converted states (or a damaged copy of it, or the default next to the output)."""
+    src = base / "yade_states"
+    d.mkdir()
+    states = sorted(src.glob("facets-*"))
+    for p in states:
+        shutil.copy(p, d / p.name)
+    kind = rng.choice(STATE_KINDS)
+    target = d / rng.choice(states).name
+    cache = src / "cache"
+    options: list[str] = []
+    if kind == "bytes":
+        data, what = mutate_compressed(rng, target.read_bytes(), ".gz")
+        target.write_bytes(data)
+    elif kind == "archive":  # a valid gzip stream of a damaged archive: YADE reads it
+        raw = gzip.decompress(target.read_bytes())
+        data, what = rng.choice((flip_bytes, cut_bytes, random_text_mutation))(rng, raw)
+        target.write_bytes(gzip.compress(data, 1))
+    elif kind == "xml":  # the XML state of iteration 6000 in place of the binary one, a token or line changed
+        (d / "facets-006000.yade.gz").unlink()
+        data, what = random_text_mutation(rng, bz2.decompress((src / "again-006000.xml.bz2").read_bytes()))
+        target = d / rng.choice(("facets-006000.xml", "facets-006000.xml.bz2"))
+        target.write_bytes(bz2.compress(data) if target.name.endswith(".bz2") else data)
+    elif kind == "not_a_state":
+        target = d / rng.choice(("facets-007000.yade.gz", "facets-007000.xml", "facets-007000.yade",
+                                 "facets-007000.xml.bz2"))
+        data = rng.choice(FOREIGN + ((src / "again-006000.xml.bz2").read_bytes(),))
+        target.write_bytes(gzip.compress(data) if target.name.endswith(".gz") and rng.random() < 0.5 else data)
+        what = f"{len(data)} bytes beginning {data[:20]!r}"
+    elif kind == "other":  # another simulation, a changed state, the same state again (named or recompressed)
+        other = rng.choice(("clumps-004500.yade.gz", "seed-003000.yade.gz", "changed-006000.yade.gz",
+                            "again-006000.xml.bz2", "viscelcap-000020.yade.gz", "recompressed"))
+        if other == "recompressed":
+            target = d / "facets-006000-copy.yade.gz"
+            target.write_bytes(gzip.compress(gzip.decompress((src / "facets-006000.yade.gz").read_bytes()), 9))
+        else:
+            target = d / other
+            shutil.copy(src / other, target)
+        what = other
+    elif kind == "cache":  # a damaged copy of the converted states, in the output's directory
+        cache = out.parent / "cache"
+        shutil.copytree(src / "cache", cache)
+        victim = rng.choice(sorted(cache.iterdir()))
+        damage = rng.choice(("cut", "flip", "empty", "swap", "directory", "tmp"))
+        if damage == "cut":
+            data = victim.read_bytes()
+            victim.write_bytes(data[: rng.randrange(len(data))])
+        elif damage == "flip":
+            victim.write_bytes(flip_bytes(rng, victim.read_bytes())[0])
+        elif damage == "empty":
+            victim.write_bytes(b"")
+        elif damage == "swap":  # another state's conversion under this name
+            victim.write_bytes(rng.choice(sorted(cache.iterdir())).read_bytes())
+        elif damage == "directory":
+            victim.unlink()
+            victim.mkdir()
+        else:
+            victim.with_name(victim.name + ".tmp").write_bytes(victim.read_bytes()[:100])
+        what = f"cache entry {victim.name[:16]}...: {damage}"
+    else:
+        options, what = rng.choice((
+            (["--yade-timeout", "0.01"], "a time limit YADE cannot keep"), (["--yade", "false"], "--yade false"),
+            (["--yade", "nonexistent-yade"], "no such yade"), (["--yade", "yade-mpfr150"], "the wrong build"),
+            (["--material", "9:1e9:0.3"], "--material of no material"), (["--material", "1:1e9:0.3"], "--material"),
+            (["--plane-as-plane"], "--plane-as-plane"), (["--state-cache", str(target)], "--state-cache onto a state")))
+        if options[0] in ("--yade-timeout", "--yade"):
+            cache = out.parent / "fresh"  # nothing converted: YADE runs
+    form = rng.choice(("glob", "glob", "directory", "list"))
+    given = {"glob": [str(d / "facets*")], "directory": [str(d)],
+             "list": [str(p) for p in sorted(d.iterdir())]}[form]
+    if rng.random() < 0.15:  # the default: next to the output
+        cache = out.with_name(out.name + ".states")
+    else:
+        options = ["--state-cache", str(cache), *options] if "--state-cache" not in options else options
+    if "--yade-timeout" not in options:
+        options += ["--yade-timeout", STATE_TIMEOUT]
+    if rng.random() < 0.25:
+        options += ["--on-bad-frame", "skip"]
+    argv = ["run", *given, *options]
+    return Case(index, "yade_states", f"{kind} {target.name}: {what} ({form}; {' '.join(options)})"[:300],
+                [*argv, "-o", str(out), "-q"], d, out, new_ok=[out], caches=[cache])
+
+
+def cache_state(cache: Path) -> dict[str, tuple[int, int]]:
+    """Name -> (size, modification time) of each file in a directory of converted YADE states."""
+    return {p.name: (p.stat().st_size, p.stat().st_mtime_ns) for p in cache.iterdir()} if cache.is_dir() else {}
+
+
+def cache_problems(cache: Path, before: dict[str, tuple[int, int]]) -> list[str]:
+    """What a run did wrong to a directory of converted YADE states (``before``: :func:`cache_state` before it): a
+    file it wrote whose content does not give its name, a file it left half-written (``.tmp``)."""
+    from demsplit.runtime.hashing import file_digest
+
+    problems = []
+    for name, now in cache_state(cache).items():
+        if before.get(name) == now:
+            continue
+        p = cache / name
+        if name.endswith(".tmp"):
+            problems.append(f"{name}: left half-written")
+        elif p.is_file() and not name.endswith(f"-{file_digest(p)}.npys"):
+            problems.append(f"{name}: its content does not give its name")
+    return problems
 
 
 def mutate_script(rng: random.Random, data: bytes) -> tuple[bytes, str]:
@@ -1403,6 +1556,7 @@ def check_case(case: Case) -> tuple[str, str]:
 
     sandbox = case.directory.parent  # the case's files and the output directory: nothing but outputs changes
     before = tree_state(sandbox)
+    cached = {c: cache_state(c) for c in case.caches}
     seen: dict = {}
 
     def recording(func):
@@ -1467,6 +1621,10 @@ def check_case(case: Case) -> tuple[str, str]:
         problems = store_problems(case.output)
         if problems:
             return problems[0].split(" ")[0], "; ".join(problems)
+    for cache, earlier in cached.items():
+        problems = cache_problems(cache, earlier)
+        if problems:
+            return "CACHE", "; ".join(problems)
     out_dir = case.output.parent if case.output is not None else None
     if out_dir is not None and out_dir.is_dir() and out_dir != case.directory and out_dir.name == "out":
         for p in out_dir.iterdir():
@@ -1523,7 +1681,9 @@ def warm_up(base: Path, work: Path) -> None:
                      ["run", str(base / "packing_bin" / "in.packing"), "--atoms",
                       str(base / "packing_bin" / "atoms.bin")],
                      ["run", str(base / "packing_gz" / "in.packing")],
-                     *(["run", str(p)] for p in yade_bases(base, ""))):
+                     *(["run", str(p)] for p in yade_bases(base, "")),
+                     *([["run", str(base / "yade_states" / "facets-*"), "--state-cache",
+                         str(base / "yade_states" / "cache")]] if (base / "yade_states" / "done").exists() else [])):
             out = work / "warm.h5"
             if out.exists():
                 out.unlink()
@@ -1601,7 +1761,7 @@ def fuzz(seed: int, count: int | None, seconds: float | None, families=FAMILIES,
         if root is None:
             shm = "/dev/shm" if Path("/dev/shm").is_dir() else None
             root = Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="demsplit-fuzz-", dir=shm)))
-        base = make_bases(root)
+        base = make_bases(root, families)
         work = root / "work"
         warm_up(base, work)
         full_fs = stack.enter_context(full_file_system(root, mount and "output_path" in families))
@@ -1625,8 +1785,10 @@ def fuzz(seed: int, count: int | None, seconds: float | None, families=FAMILIES,
                     except EOFError:
                         msg = ("died",)
                 if msg is None:
-                    if current is not None and time.monotonic() - started > time_limit:
-                        record(current, family_of(seed, current, families), "HANG", f"more than {time_limit} s")
+                    limit = TIME_LIMITS.get(family_of(seed, current, families), time_limit) \
+                        if current is not None else time_limit
+                    if current is not None and time.monotonic() - started > limit:
+                        record(current, family_of(seed, current, families), "HANG", f"more than {limit} s")
                         next_index = current + 1
                         break
                     if proc.is_alive():
@@ -1696,14 +1858,16 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--count", type=int, help="how many inputs (0 .. COUNT-1 of the seed)")
     p.add_argument("--seconds", type=float, help="fuzz this long instead (default 60 without --count)")
     p.add_argument("--seed", type=int, default=1)
-    p.add_argument("--families", default=",".join(FAMILIES), help="comma-separated subset of " + ", ".join(FAMILIES))
+    p.add_argument("--families", default=",".join(FAMILIES),
+                   help="comma-separated subset of " + ", ".join(FAMILIES + NAMED_FAMILIES) + " (default: all but "
+                   + ", ".join(NAMED_FAMILIES) + ")")
     p.add_argument("--only", type=int, help="run input ONLY of the seed in this process and show its traceback")
     p.add_argument("--json", help="write the summary here")
     p.add_argument("--no-mount", action="store_true", help="no full-file-system cases (they mount a tmpfs as root)")
     p.add_argument("--root", help="work directory (default: a temporary one in /dev/shm)")
     args = p.parse_args(argv)
     families = tuple(args.families.split(","))
-    unknown = set(families) - set(FAMILIES)
+    unknown = set(families) - set(FAMILIES + NAMED_FAMILIES)
     if unknown:
         p.error(f"unknown families {sorted(unknown)}")
     def stop(signum, frame):  # as Ctrl-C: the worker killed, the full file system unmounted, the work files removed
@@ -1716,7 +1880,7 @@ def main(argv: list[str] | None = None) -> int:
     demsplit.runtime.threads.THREADS = 1  # one core: the fuzzer runs beside other work
     if args.only is not None:
         with tempfile.TemporaryDirectory(prefix="demsplit-fuzz-") as tmp:
-            base = make_bases(Path(tmp))
+            base = make_bases(Path(tmp), families)
             warm_up(base, Path(tmp) / "work")
             with full_file_system(Path(tmp), not args.no_mount and "output_path" in families) as full:
                 case = build_case(base, Path(tmp) / "work", args.seed, args.only, families, full)

@@ -22,7 +22,7 @@ import pytest
 from conftest import require_program
 from demsplit.cli import main
 from demsplit.physics import laws
-from demsplit.readers.yade_state import converted, state_files
+from demsplit.readers.yade_state import convert_states, state_files
 from demsplit.results.report import text_summary, write_html
 from demsplit.results.store import load_results
 from demsplit.scene import Material
@@ -64,7 +64,7 @@ def saved(tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp("instants")
     run_yade(yade, SAMPLE_SCRIPTS / "saved_instants.py", out)
     run_yade(yade, SAMPLE_SCRIPTS / "jcfpm_example.py", out)
-    converted(state_files(out), out / "cache")
+    assert not convert_states(state_files(out), out / "cache")[1]
     return out
 
 

@@ -120,9 +120,9 @@ def test_a_damaged_state_is_one_clear_error(states, tmp_path):
     cut.write_bytes(data[: len(data) // 2])
     proc = cli("run", str(cut), "-o", str(tmp_path / "x.h5"), "-q", "--state-cache", str(tmp_path / "cache"),
                address_space=DAMAGED_STATE_MEMORY)
-    assert proc.returncode == 2 and "could not load" in proc.stderr and "Traceback" not in proc.stderr
+    assert proc.returncode == 2 and "gzip stream is cut short" in proc.stderr and "Traceback" not in proc.stderr
     assert not (tmp_path / "x.h5").exists()
-    assert not list((tmp_path / "cache").iterdir())  # nothing half-converted is cached
+    assert not (tmp_path / "cache").exists()  # nothing half-converted is cached
 
 
 def test_site_is_where_demsplit_is_installed():
