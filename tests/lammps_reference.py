@@ -646,7 +646,7 @@ def wall_geometry(script: Script, fix_id: str, x: np.ndarray, r: np.ndarray
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """For every atom: d (from the wall point to the centre), its length as LAMMPS computes it, the wall's curvature
     radius r_w (0 flat), the wall's velocity at the contact and the number of the region's surfaces within r
-    (fix_wall_gran.cpp:607-640, region_cylinder.cpp:274-420; a region cylinder only)."""
+    (fix_wall_gran.cpp:607-640; regions: a cylinder or a plane, static or rotated)."""
     geo = wall_words(script, fix_id)[1]
     N = len(r)
     d, rw, vwall, nsurf = np.zeros((N, 3)), np.zeros(N), np.zeros((N, 3)), np.ones(N, int)
@@ -666,27 +666,14 @@ def wall_geometry(script: Script, fix_id: str, x: np.ndarray, r: np.ndarray
         rest = geo[2:]
     elif geo[0] == "region":
         reg = script.region(geo[1])
-        assert reg[2] == "cylinder" and reg[3] in "xyz", reg
-        ax = "xyz".index(reg[3])
-        c1, c2, Rc, lo, hi = (float(v) for v in reg[4:9])
-        other = [k for k in range(3) if k != ax]
-        e1, e2 = x[:, other[0]] - c1, x[:, other[1]] - c2
-        rho = np.sqrt(e1 * e1 + e2 * e2)
-        side = np.zeros((N, 3))
-        side[:, other[0]], side[:, other[1]] = e1 * (1 - Rc / rho), e2 * (1 - Rc / rho)
-        caps = [(x[:, ax] - lo, 1.0), (hi - x[:, ax], -1.0)]
-        near = [Rc - rho < r] + [c < r for c, _ in caps]
-        nsurf = sum(k.astype(int) for k in near)
-        # the last surface touched wins (side, lo cap, hi cap)
-        d = np.where(near[0][:, None], side, 0.0)
-        dist = np.where(near[0], Rc - rho, 0.0)
-        rw = np.where(near[0], -2 * Rc, 0.0)
-        for (gap, sign), touch in zip(caps, near[1:]):
-            cap = np.zeros((N, 3))
-            cap[:, ax] = sign * gap
-            d = np.where(touch[:, None], cap, d)
-            dist = np.where(touch, gap, dist)
-            rw = np.where(touch, 0.0, rw)
+        if reg[2] == "plane":  # region_plane.cpp:96-109: the side the unit normal points to
+            point, normal_ = np.array([float(v) for v in reg[3:6]]), np.array([float(v) for v in reg[6:9]])
+            normal_ /= np.sqrt(normal_ @ normal_)
+            dist = (x - point) @ normal_
+            d = dist[:, None] * normal_
+        else:
+            assert reg[2] == "cylinder" and reg[3] in "xyz", reg
+            d, dist, rw, nsurf = _region_cylinder(reg, x, r)
         if "rotate" in reg:
             k = reg.index("rotate")
             point = np.array([float(v) for v in reg[k + 2: k + 5]])
@@ -702,6 +689,31 @@ def wall_geometry(script: Script, fix_id: str, x: np.ndarray, r: np.ndarray
     if geo[0] != "region":
         dist = np.sqrt(_dot(d, d))  # fix_wall_gran.cpp:643; a region's distance is its contact's r
     return d, dist, rw, vwall, nsurf
+
+
+def _region_cylinder(reg: list[str], x: np.ndarray, r: np.ndarray):
+    """d, its length, r_w and the number of surfaces touched for a ``side in`` region cylinder: the side, then
+    the lo and hi caps, the last touched kept (region_cylinder.cpp:274-420, fix_wall_gran_region.cpp:242-250)."""
+    N = len(r)
+    ax = "xyz".index(reg[3])
+    c1, c2, Rc, lo, hi = (float(v) for v in reg[4:9])
+    other = [k for k in range(3) if k != ax]
+    e1, e2 = x[:, other[0]] - c1, x[:, other[1]] - c2
+    rho = np.sqrt(e1 * e1 + e2 * e2)
+    side = np.zeros((N, 3))
+    side[:, other[0]], side[:, other[1]] = e1 * (1 - Rc / rho), e2 * (1 - Rc / rho)
+    caps = [(x[:, ax] - lo, 1.0), (hi - x[:, ax], -1.0)]
+    near = [Rc - rho < r] + [c < r for c, _ in caps]
+    d = np.where(near[0][:, None], side, 0.0)
+    dist = np.where(near[0], Rc - rho, 0.0)
+    rw = np.where(near[0], -2 * Rc, 0.0)
+    for (gap, sign), touch in zip(caps, near[1:]):
+        cap = np.zeros((N, 3))
+        cap[:, ax] = sign * gap
+        d = np.where(touch[:, None], cap, d)
+        dist = np.where(touch, gap, dist)
+        rw = np.where(touch, 0.0, rw)
+    return d, dist, rw, sum(k.astype(int) for k in near)
 
 
 def region_angular_velocity(script: Script, variable: str) -> float:

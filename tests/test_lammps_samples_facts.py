@@ -196,6 +196,27 @@ def test_atom_torque_balance(case):
         assert t["unknowns"] < 3 * kept.sum()
 
 
+@pytest.mark.parametrize("case", ["hertz_mindlin", "jkr"])
+def test_solved_twisting_torques_respect_their_limit(case):
+    """The twisting torques solved from the torque balance lie within LAMMPS' limit of the step, μ_tw F_ncrit
+    (marshall: μ_tw = 2/3 a μ, pair_granular.cpp:622-646), and the pairs single() wrote as capped (p9 != 0) sit on
+    it: an independent check of the solution and of everything else in the torque balance."""
+    run, checked = sample(case)
+    on_limit = 0
+    for c in checked:
+        p, at = c.frame.pairs, c.frame.atoms
+        cols, tau = c.twist["cols"], c.twist["tau"]
+        limit = np.zeros(len(cols))
+        for k, row in enumerate(cols):
+            m = run.models[(at.type[p.i[row]], at.type[p.j[row]])]
+            mu_tw = 2 / 3 * math.sqrt(p.R[row] * p.delta[row]) * m.mu if m.twisting == "marshall" else m.twist[2]
+            limit[k] = mu_tw * p.crit_h[row] / m.mu
+        assert np.all(np.abs(tau) <= limit * (1 + TOL)), np.max(np.abs(tau) / limit)
+        capped = p.extra["p9"][cols] != 0
+        on_limit += int(np.sum(np.abs(np.abs(tau[capped]) - limit[capped]) <= TOL * limit[capped]))
+    assert on_limit > 0 if case == "hertz_mindlin" else on_limit == 0
+
+
 # ------------------------------------------------------------------------------------------- what no dump holds
 
 # Per frame: jkr pairs that single() zeroed, atoms near a possible jkr neck, region-wall contacts with other
