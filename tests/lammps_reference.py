@@ -17,7 +17,8 @@ n = (x_i - x_j)/r, m* = m_i m_j/(m_i + m_j) (a wall: m_i), a = sqrt(R δ).
 - damping (:368-380): η_n = damp (tsuji: α(e) of coeff(), :922-928) times 1 (velocity), m* (mass_velocity),
   a m* (viscoelastic), sqrt(m* kn_fac) (tsuji; kn_fac = kn, or kn a, or kn a with jkr's a); F_n = F_ne - η_n v_n,
   clipped at 0 with limit_damping (:382-383);
-- Coulomb limit (:410-421): F_ncrit = |F_ne + 6πγR| (jkr), |F_ne + 8πγR| (dmt), |F_n| (others);
+- Coulomb limit (:410-421): F_ncrit = |F_ne + 6πγR| (jkr), |F_n| (others); dmt's |F_ne + 8πγR| reads γ from a
+  variable only jkr sets (:416, single :1589): its limit is undefined and a dmt row capped in single() unknown;
 - tangential (:423-546): η_t = x_γt η_n, k = k_t (linear_history), k_t a (mindlin*), 0 (linear_nohistory beside
   a history model: the global ``tangential_history`` flag, :864); the force applied in the step is F_el - η_t v_t
   with F_el the stored spring (-kξ, or the stored force for */force) after the step's Coulomb reset (:510-536);
@@ -619,8 +620,9 @@ def rebuild_pairs(script: Script, atoms: Atoms, local: Dump, models: dict) -> Co
             capped[s] |= cap_r
             why[s[bad_r]] = "no_capped_step"
             out["u_r"][s] = _dot(Fr_el, Fr_el) / (2 * kr)
-        if m.normal == "dmt":  # single() reads an unset variable for γ in F_ncrit (:1589): the first row's limit is
-            why[s[s == 0]] = "dmt_first_row"  # whatever the stack held (the rows after it had the documented one)
+        if m.normal == "dmt":  # compute() and single() read an unset variable for γ in F_ncrit (:416, :1589): the
+            why[s[capped[s]]] = "dmt_capped"  # step's limit is unknown, and so is a capped row's spring; the first
+            why[s[s == 0]] = "dmt_first_row"  # row's limit is whatever the stack held (later rows: the documented)
         twist[s] = m.twisting != "none"
         out["u_n"][s], out["u_adh"][s] = nrm.u_n, nrm.u_adh
         out["u_tw"][s] = np.nan if m.twisting != "none" else 0.0
