@@ -111,9 +111,13 @@ _OPS = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul, as
         ast.Pow: operator.pow, ast.USub: operator.neg, ast.UAdd: operator.pos}
 
 
+# LAMMPS' log() is log10, ln() the natural log (variable.cpp:3394-3413)
+_FUNCTIONS = {"sqrt": math.sqrt, "ln": math.log, "log": math.log10}
+
+
 def _arithmetic(formula: str) -> float:
-    """An equal-style formula of numbers, + - * / ^, parentheses, PI and sqrt() (what the samples and the official
-    examples use)."""
+    """An equal-style formula of numbers, + - * / ^, parentheses, PI, sqrt(), ln() and log() (what the samples and
+    the official examples use)."""
     def ev(node: ast.AST) -> float:
         if isinstance(node, ast.Constant):
             return float(node.value)
@@ -123,8 +127,8 @@ def _arithmetic(formula: str) -> float:
             return _OPS[type(node.op)](ev(node.left), ev(node.right))
         if isinstance(node, ast.UnaryOp):
             return _OPS[type(node.op)](ev(node.operand))
-        if isinstance(node, ast.Call) and getattr(node.func, "id", "") == "sqrt":
-            return math.sqrt(ev(node.args[0]))
+        if isinstance(node, ast.Call) and getattr(node.func, "id", "") in _FUNCTIONS:
+            return _FUNCTIONS[node.func.id](ev(node.args[0]))
         raise ValueError(f"the reference does not evaluate {formula!r}")
     return ev(ast.parse(formula.replace("^", "**"), mode="eval").body)
 
