@@ -10,38 +10,40 @@ Notation: r_i, r_j radii, R = r_i r_j/(r_i + r_j) (a wall: r_i, or r_i r_w/(r_i 
 n = (x_i - x_j)/r, m* = m_i m_j/(m_i + m_j) (a wall: m_i), a = sqrt(R δ).
 
 ``pair_style granular`` (pair_granular.cpp), per type pair ``kn`` = normal_coeffs[0]:
-- kn = k_n (hooke, hertz) or 4/3 E/(2(1 - ν²)) of the line's E, ν (hertz/material, dmt, jkr; :942-948 with
-  mix_stiffnessE :1780-1784); k_t NULL = 8 G = 2E/((2 - ν)(1 + ν)) (:956-958, mix_stiffnessG :1790-1794);
-- elastic normal force (:356-366, single :1513-1523): hooke kn δ, hertz-like kn a δ, dmt kn a δ - 4πγR;
-  jkr (:333-354): a from LAMMPS' closed form, E = ¾ kn, F = kn a³/R - 2πa² sqrt(4γE/(πa));
-- damping (:368-380): η_n = damp (tsuji: α(e) of coeff(), :922-928) times 1 (velocity), m* (mass_velocity),
+- kn = k_n (hooke, hertz) or 4/3 E/(2(1 - ν²)) of the line's E, ν (hertz/material, dmt, jkr; coeff() :1006-1016,
+  mix_stiffnessE :1780-1784); k_t NULL = 8 G = 2E/((2 - ν)(1 + ν)) (:1021-1024, mix_stiffnessG :1790-1794);
+- elastic normal force (compute :328-358, single :1498-1525): hooke kn δ, hertz-like kn a δ, dmt kn a δ - 4πγR;
+  jkr: a from LAMMPS' closed form, E = ¾ kn, F = kn a³/R - 2πa² sqrt(4γE/(πa));
+- damping (:363-377): η_n = damp (tsuji: α(e) of coeff(), :986-993) times 1 (velocity), m* (mass_velocity),
   a m* (viscoelastic), sqrt(m* kn_fac) (tsuji; kn_fac = kn, or kn a, or kn a with jkr's a); F_n = F_ne - η_n v_n,
-  clipped at 0 with limit_damping (:382-383);
-- Coulomb limit (:410-421): F_ncrit = |F_ne + 6πγR| (jkr), |F_n| (others); dmt's |F_ne + 8πγR| reads γ from a
+  clipped at 0 with limit_damping (:377);
+- Coulomb limit (:412-421): F_ncrit = |F_ne + 6πγR| (jkr), |F_n| (others); dmt's |F_ne + 8πγR| reads γ from a
   variable only jkr sets (:416, single :1589): its limit is undefined and a dmt row capped in single() unknown;
 - tangential (:423-546): η_t = x_γt η_n, k = k_t (linear_history), k_t a (mindlin*), 0 (linear_nohistory beside
-  a history model: the global ``tangential_history`` flag, :864); the force applied in the step is F_el - η_t v_t
-  with F_el the stored spring (-kξ, or the stored force for */force) after the step's Coulomb reset (:510-536);
-- rolling sds (:551-616): F_r = F_r,el - γ_r v_r, v_r = R (ω_i - ω_j) × n, limit μ_r F_ncrit, torque R n × F_r;
-- twisting (:622-646): torque τ n with τ from a spring that no dump holds (single() writes it only when capped,
-  :1710-1716);
-- torques (:663-693): -(r_i - δ/2) n × F_t on i, -(r_j - δ/2) n × F_t on j.
-The dumped rows come from single() (:1394-1735) after the step, with the velocities then held: full-step for the
-owned atom i, half-step for a ghost j (a periodic image on one process; verlet.cpp:254-344), and svector p1-p3 the
-tangential force, p5-p7 the rolling pseudo-force, p9 the capped twisting torque, p10-p12 x_i - x_j.
+  a history model: ``tangential_history`` is global, :900); the force applied in the step is F_el - η_t v_t with
+  F_el the stored spring (-kξ, or the stored force for */force) after the step's Coulomb reset (:510-536);
+- rolling sds (:550-616): F_r = F_r,el - γ_r v_r, v_r = R (ω_i - ω_j) × n, limit μ_r F_ncrit, torque R n × F_r;
+- twisting (:620-646): torque τ n with τ from a spring that no dump holds (single() writes it only when capped,
+  :1694-1716);
+- torques (:649-693): -(r_i - δ/2) n × F_t on i, -(r_j - δ/2) n × F_t on j.
+The dumped rows come from single() (:1375-1737) after the step, with the velocities then held: full-step for the
+owned atom i, half-step for a ghost j (a periodic image on one process: verlet.cpp:254-352 integrates, forwards
+ghosts, computes forces, then final_integrate updates owned atoms only before output), and svector (:1724-1735)
+p1-p3 the tangential force, p5-p7 the rolling pseudo-force, p9 the capped twisting torque, p10-p12 x_i - x_j.
 
-Legacy ``gran/hooke``, ``gran/hooke/history``, ``gran/hertz/history`` (pair_gran_hooke_history.cpp:200-330,
-pair_gran_hertz_history.cpp:180-240, pair_gran_hooke.cpp:150-215): p = 1 or sqrt(R δ) (hertz), F_n = p (kn δ -
-m* γn v_n), F_t = -p (kt ξ + m* γt v_t) limited to μ |F_n| (gran/hooke: -min(μ|F_n|, m* γt |v_t|) t), torque
--r n × F_t; kt NULL = 2/7 kn, γt NULL = γn/2, dampflag 0: γt = 0 (:360-372); single() writes p1-p3 F_t, p5-p7
-v_n n, p8-p10 v_t (:744-755).
+Legacy ``gran/hooke``, ``gran/hooke/history``, ``gran/hertz/history`` (pair_gran_hooke_history.cpp:244-330,
+single :605-757; pair_gran_hertz_history.cpp:183-236; pair_gran_hooke.cpp:160-200): p = 1 or sqrt(R δ) (hertz),
+F_n = p (kn δ - m* γn v_n), F_t = -p (kt ξ + m* γt v_t) limited to μ |F_n| (gran/hooke: -min(μ|F_n|, m* γt |v_t|)
+t), torque -r n × F_t; kt NULL = 2/7 kn, γt NULL = γn/2, dampflag 0: γt = 0 (:360-380); single() writes p1-p3 F_t,
+p5-p7 v_n n, p8-p10 v_t (:746-755).
 
-Walls (fix_wall_gran.cpp): the same laws with m* = m_i, torque -r_i n × F_t (:1502-1504), and for ``granular``
-kn = 4/3 E/(2(1 - ν)) (:157-183), k_t NULL = E/4 (2 - ν)(1 + ν) (:248), tsuji applied once per ``init()``, i.e.
-once per ``run`` (:531-537); zcylinder: r_w = -2 R_cyl inside (:662); a region cylinder's side -2 R
-(region_cylinder.cpp:297). The ``contacts`` array holds the force of the step (normal + tangential) and the wall
-point; wall/gran/region keeps the last contact of a particle only (fix_wall_gran_region.cpp:242-250). A moving
-region's wall velocity is ω × (x_c - P) with ω = Δθ/dt (region.cpp:457-517).
+Walls (fix_wall_gran.cpp): the same laws with m* = m_i, torque -r_i n × F_t (:840, :965, :1097, :1512), and for
+``granular`` kn = 4/3 E/(2(1 - ν)) (:160, :171, :183), k_t NULL = E/4 (2 - ν)(1 + ν) (:248), tsuji applied once per
+``init()``, i.e. once per ``run`` (:535-540); zcylinder: r_w = -2 R_cyl inside (:662), legacy hertz with the same
+r_w (:1020-1021); a region cylinder's side -2 R (region_cylinder.cpp:297). The ``contacts`` array holds the force
+of the step (normal + tangential) and the wall point; wall/gran/region keeps the last contact of a particle only
+(fix_wall_gran_region.cpp:244-254). A rotating region's wall velocity is ω × (x_c - P), ω = Δθ/dt
+(region.cpp:457-517).
 
 Half-step velocities (fix_nve_sphere.cpp:117-135): v_h = v - dt/2 f/m, ω_h = ω - dt/2 τ/(0.4 m r²).
 
@@ -102,7 +104,7 @@ def read_dump(path: Path) -> list[Dump]:
 
 
 def _alpha(e: float) -> float:
-    """The tsuji damping coefficient of restitution e (pair_granular.cpp:922-928, fix_wall_gran.cpp:531-537)."""
+    """The tsuji damping coefficient of restitution e (pair_granular.cpp:986-993, fix_wall_gran.cpp:535-540)."""
     return (1.2728 - 4.2783 * e + 11.087 * e**2 - 22.348 * e**3 + 27.467 * e**4 - 18.022 * e**5
             + 4.8218 * e**6)
 
@@ -283,8 +285,8 @@ def parse_granular(words: list[str], wall: bool, ninit: int = 1) -> tuple[Model,
 
 
 def parse_legacy(kind: str, args: list[str]) -> tuple[Model, list[str]]:
-    """``gran/<kind> kn kt γn γt μ dampflag [limit_damping]`` (pair_gran_hooke_history.cpp:352-380,
-    fix_wall_gran.cpp:94-125; nktv2p = 1 in units si and lj)."""
+    """``gran/<kind> kn kt γn γt μ dampflag [limit_damping]`` (pair_gran_hooke_history.cpp:361-380,
+    fix_wall_gran.cpp:96-122; nktv2p = 1 in units si and lj)."""
     kn = float(args[0])
     kt = kn * 2 / 7 if args[1] == "NULL" else float(args[1])
     gn = float(args[2])
@@ -340,7 +342,7 @@ def _norm(a: np.ndarray) -> np.ndarray:
 
 
 def jkr_radius(kn: float, coh: float, delta: np.ndarray, R: np.ndarray) -> np.ndarray:
-    """LAMMPS' contact radius a(δ) of jkr (pair_granular.cpp:333-349), E = ¾ kn."""
+    """LAMMPS' contact radius a(δ) of jkr (pair_granular.cpp:328-354), E = ¾ kn."""
     E = 0.75 * kn
     dR = delta * R
     R2, dR2 = R * R, dR * dR
@@ -374,7 +376,7 @@ class Normal:
 
 
 def normal(m: Model, delta: np.ndarray, R: np.ndarray, meff: np.ndarray) -> Normal:
-    """pair_granular.cpp:333-380 (fix_wall_gran.cpp:1173-1211) and the legacy styles' p, kn."""
+    """pair_granular.cpp:328-377 (fix_wall_gran.cpp:1170-1214) and the legacy styles' p, kn."""
     zero = np.zeros_like(delta)
     if m.legacy:
         p = np.sqrt(R * delta) if m.normal == "legacy/hertz/history" else np.ones_like(delta)
@@ -403,13 +405,13 @@ def normal(m: Model, delta: np.ndarray, R: np.ndarray, meff: np.ndarray) -> Norm
 
 
 def normal_force(m: Model, nrm: Normal, vn: np.ndarray) -> np.ndarray:
-    """F_n = F_ne - η_n v_n, clipped at 0 with limit_damping (pair_granular.cpp:378-383)."""
+    """F_n = F_ne - η_n v_n, clipped at 0 with limit_damping (pair_granular.cpp:376-377)."""
     F = nrm.Fne - nrm.eta_n * vn
     return np.maximum(F, 0) if m.limit_damping else F
 
 
 def coulomb(m: Model, nrm: Normal, Fn: np.ndarray, R: np.ndarray) -> np.ndarray:
-    """F_ncrit (pair_granular.cpp:410-421): jkr, dmt from the elastic force, the others from F_n."""
+    """F_ncrit (pair_granular.cpp:412-421): jkr, dmt from the elastic force, the others from F_n."""
     if m.normal == "jkr":
         return np.abs(nrm.Fne + 6 * math.pi * m.cohesion * R)
     if m.normal == "dmt":
@@ -427,7 +429,7 @@ def spring_stiffness(m: Model, nrm: Normal) -> np.ndarray:
 
 
 def tangential_damping(m: Model, nrm: Normal, meff: np.ndarray) -> np.ndarray:
-    """η_t: x_γt η_n (pair_granular.cpp:428-429), legacy p m* γt."""
+    """η_t: x_γt η_n (pair_granular.cpp:427-428), legacy p m* γt."""
     return nrm.a * meff * m.legacy_gt if m.legacy else m.xgt * nrm.eta_n
 
 
@@ -523,7 +525,7 @@ class Contacts:
 
 
 def _tangential_velocity(dv, n, w_sum):
-    """v_t - (r_i ω_i + r_j ω_j) × n (pair_granular.cpp:393-405)."""
+    """v_t - (r_i ω_i + r_j ω_j) × n (pair_granular.cpp:392-403)."""
     vt = dv - _dot(dv, n)[:, None] * n
     return vt - np.cross(w_sum, n)
 
@@ -553,7 +555,7 @@ def rebuild_pairs(script: Script, atoms: Atoms, local: Dump, models: dict) -> Co
     ri, rj = atoms.r[i], atoms.r[j]
     R = ri * rj / (ri + rj)
     delta = ri + rj - dist
-    # jkr: single() zeroes every value of a pair closer to pull-off than |δ_pulloff| (pair_granular.cpp:1422-1437)
+    # jkr: single() zeroes every value of a pair closer to pull-off than |δ_pulloff| (pair_granular.cpp:1423-1437)
     zeroed = np.zeros(len(i), bool)
     for (a, b), m in models.items():
         if m.normal == "jkr":
@@ -599,7 +601,7 @@ def rebuild_pairs(script: Script, atoms: Atoms, local: Dump, models: dict) -> Co
         eta_t = tangential_damping(m, nrm, meff[s])
         vt_s = _tangential_velocity(dv_s[s], nn, ws_s[s])
         vt_h = _tangential_velocity(dv_h[s], nn, ws_h[s])
-        if m.tangential in ("none", "linear_nohistory"):  # viscous only, limited (pair_gran_hooke.cpp:172-182)
+        if m.tangential in ("none", "linear_nohistory"):  # viscous only, limited (pair_gran_hooke.cpp:172-183)
             vmag = _norm(vt_h)
             ft = np.minimum(crit_h, eta_t * vmag) / np.where(vmag > 0, vmag, 1)
             vecs["Ft_h"][s] = -ft[:, None] * vt_h
@@ -652,7 +654,7 @@ def wall_geometry(script: Script, fix_id: str, x: np.ndarray, r: np.ndarray
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """For every atom: d (from the wall point to the centre), its length as LAMMPS computes it, the wall's curvature
     radius r_w (0 flat), the wall's velocity at the contact and the number of the region's surfaces within r
-    (fix_wall_gran.cpp:607-640; regions: a cylinder or a plane, static or rotated)."""
+    (fix_wall_gran.cpp:633-671; regions: a cylinder or a plane, static or rotated)."""
     geo = wall_words(script, fix_id)[1]
     N = len(r)
     d, rw, vwall, nsurf = np.zeros((N, 3)), np.zeros(N), np.zeros((N, 3)), np.ones(N, int)
@@ -672,7 +674,7 @@ def wall_geometry(script: Script, fix_id: str, x: np.ndarray, r: np.ndarray
         rest = geo[2:]
     elif geo[0] == "region":
         reg = script.region(geo[1])
-        if reg[2] == "plane":  # region_plane.cpp:96-109: the side the unit normal points to
+        if reg[2] == "plane":  # region_plane.cpp:80-93: the side the unit normal points to
             point, normal_ = np.array([float(v) for v in reg[3:6]]), np.array([float(v) for v in reg[6:9]])
             normal_ /= np.sqrt(normal_ @ normal_)
             dist = (x - point) @ normal_
@@ -693,13 +695,13 @@ def wall_geometry(script: Script, fix_id: str, x: np.ndarray, r: np.ndarray
         k = rest.index("shear")
         vwall[:, "xyz".index(rest[k + 1])] = float(rest[k + 2])
     if geo[0] != "region":
-        dist = np.sqrt(_dot(d, d))  # fix_wall_gran.cpp:643; a region's distance is its contact's r
+        dist = np.sqrt(_dot(d, d))  # fix_wall_gran.cpp:671, :1145; a region's distance is its contact's r
     return d, dist, rw, vwall, nsurf
 
 
 def _region_cylinder(reg: list[str], x: np.ndarray, r: np.ndarray):
     """d, its length, r_w and the number of surfaces touched for a ``side in`` region cylinder: the side, then
-    the lo and hi caps, the last touched kept (region_cylinder.cpp:274-420, fix_wall_gran_region.cpp:242-250)."""
+    the lo and hi caps, the last touched kept (region_cylinder.cpp:274-420, fix_wall_gran_region.cpp:244-254)."""
     N = len(r)
     ax = "xyz".index(reg[3])
     c1, c2, Rc, lo, hi = (float(v) for v in reg[4:9])
@@ -819,7 +821,7 @@ def _existing(path: Path) -> Path:
 
 def jkr_necks(frame: Frame, models: dict) -> np.ndarray:
     """Pairs (rows i, j) of jkr type pairs apart by less than |δ_pulloff| (δ_pulloff < δ <= 0): each may be a neck
-    still attached (the touch flag is in no dump, pair_granular.cpp:250-262) and is absent from ``cutoff radius``
+    still attached (the touch flag is in no dump, pair_granular.cpp:266-286) and is absent from ``cutoff radius``
     rows."""
     at = frame.atoms
     jkr = {k: m for k, m in models.items() if m.normal == "jkr"}
