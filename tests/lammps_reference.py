@@ -628,7 +628,7 @@ def rebuild_pairs(script: Script, atoms: Atoms, local: Dump, models: dict) -> Co
             out["u_r"][s] = _dot(Fr_el, Fr_el) / (2 * kr)
         if m.normal == "dmt":  # compute() and single() read an unset variable for γ in F_ncrit (:416, :1589): the
             why[s[capped[s]]] = "dmt_capped"  # step's limit is unknown, and so is a capped row's spring; the first
-            why[s[s == 0]] = "dmt_first_row"  # row's limit is whatever the stack held (later rows: the documented)
+            why[s[s == 0]] = "dmt_first_row"  # row's limit is whatever the stack held (seen 0 and other values)
         twist[s] = m.twisting != "none"
         out["u_n"][s], out["u_adh"][s] = nrm.u_n, nrm.u_adh
         out["u_tw"][s] = np.nan if m.twisting != "none" else 0.0
