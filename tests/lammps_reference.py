@@ -78,9 +78,6 @@ class Dump:
     periodic: np.ndarray
     columns: dict[str, np.ndarray]
 
-    def __len__(self) -> int:
-        return len(next(iter(self.columns.values()))) if self.columns else 0
-
 
 def read_dump(path: Path) -> list[Dump]:
     """Every frame of a text dump (atom or local, plain or gzip-compressed)."""
@@ -365,8 +362,8 @@ def jkr_pulloff(kn: float, coh: float, R: np.ndarray) -> np.ndarray:
 
 @dataclass
 class Normal:
-    """The normal part of contacts of one model: elastic force, contact radius a, kn_fac, damping coefficient
-    η_n, Coulomb base F_ncrit (before velocities for hooke/hertz-like: see ``crit``), energies."""
+    """The normal part of contacts of one model: the elastic force F_ne, the contact radius a (legacy: the factor
+    p), the damping coefficient η_n and the energies u_n, u_adh."""
 
     Fne: np.ndarray
     a: np.ndarray
