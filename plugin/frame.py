@@ -28,7 +28,11 @@ ids, int32 for types); DataFrames are only built at the user-facing edges.
     (stiffnesses the simulator stored), ``cpx cpy cpz`` (m, the simulator's own
     contact point), ``history_unknown`` (int8, 1 where the simulator never wrote the
     contact's history, e.g. LIGGGHTS primitive walls: the law's history-dependent modes
-    are then "not computed" for that row).
+    are then "not computed" for that row), ``unknown_modes`` (int8, the bits of
+    :data:`~demsplit.physics.modes.NOT_COMPUTED_BITS` of the modes whose state the reader could
+    not rebuild for that row) with ``unknown_why`` (int8, the law's code of why; LAMMPS), the
+    rebuilt springs of LAMMPS (``ftx_el fty_el ftz_el``, ``frx_el fry_el frz_el``, N, and
+    ``wall_curvature``, 1/m: :mod:`demsplit.physics.laws._lammps`).
 """
 
 from __future__ import annotations

@@ -224,9 +224,7 @@ def _what_run_computes(run, frame: Frame) -> tuple[list[str], list[str]]:
     scene = run.scene
     lines = ["run would compute:",
              f"  overlaps:    {frame.overlap_source or 'as the reader gives them'}"]
-    models = [scene.model]
-    models += [w.model for w in scene.walls if w.model is not None and w.model not in models]
-    lines += [f"  law:         {model.describe()}" for model in models]
+    lines += [f"  law:         {model.describe()}" for model in scene.models()]
     problems = []
     try:  # the partition's own verdict on what the columns allow (one frame)
         energies = contact_energies(frame.contacts, scene, frame.particles)

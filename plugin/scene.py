@@ -118,13 +118,18 @@ class Wall:
 
 @dataclass
 class Scene:
-    """Materials per type, the contact model and the walls of a run."""
+    """Materials per type, the contact model and the walls of a run.
+
+    ``pair_models``: the model of each pair of particle types ``(t1, t2)`` (t1 <= t2) whose model is not
+    ``model`` (LAMMPS ``pair_coeff i j`` lines give each type pair its own); empty when one model acts on
+    every pair of particles."""
 
     materials: dict[int, Material]
     model: ContactModel = field(default_factory=ContactModel)
     walls: list[Wall] = field(default_factory=list)
     units: str = "si"
     source: str = ""
+    pair_models: dict[tuple[int, int], ContactModel] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if self.units != "si":
@@ -176,11 +181,24 @@ class Scene:
         """Material type of each wall, indexed like ``walls``."""
         return np.array([w.type for w in self.walls], dtype=np.int64)
 
+    def pair_model(self, t1: int, t2: int) -> ContactModel:
+        """The model of contacts between particles of types ``t1`` and ``t2``."""
+        return self.pair_models.get((min(t1, t2), max(t1, t2)), self.model)
+
+    def models(self) -> list[ContactModel]:
+        """Every model of the scene, once each: the pair model(s), then the walls' own."""
+        out: list[ContactModel] = []
+        for m in [self.model, *self.pair_models.values(), *(w.model for w in self.walls if w.model is not None)]:
+            if m not in out:
+                out.append(m)
+        return out
+
 
 def scene_to_dict(scene: Scene) -> dict:
     """The scene as plain JSON-ready data: ``materials`` (type -> E, nu, and name when it has one),
-    ``model``, ``walls`` (every field), ``units``, ``source``."""
-    return {
+    ``model``, ``walls`` (every field), ``units``, ``source``, and ``pair_models`` (``"t1 t2"`` -> model)
+    when the scene has them."""
+    out = {
         "materials": {str(t): {k: v for k, v in asdict(m).items() if k != "name" or v}
                       for t, m in sorted(scene.materials.items())},
         "model": asdict(scene.model),
@@ -188,6 +206,9 @@ def scene_to_dict(scene: Scene) -> dict:
         "units": scene.units,
         "source": scene.source,
     }
+    if scene.pair_models:
+        out["pair_models"] = {f"{t1} {t2}": asdict(m) for (t1, t2), m in sorted(scene.pair_models.items())}
+    return out
 
 
 def scene_from_dict(d: dict) -> Scene:
@@ -200,5 +221,6 @@ def scene_from_dict(d: dict) -> Scene:
         w["model"] = None if w["model"] is None else ContactModel(**w["model"])
         return Wall(**w)
 
+    pairs = {tuple(int(t) for t in key.split()): ContactModel(**m) for key, m in d.get("pair_models", {}).items()}
     return Scene({int(t): Material(**m) for t, m in d["materials"].items()}, ContactModel(**d["model"]),
-                 [wall(w) for w in d["walls"]], d["units"], d["source"])
+                 [wall(w) for w in d["walls"]], d["units"], d["source"], pairs)

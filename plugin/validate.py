@@ -37,7 +37,8 @@ from .errors import ContactError, InputFormatError
 from .frame import Frame, Table
 
 INTEGER_COLUMNS = {"id": np.int64, "type": np.int32, "clump": np.int64, "id1": np.int64, "id2": np.int64,
-                   "wall": np.int64, "type1": np.int64, "type2": np.int64, "history_unknown": np.int8}
+                   "wall": np.int64, "type1": np.int64, "type2": np.int64, "history_unknown": np.int8,
+                   "unknown_modes": np.int8, "unknown_why": np.int8}
 """Integer columns and their canonical dtypes; every other column is a real (float64)."""
 POSITIVE = ("radius", "r1", "r2")
 NOT_NEGATIVE = ("kn", "ks", "kno", "kso", "kr", "ktw", "mb", "mtw", "mass")

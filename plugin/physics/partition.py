@@ -112,23 +112,34 @@ class ContactEnergy(_ByMode):
         return out
 
 
-def law_groups(contacts: Table, scene: Scene) -> list[tuple[ContactModel, slice | np.ndarray]]:
-    """Rows of the contacts each law acts on: the scene's law, or a wall's own law where it differs
-    (LIGGGHTS ``fix wall/gran`` with another model)."""
+def law_groups(contacts: Table, scene: Scene,
+               types: tuple[np.ndarray, np.ndarray] | None = None) -> list[tuple[ContactModel, slice | np.ndarray]]:
+    """Rows of the contacts each law acts on: the scene's law, a wall's own law where it differs (LIGGGHTS
+    ``fix wall/gran`` with another model), and the law of each pair of particle types that has its own
+    (``Scene.pair_models``: then ``types``, the material types of body 1 and body 2 of every contact, are
+    needed)."""
     wall = contacts["wall"]
     groups: list[tuple[ContactModel, np.ndarray]] = []
     default = np.ones(len(wall), dtype=bool)
-    for i, w in enumerate(scene.walls):
-        if w.model is None or w.model == scene.model:
-            continue
-        mask = wall == i
+
+    def add(model: ContactModel, mask: np.ndarray) -> None:
+        nonlocal default
         default &= ~mask
-        for model, other in groups:
-            if model == w.model:
+        for known, other in groups:
+            if known == model:
                 other |= mask
-                break
-        else:
-            groups.append((w.model, mask))
+                return
+        groups.append((model, mask))
+
+    for i, w in enumerate(scene.walls):
+        if w.model is not None and w.model != scene.model:
+            add(w.model, wall == i)
+    if scene.pair_models and len(wall):
+        t1, t2 = (np.asarray(t, dtype=np.int64) for t in types)
+        lo, hi = np.minimum(t1, t2), np.maximum(t1, t2)
+        for (a, b), model in scene.pair_models.items():
+            if model != scene.model:
+                add(model, (wall < 0) & (lo == a) & (hi == b))
     groups.append((scene.model, default))
     if len(groups) == 1:  # one law for every contact: a slice, so that x[rows] is a view, not a copy
         return [(scene.model, slice(None))] if len(wall) else []
@@ -152,10 +163,11 @@ def law_energies(frame: FrameContacts, *, compiled: bool = True) -> ContactLawEn
     contacts, scene = frame.contacts, frame.scene
     n = len(frame)
     _refuse_rigid_pairs(frame)
-    groups = [(model.contact_law, rows) for model, rows in law_groups(contacts, scene)]
+    types = frame.types() if scene.pair_models else None
+    groups = [(model.contact_law, rows) for model, rows in law_groups(contacts, scene, types)]
     # the modes of every law of the scene, whether or not this frame has contacts it acts on: every frame
     # of a run has the same columns (a frame without contacts had only u_n and u_t)
-    laws = [scene.model.contact_law] + [w.model.contact_law for w in scene.walls if w.model is not None]
+    laws = [model.contact_law for model in scene.models()]
     modes = scene_modes(c for law in laws for c in law.modes)
     u = np.zeros((len(modes), n))
     with_adhesion = any(ADHESION_COLUMN in law.modes for law in laws)
@@ -181,6 +193,7 @@ def law_energies(frame: FrameContacts, *, compiled: bool = True) -> ContactLawEn
         bits_without_history = sum(NOT_COMPUTED_BITS[m] for m in law.mode_columns
                                    if m not in result.skipped and m not in result.unknown)
         decided = {m: mask for m, mask in result.unknown.items() if mask.any()}  # rows the law itself says are unknown
+        missing.update({m: why for m, why in result.unknown_why.items() if m in decided and m not in missing})
         if bits or decided or (unknown is not None and bits_without_history):
             not_computed[rows] |= bits
             if unknown is not None and bits_without_history:
