@@ -91,6 +91,8 @@ class Run(ABC):
 
     format_name: ClassVar[str]
     formats: ClassVar[tuple[str, ...]]
+    simulator: ClassVar[str | None] = None
+    """The simulator whose runs the reader reads (``liggghts``, ``lammps``), for ``--simulator``."""
     priority: ClassVar[int] = 0
     cli_group: ClassVar[str] = ""
     cli_options: ClassVar[tuple[Option, ...]] = ()
