@@ -505,6 +505,10 @@ class LammpsModel(ContactLaw):
         else:
             spring_t = zeros
             F_t = viscous_limited(eta_t, vt_h, crit_h)
+        # where the dump holds the step's own force (a wall's contacts array; any row of a frame written at a run's
+        # setup), it is the step's tangential force as written, not a round trip through the damping
+        of_step = np.all(np.stack([np.all(vel[f"{q}_s"] == vel[f"{q}_h"], axis=1) for q in ("dv", "ws")]), axis=0)
+        F_t = np.where(of_step[:, None], p_t, F_t)
         spring_r, F_r = zeros, zeros
         interval_r = np.zeros(n, dtype=bool)
         p_r = zeros

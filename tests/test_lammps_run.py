@@ -1,0 +1,318 @@
+"""demsplit's LAMMPS reader and laws against LAMMPS itself, on the sample runs (``sample_dumps/lammps/``).
+
+Through demsplit's own reader (:class:`demsplit.readers.lammps.LammpsRun`) and laws (``lammps:*``): per contact,
+the normal force rebuilt from demsplit's law equals the one LAMMPS dumped; per atom, the sum of the rebuilt
+contact forces and torques of the step (plus gravity; the pairs' twisting torques, in no dump, solved by least
+squares) equals LAMMPS' dumped ``fx fy fz`` and ``tqx tqy tqz``: this checks the springs the energies rest on.
+Per contact, demsplit's energies equal those of the independent reference ``tests/lammps_reference.py`` and it
+marks unknown exactly what the reference finds unknowable; ``demsplit run`` on every sample conserves every mode.
+"""
+
+from __future__ import annotations
+
+import functools
+from pathlib import Path
+
+import numpy as np
+import pytest
+from demsplit import Material
+from demsplit.cli import main
+from demsplit.compute import Options, frame_tables
+from demsplit.errors import InputFormatError
+from demsplit.physics.modes import NOT_COMPUTED_BITS
+from demsplit.readers import open_run, reader_for
+from demsplit.readers.lammps import LammpsRun
+from demsplit.readers.lammps_balance import twisting_torques
+from demsplit.readers.liggghts import LiggghtsRun
+from demsplit.results import load_results
+from lammps_reference import Run as Reference
+from lammps_reference import atom_sums, resolve_intervals
+from reader_contract import ReaderContract
+
+SAMPLES = Path(__file__).resolve().parent.parent / "sample_dumps" / "lammps"
+TOL = 1e-9
+MATERIALS = {1: Material(1e7, 0.25), 2: Material(2e6, 0.4)}
+WALL = Material(5e7, 0.3)
+
+# case -> (folder, script, dump prefix, the options demsplit needs, the modes no dump holds)
+CASES = {
+    "hertz_mindlin": ("hertz_mindlin", "in.hertz_mindlin", "", {}, ("u_tw", "u_r")),
+    "dmt": ("dmt", "in.dmt", "", {}, ("u_t", "u_r")),
+    "jkr": ("jkr", "in.jkr", "", {}, ("u_tw", "u_t", "u_r", "u_n", "u_adh")),
+    "hooke_region": ("hooke_region", "in.hooke_region", "", {"materials": MATERIALS,
+                                                             "wall_materials": {"shell": WALL}}, ("u_t",)),
+    "periodic": ("periodic", "in.periodic", "", {"materials": {2: MATERIALS[2]}}, ()),
+    "gran_hooke_history": ("legacy", "in.hooke_history", "hooke_history_",
+                           {"materials": MATERIALS, "wall_materials": {"floor": WALL}}, ()),
+    "gran_hertz_history": ("legacy", "in.hertz_history", "hertz_history_",
+                           {"materials": MATERIALS, "wall_materials": {"floor": WALL, "cyl": WALL}}, ()),
+    "gran_hooke": ("legacy", "in.hooke", "hooke_",
+                   {"materials": MATERIALS, "wall_materials": {"floor": WALL, "sides": WALL}}, ()),
+}
+
+
+def script_of(case: str) -> Path:
+    folder, script, *_ = CASES[case]
+    return SAMPLES / folder / script
+
+
+@functools.cache
+def assembled(case: str) -> tuple[LammpsRun, list]:
+    """Every frame of a sample as demsplit's reader assembles it (contacts, springs, step forces)."""
+    run = open_run(script_of(case), **CASES[case][3])
+    out = []
+    for k in range(len(run)):
+        af = run.atoms.frame(k, columns=run._atom_columns())
+        out.append(run.assemble(af, run._local_at(int(run.steps[k]))))
+    return run, out
+
+
+@functools.cache
+def reference(case: str) -> tuple[Reference, list]:
+    folder, script, prefix, *_ = CASES[case]
+    ref = Reference(SAMPLES / folder, script, prefix)
+    frames = []
+    for frame in ref.frames():
+        sums = atom_sums(frame, ref.models)
+        frames.append((frame, resolve_intervals(frame, sums, TOL)))
+    return ref, frames
+
+
+def _rel(a: np.ndarray, b: np.ndarray, scale: np.ndarray) -> np.ndarray:
+    diff = np.abs(a - b) if a.ndim == 1 else np.linalg.norm(a - b, axis=1)
+    return diff / np.where(scale > 0, scale, 1.0)
+
+
+# ------------------------------------------------------------------------------------------- the reader's contract
+
+
+class TestHertzMindlinSample(ReaderContract):
+    reader = LammpsRun
+    path = SAMPLES / "hertz_mindlin" / "in.hertz_mindlin"
+
+
+class TestLegacyHookeHistorySample(ReaderContract):
+    reader = LammpsRun
+    path = SAMPLES / "legacy" / "in.hooke_history"
+    options = CASES["gran_hooke_history"][3]
+
+
+def test_a_lammps_script_is_told_from_a_liggghts_one():
+    """The scripts' own words decide; --simulator decides where they cannot."""
+    assert reader_for(script_of("hertz_mindlin")) is LammpsRun
+    assert reader_for(script_of("gran_hooke")) is LammpsRun
+    liggghts = SAMPLES.parent / "liggghts" / "packing" / "in.packing"
+    assert reader_for(liggghts) is LiggghtsRun
+    assert reader_for(liggghts, "lammps") is LammpsRun
+    assert reader_for(script_of("dmt"), "liggghts") is LiggghtsRun
+
+
+# ------------------------------------------------------------------------------------------- per contact
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_rebuilt_normal_force_is_the_dumped_one(case):
+    """Every pair row and wall contact LAMMPS wrote: the normal force demsplit's law gives (damping at the
+    velocities LAMMPS used) is the dumped one, to 1e-9 of |F_ne| + |damping|; the rows it cannot compare are the
+    jkr rows single() zeroed, and every other row was compared."""
+    ref, frames = reference(case)
+    for a, (frame, _) in zip(assembled(case)[1], frames):
+        r, c = a.rebuilt, a.contacts
+        written = ~c["neck"] & ~c["extra_contact"]
+        compared = written & np.isfinite(r.fn_rebuilt)
+        assert compared.sum() == len(frame.pairs.i) + sum(len(w.i) for w in frame.walls) \
+            - int((frame.pairs.extra["why"] == "jkr_zeroed").sum())
+        err = _rel(r.fn_rebuilt[compared], c["fn_dumped"][compared], r.fn_scale[compared])
+        assert err.max() < TOL, (a.step, err.max())
+
+
+def test_a_wrong_coefficient_is_an_error_naming_the_line(tmp_path):
+    """A script whose model differs from the run's (k_n of hooke_region's 1-1 pairs) is refused by the first row
+    whose dumped normal force it does not give."""
+    text = script_of("hooke_region").read_text().replace("1 1 hooke 800.0", "1 1 hooke 801.0")
+    copy = _copy_sample("hooke_region", tmp_path, text)
+    run = open_run(copy, **CASES["hooke_region"][3])
+    with pytest.raises(InputFormatError) as err:
+        run.frame(0)
+    message = str(err.value)
+    assert "pairs.txt.gz:" in message and "timestep 51000" in message and "lammps:hooke" in message
+    assert err.value.line > 9  # a row of the frame, after its header
+
+
+# ------------------------------------------------------------------------------------------- per atom
+
+
+def _balances(a, gravity) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Per atom: the relative force and torque residuals of demsplit's rebuilt step (NaN where a term is in no
+    dump), gravity from the script, the twisting torques solved."""
+    r, atoms = a.rebuilt, a.atoms
+    n = len(atoms["r"])
+    pair = a.rows2 >= 0
+
+    def total(on1, on2):
+        out, scale = np.zeros((n, 3)), np.zeros(n)
+        np.add.at(out, a.rows1, on1)
+        np.add.at(out, a.rows2[pair], on2[pair])
+        np.add.at(scale, a.rows1, np.linalg.norm(on1, axis=1))
+        np.add.at(scale, a.rows2[pair], np.linalg.norm(on2[pair], axis=1))
+        return out, scale
+
+    g = np.asarray(gravity)
+    F, Fs = total(r.force, -r.force)
+    weight = atoms["m"][:, None] * g
+    rel_f = np.linalg.norm(atoms["f"] - weight - F, axis=1) / (Fs + np.linalg.norm(weight, axis=1))
+    T, Ts = total(r.torque1, r.torque2)
+    known = np.isfinite(T).all(1)
+    res = np.where(known[:, None], atoms["tq"] - np.nan_to_num(T), 0.0)
+    n_L = -np.stack([a.contacts[c] for c in ("nx", "ny", "nz")], -1)
+    twist = np.flatnonzero(r.twisting & pair & np.isfinite(r.torque1).all(1))
+    tau = twisting_torques(res, a.rows1[twist], a.rows2[twist], n_L[twist], known)
+    for rows, sign in ((a.rows1[twist], 1.0), (a.rows2[twist], -1.0)):
+        np.add.at(res, rows, -sign * tau[:, None] * n_L[twist])
+        np.add.at(Ts, rows, np.abs(tau))
+    rel_t = np.where(known, np.linalg.norm(res, axis=1) / np.where(Ts > 0, Ts, 1.0), np.nan)
+    return rel_f, rel_t, np.isfinite(F).all(1), known
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_atom_force_and_torque_balance(case):
+    """Σ rebuilt contact forces + m g = the dumped fx fy fz, Σ rebuilt torques + the solved twisting torques = the
+    dumped tqx tqy tqz, to 1e-9, for every atom whose terms are all in the dumps; the atoms left out are those the
+    reference leaves out (its rule-flagged contacts and necks, and for the torque the walls with a rolling model)."""
+    ref, frames = reference(case)
+    run, steps = assembled(case)
+    for a, (frame, _) in zip(steps, frames):
+        rel_f, rel_t, known_f, known_t = _balances(a, run.script.gravity[a.run])
+        assert rel_f[known_f].max() < TOL, (a.step, rel_f[known_f].max())
+        assert rel_t[known_t].max() < TOL, (a.step, np.nanmax(rel_t[known_t]))
+        sums = atom_sums(frame, ref.models)
+        ref_known = ~np.isnan(sums["F"]).any(1)
+        order = np.argsort(a.atoms["id"])
+        assert np.array_equal(known_f[order], ref_known[np.argsort(frame.atoms.ids)])
+        assert known_f.sum() > 0.8 * len(known_f)
+
+
+# ------------------------------------------------------------------------------------------- energies
+
+
+def _modes_of(a, run: LammpsRun) -> dict[str, np.ndarray]:
+    """demsplit's energies of every contact of an assembled step (NaN where not computed)."""
+    from demsplit.physics.partition import contact_energies
+
+    frame = run.to_frame(a)
+    e = contact_energies(frame.contacts, run.scene, frame.particles)
+    out = {m.column: e.u[k].copy() for k, m in enumerate(e.modes)}
+    if e.u_adh is not None:
+        out["u_adh"] = e.u_adh.copy()
+    for mode, values in out.items():
+        values[(e.not_computed & NOT_COMPUTED_BITS[mode]) != 0] = np.nan
+    return out
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_energies_equal_the_reference_per_contact(case):
+    """Per pair row and wall contact: u_n, u_t, u_r, u_adh equal the reference's to 1e-9 (a spring the atoms'
+    balance moved: the reference's resolution), and a value is not computed exactly where the reference has none."""
+    run, steps = assembled(case)
+    ref, frames = reference(case)
+    for a, (frame, resolved) in zip(steps, frames):
+        mine = _modes_of(a, run)
+        c = a.contacts
+        written = ~c["neck"] & ~c["extra_contact"]
+        parts = [frame.pairs, *frame.walls]
+        keys_ref = np.concatenate([_keys(p.i, p.j, frame.atoms.ids, k) for k, p in enumerate(parts)])
+        wall_of = {w.kind.split(":")[1]: k + 1 for k, w in enumerate(frame.walls)}
+        fix_ids = [w.name for w in run.scene.walls]
+        kind = np.where(c["wall"] < 0, 0, np.array([wall_of.get(f, -1) for f in fix_ids] + [0])[c["wall"]])
+        ids2 = np.where(c["wall"] < 0, c["id2"], -1)
+        keys_mine = _pack(c["id1"], ids2, kind)
+        assert np.array_equal(np.sort(keys_mine[written]), np.sort(keys_ref))
+        where = {int(keys_mine[n]): n for n in np.flatnonzero(written)}
+        rows = np.array([where[int(k)] for k in keys_ref])
+        for mode in ("u_n", "u_t", "u_r", "u_adh"):
+            theirs = np.concatenate([p.energies[mode] for p in parts])
+            if mode == "u_t":
+                theirs = _with_resolution(theirs, frame, resolved)
+            ours = mine.get(mode, np.zeros(len(keys_mine)))[rows]
+            assert np.array_equal(np.isnan(ours), np.isnan(theirs)), mode
+            known = ~np.isnan(theirs)
+            scale = np.maximum(np.abs(theirs[known]), 1e-300)
+            assert (np.abs(ours[known] - theirs[known]) <= TOL * scale).all(), (mode, a.step)
+        twist = np.concatenate([p.twist if p.twist is not None else np.zeros(len(p.i), bool) for p in parts])
+        if twist.any():
+            assert np.all(np.isnan(mine["u_tw"][rows][twist]))
+
+
+def _pack(i: np.ndarray, j: np.ndarray, kind: np.ndarray) -> np.ndarray:
+    return (np.asarray(i, np.int64) * 1_000_003 + (np.asarray(j, np.int64) + 1)) * 16 + np.asarray(kind, np.int64)
+
+
+def _keys(i: np.ndarray, j: np.ndarray, ids: np.ndarray, kind: int) -> np.ndarray:
+    return _pack(ids[i], np.where(j >= 0, ids[np.maximum(j, 0)], -1), np.full(len(i), kind))
+
+
+def _with_resolution(u_t: np.ndarray, frame, resolved: list) -> np.ndarray:
+    """The reference's pair u_t with the springs its force balance moved: u scales with |F_el|^2."""
+    u_t = u_t.copy()
+    p = frame.pairs
+    for r in resolved:
+        c = r["row"]
+        w = p.extra["pt"][c] / np.linalg.norm(p.extra["pt"][c])
+        moved = p.F_el[c] + r["dL"] * w
+        u_t[c] *= (moved @ moved) / (p.F_el[c] @ p.F_el[c])
+    return u_t
+
+
+# ------------------------------------------------------------------------------------------- demsplit run
+
+
+def _cli(case: str, out: Path, allow: bool) -> list[str]:
+    """``demsplit run`` of a sample with the material options its models need (and ``--allow-missing`` for
+    what no dump holds)."""
+    options = CASES[case][3]
+    args = ["run", str(script_of(case)), "-o", str(out), "-q"]
+    for t, m in options.get("materials", {}).items():
+        args += ["--material", f"{t}:{m.E!r}:{m.nu!r}"]
+    for fid, m in options.get("wall_materials", {}).items():
+        args += ["--wall-material", f"{fid}:{m.E!r}:{m.nu!r}"]
+    for mode in CASES[case][4] if allow else ():
+        args += ["--allow-missing", mode]
+    return args
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_demsplit_run_succeeds_and_conserves_every_mode(case, tmp_path):
+    """``demsplit run`` on the sample succeeds; per frame and mode the particles and walls hold the contacts'
+    energy (the stored values: a contact not computed holds 0 with its bit, the bodies its known part); the
+    stored contacts' not-computed bits are those of the reader's rebuild."""
+    assert main(_cli(case, tmp_path / "out.h5", allow=True)) == 0
+    run, steps = assembled(case)
+    options = Options(allow_missing=CASES[case][4])
+    stored = load_results(tmp_path / "out.h5").contacts
+    for a in steps:
+        tables = frame_tables(run.to_frame(a), run.scene, options)
+        c, p, w = tables["contacts"], tables["particles"], tables["walls"]
+        for mode in [m for m in ("u_n", "u_t", "u_r", "u_tw", "u_adh") if m in c]:
+            total = c[mode].sum()
+            assert abs(p[mode].sum() + w[mode].sum() - total) <= 1e-12 * max(abs(total), 1e-300), mode
+        mine = stored[stored["step"] == a.step]
+        assert np.array_equal(mine["not_computed"].to_numpy(), c["not_computed"])
+        assert len(mine) == len(a.contacts["delta"])
+
+
+@pytest.mark.parametrize("case", [c for c in CASES if CASES[c][4]])
+def test_what_no_dump_holds_is_refused_without_allow_missing(case, tmp_path, capsys):
+    """Each mode no dump holds refuses the run, naming it and the option; with it the run goes on."""
+    assert main(_cli(case, tmp_path / "out.h5", allow=False)) == 2
+    err = capsys.readouterr().err
+    assert "--allow-missing" in err and any(f"--allow-missing {m}" in err for m in CASES[case][4])
+
+
+def _copy_sample(case: str, tmp_path: Path, text: str) -> Path:
+    """The sample's dumps linked into tmp_path beside a script of ``text``."""
+    folder = SAMPLES / CASES[case][0]
+    for f in folder.glob("*.gz"):
+        (tmp_path / f.name).symlink_to(f)
+    path = tmp_path / CASES[case][1]
+    path.write_text(text)
+    return path
