@@ -52,11 +52,12 @@ def _reader_options(args: argparse.Namespace) -> dict:
             value = getattr(args, _dest(opt), None)
             if value not in (None, False, []):
                 given[opt.flags] = value
+    simulator = getattr(args, "simulator", None)
     if not given:
-        return {}
+        return {} if simulator is None else {"simulator": simulator}
     inputs = args.input if isinstance(args.input, list) else [args.input]
-    cls = reader_for(inputs[0])
-    options: dict = {}
+    cls = reader_for(inputs[0], simulator)
+    options: dict = {} if simulator is None else {"simulator": simulator}
     for flags, value in given.items():
         opt = next((o for o in cls.cli_options if o.flags == flags), None)
         if opt is None:
@@ -94,6 +95,10 @@ def _add_input(p: argparse.ArgumentParser) -> None:
                    help="the run: " + "; ".join(f for cls in readers() for f in cls.formats)
                    + " (several files are one run only where the reader says so); omit it to describe a LIGGGHTS "
                    "scene with --atoms, --contacts, --material and --columns")
+    p.add_argument("--simulator", choices=sorted({cls.simulator for cls in readers() if cls.simulator}),
+                   help="the simulator whose run the input is, where its words cannot tell (a LAMMPS and a LIGGGHTS "
+                   "script are text in the same language; demsplit recognises pair_style granular and gran/* as "
+                   "LAMMPS, pair_style gran model ... as LIGGGHTS)")
     groups: dict[str, argparse._ArgumentGroup] = {}
     added: set[tuple[str, ...]] = set()
     for cls in readers():

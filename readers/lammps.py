@@ -239,8 +239,9 @@ class LammpsRun(Run):
         ntypes = script.ntypes or max(found, default=0)
         absent = [t for t in range(1, ntypes + 1) if t not in found]
         if absent:
-            raise MaterialError(f"atom type(s) {absent} have no E and nu: their pair_coeff line's model carries none "
-                                f"({script.pair_style}).", file=script.path,
+            laws = sorted({script.pair_models[(t, t)].law for t in absent if (t, t) in script.pair_models})
+            raise MaterialError(f"atom type(s) {absent} have no E and nu: the model of their pair ({', '.join(laws)}) "
+                                "carries none.", file=script.path,
                                 fix="give them with --material TYPE:E:NU (Pa, -), e.g. "
                                     + " ".join(f"--material {t}:1e7:0.3" for t in absent[:2]) + ".")
         unknown = sorted(set(wall_materials) - {w.id for w in script.walls})

@@ -316,3 +316,91 @@ def _copy_sample(case: str, tmp_path: Path, text: str) -> Path:
     path = tmp_path / CASES[case][1]
     path.write_text(text)
     return path
+
+
+# ------------------------------------------------------------------------------------------- refusals
+
+
+def _refused(case: str, tmp_path: Path, old: str, new: str, *extra: str) -> str:
+    """``demsplit run`` of the sample whose script has ``old`` replaced by ``new``: its exit status must be 2 and
+    its one message is returned."""
+    text = script_of(case).read_text()
+    assert old in text
+    path = _copy_sample(case, tmp_path, text.replace(old, new))
+    args = _cli(case, tmp_path / "out.h5", allow=True)
+    args[1] = str(path)
+    import subprocess
+    import sys
+
+    proc = subprocess.run([sys.executable, "-m", "demsplit.cli", *args, *extra], capture_output=True, text=True)
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.count("\n") == 1 and "Traceback" not in proc.stderr
+    return proc.stderr
+
+
+def test_g_atom_dump_is_refused_with_the_fix(tmp_path):
+    err = _refused("dmt", tmp_path, "dump_modify     dsAtoms format float %.17g sort id", "dump_modify dsAtoms sort id")
+    assert "dump dsAtoms" in err and "%g" in err and "dump_modify dsAtoms format float %.17g" in err
+
+
+def test_g_pair_dump_is_refused_with_the_fix(tmp_path):
+    err = _refused("dmt", tmp_path, "dump_modify     dsPairs format float %.17g", "dump_modify dsPairs format float %g")
+    assert "dump dsPairs" in err and "overlap" in err and "dump_modify dsPairs format float %.17g" in err
+
+
+def test_cutoff_type_is_refused_with_the_fix(tmp_path):
+    err = _refused("dmt", tmp_path, "p10 p11 p12 cutoff radius", "p10 p11 p12")
+    assert "compute dsP" in err and "cutoff type" in err and "in.dmt:" in err and "cutoff radius" in err
+
+
+def test_a_pair_quantity_missing_is_refused(tmp_path):
+    err = _refused("dmt", tmp_path, "c_dsP[16] c_dsP[17]", "c_dsP[16]")
+    assert "p12" in err and "dump dsPairs" in err
+
+
+def test_a_wall_column_missing_is_refused(tmp_path):
+    """The script's wall fix 'cyl' renamed: the atom dump has no f_cyl2 columns."""
+    text = script_of("jkr").read_text().replace("fix             cyl all", "fix             cyl2 all")
+    path = _copy_sample("jkr", tmp_path, text)
+    with pytest.raises(InputFormatError) as err:
+        open_run(path)
+    assert "f_cyl2[1]" in str(err.value) and "atoms.txt.gz" in str(err.value)
+
+
+def test_a_cross_pair_left_to_mixing_is_refused_where_it_touches(tmp_path):
+    old = ("pair_coeff      1 2 dmt 3892944.0389294405 4.0e6 0.0 0.06 &\n"
+           "                tangential mindlin_rescale 2987861.811391223 1.0 0.55 rolling sds 15.0 0.002 0.12\n")
+    err = _refused("dmt", tmp_path, old, "")
+    assert "pair_coeff 1 2" in err and "mix" in err
+
+
+def test_a_jkr_wall_is_refused(tmp_path):
+    err = _refused("jkr", tmp_path, "fix             floor all wall/gran granular hertz/material 5.0e7 4.0e6 0.3",
+                   "fix             floor all wall/gran granular jkr 5.0e7 4.0e6 0.3 0.02")
+    assert "jkr wall" in err and "in.jkr:" in err
+
+
+def test_types_without_e_and_nu_are_refused_naming_the_option(tmp_path, capsys):
+    assert main(["run", str(script_of("hooke_region")), "-o", str(tmp_path / "out.h5"), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "--material 1:" in err and "lammps:hooke" in err
+
+
+def test_a_wall_model_without_e_and_nu_is_refused_naming_the_option(tmp_path, capsys):
+    args = ["run", str(script_of("hooke_region")), "-o", str(tmp_path / "out.h5"), "-q", "--material", "1:1e7:0.25",
+            "--material", "2:2e6:0.4"]
+    assert main(args) == 2
+    assert "--wall-material shell:E:NU" in capsys.readouterr().err
+
+
+def test_a_wall_without_contacts_is_refused_unless_allowed(tmp_path):
+    old = "tangential mindlin NULL 1.0 0.4 zplane 0.0 NULL contacts"
+    err = _refused("hertz_mindlin", tmp_path, old, "tangential mindlin NULL 1.0 0.4 zplane 0.0 NULL")
+    assert "floor" in err and "contacts" in err and "--allow-missing floor" in err
+
+
+def test_simulator_option_picks_the_reader(tmp_path, capsys):
+    """--simulator liggghts reads a LAMMPS script as LIGGGHTS would: it has no 'pair_style gran model ...'."""
+    args = _cli("dmt", tmp_path / "out.h5", allow=True) + ["--simulator", "liggghts"]
+    assert main(args) == 2
+    assert "pair_style 'granular' is not supported" in capsys.readouterr().err
