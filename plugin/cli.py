@@ -261,7 +261,7 @@ def cmd_prepare(args: argparse.Namespace) -> int:
         print(prepared.diff(script.read_text(), str(script)))
         where = f"in {out.parent}" if len(paths) == 1 else f"one after the other in {out.parent}"
         print(f"wrote {', '.join(map(str, paths))}: run {'it' if len(paths) == 1 else 'them'} with "
-              f"{'; '.join(f'liggghts -in {p.name}' for p in paths)} {where}, then "
+              f"{'; '.join(f'{prepared.program} -in {p.name}' for p in paths)} {where}, then "
               + "; ".join(f"'demsplit run {p} -o results{'' if k == 0 else k + 1}.h5'" for k, p in enumerate(paths)))
     return 0
 
@@ -367,7 +367,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = add("yade-path", "print the directory to site.addsitedir() inside YADE so that 'import demsplit.yade' works")
     p.set_defaults(func=cmd_yade_path)
 
-    p = add("prepare", "write a copy of a LIGGGHTS input script with the dumps demsplit needs, and show the diff")
+    p = add("prepare", "write a copy of a LIGGGHTS or LAMMPS input script with the dumps demsplit needs, and show "
+                       "the diff")
     p.add_argument("input", help="the LIGGGHTS input script")
     p.add_argument("-o", "--output", help="prepared script (default: INPUT.demsplit next to the input; a script "
                    "split at a mesh wall fix after a run also gets OUTPUT.part2, ...)")

@@ -77,6 +77,8 @@ class Prepared:
     notes: list[str]
     part2: Prepared | None = None
     """When the script was split at a mesh wall fix after a run, the rest of it (this is then part 1)."""
+    program: str = "liggghts"
+    """The simulator's program that runs the prepared script."""
 
     def diff(self, original: str, name: str) -> str:
         """A unified diff from the original script to the prepared one (to each part in turn when split)."""
@@ -154,6 +156,12 @@ def prepare_script(path: str | Path) -> Prepared:
     """The script at ``path`` with the computes and dumps demsplit needs, split where a mesh wall fix
     follows a run (module docstring)."""
     path = Path(path)
+    from .readers.lammps_script import is_lammps_script
+
+    if is_lammps_script(path.read_bytes()):  # a LAMMPS GRANULAR script: its own output (docs/lammps-output.md)
+        from .prepare_lammps import prepare_lammps_script
+
+        return prepare_lammps_script(path)
     script = read_script(path)
     law = script.scene.model.contact_law
     # the history each compute writes: the pair and the mesh-wall model's own, computeElasticPotential's too

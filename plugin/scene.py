@@ -75,6 +75,10 @@ class ContactModel:
         return self.contact_law.describe()
 
 
+UNITS = ("si", "lj")
+"""A scene's units: SI, or LAMMPS' ``lj`` (mass, length and time of the run's own scales; energies in m sigma^2/tau^2),
+which demsplit computes in as given and labels as such."""
+
 WALL_KINDS = ("plane", "cylinder", "mesh", "yade_wall", "facet", "box")
 
 
@@ -118,7 +122,7 @@ class Wall:
 
 @dataclass
 class Scene:
-    """Materials per type, the contact model and the walls of a run.
+    """Materials per type, the contact model and the walls of a run (``units``: :data:`UNITS`).
 
     ``pair_models``: the model of each pair of particle types ``(t1, t2)`` (t1 <= t2) whose model is not
     ``model`` (LAMMPS ``pair_coeff i j`` lines give each type pair its own); empty when one model acts on
@@ -132,9 +136,9 @@ class Scene:
     pair_models: dict[tuple[int, int], ContactModel] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        if self.units != "si":
+        if self.units not in UNITS:
             raise UnsupportedModelError(
-                f"units {self.units!r} are not supported; demsplit works in SI.",
+                f"units {self.units!r} are not supported; demsplit works in SI (or in LAMMPS' lj units, as given).",
                 fix="run the simulation with 'units si'.",
             )
         self._table_cache: tuple[np.ndarray, np.ndarray] | None = None

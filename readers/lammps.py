@@ -269,7 +269,8 @@ class LammpsRun(Run):
             wall_index.append(k)
         models = script.pair_models
         first = models.get((1, 1)) or next(iter(models.values()))
-        scene = Scene(found, first, walls, "si", str(script.path), {k: m for k, m in models.items() if m != first})
+        scene = Scene(found, first, walls, script.units, str(script.path),
+                      {k: m for k, m in models.items() if m != first})
         return scene, wall_index
 
     # -- frames -------------------------------------------------------------------------------------------------
@@ -332,8 +333,8 @@ class LammpsRun(Run):
             rows1.append(i)
             rows2.append(j)
             lines.append((str(af.file), af.first_line + i if af.first_line is not None else None))
-            notes.append(f"{len(i)} jkr pair(s) apart by less than their pull-off distance may hold a neck, which no "
-                         "dump says: their energies are not computed")
+            notes.append("jkr pairs apart by less than their pull-off distance may hold a neck, which no dump says: "
+                         "their energies are not computed (the contacts' not_computed column marks them)")
         wall_parts, wall_rows, wall_notes = join.walls(af, atoms, run)
         notes += wall_notes
         for part, i in zip(wall_parts, wall_rows):
@@ -348,7 +349,7 @@ class LammpsRun(Run):
         contacts = {c: np.concatenate([p[c] for p in parts]) for c in parts[0]} if parts else {}
         r1 = np.concatenate(rows1) if rows1 else np.zeros(0, int)
         r2 = np.concatenate(rows2) if rows2 else np.zeros(0, int)
-        rebuilt = join.rebuild(contacts, particles, run, self.walls_first_run) if parts else None
+        rebuilt = join.rebuild(contacts, particles, run, self.walls_first_run) if len(r1) else None
         assembled = Assembled(step, particles, contacts, box, atoms, r1, r2, rebuilt, lines, run, notes,
                               (str(af.file),) + ((str(lf.file),) if lf is not None else ()))
         if rebuilt is not None:
@@ -390,24 +391,22 @@ class LammpsRun(Run):
 
     def to_frame(self, a: Assembled) -> Frame:
         """The Frame of an assembled step: the canonical contact columns, the rebuilt springs and what is unknown."""
-        contacts: dict[str, np.ndarray] = {}
-        if a.rebuilt is not None:
-            keep = ("id1", "id2", "wall", "delta", "nx", "ny", "nz", "x1", "y1", "z1", "r1", "r2", "wall_curvature")
+        keep = ("id1", "id2", "wall", "delta", "nx", "ny", "nz", "x1", "y1", "z1", "r1", "r2", "wall_curvature")
+        laws = [m.contact_law for m in self.scene.models()]
+        rolling = any("u_r" in law.modes for law in laws)
+        springs = [*(SPRING_T if any("u_t" in law.modes for law in laws) else ()), *(SPRING_R if rolling else ())]
+        if a.rebuilt is None:  # no contact: the columns of every other frame, empty
+            contacts = {c: np.zeros(0, dtype=np.int64 if c in ("id1", "id2", "wall") else np.float64)
+                        for c in (*keep, *springs)}
+            contacts[UNKNOWN_MODES] = contacts[UNKNOWN_WHY] = np.zeros(0, dtype=np.int8)
+        else:
             contacts = {c: a.contacts[c] for c in keep}
-            laws = [m.contact_law for m in self.scene.models()]
-            rolling = any("u_r" in law.modes for law in laws)
             bits, why = unknown_columns(a.rebuilt, a.contacts["extra_contact"], a.contacts["neck"], rolling)
             lost = bits != 0
-            if any("u_t" in law.modes for law in laws):
-                for k, c in enumerate(SPRING_T):
-                    contacts[c] = np.where(lost, 0.0, a.rebuilt.spring_t[:, k])
-            if rolling:
-                for k, c in enumerate(SPRING_R):
-                    contacts[c] = np.where(lost, 0.0, a.rebuilt.spring_r[:, k])
+            vectors = {**dict(zip(SPRING_T, a.rebuilt.spring_t.T)), **dict(zip(SPRING_R, a.rebuilt.spring_r.T))}
+            for c in springs:
+                contacts[c] = np.where(lost, 0.0, vectors[c])
             contacts[UNKNOWN_MODES], contacts[UNKNOWN_WHY] = bits, why
-        else:
-            contacts = {c: np.zeros(0, dtype=np.int64 if c in ("id1", "id2", "wall") else np.float64)
-                        for c in ("id1", "id2", "wall", "delta", "nx", "ny", "nz", "x1", "y1", "z1", "r1", "r2")}
         present = tuple(k for k, w in enumerate(self.script.walls) if w.first_run <= a.run
                         and (w.end_run is None or a.run < w.end_run))
         time = None if self.script.timestep is None else a.step * self.script.timestep

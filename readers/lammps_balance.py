@@ -75,8 +75,8 @@ def close_balances(a, gravity: tuple[float, float, float] | None) -> None:
     _close_torques(a, r, n_L)
     notes = []
     if resolved:
-        notes.append(f"{resolved} spring(s) that single() wrote at their limit but the step had not capped were "
-                     "pinned by the atoms' force balance")
+        notes.append("springs that single() wrote at their limit but the step had not capped were pinned by the atoms' "
+                     "force balance")
     a.notes += notes
 
 
@@ -120,7 +120,7 @@ def _close_forces(a, r: Rebuilt, n_L: np.ndarray, weight: np.ndarray) -> int:
     nxd = np.cross(n_L[candidates], dF)
     r.torque1[candidates] -= r.arm1[candidates, None] * nxd
     r.torque2[candidates] -= r.arm2[candidates, None] * nxd
-    return int(np.count_nonzero(np.abs(dL) > 0))
+    return int(np.count_nonzero(np.abs(dL) > TOLERANCE * r.limit_t[candidates]))
 
 
 def _close_torques(a, r: Rebuilt, n_L: np.ndarray) -> None:

@@ -118,7 +118,7 @@ class LammpsJoin:
         else:
             v_h = v - 0.5 * dt * f / m[:, None]
             w_h = w - 0.5 * dt * tq / (0.4 * m * r * r)[:, None]
-        return {"id": af.int_column("id"), "type": af.int_column("type"), "x": x, "v": v, "w": w, "f": f, "tq": tq,
+        return {"id": integers(af, "id"), "type": integers(af, "type"), "x": x, "v": v, "w": w, "f": f, "tq": tq,
                 "r": r, "m": m, "v_h": v_h, "w_h": w_h}
 
     def setup_frame(self, step: int) -> bool:
@@ -134,7 +134,7 @@ class LammpsJoin:
         names = self.pair_names
         col = {k: np.asarray(lf.columns[t], dtype=np.float64) for k, t in names.items() if k not in ("patom1",
                                                                                                      "patom2")}
-        id1, id2 = lf.int_column(names["patom1"]), lf.int_column(names["patom2"])
+        id1, id2 = integers(lf, names["patom1"]), integers(lf, names["patom2"])
         try:
             i, j = index.rows(id1), index.rows(id2)
         except ContactError as exc:
@@ -160,7 +160,7 @@ class LammpsJoin:
                  if np.any(m.contact_law.reach(np.ones(1)) > 0)}
         x, r, t = atoms["x"], atoms["r"], atoms["type"]
         found_i, found_j = [np.zeros(0, dtype=np.int64)], [np.zeros(0, dtype=np.int64)]
-        if reach:
+        if reach and len(r):
             far = 2.0 * r.max() + max(float(law.reach(np.array([r.max()]))[0]) for law in reach.values())
             for lo in range(0, len(r), NEIGHBOUR_BLOCK):
                 i = np.arange(lo, min(lo + NEIGHBOUR_BLOCK, len(r)))
@@ -255,9 +255,9 @@ class LammpsJoin:
         out["extra_contact"] = extra
         notes = []
         if extra.any():
-            notes.append(f"fix {fix.id}: {int(extra.sum())} particle(s) touch a second surface of region "
-                         f"{fix.region.id}; the fix's contacts array holds the last contact only, so the other's "
-                         "tangential spring is not computed")
+            notes.append(f"fix {fix.id}: particles touching a second surface of region {fix.region.id} have that "
+                         "contact's tangential spring not computed (the fix's contacts array holds the last contact "
+                         "only)")
         return out, i, notes
 
     def region_turn(self, fix: WallFix, step: int, run: int) -> tuple[float, np.ndarray | None]:
@@ -326,6 +326,22 @@ class LammpsJoin:
                 file=self.script.path, fix=f"add 'pair_coeff {a} {b} ...' to the script and rerun (for material "
                 "models: E = 2E*, nu = 0, k_t = 8G* of the two materials give the mixed values).")
         return model
+
+
+def integers(f: DumpFrame, name: str) -> np.ndarray:
+    """An integer column of a LAMMPS dump as int64: LAMMPS prints ids and types with ``%d`` whatever the float
+    format, so every value is exact (a frame whose integer-looking columns the parser read as reals, because one
+    of them held a real, keeps their values); a value that is not an integer is an error naming its line."""
+    values = f.columns[name]
+    if values.dtype.kind in "iu":
+        return values.astype(np.int64, copy=False)
+    bad = ~(values == np.rint(values)) | ~(np.abs(values) < 2.0**53)
+    if bad.any():
+        row = int(np.flatnonzero(bad)[0])
+        raise InputFormatError(f"column '{name}' must hold integers, but row {row + 1} of the frame holds "
+                               f"{values[row].item()!r}.", file=f.file, step=f.step, line=f.line_of(row),
+                               fix="pass the dump the script's line writes (LAMMPS prints ids with %d).")
+    return values.astype(np.int64)
 
 
 def pair_table(atoms: dict, i: np.ndarray, j: np.ndarray, d: np.ndarray, dist: np.ndarray,

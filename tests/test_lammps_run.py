@@ -404,3 +404,56 @@ def test_simulator_option_picks_the_reader(tmp_path, capsys):
     args = _cli("dmt", tmp_path / "out.h5", allow=True) + ["--simulator", "liggghts"]
     assert main(args) == 2
     assert "pair_style 'granular' is not supported" in capsys.readouterr().err
+
+
+# ------------------------------------------------------------------------------------------- prepare and lmp
+
+
+def _without_demsplit_lines(case: str) -> str:
+    """The sample's script as a user would have written it: no demsplit computes and dumps, no 'contacts'."""
+    text = script_of(case).read_text()
+    head, _, tail = text.partition("# demsplit:")
+    return head.replace(" contacts", "") + "run             " + tail.rsplit("run", 1)[1].split()[0] + "\n"
+
+
+def test_prepare_adds_what_demsplit_reads(tmp_path, capsys):
+    path = tmp_path / "in.hertz_mindlin"
+    path.write_text(_without_demsplit_lines("hertz_mindlin"))
+    assert main(["prepare", str(path), "-o", str(tmp_path / "in.prepared")]) == 0
+    out = capsys.readouterr().out
+    text = (tmp_path / "in.prepared").read_text()
+    assert text.count(" contacts") == 2 and "lmp -in in.prepared" in out
+    assert "pair/local dist force fx fy fz p1 p2 p3 p4 p5 p6 p7 p8 p9 p10 p11 p12 cutoff radius" in text
+    assert "property/local patom1 patom2 ptype1 ptype2 cutoff radius" in text
+    assert text.count("format float %.17g") == 2 and "f_cyl[8]" in text and "f_floor[8]" in text
+    assert text.index("dump dsAtoms") < text.index("run             ${nfall}")
+    assert main(["prepare", str(tmp_path / "in.prepared"), "-o", str(tmp_path / "again")]) == 0
+    assert "nothing to add" in capsys.readouterr().out
+
+
+@pytest.mark.simulator
+def test_a_prepared_script_run_by_lmp_is_read_and_checked(tmp_path):
+    """The hertz_mindlin scene without demsplit's lines, prepared, run by Debian's lmp (60 + 60 particles): demsplit
+    reads it (every dumped normal force checked), its atoms' balances close, and demsplit run succeeds."""
+    from conftest import require_program
+
+    lmp = require_program("lmp", package="lammps")
+    import subprocess
+
+    (tmp_path / "in.user").write_text(_without_demsplit_lines("hertz_mindlin"))
+    assert main(["prepare", str(tmp_path / "in.user"), "-o", str(tmp_path / "in.ds"), "-q"]) == 0
+    subprocess.run([lmp, "-in", "in.ds", "-var", "npour", "60", "-log", "none", "-echo", "none"], cwd=tmp_path,
+                   check=True, capture_output=True, timeout=300)
+    run = open_run(tmp_path / "in.ds", variables={"npour": "60"})
+    frames = 0
+    for k in range(len(run)):
+        a = run.assemble(run.atoms.frame(k, columns=run._atom_columns()), run._local_at(int(run.steps[k])))
+        if a.rebuilt is None or not len(a.contacts["delta"]):
+            continue
+        rel_f, rel_t, known_f, known_t = _balances(a, run.script.gravity[a.run])
+        assert rel_f[known_f].max(initial=0) < TOL and rel_t[known_t].max(initial=0) < TOL, a.step
+        frames += 1
+    assert frames >= 10
+    out = tmp_path / "out.h5"
+    assert main(["run", str(tmp_path / "in.ds"), "--var", "npour", "60", "-o", str(out), "-q",
+                 "--allow-missing", "u_tw", "--allow-missing", "u_r"]) == 0

@@ -420,10 +420,8 @@ class LammpsModel(ContactLaw):
             mask = (bits & NOT_COMPUTED_BITS[mode]) != 0
             if mask.any():
                 unknown[mode] = mask
-                reasons = "; ".join(f"{REASONS[c]} ({int(np.count_nonzero(mask & (codes == c)))} contact(s))"
-                                    for c in np.unique(codes[mask]) if c in REASONS)
-                why[mode] = (f"the {mode} energy of {int(mask.sum())} contact(s) of {self.key} is not computed: "
-                             + reasons)
+                reasons = "; ".join(REASONS[c] for c in np.unique(codes[mask]) if c in REASONS)
+                why[mode] = f"the {mode} energy of some contacts of {self.key} is not computed: {reasons}"
         return unknown, why
 
     def missing_mode(self, rows: ContactRows, mode: str) -> str | None:
