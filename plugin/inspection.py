@@ -180,12 +180,14 @@ def _finish(out: list[str], problems: list[str]) -> tuple[str, bool]:
 def _check_overlaps(run, frame: Frame) -> list[str]:
     """-limit < delta <= min(r1, r2) for every contact (first offending row of each kind), with limit the largest
     gap at which the contact's law acts (0: delta > 0, ``ContactLaw.separation_limit``)."""
+    from .physics.bodies import FrameContacts
     from .physics.partition import law_groups
 
     c = frame.contacts
     delta = c["delta"]
     limit = np.zeros(len(delta))
-    for model, rows in law_groups(c, run.scene):
+    types = FrameContacts(c, run.scene, frame.particles).types() if run.scene.pair_models and len(delta) else None
+    for model, rows in law_groups(c, run.scene, types):
         limit[rows] = model.contact_law.separation_limit(c["r1"][rows], c["r2"][rows])
     problems = []
     for bad, what in ((~(delta > -limit), "overlap delta <= 0 (not in contact)" if not limit.any() else

@@ -193,7 +193,9 @@ def law_energies(frame: FrameContacts, *, compiled: bool = True) -> ContactLawEn
         bits_without_history = sum(NOT_COMPUTED_BITS[m] for m in law.mode_columns
                                    if m not in result.skipped and m not in result.unknown)
         decided = {m: mask for m, mask in result.unknown.items() if mask.any()}  # rows the law itself says are unknown
-        missing.update({m: why for m, why in result.unknown_why.items() if m in decided and m not in missing})
+        for m, why in result.unknown_why.items():  # every law's reason, once
+            if m in decided and why not in missing.get(m, ""):
+                missing[m] = f"{missing[m]}; {why}" if m in missing else why
         if bits or decided or (unknown is not None and bits_without_history):
             not_computed[rows] |= bits
             if unknown is not None and bits_without_history:

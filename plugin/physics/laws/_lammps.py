@@ -451,7 +451,9 @@ class LammpsModel(ContactLaw):
     def describe(self) -> str:
         """The normal model's line, with its sub-models."""
         p = self.params
-        parts = [f"{self.key}{' (wall)' if p['wall'] else ''}: {self.summary}", f"damping {p['damping']}",
+        wall = "" if not p["wall"] else " (wall)" if not self.has_material() else \
+            " (wall: k_n = 4/3 E/(2(1 - nu)), k_t NULL = E/4 (2 - nu)(1 + nu))"
+        parts = [f"{self.key}{wall}: {self.summary}", f"damping {p['damping']}",
                  f"tangential {p['tangential']}" + (f" u_t = |F_el|^2/(2 k), k = {self.kt:g}"
                                                       f"{' a' if p['tangential'].startswith('mindlin') else ''}"
                                                       if self.has_spring else "")]

@@ -91,6 +91,12 @@ class LammpsJkr(LammpsAdhesiveModel):
         """|delta_pulloff| (m): a pair apart by less may still hold its neck (its touch flag is in no dump)."""
         return -jkr_pulloff_distance(self.kn, float(self.params["cohesion"]), R)
 
+    def separation_limit(self, r1: np.ndarray | float, r2: np.ndarray | float) -> np.ndarray | float:
+        """|delta_pulloff| of R = r1 r2/(r1 + r2) (m): the reader writes a pair apart by less as a possible neck,
+        every value of which is not computed."""
+        r1, r2 = np.asarray(r1, dtype=np.float64), np.asarray(r2, dtype=np.float64)
+        return self.reach(1.0 / (1.0 / r1 + 1.0 / r2))
+
     def unwritten(self, rows: ContactRows, R: np.ndarray) -> np.ndarray:
         """Pairs with 0 < delta < |delta_pulloff|, which single() writes as zeros (module docstring)."""
         if self.params["wall"]:
