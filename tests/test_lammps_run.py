@@ -433,17 +433,25 @@ def test_prepare_adds_what_demsplit_reads(tmp_path, capsys):
 
 @pytest.mark.simulator
 def test_a_prepared_script_run_by_lmp_is_read_and_checked(tmp_path):
-    """The hertz_mindlin scene without demsplit's lines, prepared, run by Debian's lmp (60 + 60 particles): demsplit
-    reads it (every dumped normal force checked), its atoms' balances close, and demsplit run succeeds."""
+    """The hertz_mindlin scene without demsplit's lines, with a trajectory dump of its own, prepared and run by
+    Debian's lmp (60 + 60 particles): the trajectory is byte for byte the unprepared run's; demsplit reads the run
+    (every dumped normal force checked), its atoms' balances close, and demsplit run succeeds."""
     from conftest import require_program
 
     lmp = require_program("lmp", package="lammps")
     import subprocess
 
-    (tmp_path / "in.user").write_text(_without_demsplit_lines("hertz_mindlin"))
+    head, run_line, tail = _without_demsplit_lines("hertz_mindlin").rpartition("run             ")
+    user = (head + "dump t all custom 500 t.txt id x y z vx vy vz omegax omegay omegaz fx fy fz\n"
+            "dump_modify t format float %.17g sort id\n" + run_line + tail)
+    (tmp_path / "plain").mkdir()
+    (tmp_path / "plain" / "in.user").write_text(user)
+    (tmp_path / "in.user").write_text(user)
     assert main(["prepare", str(tmp_path / "in.user"), "-o", str(tmp_path / "in.ds"), "-q"]) == 0
-    subprocess.run([lmp, "-in", "in.ds", "-var", "npour", "60", "-log", "none", "-echo", "none"], cwd=tmp_path,
-                   check=True, capture_output=True, timeout=300)
+    for where, script in ((tmp_path / "plain", "in.user"), (tmp_path, "in.ds")):
+        subprocess.run([lmp, "-in", script, "-var", "npour", "60", "-log", "none", "-echo", "none"], cwd=where,
+                       check=True, capture_output=True, timeout=300)
+    assert (tmp_path / "t.txt").read_bytes() == (tmp_path / "plain" / "t.txt").read_bytes()
     run = open_run(tmp_path / "in.ds", variables={"npour": "60"})
     frames = 0
     for k in range(len(run)):
@@ -457,3 +465,34 @@ def test_a_prepared_script_run_by_lmp_is_read_and_checked(tmp_path):
     out = tmp_path / "out.h5"
     assert main(["run", str(tmp_path / "in.ds"), "--var", "npour", "60", "-o", str(out), "-q",
                  "--allow-missing", "u_tw", "--allow-missing", "u_r"]) == 0
+
+
+OFFICIAL = Path("/usr/share/lammps/examples")
+
+
+@pytest.mark.simulator
+@pytest.mark.slow
+@pytest.mark.parametrize("example, options", [
+    ("pour/in.pour", ["--material", "1:1e5:0.3", "--wall-material", "zlower:1e5:0.3"]),
+    ("granular/in.pour.drum", ["--allow-missing", "all"]),
+])
+def test_official_examples_prepared_and_run_unedited(example, options, tmp_path):
+    """LAMMPS' own examples (Debian's copies), prepared and run by lmp as they are: demsplit reads every frame
+    (each dumped normal force checked, the capped springs checked against the atoms' balance; in.pour changes its
+    gravity between its two runs, the drum rotates its region walls and writes its first frame at a run's setup)."""
+    from conftest import require_program
+
+    lmp = require_program("lmp", package="lammps")
+    import shutil
+    import subprocess
+
+    source = OFFICIAL / example
+    if not source.is_file():
+        pytest.fail(f"{source} is missing: Debian's lammps package installs the examples")
+    shutil.copy(source, tmp_path / source.name)
+    assert main(["prepare", str(tmp_path / source.name), "-o", str(tmp_path / "in.ds"), "-q"]) == 0
+    subprocess.run([lmp, "-in", "in.ds", "-log", "none", "-echo", "none"], cwd=tmp_path, check=True,
+                   capture_output=True, timeout=600)
+    assert main(["run", str(tmp_path / "in.ds"), "-o", str(tmp_path / "out.h5"), "-q", *options]) == 0
+    frames = load_results(tmp_path / "out.h5").frames
+    assert len(frames) == (51 if source.name == "in.pour" else 4) and (frames["n_contacts"] > 0).sum() >= 3
