@@ -13,7 +13,10 @@ contacts' torques, the pairs' twisting torques tau n being unknowns (no dump hol
    verifiable atom pins, or whose solution does not close, is unknown;
 3. solves the pairs' twisting torques by least squares (conjugate gradients on the normal equations) over the
    atoms whose torque terms are known and verifies their torque balance; a rolling spring capped in single() on an
-   atom that fails it, or on no verifiable atom, is unknown.
+   atom that fails it, or on no verifiable atom, is unknown;
+4. a verifiable atom whose force (torque) balance still does not close has a term that is not what the dumps and
+   the script say (an MPI run's dmt rows, whose limit reads an unset variable on each process): the tangential and
+   rolling (the rolling) springs of its pair contacts are unknown.
 
 Every check is relative to the sum of the magnitudes of the atom's terms, within :data:`TOLERANCE`.
 """
@@ -72,23 +75,44 @@ def close_balances(a, gravity: tuple[float, float, float] | None) -> None:
     n_L = -np.stack([a.contacts[c] for c in ("nx", "ny", "nz")], axis=-1)
     weight = atoms["m"][:, None] * np.asarray(gravity)[None, :]
     resolved = _close_forces(a, r, n_L, weight)
-    _close_torques(a, r, n_L)
+    open_forces = _unclosed(a, r, *_force_residuals(a, r, weight), T_BIT | R_BIT)
+    open_torques = _close_torques(a, r, n_L)
     notes = []
     if resolved:
         notes.append("springs that single() wrote at their limit but the step had not capped were pinned by the atoms' "
                      "force balance")
+    if open_forces or open_torques:
+        notes.append("atoms whose force or torque balance does not close (a term of the step is not what the dumps "
+                     "and the script say): the springs of their pair contacts are not computed")
     a.notes += notes
+
+
+def _force_residuals(a, r: Rebuilt, weight: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per atom: f - m g - the sum of its contacts' step forces, the sum of the terms' magnitudes, and whether
+    every term is known."""
+    n_atoms = len(a.atoms["r"])
+    F, scale = _sums(n_atoms, a.rows1, a.rows2, r.force, -r.force)
+    known = ~_bad_atoms(n_atoms, a.rows1, a.rows2, ~np.all(np.isfinite(r.force), axis=1))
+    return a.atoms["f"] - weight - np.nan_to_num(F), scale + norm(weight), known
+
+
+def _unclosed(a, r: Rebuilt, res: np.ndarray, scale: np.ndarray, known: np.ndarray, bits: int) -> int:
+    """Step 4 of the module docstring: the springs ``bits`` of the pair contacts of every verifiable atom whose
+    balance does not close are unknown (code 6); returns how many such atoms."""
+    fails = known & (norm(res) > TOLERANCE * scale)
+    if not fails.any():
+        return 0
+    pair = a.rows2 >= 0
+    rows = np.flatnonzero(pair & (fails[a.rows1] | fails[np.maximum(a.rows2, 0)]))
+    r.unknown[rows] |= bits
+    r.why[rows] = np.where(r.why[rows] == 0, 6, r.why[rows])
+    return int(fails.sum())
 
 
 def _close_forces(a, r: Rebuilt, n_L: np.ndarray, weight: np.ndarray) -> int:
     """Step 1 and 2 of the module docstring; returns how many capped springs the balance moved."""
-    atoms, rows1, rows2 = a.atoms, a.rows1, a.rows2
-    n_atoms = len(atoms["r"])
-    F, scale = _sums(n_atoms, rows1, rows2, r.force, -r.force)
-    unknown = ~np.all(np.isfinite(r.force), axis=1)
-    known = ~_bad_atoms(n_atoms, rows1, rows2, unknown)
-    res = atoms["f"] - weight - np.nan_to_num(F)
-    scale = scale + norm(weight)
+    rows1, rows2 = a.rows1, a.rows2
+    res, scale, known = _force_residuals(a, r, weight)
     fails = known & (norm(res) > TOLERANCE * scale)
     capped = np.flatnonzero(r.interval_t)
     on_known = known[rows1[capped]] | ((rows2[capped] >= 0) & known[np.maximum(rows2[capped], 0)])
@@ -123,13 +147,12 @@ def _close_forces(a, r: Rebuilt, n_L: np.ndarray, weight: np.ndarray) -> int:
     return int(np.count_nonzero(np.abs(dL) > TOLERANCE * r.limit_t[candidates]))
 
 
-def _close_torques(a, r: Rebuilt, n_L: np.ndarray) -> None:
-    """Step 3 of the module docstring."""
+def _close_torques(a, r: Rebuilt, n_L: np.ndarray) -> int:
+    """Step 3 of the module docstring, then step 4 for the torques (the rolling springs); returns how many atoms'
+    torque balance does not close."""
     atoms, rows1, rows2 = a.atoms, a.rows1, a.rows2
     n_atoms = len(atoms["r"])
     capped = np.flatnonzero(r.interval_r)
-    if not len(capped):
-        return
     T, scale = _sums(n_atoms, rows1, rows2, r.torque1, r.torque2)
     unknown = ~np.all(np.isfinite(r.torque1), axis=1)
     known = ~_bad_atoms(n_atoms, rows1, rows2, unknown)
@@ -143,6 +166,7 @@ def _close_torques(a, r: Rebuilt, n_L: np.ndarray) -> None:
     on_known = known[rows1[capped]] | ((rows2[capped] >= 0) & known[np.maximum(rows2[capped], 0)])
     on_fail = fails[rows1[capped]] | ((rows2[capped] >= 0) & fails[np.maximum(rows2[capped], 0)])
     _mark(r, capped[~on_known | on_fail], R_BIT)
+    return _unclosed(a, r, res, scale, known, R_BIT)
 
 
 def twisting_torques(res: np.ndarray, i: np.ndarray, j: np.ndarray, n: np.ndarray, known: np.ndarray) -> np.ndarray:

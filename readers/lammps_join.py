@@ -185,6 +185,15 @@ class LammpsJoin:
                    "fr_dumped": np.full((len(i), 3), np.nan)}
         return pair_table(atoms, i, j, d, np.sqrt(np.einsum("ak,ak->a", d, d)), unknown), i, j
 
+    def as_ghosts(self, contacts: Table, atoms: dict, i: np.ndarray, j: np.ndarray, rows: np.ndarray) -> Table:
+        """The pair contacts ``rows`` (atom rows ``i``, ``j``) as if single() had read atom 2's half-step velocities
+        (a ghost of another process)."""
+        sub = {c: v[rows].copy() for c, v in contacts.items()}
+        vj, wj = atoms["v_h"][j], atoms["w_h"][j]
+        _put_vectors(sub, {"dv_s": atoms["v"][i] - vj, "wr_s": atoms["w"][i] - wj,
+                           "ws_s": atoms["r"][i, None] * atoms["w"][i] + atoms["r"][j, None] * wj})
+        return sub
+
     # -- walls ------------------------------------------------------------------------------------------------
 
     def walls(self, af: DumpFrame, atoms: dict, run: int) -> tuple[list[Table], list[np.ndarray], list[str]]:

@@ -496,3 +496,29 @@ def test_official_examples_prepared_and_run_unedited(example, options, tmp_path)
     assert main(["run", str(tmp_path / "in.ds"), "-o", str(tmp_path / "out.h5"), "-q", *options]) == 0
     frames = load_results(tmp_path / "out.h5").frames
     assert len(frames) == (51 if source.name == "in.pour" else 4) and (frames["n_contacts"] > 0).sum() >= 3
+
+
+@pytest.mark.simulator
+def test_a_run_on_two_processes_is_read_and_checked(tmp_path):
+    """The hertz_mindlin scene (60 + 60 particles) run by lmp on two processes split along x: single() read the
+    half-step velocities of the pairs' atoms 2 that were ghosts of the other process, which no dump says; demsplit
+    finds them by their dumped normal force, and the atoms' balances close."""
+    from conftest import require_program
+
+    lmp = require_program("lmp", package="lammps")
+    mpirun = require_program("mpirun", package="openmpi-bin")
+    import subprocess
+
+    text = script_of("hertz_mindlin").read_text().replace("boundary        f f f", "boundary f f f\nprocessors 2 1 1")
+    (tmp_path / "in.mpi").write_text(text)
+    subprocess.run([mpirun, "--allow-run-as-root", "--oversubscribe", "-np", "2", lmp, "-in", "in.mpi", "-var",
+                    "npour", "60", "-log", "none", "-echo", "none"], cwd=tmp_path, check=True, capture_output=True,
+                   timeout=300)
+    run = open_run(tmp_path / "in.mpi", variables={"npour": "60"})
+    found = 0
+    for k in range(len(run)):
+        a = run.assemble(run.atoms.frame(k, columns=run._atom_columns()), run._local_at(int(run.steps[k])))
+        rel_f, rel_t, known_f, known_t = _balances(a, run.script.gravity[a.run])
+        assert rel_f[known_f].max() < TOL and rel_t[known_t].max() < TOL
+        found += any("another process" in note for note in a.notes)
+    assert found >= 1

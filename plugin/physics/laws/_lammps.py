@@ -96,8 +96,11 @@ REASONS = {
        "one only (fix_wall_gran_region.cpp:244-254): the other contact's tangential spring is in no dump",
     5: "a jkr pair apart by less than its pull-off distance may still hold its neck: whether it does (its touch "
        "flag) is in no dump, and compute pair/local's cutoff radius rows list touching pairs only",
+    6: "an atom of the contact does not close its force or torque balance with the rebuilt springs (a term of the "
+       "step is not what the dumps and the script say), so the springs of its contacts are not trusted",
 }
-"""Why the reader could not rebuild a spring: code (the ``spring_unknown_why`` bits' companion) -> reason."""
+"""Why the reader could not rebuild a spring or a contact: the code it writes in the contact column ``unknown_why``
+(beside the modes' bits in ``unknown_modes``) -> the reason."""
 
 
 def tsuji_alpha(e: float) -> float:
@@ -188,9 +191,9 @@ class Rebuilt:
     unknown : bits (:data:`demsplit.physics.modes.NOT_COMPUTED_BITS`) of the modes whose spring the dump does
         not give; why : per row, the :data:`REASONS` code (0: none).
     interval_t, interval_r : capped in single(), the step's cap assumed (:func:`unsliding`): checked by the
-        reader against the atoms' balance; direction_t, direction_r : single()'s force direction w;
+        reader against the atoms' balance; direction_t : single()'s tangential force direction w;
         limit_t, spring_limit_t : single()'s tangential limit crit_s and the force L assumed (N);
-        arm1, arm2 : the lever arms of the tangential force on each body (m); rolling_radius : R (m).
+        arm1, arm2 : the lever arms of the tangential force on each body (m).
     twisting : rows whose twisting torque tau n (on body 1; -tau n on body 2) no dump gives.
     """
 
@@ -206,12 +209,10 @@ class Rebuilt:
     interval_t: np.ndarray
     interval_r: np.ndarray
     direction_t: np.ndarray
-    direction_r: np.ndarray
     limit_t: np.ndarray
     spring_limit_t: np.ndarray
     arm1: np.ndarray
     arm2: np.ndarray
-    rolling_radius: np.ndarray
     twisting: np.ndarray
 
 
@@ -511,7 +512,6 @@ class LammpsModel(ContactLaw):
         F_t = np.where(of_step[:, None], p_t, F_t)
         spring_r, F_r = zeros, zeros
         interval_r = np.zeros(n, dtype=bool)
-        p_r = zeros
         if self.rolling:
             p_r = vectors(rows, ("frx_dumped", "fry_dumped", "frz_dumped"))
             gr, mu_ratio = float(self.params["gammar"]), self.rolling_limit_ratio()
@@ -543,10 +543,9 @@ class LammpsModel(ContactLaw):
         nxfr = R[:, None] * np.cross(n_L, F_r)
         force = F_n_h[:, None] * n_L + F_t
         w_t = p_t / np.where(norm(p_t) > 0, norm(p_t), 1.0)[:, None]
-        w_r = p_r / np.where(norm(p_r) > 0, norm(p_r), 1.0)[:, None]
         return Rebuilt(spring_t, spring_r, force, -arm1[:, None] * nxft + nxfr, -arm2[:, None] * nxft - nxfr,
-                       F_n_s, np.abs(F_ne) + np.abs(F_n_s - F_ne), unknown, why, interval_t, interval_r, w_t, w_r,
-                       crit_s, L_t, arm1, arm2, R, np.full(n, self.twisting))
+                       F_n_s, np.abs(F_ne) + np.abs(F_n_s - F_ne), unknown, why, interval_t, interval_r, w_t,
+                       crit_s, L_t, arm1, arm2, np.full(n, self.twisting))
 
     def rolling_limit_ratio(self) -> float:
         """mu_r/mu: the rolling limit is mu_r F_ncrit (pair_granular.cpp:585)."""
