@@ -25,9 +25,12 @@ commands their LAMMPS meaning:
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
+
+import numpy as np
 
 from ..errors import DemsplitError, MaterialError, ScriptError, UnsupportedModelError
 from ..physics.laws import law_class, simulator_words
@@ -220,8 +223,7 @@ class _LammpsReader(_Reader):
                 nums = [self.number(v, where, f"region {rid} rotate") for v in rest[k + 2:k + 8]]
                 rotate = (var[2:], tuple(nums[:3]), tuple(nums[3:]))
                 k += 8
-            elif word == "move":
-                rotate = None
+            elif word == "move":  # a moving region: refused where a wall fix uses it
                 self.regions[rid] = Region(rid, "moving", [], side_in, (), None, where)
                 return
             else:
@@ -258,10 +260,6 @@ class _LammpsReader(_Reader):
 
     def fix_gravity_lammps(self, fid: str, rest: list[str], where: Where) -> None:
         """``fix ID group gravity G vector X Y Z | spherical PHI THETA | chute ANGLE`` (fix_gravity.cpp:324-357)."""
-        import math
-
-        import numpy as np
-
         self.gravity_fix = fid
         try:
             g = float(rest[0])

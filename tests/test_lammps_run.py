@@ -522,3 +522,23 @@ def test_a_run_on_two_processes_is_read_and_checked(tmp_path):
         assert rel_f[known_f].max() < TOL and rel_t[known_t].max() < TOL
         found += any("another process" in note for note in a.notes)
     assert found >= 1
+
+
+def test_pair_coeff_ranges_and_the_global_history_flag(tmp_path):
+    """``pair_coeff 1 * ...`` sets 1-1 and 1-2, a later line overrides an earlier one, and linear_nohistory beside
+    a history model runs LAMMPS' history branch (k_t = 0); E and nu of a type come from its own i i line only."""
+    from demsplit.readers.lammps_script import read_lammps_script
+
+    path = tmp_path / "in.ranges"
+    path.write_text("units si\natom_style sphere\nregion b block 0 1 0 1 0 1\ncreate_box 3 b\npair_style granular\n"
+                    "pair_coeff * * hooke 1e5 0.5 tangential linear_nohistory 1.0 0.5\n"
+                    "pair_coeff 1 * hertz/material 1e7 0.5 0.25 tangential mindlin NULL 1.0 0.5\n"
+                    "pair_coeff 3 3 dmt 2e6 0.5 0.4 0.05 tangential linear_history 1e4 1.0 0.5\n"
+                    "pair_coeff 2 3 hooke 2e5 0.5 tangential linear_nohistory 1.0 0.5\nrun 10\n")
+    script = read_lammps_script(path)
+    laws = {pair: m.law for pair, m in script.pair_models.items()}
+    assert laws == {(1, 1): "lammps:hertz/material", (1, 2): "lammps:hertz/material", (1, 3): "lammps:hertz/material",
+                    (2, 2): "lammps:hooke", (2, 3): "lammps:hooke", (3, 3): "lammps:dmt"}
+    assert script.pair_models[(2, 3)].params["kn"] == 2e5
+    assert script.pair_models[(2, 2)].contact_law.history_branch
+    assert set(script.line_materials) == {1, 3} and script.line_materials[3] == Material(2e6, 0.4)
