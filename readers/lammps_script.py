@@ -399,6 +399,10 @@ class _LammpsReader(_Reader):
         while k < len(tail):
             if tail[k] == "shear":
                 self.need(tail[k + 1:], 2, where, what, "shear DIM V")
+                if fix.geometry == "zcylinder":
+                    raise self.error(UnsupportedModelError, f"{what}: a shearing zcylinder is not supported (its "
+                                     "velocity at the contact is not a plain translation, fix_wall_gran.cpp:664).",
+                                     where, "analyse a run whose cylinder wall does not shear.")
                 fix.shear = ("xyz".index(tail[k + 1]), self.number(tail[k + 2], where, what))
                 k += 3
             elif tail[k] == "wiggle":
