@@ -231,10 +231,13 @@ def _yade_states(inputs: str | list[str]) -> bool:
 def cmd_prepare(args: argparse.Namespace) -> int:
     from .outputs import check_output_path
     from .prepare import prepare_script
+    from .prepare_lammps import prepare_lammps_script
+    from .readers.lammps_script import is_lammps_script
 
     script = Path(args.input)
     out = Path(args.output or script.with_name(script.name + ".demsplit"))
-    prepared = prepare_script(script)
+    lammps = script.is_file() and is_lammps_script(script.read_bytes())  # LAMMPS' own output: docs/lammps-output.md
+    prepared = (prepare_lammps_script if lammps else prepare_script)(script)
     parts = [prepared]
     while parts[-1].part2 is not None:
         parts.append(parts[-1].part2)

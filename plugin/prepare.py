@@ -156,12 +156,6 @@ def prepare_script(path: str | Path) -> Prepared:
     """The script at ``path`` with the computes and dumps demsplit needs, split where a mesh wall fix
     follows a run (module docstring)."""
     path = Path(path)
-    from .readers.lammps_script import is_lammps_script
-
-    if is_lammps_script(path.read_bytes()):  # a LAMMPS GRANULAR script: its own output (docs/lammps-output.md)
-        from .prepare_lammps import prepare_lammps_script
-
-        return prepare_lammps_script(path)
     script = read_script(path)
     law = script.scene.model.contact_law
     # the history each compute writes: the pair and the mesh-wall model's own, computeElasticPotential's too
