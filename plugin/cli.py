@@ -53,11 +53,12 @@ def _reader_options(args: argparse.Namespace) -> dict:
             value = getattr(args, _dest(opt), None)
             if value is not None and value is not False and value != []:  # (0 is a value: `in` would equate it)
                 given[opt.flags] = value
+    simulator = getattr(args, "simulator", None)
     if not given:
-        return {}
+        return {} if simulator is None else {"simulator": simulator}
     inputs = args.input if isinstance(args.input, list) else [args.input]
-    cls = reader_for(inputs[0])
-    options: dict = {}
+    cls = reader_for(inputs[0], simulator)
+    options: dict = {} if simulator is None else {"simulator": simulator}
     for flags, value in given.items():
         opt = next((o for o in cls.cli_options if o.flags == flags), None)
         if opt is None:
@@ -95,6 +96,10 @@ def _add_input(p: argparse.ArgumentParser) -> None:
                    help="the run: " + "; ".join(f for cls in readers() for f in cls.formats)
                    + " (several files are one run only where the reader says so); omit it to describe a LIGGGHTS "
                    "scene with --atoms, --contacts, --material and --columns")
+    p.add_argument("--simulator", choices=sorted({cls.simulator for cls in readers() if cls.simulator}),
+                   help="the simulator whose run the input is, where its words cannot tell (a LAMMPS and a LIGGGHTS "
+                   "script are text in the same language; demsplit recognises pair_style granular and gran/* as "
+                   "LAMMPS, pair_style gran model ... as LIGGGHTS)")
     groups: dict[str, argparse._ArgumentGroup] = {}
     added: set[tuple[str, ...]] = set()
     for cls in readers():
@@ -246,17 +251,20 @@ def cmd_export(args: argparse.Namespace) -> int:
 def cmd_prepare(args: argparse.Namespace) -> int:
     from .outputs import PREPARED_SCRIPT, output_errors, output_files, stamp_script
     from .prepare import prepare_script
+    from .prepare_lammps import prepare_lammps_script
     from .readers.lammps_input import read_text
+    from .readers.lammps_script import is_lammps_script, read_lammps_script
     from .readers.liggghts_script import read_script
 
     script = Path(args.input)
     out = Path(args.output or script.with_name(script.name + ".demsplit"))
-    prepared = prepare_script(script, every=args.every)
+    lammps = script.is_file() and is_lammps_script(script.read_bytes())  # LAMMPS' own output: docs/lammps-output.md
+    prepared = (prepare_lammps_script if lammps else prepare_script)(script, every=args.every)
     parts = [prepared]
     while parts[-1].part2 is not None:
         parts.append(parts[-1].part2)
     paths = [out] + [out.with_name(f"{out.name}.part{k}") for k in range(2, len(parts) + 1)]
-    protected = [script, *read_script(script).named_files()]
+    protected = [script, *(read_lammps_script if lammps else read_script)(script).named_files()]
     for path in paths:  # every path checked before anything is written
         check_output_path(path, protected, kind=PREPARED_SCRIPT, overwrite=args.overwrite)
     if not args.quiet:
@@ -271,7 +279,7 @@ def cmd_prepare(args: argparse.Namespace) -> int:
         print(prepared.diff(read_text(script), str(script)))
         where = f"in {out.parent}" if len(paths) == 1 else f"one after the other in {out.parent}"
         print(f"wrote {', '.join(map(str, paths))}: run {'it' if len(paths) == 1 else 'them'} with "
-              f"{'; '.join(f'liggghts -in {p.name}' for p in paths)} {where}, then "
+              f"{'; '.join(f'{prepared.program} -in {p.name}' for p in paths)} {where}, then "
               + "; ".join(f"'demsplit run {p} -o results{'' if k == 0 else k + 1}.h5'" for k, p in enumerate(paths)))
     return 0
 
@@ -388,7 +396,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = add("yade-path", "print the directory to site.addsitedir() inside YADE so that 'import demsplit.yade' works")
     p.set_defaults(func=cmd_yade_path)
 
-    p = add("prepare", "write a copy of a LIGGGHTS input script with the dumps demsplit needs, and show the diff")
+    p = add("prepare", "write a copy of a LIGGGHTS or LAMMPS input script with the dumps demsplit needs, and show "
+                       "the diff")
     p.add_argument("input", help="the LIGGGHTS input script")
     p.add_argument("-o", "--output", help="prepared script (default: INPUT.demsplit next to the input; a script "
                    "split at a mesh wall fix after a run also gets OUTPUT.part2, ...)")

@@ -120,9 +120,9 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = DEFAULT_OPTIONS)
             f"{why}. The run has this energy but its files do not hold it"
             + (f" (also missing: {', '.join(list(refused)[1:])})" if len(refused) > 1 else "") + ".",
             file=source, step=frame.step,
-            fix=f"dump the columns it needs (docs/liggghts-output.md lists them per model; 'demsplit check' "
-                f"names the lines), or go on without it with --allow-missing {mode}: its values are then "
-                "marked not computed.")
+            fix=f"dump the columns it needs where a dump can hold them (docs/liggghts-output.md and "
+                f"docs/lammps-output.md list them per model; 'demsplit check' names the lines), or go on without it "
+                f"with --allow-missing {mode}: its values are then marked not computed.")
     for what, why in main.skipped.items():
         note = f"{what} is 0: {why}"
         if note not in frame.notes:
@@ -179,8 +179,7 @@ accuracy columns."""
 def _used_up(scene: Scene) -> tuple[str, ...]:
     """Contact columns nothing after the partition reads: body 1's centre and the normal (which gave the
     contact point) and the laws' own columns (their histories, which gave the energies)."""
-    laws = [scene.model.contact_law] + [w.model.contact_law for w in scene.walls if w.model is not None]
-    own = [c for law in laws for c in law.needs()]
+    own = [c for model in scene.models() for c in model.contact_law.needs()]
     return tuple(dict.fromkeys(c for c in ("x1", "y1", "z1", "nx", "ny", "nz", *own) if c not in _KEPT))
 
 

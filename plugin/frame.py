@@ -29,7 +29,11 @@ ids, int32 for types); DataFrames are only built at the user-facing edges.
     contact point), ``history_unknown`` (int8, the ``not_computed`` bits of the modes whose history
     the simulator never wrote for the contact, :data:`~demsplit.physics.modes.HISTORY_LOST` for all of
     them, e.g. LIGGGHTS primitive walls: the law's modes that read a history are then "not computed" for
-    that row where their bit is set).
+    that row where their bit is set), ``unknown_modes`` (int8, the bits of
+    :data:`~demsplit.physics.modes.NOT_COMPUTED_BITS` of the modes whose state the reader could
+    not rebuild for that row) with ``unknown_why`` (int8, the law's code of why; LAMMPS), the
+    rebuilt springs of LAMMPS (``ftx_el fty_el ftz_el``, ``frx_el fry_el frz_el``, N, and
+    ``wall_curvature``, 1/m: :mod:`demsplit.physics.laws._lammps`).
 """
 
 from __future__ import annotations

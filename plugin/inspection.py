@@ -183,19 +183,21 @@ def _check_overlaps(run, frame: Frame) -> list[str]:
     """-limit < delta <= its law's largest overlap for every contact (first offending row of each kind), with
     limit the largest gap at which the contact's law acts (0: delta > 0, ``ContactLaw.separation_limit``) and
     the largest overlap as the validation has it (:func:`demsplit.validate.overlap_limit`)."""
+    from .physics.bodies import FrameContacts
     from .physics.partition import law_groups
     from .validate import overlap_limit
 
     c = frame.contacts
     delta = c["delta"]
     limit = np.zeros(len(delta))
-    for model, rows in law_groups(c, run.scene):
+    types = FrameContacts(c, run.scene, frame.particles).types() if run.scene.pair_models and len(delta) else None
+    for model, rows in law_groups(c, run.scene, types):
         limit[rows] = model.contact_law.separation_limit(c["r1"][rows], c["r2"][rows])
     problems = []
     for bad, what in ((~(delta > -limit), "overlap delta <= 0 (not in contact)" if not limit.any() else
                        "a gap -delta at or beyond the largest its law acts across (0 but for a liquid bridge)"),
-                      (delta > overlap_limit(c, run.scene), "overlap larger than the smaller radius (or the largest "
-                                                            "its law allows)")):
+                      (delta > overlap_limit(c, run.scene, frame.particles),
+                       "overlap larger than the smaller radius (or the largest its law allows)")):
         if bad.any():
             row = int(np.flatnonzero(bad)[0])
             who = (f"particles {int(c['id1'][row])}-{int(c['id2'][row])}" if c["wall"][row] < 0
@@ -238,9 +240,7 @@ def _what_run_computes(run, frame: Frame, sources: dict[str, int], imprecise: in
                      "refused: see the problems)")
     lines = ["run would compute:",
              f"  overlaps:    {'; '.join(shown) or frame.overlap_source or 'as the reader gives them'}"]
-    models = [scene.model]
-    models += [w.model for w in scene.walls if w.model is not None and w.model not in models]
-    lines += [f"  law:         {model.describe()}" for model in models]
+    lines += [f"  law:         {model.describe()}" for model in scene.models()]
     problems = []
     try:  # the partition's own verdict on what the columns allow (one frame)
         energies = contact_energies(frame.contacts, scene, frame.particles)

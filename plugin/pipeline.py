@@ -170,7 +170,9 @@ def _first_frame_rows(path: str | Path | list | None, options: Mapping) -> tuple
     if isinstance(path, (list, tuple)):
         return None
     try:
-        return reader_for(path).first_frame_rows(None if path is None else Path(path), **options)
+        options = dict(options)
+        return reader_for(path, options.pop("simulator", None)).first_frame_rows(
+            None if path is None else Path(path), **options)
     except DemsplitError:  # the opening that follows reports it
         return None
 

@@ -90,6 +90,8 @@ class Prepared:
     notes: list[str]
     part2: Prepared | None = None
     """When the script was split at a mesh wall fix after a run, the rest of it (this is then part 1)."""
+    program: str = "liggghts"
+    """The simulator's program that runs the prepared script."""
 
     @property
     def data(self) -> bytes:

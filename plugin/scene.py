@@ -75,6 +75,10 @@ class ContactModel:
         return self.contact_law.describe()
 
 
+UNITS = ("si", "lj")
+"""A scene's units: SI, or LAMMPS' ``lj`` (mass, length and time of the run's own scales; energies in m sigma^2/tau^2),
+which demsplit computes in as given and labels as such."""
+
 WALL_KINDS = ("plane", "cylinder", "mesh", "yade_wall", "facet", "box")
 
 
@@ -118,18 +122,23 @@ class Wall:
 
 @dataclass
 class Scene:
-    """Materials per type, the contact model and the walls of a run."""
+    """Materials per type, the contact model and the walls of a run (``units``: :data:`UNITS`).
+
+    ``pair_models``: the model of each pair of particle types ``(t1, t2)`` (t1 <= t2) whose model is not
+    ``model`` (LAMMPS ``pair_coeff i j`` lines give each type pair its own); empty when one model acts on
+    every pair of particles."""
 
     materials: dict[int, Material]
     model: ContactModel = field(default_factory=ContactModel)
     walls: list[Wall] = field(default_factory=list)
     units: str = "si"
     source: str = ""
+    pair_models: dict[tuple[int, int], ContactModel] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        if self.units != "si":
+        if self.units not in UNITS:
             raise UnsupportedModelError(
-                f"units {self.units!r} are not supported; demsplit works in SI.",
+                f"units {self.units!r} are not supported; demsplit works in SI (or in LAMMPS' lj units, as given).",
                 fix="run the simulation with 'units si'.",
             )
         self._table_cache: tuple[np.ndarray, np.ndarray] | None = None
@@ -178,11 +187,24 @@ class Scene:
         """Material type of each wall, indexed like ``walls``."""
         return np.array([w.type for w in self.walls], dtype=np.int64)
 
+    def pair_model(self, t1: int, t2: int) -> ContactModel:
+        """The model of contacts between particles of types ``t1`` and ``t2``."""
+        return self.pair_models.get((min(t1, t2), max(t1, t2)), self.model)
+
+    def models(self) -> list[ContactModel]:
+        """Every model of the scene, once each: the pair model(s), then the walls' own."""
+        out: list[ContactModel] = []
+        for m in [self.model, *self.pair_models.values(), *(w.model for w in self.walls if w.model is not None)]:
+            if m not in out:
+                out.append(m)
+        return out
+
 
 def scene_to_dict(scene: Scene) -> dict:
     """The scene as plain JSON-ready data: ``materials`` (type -> E, nu, and name when it has one),
-    ``model``, ``walls`` (every field), ``units``, ``source``."""
-    return {
+    ``model``, ``walls`` (every field), ``units``, ``source``, and ``pair_models`` (``"t1 t2"`` -> model)
+    when the scene has them."""
+    out = {
         "materials": {str(t): {k: v for k, v in asdict(m).items() if k != "name" or v}
                       for t, m in sorted(scene.materials.items())},
         "model": asdict(scene.model),
@@ -190,6 +212,9 @@ def scene_to_dict(scene: Scene) -> dict:
         "units": scene.units,
         "source": scene.source,
     }
+    if scene.pair_models:
+        out["pair_models"] = {f"{t1} {t2}": asdict(m) for (t1, t2), m in sorted(scene.pair_models.items())}
+    return out
 
 
 def scene_from_dict(d: dict) -> Scene:
@@ -202,5 +227,6 @@ def scene_from_dict(d: dict) -> Scene:
         w["model"] = None if w["model"] is None else ContactModel(**w["model"])
         return Wall(**w)
 
+    pairs = {tuple(int(t) for t in key.split()): ContactModel(**m) for key, m in d.get("pair_models", {}).items()}
     return Scene({int(t): Material(**m) for t, m in d["materials"].items()}, ContactModel(**d["model"]),
-                 [wall(w) for w in d["walls"]], d["units"], d["source"])
+                 [wall(w) for w in d["walls"]], d["units"], d["source"], pairs)

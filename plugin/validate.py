@@ -37,11 +37,13 @@ import numpy as np
 
 from .errors import ContactError, InputFormatError
 from .frame import Frame, Table
+from .physics.bodies import FrameContacts
 from .physics.partition import law_groups
 from .scene import Scene
 
 INTEGER_COLUMNS = {"id": np.int64, "type": np.int32, "clump": np.int64, "id1": np.int64, "id2": np.int64,
-                   "wall": np.int64, "type1": np.int64, "type2": np.int64, "history_unknown": np.int8}
+                   "wall": np.int64, "type1": np.int64, "type2": np.int64, "history_unknown": np.int8,
+                   "unknown_modes": np.int8, "unknown_why": np.int8}
 """Integer columns and their canonical dtypes; every other column is a real (float64)."""
 NOT_NEGATIVE = ("kn", "ks", "kno", "kso", "kr", "ktw", "mb", "mtw", "mass")
 MAY_BE_INFINITE = ("r2",)  # a plane: R = inf
@@ -65,7 +67,7 @@ def validated_frame(frame: Frame, scene: Scene) -> Frame:
         raise InputFormatError(f"the frame's time {float(frame.time)!r} s is not a finite time >= 0.", **where,
                                fix="check the run's timestep and the frame's step.")
     if contacts and len(contacts["delta"]):
-        _check_geometry(contacts, scene, {**where, "file": source})
+        _check_geometry(contacts, particles, scene, {**where, "file": source})
     return replace(frame, particles=particles, contacts=contacts)
 
 
@@ -126,10 +128,10 @@ def _refuse(bad: np.ndarray, table: str, col: str, values: np.ndarray, what: str
                                fix="check the file at that row: a damaged or foreign value.")
 
 
-def _check_geometry(c: Table, scene: Scene, where: dict) -> None:
+def _check_geometry(c: Table, particles: Table, scene: Scene, where: dict) -> None:
     norm = np.sqrt(c["nx"] ** 2 + c["ny"] ** 2 + c["nz"] ** 2)
     _refuse(np.abs(norm - 1.0) > UNIT_TOLERANCE, "contacts", "|n|", norm, "is not a unit normal", c, where)
-    limit = overlap_limit(c, scene)
+    limit = overlap_limit(c, scene, particles)
     too_deep = c["delta"] > limit
     if too_deep.any():
         row = int(np.flatnonzero(too_deep)[0])
@@ -142,11 +144,13 @@ def _check_geometry(c: Table, scene: Scene, where: dict) -> None:
             fix="check that the contact and atom dumps belong to the same run and timestep.")
 
 
-def overlap_limit(c: Table, scene: Scene) -> np.ndarray:
+def overlap_limit(c: Table, scene: Scene, particles: Table | None = None) -> np.ndarray:
     """The largest plausible overlap (m) of each contact: what the law that acts on it allows
-    (:meth:`~demsplit.physics.laws.ContactLaw.overlap_limit`), by default the smaller of r1 and r2."""
+    (:meth:`~demsplit.physics.laws.ContactLaw.overlap_limit`), by default the smaller of r1 and r2; ``particles``
+    gives the types where the law depends on the pair of types (``Scene.pair_models``)."""
     limit = np.minimum(c["r1"], c["r2"])
-    for model, rows in law_groups(c, scene):
+    types = FrameContacts(c, scene, particles).types() if scene.pair_models and len(limit) else None
+    for model, rows in law_groups(c, scene, types):
         law_limit = model.contact_law.overlap_limit({k: np.asarray(v)[rows] for k, v in c.items()})
         if law_limit is not None:
             limit[rows] = law_limit

@@ -20,7 +20,7 @@ from pathlib import Path
 from ..errors import InputFormatError
 from .base import REGISTRY, Run
 
-READER_MODULES = ("cache", "yade_snapshot", "yade_state", "yade_export", "liggghts")
+READER_MODULES = ("cache", "yade_snapshot", "yade_state", "yade_export", "lammps", "liggghts")
 """Modules of this package that define readers (each registers its classes when imported)."""
 
 HEAD_BYTES = 4096
@@ -52,10 +52,19 @@ def _looks_like_a_run(path: Path) -> bool:
     return path.name.startswith("in.") or any(cls.detect(path, head) for cls in readers() if cls.priority >= 0)
 
 
-def reader_for(path: str | Path | None) -> type[Run]:
-    """The reader class that reads ``path`` (None: a run given by options)."""
+def reader_for(path: str | Path | None, simulator: str | None = None) -> type[Run]:
+    """The reader class that reads ``path`` (None: a run given by options); ``simulator`` (``--simulator``): the
+    reader of that simulator's runs, where the file's words cannot tell (a LAMMPS and a LIGGGHTS script are
+    both text in the same language)."""
     path = None if path is None else Path(path)
     head = b"" if path is None else read_head(path)
+    if simulator is not None:
+        own = [cls for cls in readers() if cls.simulator == simulator]
+        if not own:
+            known = sorted({cls.simulator for cls in readers() if cls.simulator})
+            raise InputFormatError(f"no reader reads {simulator!r} runs.", file=path,
+                                   fix=f"use --simulator with one of {', '.join(known)}.")
+        return next((cls for cls in own if cls.detect(path, head)), own[-1])
     for cls in readers():
         if cls.detect(path, head):
             return cls
@@ -79,9 +88,9 @@ def reader_for(path: str | Path | None) -> type[Run]:
                            fix=f"pass one of: {accepted}.")
 
 
-def open_run(path: str | Path | list | None, **options) -> Run:
-    """Open a run (see the module docstring). ``options`` go to the reader. A list of paths is one run of
-    several files, for a reader whose files are that (``Run.several_files``: YADE saved states).
+def open_run(path: str | Path | list | None, simulator: str | None = None, **options) -> Run:
+    """Open a run (see the module docstring). ``options`` go to the reader; ``simulator`` picks the reader of
+    that simulator (:func:`reader_for`). A list of paths is a run of several files (YADE saved states).
 
     The returned run remembers ``(path, options)`` as ``run.spec`` so that
     worker processes can open the same run again.
@@ -90,20 +99,22 @@ def open_run(path: str | Path | list | None, **options) -> Run:
         path = path[0]
     if isinstance(path, (list, tuple)):
         paths = [Path(p) for p in path]
-        cls = reader_for(paths[0])
+        cls = reader_for(paths[0], simulator)
         if not cls.several_files:
             raise InputFormatError(f"several inputs were given, but {paths[0].name} is {cls.formats[0]}, which is "
                                    "a run by itself.", file=paths[0],
                                    fix="give one run (several files are one run only for YADE saved states).")
         for other in paths[1:]:
-            if reader_for(other) is not cls:
+            if reader_for(other, simulator) is not cls:
                 raise InputFormatError(f"this input is not {cls.formats[0]}, as {paths[0].name} is.", file=other,
                                        fix="give the files of one run.")
         run = cls.open(paths, **options)
         run.spec = {"path": [str(p) for p in path], **options}
         return run
-    run = reader_for(path).open(None if path is None else Path(path), **options)
+    run = reader_for(path, simulator).open(None if path is None else Path(path), **options)
     run.spec = {"path": None if path is None else str(path), **options}
+    if simulator is not None:
+        run.spec["simulator"] = simulator
     return run
 
 

@@ -95,6 +95,8 @@ class Run(ABC):
 
     format_name: ClassVar[str]
     formats: ClassVar[tuple[str, ...]]
+    simulator: ClassVar[str | None] = None
+    """The simulator whose runs the reader reads (``liggghts``, ``lammps``), for ``--simulator``."""
     priority: ClassVar[int] = 0
     several_files: ClassVar[bool] = False
     cli_group: ClassVar[str] = ""

@@ -295,6 +295,7 @@ class LiggghtsRun(Run):
     """A LIGGGHTS run opened for reading (see the module docstring)."""
 
     format_name = "liggghts"
+    simulator = "liggghts"
     formats = ("a LIGGGHTS input script (its dumps found from its dump lines, or given as options)",
                "LIGGGHTS dumps given as options (atoms=, contacts=) with the scene as options")
     priority = -10  # any text file that no other reader claims is taken for a script

@@ -312,18 +312,24 @@ class LiggghtsScript:
 
     def named_files(self) -> list[Path]:
         """Every file the script names: itself, its includes, its mesh files and the file (and compressed
-        copies) of every dump it writes, a per-step or per-processor pattern's existing files included;
-        what no output of demsplit may replace (:mod:`demsplit.outputs`)."""
-        files = [self.path, *self.included]
-        files += [Path(w.file) for w in self.scene.walls if w.kind == "mesh" and w.file]
-        for dump in self.dumps:
-            name = Path(dump.file)
-            if "*" in name.name or "%" in name.name:
-                pattern = name.name.replace("%", "*")
-                files += [p for suffix in ("", *COMPRESSED_SUFFIXES) for p in name.parent.glob(pattern + suffix)]
-            else:
-                files += [name, *(name.with_name(name.name + suffix) for suffix in COMPRESSED_SUFFIXES)]
-        return files
+        copies) of every dump it writes (:func:`dump_files`); what no output of demsplit may replace
+        (:mod:`demsplit.outputs`)."""
+        meshes = [Path(w.file) for w in self.scene.walls if w.kind == "mesh" and w.file]
+        return [self.path, *self.included, *meshes, *dump_files(self.dumps)]
+
+
+def dump_files(dumps: list[DumpSpec]) -> list[Path]:
+    """The files of ``dumps`` and their compressed copies; for a per-step or per-processor pattern (``*``,
+    ``%``), the files that exist."""
+    files: list[Path] = []
+    for dump in dumps:
+        name = Path(dump.file)
+        if "*" in name.name or "%" in name.name:
+            pattern = name.name.replace("%", "*")
+            files += [p for suffix in ("", *COMPRESSED_SUFFIXES) for p in name.parent.glob(pattern + suffix)]
+        else:
+            files += [name, *(name.with_name(name.name + suffix) for suffix in COMPRESSED_SUFFIXES)]
+    return files
 
 
 COMPRESSED_SUFFIXES = (".gz", ".bz2", ".xz")

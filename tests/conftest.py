@@ -1,6 +1,6 @@
 """Shared test fixtures.
 
-Simulator tests (Debian's ``liggghts``, ``yade``) skip with a stated reason when
+Simulator tests (Debian's ``liggghts``, ``yade``, ``lmp``) skip with a stated reason when
 the program is absent, and fail instead when ``DEMSPLIT_REQUIRE_SIMULATORS=1``
 (as ``.ci/run`` sets after installing them).
 """
@@ -18,11 +18,12 @@ REPO = Path(__file__).resolve().parent.parent
 SAMPLES = REPO / "sample_dumps"
 
 
-def require_program(name: str) -> str:
-    """Path of program ``name``; skip (or fail under DEMSPLIT_REQUIRE_SIMULATORS=1) if absent."""
+def require_program(name: str, package: str | None = None) -> str:
+    """Path of program ``name`` (Debian package ``package``, default the name's first part); skip (or fail under
+    DEMSPLIT_REQUIRE_SIMULATORS=1) if absent."""
     path = shutil.which(name)
     if path is None:
-        reason = f"{name} is not installed (apt-get install {name.split('-')[0]})"
+        reason = f"{name} is not installed (apt-get install {package or name.split('-')[0]})"
         if os.environ.get("DEMSPLIT_REQUIRE_SIMULATORS") == "1":
             pytest.fail(f"DEMSPLIT_REQUIRE_SIMULATORS=1 but {reason}")
         pytest.skip(reason)

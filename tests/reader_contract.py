@@ -93,7 +93,7 @@ class ReaderContract:
                         assert values.ndim == 1 and len(values) == len(next(iter(table.values()))), (name, col)
                         if col in INT64:
                             assert values.dtype == np.int64, (name, col, values.dtype)
-                        elif col in ("type1", "type2", "history_unknown"):
+                        elif col in ("type1", "type2", "history_unknown", "unknown_modes", "unknown_why"):
                             assert values.dtype.kind == "i", (name, col, values.dtype)
                         elif col != "type":
                             assert values.dtype == np.float64, (name, col, values.dtype)  # SI reals

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 import test_cache
+import test_lammps_run
 import test_liggghts_run
 import test_yade_readers
 import test_yade_state
@@ -22,7 +23,7 @@ def test_every_registered_reader_keeps_the_contract():
     """Every reader of the package has a test class inheriting the contract (a reader a test defines for
     itself has one too, but is registered only while its tests run)."""
     tested = {getattr(cls, "reader", None) for cls in ReaderContract.__subclasses__()}
-    assert test_cache and test_liggghts_run and test_yade_readers and test_yade_state  # they inherit the contract
+    assert test_cache and test_lammps_run and test_liggghts_run and test_yade_readers and test_yade_state  # contract
     assert set(readers()) <= tested
 
 

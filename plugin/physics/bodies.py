@@ -58,6 +58,15 @@ class FrameContacts:
     def __len__(self) -> int:
         return table_length(self.contacts)
 
+    def types(self) -> tuple[np.ndarray, np.ndarray]:
+        """The material types of body 1 and body 2 of every contact (a wall: its type), single material or not."""
+        type1, type2 = self.bodies.type1, self.bodies.type2
+        if type1 is None:  # a single-material scene: the types were not needed until now
+            type1, type2, pairs = _contact_pairs(self)
+            if type1 is None:
+                type1, type2 = _types_of_codes(pairs[0], self.scene)
+        return type1, type2
+
     def without(self, columns: Sequence[str]) -> None:
         """Drop contact ``columns`` nothing later reads (the caller's table keeps them: a new dict)."""
         self.contacts = {c: v for c, v in self.contacts.items() if c not in columns}
@@ -258,11 +267,7 @@ class LawRows:
         values = np.asarray(table, dtype=np.float64)
         if np.all(values == values.flat[0]):
             return float(values.flat[0])
-        type1, type2 = self.bodies.type1, self.bodies.type2
-        if type1 is None:  # a single-material scene: the types were not needed until now
-            type1, type2, pairs = _contact_pairs(self.frame)
-            if type1 is None:
-                type1, type2 = _types_of_codes(pairs[0], self.bodies.scene)
+        type1, type2 = self.frame.types()
         t1, t2 = np.asarray(type1)[self.rows], np.asarray(type2)[self.rows]
         n = len(values)
         if np.any((t1 < 1) | (t1 > n) | (t2 < 1) | (t2 > n)):

@@ -113,23 +113,34 @@ class ContactEnergy(_ByMode):
         return out
 
 
-def law_groups(contacts: Table, scene: Scene) -> list[tuple[ContactModel, slice | np.ndarray]]:
-    """Rows of the contacts each law acts on: the scene's law, or a wall's own law where it differs
-    (LIGGGHTS ``fix wall/gran`` with another model)."""
+def law_groups(contacts: Table, scene: Scene,
+               types: tuple[np.ndarray, np.ndarray] | None = None) -> list[tuple[ContactModel, slice | np.ndarray]]:
+    """Rows of the contacts each law acts on: the scene's law, a wall's own law where it differs (LIGGGHTS
+    ``fix wall/gran`` with another model), and the law of each pair of particle types that has its own
+    (``Scene.pair_models``: then ``types``, the material types of body 1 and body 2 of every contact, are
+    needed)."""
     wall = contacts["wall"]
     groups: list[tuple[ContactModel, np.ndarray]] = []
     default = np.ones(len(wall), dtype=bool)
-    for i, w in enumerate(scene.walls):
-        if w.model is None or w.model == scene.model:
-            continue
-        mask = wall == i
+
+    def add(model: ContactModel, mask: np.ndarray) -> None:
+        nonlocal default
         default &= ~mask
-        for model, other in groups:
-            if model == w.model:
+        for known, other in groups:
+            if known == model:
                 other |= mask
-                break
-        else:
-            groups.append((w.model, mask))
+                return
+        groups.append((model, mask))
+
+    for i, w in enumerate(scene.walls):
+        if w.model is not None and w.model != scene.model:
+            add(w.model, wall == i)
+    if scene.pair_models and len(wall):
+        t1, t2 = (np.asarray(t, dtype=np.int64) for t in types)
+        lo, hi = np.minimum(t1, t2), np.maximum(t1, t2)
+        for (a, b), model in scene.pair_models.items():
+            if model != scene.model:
+                add(model, (wall < 0) & (lo == a) & (hi == b))
     groups.append((scene.model, default))
     if len(groups) == 1:  # one law for every contact: a slice, so that x[rows] is a view, not a copy
         return [(scene.model, slice(None))] if len(wall) else []
@@ -153,8 +164,9 @@ def law_energies(frame: FrameContacts, *, compiled: bool = True) -> ContactLawEn
     contacts, scene = frame.contacts, frame.scene
     n = len(frame)
     _refuse_rigid_pairs(frame)
-    models = [scene.model] + [w.model for w in scene.walls if w.model is not None]
-    by_model = law_groups(contacts, scene)
+    types = frame.types() if scene.pair_models else None
+    models = scene.models()
+    by_model = law_groups(contacts, scene, types)
     # every law of the scene, also one without a contact in this frame (rows: none), so that what its columns
     # lack is known from the first frame on, before particles touch (a run that inserts them): a refusal then
     # comes before any frame is stored, and every frame says the same
@@ -197,6 +209,9 @@ def law_energies(frame: FrameContacts, *, compiled: bool = True) -> ContactLawEn
         bits_without_history = sum(NOT_COMPUTED_BITS[m] for m in law.mode_columns
                                    if m not in result.skipped and m not in result.unknown)
         decided = {m: mask for m, mask in result.unknown.items() if mask.any()}  # rows the law itself says are unknown
+        for m, why in result.unknown_why.items():  # every law's reason, once
+            if m in decided and why not in missing.get(m, ""):
+                missing[m] = f"{missing[m]}; {why}" if m in missing else why
         if bits or decided or (unknown is not None and bits_without_history):
             not_computed[rows] |= bits
             if unknown is not None and bits_without_history:

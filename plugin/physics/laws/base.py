@@ -62,11 +62,14 @@ class LawEnergy:
 
     ``unknown``: per mode, the rows whose value the law could not know from the data (a boolean array);
     for a mode named there the law has itself decided which rows without a written history
-    (``history_unknown``) are unknown, instead of all of them."""
+    (``history_unknown``) are unknown, instead of all of them. ``unknown_why``: per mode of ``unknown``, why
+    its rows are unknown, when the run must be refused for them unless the user lets it go on
+    (``--allow-missing MODE``), as for a mode whose columns were not dumped."""
 
     modes: dict[str, np.ndarray]
     skipped: dict[str, str] = field(default_factory=dict)
     unknown: dict[str, np.ndarray] = field(default_factory=dict)
+    unknown_why: dict[str, str] = field(default_factory=dict)
 
 
 class ContactLaw(ABC):
