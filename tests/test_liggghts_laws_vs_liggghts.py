@@ -75,7 +75,7 @@ ROLLING_SPRINGS = sorted(name for name, (words, _, _) in make_run.MODELS.items()
 
 
 FEW_CONTACTS = {"no_history": 20}
-"""Contacts a model's run holds at least in each test, where not the usual 100 per frame and 300 in all: without
+"""Contacts a model's run holds at least in each test, where not the usual 100 per frame (200 with the mesh floor) and 300 in all: without
 friction and damping the particles of ``no_history`` keep bouncing (22-27 contacts per frame)."""
 
 
@@ -365,7 +365,7 @@ def test_totals_equal_an_independent_recomputation(referenced_run):
     for k, step in enumerate(sorted(res.contacts["step"].unique())):
         ours = res.contacts[(res.contacts["step"] == step) & res.contacts["wall"].isin(dumped_walls)]
         reference = reference_energies(name, run, k, raw_contacts(run, k))
-        assert len(ours) == len(reference["u_n"]) > at_least(name, 300)
+        assert len(ours) == len(reference["u_n"]) > at_least(name, 200)
         assert set(reference) == {m for m in ("u_n", "u_t", "u_r", "u_adh") if m in ours}
         for mode, u in reference.items():
             assert ours[mode].sum() == pytest.approx(u.sum(), rel=1e-12, abs=0), (name, step, mode)
