@@ -1,4 +1,4 @@
-"""demsplit: per-particle elastic contact energy for YADE and LIGGGHTS runs.
+"""demsplit: per-particle elastic contact energy for YADE, LIGGGHTS and LAMMPS GRANULAR runs.
 
 Each contact's elastic energy (normal and tangential, with the contact law the
 run used) is split between the two bodies by the Feng & Gao distribution law,

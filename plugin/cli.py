@@ -3,12 +3,14 @@
     demsplit run IN [--atoms F] [--contacts F] [--walls F] -o OUT.h5
     demsplit info FILE
     demsplit check IN
+    demsplit prepare SCRIPT [-o OUT]
     demsplit report OUT.h5 [-o report.html]
-    demsplit export OUT.h5 --parquet DIR | --csv DIR
+    demsplit export OUT.h5 --parquet DIR | --csv DIR | --vtk DIR | --dump FILE
     demsplit convert IN -o CACHE.h5
+    demsplit yade-path
 
-``IN`` is a LIGGGHTS input script (its dumps are found from its ``dump``
-lines unless given) or a ``demsplit.yade`` snapshot file. Errors print one
+``IN`` is a LIGGGHTS or LAMMPS input script (its dumps are found from its ``dump``
+lines unless given), YADE saved states or a ``demsplit.yade`` snapshot file (readers/). Errors print one
 message naming the file, timestep and line and how to fix it, and exit 2;
 ``--debug`` shows the traceback.
 """
@@ -313,8 +315,8 @@ def build_parser() -> argparse.ArgumentParser:
     from . import __version__
 
     parser = argparse.ArgumentParser(
-        prog="demsplit", description="Per-particle elastic contact energy of LIGGGHTS and YADE runs, split between "
-        "the two bodies by the Feng & Gao material law.",
+        prog="demsplit", description="Per-particle elastic contact energy of LIGGGHTS, LAMMPS GRANULAR and YADE "
+        "runs, split between the two bodies by the Feng & Gao material law.",
         epilog="Errors print one message naming the file, timestep and line and how to fix it, and exit 2; --debug "
         "shows the traceback. 'demsplit COMMAND -h' describes a command.")
     parser.add_argument("--version", action="version", version=f"demsplit {__version__}")
@@ -360,8 +362,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_run)
 
     p = add("info", "describe a dump or snapshot file: kind, frames, columns, precision")
-    p.add_argument("file", help="a LIGGGHTS dump, input script, YADE snapshot or saved state, ingest cache or "
-                   "result store")
+    p.add_argument("file", help="a LIGGGHTS or LAMMPS dump or input script, YADE snapshot or saved "
+                   "state, ingest cache or result store")
     p.set_defaults(func=cmd_info)
 
     p = add("check", "validate a run without computing energies")
@@ -398,7 +400,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = add("prepare", "write a copy of a LIGGGHTS or LAMMPS input script with the dumps demsplit needs, and show "
                        "the diff")
-    p.add_argument("input", help="the LIGGGHTS input script")
+    p.add_argument("input", help="the LIGGGHTS or LAMMPS input script")
     p.add_argument("-o", "--output", help="prepared script (default: INPUT.demsplit next to the input; a script "
                    "split at a mesh wall fix after a run also gets OUTPUT.part2, ...)")
     p.add_argument("--every", type=_positive, metavar="N",

@@ -119,7 +119,8 @@ def analyze(path: str | Path, *, options: Options = DEFAULT_OPTIONS, jobs: int =
             type_names: Mapping[int, str] | None = None, **reader_options):
     """Analyse a run in memory and return :class:`~demsplit.results.Results`.
 
-    ``path``: a LIGGGHTS input script or a ``demsplit.yade`` snapshot file;
+    ``path``: any input a reader of :mod:`demsplit.readers` takes (a LIGGGHTS or LAMMPS input script, YADE
+    saved states, a ``demsplit.yade`` snapshot, an ingest cache);
     ``type_names``: material names of particle types, kept in the provenance (``type_names``) for
     reports and exports; ``reader_options`` go to :func:`demsplit.readers.open_run` (e.g.
     ``atoms=``, ``contacts=``, ``walls=``, ``overlap_tolerance=``).

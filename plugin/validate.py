@@ -1,7 +1,7 @@
 """One validation for every reader's frames: dtypes, finiteness, ranges and plausibility, before any physics.
 
 Readers parse; this module checks what they hand over, the same way for every
-format (DESIGN.md, "Precision and plausibility"), so a NaN in a YADE snapshot,
+format (docs/design.md, "Validation and errors"), so a NaN in a YADE snapshot,
 an ``inf`` position in a binary dump or an ``int8`` stiffness never reaches an
 energy. :func:`validated_frame` returns the frame with every column in its
 canonical dtype (integers as int64, types as int32, reals as float64: safe

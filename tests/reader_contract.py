@@ -10,8 +10,8 @@ reads::
 
 (or overrides the ``run_path`` fixture when the input must be made first), and
 every test below runs on that run: the reader is registered and detects
-its own input, columns and dtypes are the canonical ones (DESIGN.md, "The
-canonical tables"), ``len(run)`` equals the frames iterated, ``frame(k)``
+its own input, columns and dtypes are the canonical ones (docs/design.md, "Data
+flow and tables"), ``len(run)`` equals the frames iterated, ``frame(k)``
 equals the k-th iterated frame bit for bit, ``steps`` are the frames' steps,
 ``close()`` may be called twice, and the ingest cache gives back the same
 frames bit for bit.

@@ -1,4 +1,4 @@
-"""A run is analysed whole or refused (DESIGN.md, "Completeness").
+"""A run is analysed whole or refused (docs/design.md, "Energy modes, split rules and completeness").
 
 What the run has but its files lack (a mesh wall whose contacts were not dumped, a history the
 law needs cut from the dump's column list) stops ``run`` (exit 2) and is a problem in ``check``

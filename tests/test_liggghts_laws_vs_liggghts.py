@@ -75,8 +75,9 @@ ROLLING_SPRINGS = sorted(name for name, (words, _, _) in make_run.MODELS.items()
 
 
 FEW_CONTACTS = {"no_history": 20}
-"""Contacts a model's run holds at least in each test, where not the usual 100 per frame (200 with the mesh floor) and 300 in all: without
-friction and damping the particles of ``no_history`` keep bouncing (22-27 contacts per frame)."""
+"""Contacts a model's run holds at least in each test, where not the usual 100 per frame (200 with the mesh floor)
+and 300 in all: without friction and damping the particles of ``no_history`` keep bouncing (22-27 contacts per
+frame)."""
 
 
 def at_least(name: str, usual: int) -> int:

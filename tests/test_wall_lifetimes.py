@@ -1,4 +1,5 @@
-"""A wall exists exactly in the frames the simulation has it (DESIGN.md, "Completeness").
+"""A wall exists exactly in the frames the simulation has it (docs/design.md, "Energy modes, split rules and
+completeness").
 
 The script reader follows the ``run`` commands and where each wall fix, ``unfix`` and dump line stands
 among them; a frame is written by the run whose timesteps hold it (the first of two that share a

@@ -1,7 +1,7 @@
 """The energy modes of a contact and the rule that splits each between the two bodies.
 
 A contact law returns its elastic energy mode by mode; the split rule belongs
-to the mode, not to the law (DESIGN.md, "Energy modes and how each is split"):
+to the mode, not to the law (docs/design.md, "Energy modes, split rules and completeness"):
 whatever law produced the traction, a half-space's surface displacement under
 it scales with one compliance, so the share of body 1 is that compliance over
 the sum of both.
