@@ -73,6 +73,17 @@ OVERLAP_TOLERANCE = Option("overlap_tolerance", ("--overlap-tolerance",), "large
 """The option of readers that may recompute overlaps from printed positions."""
 
 
+SCRIPT_FILES = "Input scripts, LIGGGHTS and LAMMPS (default: the files the script's dump lines write)"
+"""The help section of the options every input-script reader takes."""
+ATOMS = Option("atoms", ("--atoms",), "atom dump (dump custom: text; LIGGGHTS also binary .bin or compressed)",
+               group=SCRIPT_FILES)
+CONTACTS = Option("contacts", ("--contacts",), "pair contact dump (LIGGGHTS: dump local of compute pair/gran/local; "
+                  "LAMMPS: dump local of compute property/local and pair/local)", group=SCRIPT_FILES)
+VARIABLES = Option("variables", ("--var",), "script variable, as liggghts -var or lmp -var NAME VALUE",
+                   {"nargs": 2, "action": "append", "metavar": ("NAME", "VALUE")}, convert=dict, group=SCRIPT_FILES)
+"""The options of the readers of input scripts."""
+
+
 class Run(ABC):
     """A run opened for reading (see the module docstring).
 

@@ -26,7 +26,7 @@ from ..errors import InputFormatError, MaterialError, ScriptError
 from ..frame import Box, Frame, ParticleIndex, describe_steps
 from ..physics.laws._lammps import DUMP_ROW, SPRING_R, SPRING_T, UNKNOWN_MODES, UNKNOWN_WHY, Rebuilt
 from ..scene import Material, Scene, Wall
-from .base import MATERIALS, Option, Run
+from .base import ATOMS, CONTACTS, MATERIALS, VARIABLES, Option, Run
 from .lammps_balance import close_balances
 from .lammps_dump import HEADER_LINES, DumpFile, DumpFrame, open_dump
 from .lammps_join import ATOM_COLUMNS, FORCE_TOLERANCE, Assembled, LammpsJoin, run_of_step, unknown_columns
@@ -74,10 +74,7 @@ class LammpsRun(Run):
     priority = -5  # a text file: after the file formats, before the LIGGGHTS script that takes any text
     cli_group = "LAMMPS inputs (default: the files the script's dump lines write)"
     cli_options = (
-        Option("atoms", ("--atoms",), "atom dump"),
-        Option("contacts", ("--contacts",), "pair contact dump"),
-        Option("variables", ("--var",), "script variable, as -var NAME VALUE",
-               {"nargs": 2, "action": "append", "metavar": ("NAME", "VALUE")}, convert=dict),
+        ATOMS, CONTACTS, VARIABLES,
         MATERIALS,
         Option("wall_materials", ("--wall-material",), "the elastic constants of a LAMMPS wall fix whose model has "
                "none (hooke, hertz, gran/*), FIXID:E:NU (Pa, -) (repeatable)",

@@ -289,8 +289,7 @@ class _LammpsReader(_Reader):
                              "not supported.", where, f"use one of {', '.join(normals)}.")
         name = words[0]
         law = law_class(normals[name])
-        nums = {"hooke": ("kn", "damp"), "hertz": ("kn", "damp"), "hertz/material": ("E", "damp", "nu"),
-                "dmt": ("E", "damp", "nu", "cohesion"), "jkr": ("E", "damp", "nu", "cohesion")}[name]
+        nums = law.line_coefficients
         self.need(words[1:], len(nums), where, what, f"{name} " + " ".join(nums))
         params: dict = {p: self.number(v, where, f"{what} {name}") for p, v in zip(nums, words[1:])}
         k = 1 + len(nums)

@@ -33,7 +33,7 @@ from ..errors import DemsplitError, InputFormatError
 from ..frame import Frame, describe_steps
 from ..physics.laws import simulator_words
 from ..scene import Material, Scene
-from .base import MATERIALS, OVERLAP_TOLERANCE, Option, Run
+from .base import ATOMS, CONTACTS, MATERIALS, OVERLAP_TOLERANCE, VARIABLES, Option, Run
 from .dump_series import DumpSeries, series_files
 from .lammps_dump import HEADER_LINES, DumpFile, DumpFrame, open_dump
 from .liggghts_join import ATOM_COLUMNS, PRIMITIVE_HISTORY_UNKNOWN, StepJoin
@@ -301,11 +301,9 @@ class LiggghtsRun(Run):
     priority = -10  # any text file that no other reader claims is taken for a script
     cli_group = "LIGGGHTS inputs (default: the files the script's dump lines write)"
     cli_options = (
-        Option("atoms", ("--atoms",), "atom dump (dump custom, text, .bin, or compressed)"),
-        Option("contacts", ("--contacts",), "pair contact dump (dump local of compute pair/gran/local)"),
+        ATOMS, CONTACTS,
         Option("walls", ("--walls",), "mesh-wall contact dump (dump local of compute wall/gran/local)"),
-        Option("variables", ("--var",), "script variable, as liggghts -var NAME VALUE",
-               {"nargs": 2, "action": "append", "metavar": ("NAME", "VALUE")}, convert=dict),
+        VARIABLES,
         MATERIALS, OVERLAP_TOLERANCE,
         Option("force_positions", ("--force-positions",), "recompute overlaps from printed positions even above "
                "the tolerance (reported)", {"action": "store_true"}),

@@ -222,6 +222,9 @@ class LammpsModel(ContactLaw):
     :meth:`elastic_normal_force`, :meth:`normal_energy` and the stiffness :attr:`kn`."""
 
     mode_columns = {"u_t": SPRING_T, "u_r": SPRING_R, "u_tw": SPRING_TW}
+    line_coefficients: ClassVar[tuple[str, ...]] = ()
+    """The numbers after the normal model's name on a ``pair_coeff`` (or wall fix) line, in LAMMPS' order: the
+    parameters they set (pair_granular.cpp coeff())."""
     parameters: ClassVar[dict[str, tuple[Any, str]]] = {
         "damp": (ContactLaw.REQUIRED, "the normal damping coefficient (e for tsuji)"),
         "damping": ("viscoelastic", "damping model: velocity, mass_velocity, viscoelastic or tsuji"),

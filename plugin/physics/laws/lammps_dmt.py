@@ -20,6 +20,7 @@ from .base import ContactRows
 @register
 class LammpsDmt(LammpsAdhesiveModel):
     key = "lammps:dmt"
+    line_coefficients = ("E", "damp", "nu", "cohesion")
     summary = ("DMT F_ne = k_n a delta - 4 pi gamma R, u_n = 2/5 k_n a delta^2, work of adhesion "
                "u_adh = -4 pi gamma R delta")
 

@@ -17,6 +17,7 @@ from .base import ContactLaw
 @register
 class LammpsHertz(LammpsModel):
     key = "lammps:hertz"
+    line_coefficients = ("kn", "damp")
     summary = "Hertz F_ne = k_n a delta, u_n = 2/5 k_n a delta^2 (a = sqrt(R delta))"
     parameters = {"kn": (ContactLaw.REQUIRED, "normal stiffness k_n (N/m^(3/2))"), **LammpsModel.parameters}
     example_params = {"kn": 1e9, **LammpsModel.example_params, "kt": 8e8}

@@ -16,6 +16,7 @@ from ._lammps import LammpsMaterialModel, hertz_energy
 @register
 class LammpsHertzMaterial(LammpsMaterialModel):
     key = "lammps:hertz/material"
+    line_coefficients = ("E", "damp", "nu")
     summary = "Hertz F_ne = k_n a delta, k_n = 4/3 E/(2(1 - nu^2)), u_n = 2/5 k_n a delta^2"
 
     def elastic_normal_force(self, delta: np.ndarray, R: np.ndarray, a: np.ndarray) -> np.ndarray:

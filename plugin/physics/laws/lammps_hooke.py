@@ -17,6 +17,7 @@ from .base import ContactLaw
 @register
 class LammpsHooke(LammpsModel):
     key = "lammps:hooke"
+    line_coefficients = ("kn", "damp")
     summary = "linear spring F_ne = k_n delta, u_n = k_n delta^2/2"
     parameters = {"kn": (ContactLaw.REQUIRED, "normal stiffness k_n (N/m)"), **LammpsModel.parameters}
     example_params = {"kn": 1e5, **LammpsModel.example_params, "tangential": "linear_history", "kt": 4e4}

@@ -48,6 +48,7 @@ def jkr_pulloff_distance(kn: float, gamma: float, R: np.ndarray) -> np.ndarray:
 @register
 class LammpsJkr(LammpsAdhesiveModel):
     key = "lammps:jkr"
+    line_coefficients = ("E", "damp", "nu", "cohesion")
     summary = ("JKR F_ne = k_n a^3/R - 2 pi a^2 sqrt(4 gamma E/(pi a)), u_n = 8 E a^5/(15 R^2) - 4 E a^3 D/(3 R) "
                "+ E a D^2 (D = a^2/R - delta), work of adhesion u_adh = -2 pi gamma a^2")
 
