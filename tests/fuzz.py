@@ -1100,7 +1100,7 @@ ODD_ATTRIBUTES = (np.nan, -1, 2**63 - 1, 1.5, "x", "[", "null", "{}", '["x"]', "
                   np.array([np.inf, 0.0, 0.0]), np.zeros(3), b"\xff", True)
 """Values a damaged HDF5 attribute is given."""
 EXPORT_NAME = re.compile(r"(particles|contacts|walls|frames|clumps)\.(csv|parquet)|units\.csv|provenance\.json|"
-                         r"(particles|contacts)_\d{12}\.vtu|(particles|contacts)\.pvd|demsplit-export\.json")
+                         r"(particles|contacts|walls)_\d{12}\.vtu|(particles|contacts|walls)\.pvd|demsplit-export\.json")
 """The names of the files an export writes."""
 EXPORT_FORMATS = ("--csv", "--csv", "--vtk", "--parquet", "--dump", "--dump", "report")
 

@@ -193,7 +193,7 @@ def reference_shape(text: bytes, ncols: int, trailing: bool, max_rows: int) -> t
 
 
 @pytest.mark.slow
-@settings(max_examples=600, deadline=None)
+@settings(max_examples=200, deadline=None)
 @given(data=st.data(), ncols=st.integers(1, 40), trailing=st.booleans())
 def test_kernel_shape_check_equals_the_rule(data, ncols, trailing):
     """Rows of digit tokens with now and then a damaged separator (two spaces, a tab, a CR, a newline,

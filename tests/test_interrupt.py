@@ -262,7 +262,7 @@ while True:
 def test_sigkill_at_every_stage_of_close_leaves_a_resumable_run_or_a_complete_store(tmp_path, steps):
     """close() finishes the store (last rows, frame index, attributes; a copy in step order when frames came
     out of order), renames it into place and removes the work directory. Killed before any statement it reaches
-    (and before any of the functions it calls in the store and atomic modules), or at 12 random instants (inside
+    (and before any of the functions it calls in the store and atomic modules), or at 6 random instants (inside
     HDF5's calls too), the run is resumable to the same store, or the store is complete; a plain rerun is refused
     only while committed frames wait for --resume."""
     from demsplit.errors import StoreError
@@ -273,7 +273,7 @@ def test_sigkill_at_every_stage_of_close_leaves_a_resumable_run_or_a_complete_st
 
     tests = Path(__file__).resolve().parent
     proc = subprocess.run([sys.executable, "-c", CLOSE_KILLER, str(tests), str(tmp_path), ",".join(map(str, steps)),
-                           "12"], capture_output=True, text=True, timeout=600)
+                           "6"], capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stderr
     kills = [json.loads(line) for line in proc.stdout.splitlines()]
     assert kills[-1]["at"] is None and len(kills) > 50, kills  # every stage, then a close that ran through
