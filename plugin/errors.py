@@ -120,11 +120,10 @@ def plain(value):
 
 
 def os_error_cause(exc: OSError) -> str:
-    """The cause of an OSError in words: its ``strerror``, or the system's message inside an HDF5
-    error (h5py raises OSErrors without errno, their text holds ``errno = 28, error message = '...'``)."""
-    if exc.strerror:
-        return exc.strerror
-    text = " ".join(str(exc).split())
+    """The cause of an OSError in words, on one line: its ``strerror``, or the system's message inside an HDF5
+    error (h5py raises OSErrors whose text holds ``errno = 28, error message = '...'``, with or without an
+    errno and a strerror of their own)."""
+    text = " ".join((exc.strerror or str(exc)).split())  # HDF5's texts span lines
     found = re.search(r"error message = '([^']*)'", text)
     if found:
         return found.group(1)

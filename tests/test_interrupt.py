@@ -276,7 +276,8 @@ def test_sigkill_at_every_stage_of_close_leaves_a_resumable_run_or_a_complete_st
                            "6"], capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stderr
     kills = [json.loads(line) for line in proc.stdout.splitlines()]
-    assert kills[-1]["at"] is None and len(kills) > 50, kills  # every stage, then a close that ran through
+    stages = [k for k in kills if k["at"] != "random"]
+    assert kills[-1]["at"] is None and len(stages) > 38, kills  # every stage, then a close that ran through
     outcomes = collections.Counter()
     for kill in kills:
         n = kill.get("n_particles", 300)

@@ -398,9 +398,11 @@ class ResultWriter:
     def _commit(self) -> None:
         """Flush the store and record what it holds (renamed into place: a
         killed run leaves the previous record or this one, never a part); not
-        before the run's manifest, which waits for the inputs' digests."""
+        before the run's manifest, which needs the inputs' digests: the first frame does not wait for the
+        hashing on idle cores, the second takes it over (a busy machine leaves idle cores to none, and a run
+        must be resumable from its first frames on)."""
         if not self._manifest_written:
-            if not self._fill_digests(wait=False):
+            if not self._fill_digests(wait=len(self._steps) > 1):
                 return
             self._write_manifest()
         self._h5.flush()
