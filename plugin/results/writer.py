@@ -127,7 +127,7 @@ class ResultWriter:
     being hashed in the background) is filled in as soon as its digest is known; a resumed run waits
     for it (the interrupted run's inputs are compared by it). Until then frames are stored but not
     committed: the run's manifest names its inputs by their digests, so a run killed before them has
-    nothing to resume and starts over.
+    nothing to resume and starts over; the second frame's commit finishes the hashing itself.
 
     The store's pages are sent to disk while the run goes on (:class:`~demsplit.outputs.WriteBack`): a
     frame's after the frame, while the next one is computed, and the frame at ``final_step`` (the run's
