@@ -76,3 +76,14 @@ def test_a_hang_a_crash_and_too_much_memory_are_reported_with_their_input(bases,
     assert summary["inputs"] == 7
     assert summary["counts"]["yade_npys"] == {"ok": 4, "HANG": 1, "CRASH exit -9": 1, "CHECK MemoryError": 1}
     assert [b["index"] for b in summary["broken"]] == [1, 3, 4]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed, index", [(2, 2039), (2, 3327)])
+def test_inputs_that_once_broke_the_promise_keep_it(bases, seed, index):
+    """Inputs of a long run (``python tests/fuzz.py --seed 2``) that broke the promise before their fix: YADE
+    snapshots whose phys functor's attrs were not an object (exit 3, now one message naming the snapshot)."""
+    root, base = bases
+    case = fuzz.build_case(base, root / "work", seed, index, fuzz.FAMILIES)
+    outcome, detail = fuzz.check_case(case)
+    assert fuzz.kept(outcome), f"input {index} of seed {seed}: {case.what}\n{outcome}: {detail}"
