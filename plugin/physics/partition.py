@@ -157,9 +157,9 @@ def law_energies(frame: FrameContacts, *, compiled: bool = True) -> ContactLawEn
     """Elastic energy of every mode of every contact with the run's own law(s) (J), shape (modes, n).
 
     Each law computes the modes it has from the columns it declares
-    (:mod:`demsplit.physics.laws`); a mode a law does not have, or cannot
-    compute from the columns given, is 0 and named in ``skipped`` with the
-    reason. Damping and friction work are never counted.
+    (:mod:`demsplit.physics.laws`); a mode a law does not have is 0 and named in ``skipped`` with the
+    reason; a mode it has but cannot compute from the columns given (its ``LawEnergy.skipped``) is 0 with
+    the not-computed bit and named in ``missing``. Damping and friction work are never counted.
     """
     contacts, scene = frame.contacts, frame.scene
     n = len(frame)
