@@ -61,7 +61,8 @@ class LawEnergy:
     """Energy of every mode a law has, per contact row (J), and the modes it could not compute, with why.
 
     ``skipped``: per mode the law has but cannot compute from the columns given (not dumped), why; the
-    partition calls these *missing* and refuses the run for them unless ``--allow-missing MODE``. ``unknown``: per mode, the rows whose value the law could not know from the data (a boolean array);
+    partition calls these *missing* and refuses the run for them unless ``--allow-missing MODE``.
+    ``unknown``: per mode, the rows whose value the law could not know from the data (a boolean array);
     for a mode named there the law has itself decided which rows without a written history
     (``history_unknown``) are unknown, instead of all of them. ``unknown_why``: per mode of ``unknown``, why
     its rows are unknown, when the run must be refused for them unless the user lets it go on
