@@ -224,6 +224,7 @@ class CacheRun(Run):
         if attrs.get("n_frames", self._n_frames) != self._n_frames:
             raise self._damaged("its n_frames attribute is not the number of its frames.")
         self._frames = frames
+        self._boxed = next(("box_lo" in frames[n].attrs for n in names if "error" not in frames[n].attrs), False)
 
     def _json(self, attrs, name: str, kind: type, item: type | None = None, k: int | None = None):
         """The attribute ``name`` (JSON) as a ``kind`` (of ``item``s)."""
@@ -268,6 +269,8 @@ class CacheRun(Run):
             if int(a["step"]) != step:
                 raise self._damaged(f"its step attribute {int(a['step'])} is not the cache's step for it.", k, step)
             box = None
+            if ("box_lo" in a) != self._boxed:  # a reader gives every frame a box, or none
+                raise self._damaged("its box attributes are not those of its other frames.", k, step)
             if "box_lo" in a:
                 box = Box(*(np.array(a[n], dtype=np.float64).reshape(3) for n in ("box_lo", "box_hi")),
                           tuple(bool(p) for p in np.array(a["box_periodic"]).reshape(3)),

@@ -255,6 +255,10 @@ def checked_meta(meta, *, path: Path, k: int) -> dict:
     named(functors.get("phys", []), "'functors.phys'")
     need(all(isinstance(f.get("attrs", {}), dict) for f in functors["law"]), "law attrs are not an object")
     need(all(isinstance(f.get("attrs", {}), dict) for f in functors.get("phys", [])), "phys attrs are not an object")
+    for key in ("law_energies", "energy"):  # YADE's own energies, printed beside demsplit's
+        values = meta.get(key, {})
+        need(isinstance(values, dict) and all(_is_real(v) for v in values.values()),
+             f"{key!r} is not an object of finite numbers")
     for key in ("n_interactions_potential", "n_interactions_real"):
         need(_is_int(meta.get(key)) and 0 <= meta[key] < 2**63, f"{key!r} is not a count")
     need(_is_int(meta.get("format_version", 0)), "'format_version' is not an integer")
