@@ -21,7 +21,7 @@ while [ $# -gt 0 ]; do
     case $1 in
         --small) small=(--particles 400000 --contacts 800000); shift ;;
         --repeat) repeat=$2; shift 2 ;;
-        -h|--help) sed -n '2,14p' "$0"; exit 0 ;;
+        -h|--help) sed -n '2,13p' "$0"; exit 0 ;;
         *) dir=$1; shift ;;
     esac
 done
