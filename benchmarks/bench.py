@@ -79,16 +79,35 @@ from pathlib import Path
 
 import harness
 
-CHILDREN = ("warm-up", "imports", "demsplit-run", "demsplit-run-gzip", "demsplit-run-lzf", "demsplit-run-nocompress",
-            "demsplit-run-nocompare",
-            "demsplit-run-nocontacts", "pipeline-nostore",
-            "demsplit-read", "demsplit-dumps", "demsplit-atoms", "polars", "polars-needed",
-            "pandas-c", "limits", "ovito", "mdanalysis", "convert", "cache-read", "kernel")
+CHILDREN = (
+    "warm-up",
+    "imports",
+    "demsplit-run",
+    "demsplit-run-gzip",
+    "demsplit-run-lzf",
+    "demsplit-run-nocompress",
+    "demsplit-run-nocompare",
+    "demsplit-run-nocontacts",
+    "pipeline-nostore",
+    "demsplit-read",
+    "demsplit-dumps",
+    "demsplit-atoms",
+    "polars",
+    "polars-needed",
+    "pandas-c",
+    "limits",
+    "ovito",
+    "mdanalysis",
+    "convert",
+    "cache-read",
+    "kernel",
+)
 KERNEL_REPEAT = 7  # timings of each in-memory kernel measurement, the best kept (a shared machine: more samples,
 # a minimum nearer the uncontended time)
 
 
 # --------------------------------------------------------------------------- children
+
 
 def _frames(index_file: str, name: str) -> list[tuple[int, int]]:
     return [tuple(r) for r in json.loads(Path(index_file).read_text())[name]]
@@ -105,6 +124,7 @@ def child(name: str, d: Path, work: Path, index_file: str) -> dict:
         import demsplit.readers.liggghts  # noqa: F401
         import demsplit.results.store  # noqa: F401
         import h5py  # noqa: F401
+
         return {}
     if name == "warm-up":
         sys.argv[0] = "demsplit"
@@ -116,10 +136,14 @@ def child(name: str, d: Path, work: Path, index_file: str) -> dict:
         from demsplit.cli import main
 
         out = work / f"{name}.h5"
-        extra = {"demsplit-run": [], "demsplit-run-gzip": ["--compression", "gzip"],
-                 "demsplit-run-lzf": ["--compression", "lzf"],
-                 "demsplit-run-nocompress": ["--compression", "none"], "demsplit-run-nocompare": ["--no-compare"],
-                 "demsplit-run-nocontacts": ["--no-contacts"]}[name]
+        extra = {
+            "demsplit-run": [],
+            "demsplit-run-gzip": ["--compression", "gzip"],
+            "demsplit-run-lzf": ["--compression", "lzf"],
+            "demsplit-run-nocompress": ["--compression", "none"],
+            "demsplit-run-nocompare": ["--no-compare"],
+            "demsplit-run-nocontacts": ["--no-contacts"],
+        }[name]
         return {"rc": main(["run", str(script), "-o", str(out), "-q", *extra])}  # deleted by the parent, untimed
     if name == "pipeline-nostore":
         from demsplit.pipeline import process_run
@@ -157,8 +181,11 @@ def child(name: str, d: Path, work: Path, index_file: str) -> dict:
         return {"rc": main(["convert", str(script), "-o", str(work / "cache.h5"), "-q"])}
     if name in ("polars", "pandas-c", "polars-needed"):
         needed = json.loads(Path(index_file).read_text())["needed"] if name == "polars-needed" else {}
-        return _bare_parse(name, {atoms: _frames(index_file, "atoms"), pairs: _frames(index_file, "pairs")},
-                           {atoms: needed.get("atoms"), pairs: needed.get("pairs")})
+        return _bare_parse(
+            name,
+            {atoms: _frames(index_file, "atoms"), pairs: _frames(index_file, "pairs")},
+            {atoms: needed.get("atoms"), pairs: needed.get("pairs")},
+        )
     if name == "limits":
         return _limits([atoms, pairs])
     if name == "ovito":
@@ -176,8 +203,9 @@ def child(name: str, d: Path, work: Path, index_file: str) -> dict:
     raise ValueError(name)
 
 
-def _bare_parse(engine: str, files: dict[Path, list[tuple[int, int]]],
-                columns: dict[Path, list[int] | None] | None = None) -> dict:
+def _bare_parse(
+    engine: str, files: dict[Path, list[tuple[int, int]]], columns: dict[Path, list[int] | None] | None = None
+) -> dict:
     """Every frame of ``files`` (byte ranges of their rows) parsed by ``engine``; ``columns``: per file,
     the indices of the columns polars reads (None: all)."""
     import io
@@ -193,8 +221,9 @@ def _bare_parse(engine: str, files: dict[Path, list[tuple[int, int]]],
                 if engine.startswith("polars"):
                     import polars as pl
 
-                    df = pl.read_csv(data, separator=" ", has_header=False, quote_char=None,
-                                     columns=(columns or {}).get(path))
+                    df = pl.read_csv(
+                        data, separator=" ", has_header=False, quote_char=None, columns=(columns or {}).get(path)
+                    )
                     arrays = [s.to_numpy() for s in df.iter_columns()]
                 else:
                     import pandas as pd
@@ -294,11 +323,17 @@ def _kernel(script: Path, work: Path) -> dict:
         e = split_energies(frame, law_energies(frame))
         body_tables(frame, e, n_walls=len(scene.walls))
 
-    out = {"contacts": n, "particles": len(p["id"]), "frame_bytes": frame_bytes,
-           "frame_columns": {"particles": list(p), "contacts": list(c)}}
-    for label, f in (("partition+per_particle", kernels),
-                     ("frame_tables --no-compare", lambda: frame_tables(frame, scene, Options(compare=False))),
-                     ("frame_tables", lambda: frame_tables(frame, scene, Options()))):
+    out = {
+        "contacts": n,
+        "particles": len(p["id"]),
+        "frame_bytes": frame_bytes,
+        "frame_columns": {"particles": list(p), "contacts": list(c)},
+    }
+    for label, f in (
+        ("partition+per_particle", kernels),
+        ("frame_tables --no-compare", lambda: frame_tables(frame, scene, Options(compare=False))),
+        ("frame_tables", lambda: frame_tables(frame, scene, Options())),
+    ):
         t = harness.best_of(f, KERNEL_REPEAT)
         out[label] = {"seconds": t, "contacts_per_s": n / t}
     np.seterr(all="ignore")
@@ -306,6 +341,7 @@ def _kernel(script: Path, work: Path) -> dict:
 
 
 # --------------------------------------------------------------------------- parent
+
 
 def measure(name: str, d: Path, work: Path, index_file: str) -> dict:
     """Run child ``name`` in a fresh process (``harness.fresh``): wall time, peak memory, its report. The
@@ -345,8 +381,10 @@ def frame_ranges(d: Path) -> dict:
     try:
         names = {"atoms": run._atom_columns(), "pairs": run._wanted(run._pair_names)}
         out["needed_names"] = names
-        out["needed"] = {"atoms": sorted(run.atoms.columns.index(c) for c in names["atoms"]),
-                         "pairs": sorted(run.pairs.columns.index(c) for c in names["pairs"])}
+        out["needed"] = {
+            "atoms": sorted(run.atoms.columns.index(c) for c in names["atoms"]),
+            "pairs": sorted(run.pairs.columns.index(c) for c in names["pairs"]),
+        }
     finally:
         run.close()
     return out
@@ -378,22 +416,26 @@ def main(argv: list[str] | None = None) -> None:
         rounds = []
         for order in harness.rounds(names, a.repeat, fixed=("warm-up", "imports")):
             rounds.append({n: measure(n, a.dir, Path(work), index_file) for n in order})
-            print(f"round {len(rounds)}: " + ", ".join(f"{n} {r.get('seconds', float('nan')):.1f} s"
-                                                       for n, r in rounds[-1].items()), file=sys.stderr)
+            print(
+                f"round {len(rounds)}: "
+                + ", ".join(f"{n} {r.get('seconds', float('nan')):.1f} s" for n, r in rounds[-1].items()),
+                file=sys.stderr,
+            )
         after = harness.load()
     best = {n: min((r[n] for r in rounds), key=lambda x: x.get("seconds", float("inf"))) for n in names}
     report(best, a.dir, before, after, a.repeat)
     if a.json:
-        a.json.write_text(json.dumps({"rounds": rounds, "machine": before, "load_after": after}, indent=1,
-                                     default=str))
+        a.json.write_text(json.dumps({"rounds": rounds, "machine": before, "load_after": after}, indent=1, default=str))
 
 
 def report(m: dict, d: Path, before: str, load_after: float, repeat: int) -> None:
     sizes = {f: (d / f).stat().st_size / 1e6 for f in ("atoms.txt", "pairs.txt")}
     k = m.get("kernel", {})
     print(f"machine before: {before}; load average after {load_after:.2f}; best of {repeat}")
-    print(f"files: atoms.txt {sizes['atoms.txt']:.0f} MB, pairs.txt {sizes['pairs.txt']:.0f} MB; "
-          f"{k.get('particles', '?')} particles, {k.get('contacts', '?')} contacts per frame")
+    print(
+        f"files: atoms.txt {sizes['atoms.txt']:.0f} MB, pairs.txt {sizes['pairs.txt']:.0f} MB; "
+        f"{k.get('particles', '?')} particles, {k.get('contacts', '?')} contacts per frame"
+    )
     print()
     print(f"{'measurement':28s} {'wall s':>8s} {'peak MiB':>12s}")
     for n, r in m.items():
@@ -438,17 +480,30 @@ def report(m: dict, d: Path, before: str, load_after: float, repeat: int) -> Non
         print(f"  newline count, 8 bytes a step        {gb / lim['newline_count']:6.2f}")
         for n in ("demsplit-dumps", "demsplit-read", "polars-needed", "polars"):
             if t(n):
-                print(f"  {n:36s} {gb / t(n):6.2f}   ({lim['page_cache_read'] / t(n):.0%} of the page-cache read, "
-                      f"{lim['newline_count'] / t(n):.0%} of the newline count; process start and imports "
-                      "included)")
+                print(
+                    f"  {n:36s} {gb / t(n):6.2f}   ({lim['page_cache_read'] / t(n):.0%} of the page-cache read, "
+                    f"{lim['newline_count'] / t(n):.0%} of the newline count; process start and imports "
+                    "included)"
+                )
     if k and "frame_bytes" in k and "imports" in m and "error" not in m["imports"]:
         fb = k["frame_bytes"] / 2**20
         base = m["imports"]["peak_mib"]
-        print(f"\npeak memory above imports ({base:.0f} MiB), in units of one frame's arrays "
-              f"({fb:.0f} MiB: particles + contacts tables)")
-        for n in ("demsplit-run", "demsplit-run-gzip", "demsplit-run-lzf", "demsplit-run-nocompress",
-                  "demsplit-run-nocompare", "demsplit-run-nocontacts", "pipeline-nostore",
-                  "demsplit-read", "cache-read", "convert"):
+        print(
+            f"\npeak memory above imports ({base:.0f} MiB), in units of one frame's arrays "
+            f"({fb:.0f} MiB: particles + contacts tables)"
+        )
+        for n in (
+            "demsplit-run",
+            "demsplit-run-gzip",
+            "demsplit-run-lzf",
+            "demsplit-run-nocompress",
+            "demsplit-run-nocompare",
+            "demsplit-run-nocontacts",
+            "pipeline-nostore",
+            "demsplit-read",
+            "cache-read",
+            "convert",
+        ):
             if n in m and "error" not in m[n]:
                 print(f"  {n:28s} {(m[n]['peak_mib'] - base) / fb:6.2f}x")
     if k and "error" not in k:

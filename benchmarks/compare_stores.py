@@ -28,10 +28,20 @@ from demsplit.results import TABLES, load_results
 _PACKING = "sample_dumps/liggghts/packing"
 SAMPLE_RUNS = {
     **{s: [f"sample_dumps/liggghts/{s}/in.{s}"] for s in ("packing", "periodic", "analytic")},
-    **{f"{y}_{ext}": [f"sample_dumps/yade/{y}.{ext}"] for y in ("cundall_periodic", "mindlin_box")
-       for ext in ("h5", "npys")},
-    "packing_full": [f"{_PACKING}/in.packing", "--atoms", f"{_PACKING}/atoms_full.txt.gz", "--contacts",
-                     f"{_PACKING}/pairs_full.txt.gz", "--walls", f"{_PACKING}/wall_full.txt.gz"],
+    **{
+        f"{y}_{ext}": [f"sample_dumps/yade/{y}.{ext}"]
+        for y in ("cundall_periodic", "mindlin_box")
+        for ext in ("h5", "npys")
+    },
+    "packing_full": [
+        f"{_PACKING}/in.packing",
+        "--atoms",
+        f"{_PACKING}/atoms_full.txt.gz",
+        "--contacts",
+        f"{_PACKING}/pairs_full.txt.gz",
+        "--walls",
+        f"{_PACKING}/wall_full.txt.gz",
+    ],
     "packing_paper": [f"{_PACKING}/in.packing", "--tangential-rule", "paper"],
 }
 """Store name -> the arguments of ``run`` (paths from the repository root) of every sample ``--write`` runs."""
@@ -42,8 +52,9 @@ def write(directory: Path, command: list[str]) -> int:
     directory.mkdir(parents=True, exist_ok=True)
     failed = 0
     for name, args in SAMPLE_RUNS.items():
-        proc = subprocess.run([*command, "run", *args, "-o", str(directory / f"{name}.h5"), "-q"],
-                              capture_output=True, text=True)
+        proc = subprocess.run(
+            [*command, "run", *args, "-o", str(directory / f"{name}.h5"), "-q"], capture_output=True, text=True
+        )
         if proc.returncode != 0:
             print(f"FAILED: {name}: {proc.stderr.strip()[-500:]}")
             failed = 1
@@ -66,8 +77,9 @@ def differences(before: str, after: str, added_columns: bool = False) -> tuple[l
             x, y = ta[col].to_numpy(), tb[col].to_numpy()
             if x.dtype != y.dtype or x.shape != y.shape:
                 out.append(f"{name}.{col}: {x.dtype}{x.shape} != {y.dtype}{y.shape}")
-            elif not np.array_equal(x.view(np.uint8) if x.dtype.kind != "O" else x,
-                                    y.view(np.uint8) if y.dtype.kind != "O" else y):
+            elif not np.array_equal(
+                x.view(np.uint8) if x.dtype.kind != "O" else x, y.view(np.uint8) if y.dtype.kind != "O" else y
+            ):
                 out.append(f"{name}.{col}: values differ")
     return out, added
 
@@ -88,8 +100,10 @@ def main(argv: list[str]) -> int:
     bad = 0
     for before, after in zip(argv[::2], argv[1::2]):
         diff, added = differences(before, after, added_columns)
-        print(f"{'identical' if not diff else 'DIFFERENT'}: {before} vs {after}"
-              + (f" (added: {' '.join(added)})" if added else ""))
+        print(
+            f"{'identical' if not diff else 'DIFFERENT'}: {before} vs {after}"
+            + (f" (added: {' '.join(added)})" if added else "")
+        )
         for line in diff:
             print(f"  {line}")
         bad += bool(diff)

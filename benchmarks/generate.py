@@ -45,17 +45,33 @@ import numpy as np
 from demsplit.physics.elastic import hertz_force
 from demsplit.physics.moduli import effective_radius, effective_shear_modulus
 
-ATOM_COLUMNS = ("id", "type", "x", "y", "z", "vx", "vy", "vz", "fx", "fy", "fz",
-                "omegax", "omegay", "omegaz", "radius", "mass")
+ATOM_COLUMNS = (
+    "id",
+    "type",
+    "x",
+    "y",
+    "z",
+    "vx",
+    "vy",
+    "vz",
+    "fx",
+    "fy",
+    "fz",
+    "omegax",
+    "omegay",
+    "omegaz",
+    "radius",
+    "mass",
+)
 N_LOCAL = 41
-ID_COLUMNS = (12, 13)           # 0-based columns of id1, id2 in the pair/gran/local layout
-SPACING = 0.004                 # lattice spacing a (m)
+ID_COLUMNS = (12, 13)  # 0-based columns of id1, id2 in the pair/gran/local layout
+SPACING = 0.004  # lattice spacing a (m)
 DENSITY = {1: 2500.0, 2: 1100.0}
-MATERIALS = {1: (1.0e8, 0.25), 2: (1.0e7, 0.40)}     # type: (E Pa, nu), as in.packing
+MATERIALS = {1: (1.0e8, 0.25), 2: (1.0e7, 0.40)}  # type: (E Pa, nu), as in.packing
 ROWS_PER_CHUNK = 50_000
 STEP0, EVERY = 200_000, 2000
 
-_EXP_CHARS = 3                  # exponent digits reserved (%g prints at least 2, up to 3)
+_EXP_CHARS = 3  # exponent digits reserved (%g prints at least 2, up to 3)
 
 
 def format_g(values: np.ndarray, precision: int = 6) -> np.ndarray:
@@ -75,7 +91,7 @@ def format_g(values: np.ndarray, precision: int = 6) -> np.ndarray:
     e = np.floor(np.log10(safe)).astype(np.int64)
     m = np.rint(safe * 10.0 ** (P - 1 - e))
     for _ in range(2):  # log10/product rounding: bring m back into [10^(P-1), 10^P)
-        up = m >= 10.0 ** P
+        up = m >= 10.0**P
         e = np.where(up, e + 1, e)
         down = m < 10.0 ** (P - 1)
         e = np.where(down, e - 1, e)
@@ -102,11 +118,11 @@ def format_g(values: np.ndarray, precision: int = 6) -> np.ndarray:
     out[..., 0] = np.where(neg, ord("-"), 0)
     # the P digits of m as characters, padded with 4 zeros on both sides so that j = q + shift indexes them
     chars = np.full(x.shape + (P + 8,), 48, dtype=np.uint8)
-    chars[..., 4:4 + P] += digits
+    chars[..., 4 : 4 + P] += digits
     q = np.arange(n_q)
     picked = np.take_along_axis(chars, (q + shift[..., None] + 4), axis=-1)
-    out[..., 1:1 + 2 * n_q:2] = np.where(q < length[..., None], picked, 0)
-    out[..., 2:2 + 2 * n_q:2] = np.where((q == point[..., None]) & (length[..., None] > q + 1), ord("."), 0)
+    out[..., 1 : 1 + 2 * n_q : 2] = np.where(q < length[..., None], picked, 0)
+    out[..., 2 : 2 + 2 * n_q : 2] = np.where((q == point[..., None]) & (length[..., None] > q + 1), ord("."), 0)
     k = 1 + 2 * n_q
     sci = ~fixed
     out[..., k] = np.where(sci, ord("e"), 0)
@@ -130,14 +146,16 @@ def format_rows(columns: list[np.ndarray], precisions: list[int]) -> bytes:
 
 def _header(step: int, n: int, label: str, names: list[str], lo: np.ndarray, hi: np.ndarray) -> bytes:
     bounds = "".join(f"{a:g} {b:g}\n" for a, b in zip(lo, hi))
-    return (f"ITEM: TIMESTEP\n{step}\nITEM: NUMBER OF {label}\n{n}\nITEM: BOX BOUNDS ff ff ff\n{bounds}"
-            f"ITEM: {label} {' '.join(names)} \n").encode()
+    return (
+        f"ITEM: TIMESTEP\n{step}\nITEM: NUMBER OF {label}\n{n}\nITEM: BOX BOUNDS ff ff ff\n{bounds}"
+        f"ITEM: {label} {' '.join(names)} \n"
+    ).encode()
 
 
 def _write_rows(f, columns: list[np.ndarray], precisions: list[int]) -> None:
     n = len(columns[0])
     for start in range(0, n, ROWS_PER_CHUNK):
-        f.write(format_rows([c[start:start + ROWS_PER_CHUNK] for c in columns], precisions))
+        f.write(format_rows([c[start : start + ROWS_PER_CHUNK] for c in columns], precisions))
 
 
 def lattice(n_particles: int, rng: np.random.Generator) -> dict[str, np.ndarray]:
@@ -148,8 +166,14 @@ def lattice(n_particles: int, rng: np.random.Generator) -> dict[str, np.ndarray]
     types = (ijk.sum(axis=1) % 2 + 1).astype(np.int64)
     radius = SPACING / 2 * (1 + 1e-3 * rng.uniform(0.2, 1.0, n_particles))
     density = np.where(types == 1, DENSITY[1], DENSITY[2])
-    return {"id": k + 1, "type": types, "ijk": ijk, "side": np.int64(side), "radius": radius,
-            "mass": 4 / 3 * np.pi * radius ** 3 * density}
+    return {
+        "id": k + 1,
+        "type": types,
+        "ijk": ijk,
+        "side": np.int64(side),
+        "radius": radius,
+        "mass": 4 / 3 * np.pi * radius**3 * density,
+    }
 
 
 def bonds(p: dict[str, np.ndarray], n_contacts: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, float]:
@@ -191,7 +215,7 @@ def frame_arrays(p: dict, i: np.ndarray, j: np.ndarray, z_factor: float, rng: np
     E = np.array([MATERIALS[1][0], MATERIALS[2][0]])
     nu = np.array([MATERIALS[1][1], MATERIALS[2][1]])
     fn = hertz_force(delta, r1, r2, E[t1], nu[t1], E[t2], nu[t2])
-    fnv = -fn[:, None] * n12                       # on body 1, away from body 2
+    fnv = -fn[:, None] * n12  # on body 1, away from body 2
     R = effective_radius(r1, r2)
     G = effective_shear_modulus(E[t1], nu[t1], E[t2], nu[t2])
     kt = 8.0 * G * np.sqrt(R * delta)
@@ -201,9 +225,25 @@ def frame_arrays(p: dict, i: np.ndarray, j: np.ndarray, z_factor: float, rng: np
     ftv = -kt[:, None] * s
     tq = small(1e-7, (m, 3))
     cp = xyz[i] + (r1 - delta / 2)[:, None] * n12
-    pairs = [*xyz[i].T, *xyz[j].T, *v[i].T, *v[j].T, p["id"][i], p["id"][j], np.zeros(m),
-             *(fnv + ftv).T, *fnv.T, *ftv.T, *tq.T, *(0.5 * tq).T, *(0.5 * tq).T, *s.T,
-             np.pi * R * delta, delta, *cp.T]
+    pairs = [
+        *xyz[i].T,
+        *xyz[j].T,
+        *v[i].T,
+        *v[j].T,
+        p["id"][i],
+        p["id"][j],
+        np.zeros(m),
+        *(fnv + ftv).T,
+        *fnv.T,
+        *ftv.T,
+        *tq.T,
+        *(0.5 * tq).T,
+        *(0.5 * tq).T,
+        *s.T,
+        np.pi * R * delta,
+        delta,
+        *cp.T,
+    ]
     assert len(pairs) == N_LOCAL
     return atoms, pairs
 
@@ -234,7 +274,7 @@ timestep        2.0e-6
 compute cpgl all pair/gran/local pos vel id force force_normal force_tangential &
     torque torque_normal torque_tangential history contactArea delta contactPoint
 
-dump datoms all custom {EVERY} {atoms} {' '.join(ATOM_COLUMNS)}
+dump datoms all custom {EVERY} {atoms} {" ".join(ATOM_COLUMNS)}
 dump dpair  all local {EVERY} {pairs} {local}
 dump_modify dpair format "{fmt}"
 
@@ -266,9 +306,15 @@ def generate(out: Path, n_particles: int, n_contacts: int, n_frames: int, seed: 
             t_compute += t1 - t0
             t_write += time.perf_counter() - t1
     (out / "in.bench").write_text(script_text("atoms.txt", "pairs.txt"))
-    return {"dir": str(out), "particles": n_particles, "contacts": len(i), "frames": n_frames,
-            "bytes": {f: (out / f).stat().st_size for f in ("atoms.txt", "pairs.txt")},
-            "seconds_compute": round(t_compute, 2), "seconds_format_write": round(t_write, 2)}
+    return {
+        "dir": str(out),
+        "particles": n_particles,
+        "contacts": len(i),
+        "frames": n_frames,
+        "bytes": {f: (out / f).stat().st_size for f in ("atoms.txt", "pairs.txt")},
+        "seconds_compute": round(t_compute, 2),
+        "seconds_format_write": round(t_write, 2),
+    }
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -280,8 +326,9 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--seed", type=int, default=1)
     a = ap.parse_args(argv)
     out = Path(a.dir) if a.dir else Path(tempfile.mkdtemp(prefix="demsplit-bench-"))
-    if (Path(__file__).resolve().parent.parent / ".git").exists() and \
-            Path(__file__).resolve().parent.parent in out.resolve().parents:
+    if (Path(__file__).resolve().parent.parent / ".git").exists() and Path(
+        __file__
+    ).resolve().parent.parent in out.resolve().parents:
         ap.error("refusing to write the benchmark dumps into the repository; give a directory outside it")
     info = generate(out, a.particles, a.contacts, a.frames, a.seed)
     print(info)

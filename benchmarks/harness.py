@@ -83,8 +83,9 @@ class Fresh:
         return self.report.get("peak_mib", float("nan"))
 
 
-def fresh(argv: Sequence[str], *, inputs: Iterable[Path] = (), env: dict | None = None, pause: float = 0.0,
-          check: bool = True) -> Fresh:
+def fresh(
+    argv: Sequence[str], *, inputs: Iterable[Path] = (), env: dict | None = None, pause: float = 0.0, check: bool = True
+) -> Fresh:
     """Run ``argv`` in a new process, timed as the module docstring says; ``pause`` seconds of nothing between
     the untimed preparation and the start. ``check``: a failed child raises, with the end of its errors."""
     os.sync()
@@ -103,8 +104,15 @@ def fresh(argv: Sequence[str], *, inputs: Iterable[Path] = (), env: dict | None 
         parsed = json.loads(lines[-1]) if lines else {}
     except json.JSONDecodeError:
         parsed = {}
-    return Fresh(seconds, after.ru_utime - before.ru_utime, after.ru_stime - before.ru_stime, proc.returncode,
-                 proc.stdout, proc.stderr, parsed if isinstance(parsed, dict) else {})
+    return Fresh(
+        seconds,
+        after.ru_utime - before.ru_utime,
+        after.ru_stime - before.ru_stime,
+        proc.returncode,
+        proc.stdout,
+        proc.stderr,
+        parsed if isinstance(parsed, dict) else {},
+    )
 
 
 def python(code: str, *args, **kwargs) -> Fresh:
@@ -149,12 +157,17 @@ def machine() -> str:
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     memory = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2**30
     try:
-        cpu = next(line.split(":", 1)[1].strip() for line in Path("/proc/cpuinfo").read_text().splitlines()
-                   if line.startswith("model name"))
+        cpu = next(
+            line.split(":", 1)[1].strip()
+            for line in Path("/proc/cpuinfo").read_text().splitlines()
+            if line.startswith("model name")
+        )
     except (OSError, StopIteration):
         cpu = platform.machine()
-    return (f"{cores} cores (of {os.cpu_count()}), {memory:.0f} GiB, load average {load():.2f}; {cpu}; "
-            f"Python {platform.python_version()}")
+    return (
+        f"{cores} cores (of {os.cpu_count()}), {memory:.0f} GiB, load average {load():.2f}; {cpu}; "
+        f"Python {platform.python_version()}"
+    )
 
 
 def ratio(label: str, fast: float | None, slow: float | None, width: int = 58) -> str:

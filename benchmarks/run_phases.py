@@ -187,19 +187,24 @@ def variant_name(value: str) -> str:
         unknown = set(filter(None, value.split("=", 1)[1].split(","))) - set(SETTINGS)
         if not unknown:
             return value
-    raise argparse.ArgumentTypeError(f"{value!r}: one of {', '.join(VARIANTS)}, or settings=LIST of "
-                                     f"{','.join(SETTINGS)}")
+    raise argparse.ArgumentTypeError(
+        f"{value!r}: one of {', '.join(VARIANTS)}, or settings=LIST of {','.join(SETTINGS)}"
+    )
 
 
 def package_of(rev: str, where: Path) -> str:
     """A directory holding revision ``rev``'s package as ``demsplit`` (for PYTHONPATH)."""
     tree = where / "tree"
-    subprocess.run(["git", "-C", str(harness.REPO), "worktree", "add", "-f", "--detach", str(tree), rev],
-                   check=True, capture_output=True)
+    subprocess.run(
+        ["git", "-C", str(harness.REPO), "worktree", "add", "-f", "--detach", str(tree), rev],
+        check=True,
+        capture_output=True,
+    )
     shutil.copytree(tree / "plugin", where / "pkg" / "demsplit")
     shutil.copytree(tree / "readers", where / "pkg" / "demsplit" / "readers")
-    subprocess.run(["git", "-C", str(harness.REPO), "worktree", "remove", "--force", str(tree)], check=True,
-                   capture_output=True)
+    subprocess.run(
+        ["git", "-C", str(harness.REPO), "worktree", "remove", "--force", str(tree)], check=True, capture_output=True
+    )
     return str(where / "pkg")
 
 
@@ -217,8 +222,13 @@ def phases(script: Path, out: Path, env: dict, variant: str, pause: float) -> di
     user and system seconds, and the seconds from ``main``'s return to the process's end."""
     proc = harness.python(CHILD, script, out, variant, env=env, pause=pause)
     end = time.time()
-    return {**proc.report, "process": proc.seconds, "user": proc.user, "system": proc.system,
-            "exit": end - proc.report["main_end"]}
+    return {
+        **proc.report,
+        "process": proc.seconds,
+        "user": proc.user,
+        "system": proc.system,
+        "exit": end - proc.report["main_end"],
+    }
 
 
 def report(label: str, runs: list[dict]) -> None:
@@ -229,10 +239,13 @@ def report(label: str, runs: list[dict]) -> None:
     rest_wall, rest_cpu = wall, cpu
     for name, (w, c) in best["phases"].items():
         calls = best["calls"].get(name, [])
-        frames = (f"   first frame {calls[0]:.3f} s, later {statistics.mean(calls[1:]):.3f} s each"
-                  if len(calls) > 1 else "")
-        print(f"  {name:14s} wall {w:5.2f} s   CPU {c:5.2f} s   {c / w if w else 0:4.2f} cores   "
-              f"fresh {best['fresh'].get(name, 0):6.1f} MiB{frames}")
+        frames = (
+            f"   first frame {calls[0]:.3f} s, later {statistics.mean(calls[1:]):.3f} s each" if len(calls) > 1 else ""
+        )
+        print(
+            f"  {name:14s} wall {w:5.2f} s   CPU {c:5.2f} s   {c / w if w else 0:4.2f} cores   "
+            f"fresh {best['fresh'].get(name, 0):6.1f} MiB{frames}"
+        )
         rest_wall, rest_cpu = rest_wall - w, rest_cpu - c
     if rest_wall < 0:
         print(f"  {'overlapped':14s} wall {-rest_wall:5.2f} s   (the phases' walls exceed the total: they ran at once)")
@@ -246,8 +259,13 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("dir", type=Path, help="directory written by benchmarks/generate.py")
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--rev", help="also time this git revision's package")
-    ap.add_argument("--variant", type=variant_name, action="append", default=[],
-                    help=f"also time the working tree with a change: {', '.join(VARIANTS)}, settings=LIST")
+    ap.add_argument(
+        "--variant",
+        type=variant_name,
+        action="append",
+        default=[],
+        help=f"also time the working tree with a change: {', '.join(VARIANTS)}, settings=LIST",
+    )
     ap.add_argument("--pause", type=float, default=0.0, help="seconds between one run's end and the next's start")
     ap.add_argument("--stages", action="store_true", help="then time the index scans, parses and digests alone")
     a = ap.parse_args(argv)
@@ -271,10 +289,12 @@ def main(argv: list[str] | None = None) -> None:
         report(label, rows)
     for label, rows in runs.items():
         wall = [r["process"] for r in rows]
-        print(f"whole process ({label}): median {harness.median(wall):.2f} s, best {min(wall):.2f} s; "
-              f"user {harness.median([r['user'] for r in rows]):.2f} s, "
-              f"system {harness.median([r['system'] for r in rows]):.2f} s; "
-              f"peak {max(r['peak_mib'] for r in rows):.0f} MiB; all: {', '.join(f'{t:.2f}' for t in wall)}")
+        print(
+            f"whole process ({label}): median {harness.median(wall):.2f} s, best {min(wall):.2f} s; "
+            f"user {harness.median([r['user'] for r in rows]):.2f} s, "
+            f"system {harness.median([r['system'] for r in rows]):.2f} s; "
+            f"peak {max(r['peak_mib'] for r in rows):.0f} MiB; all: {', '.join(f'{t:.2f}' for t in wall)}"
+        )
     if a.stages:
         print(harness.python("from harness import best_of\n" + STAGES, script).stdout, end="")
     print(f"load average after: {harness.load():.2f}")

@@ -40,8 +40,16 @@ import harness
 import numpy as np
 from generate import generate
 
-GRID = [(10_000, 1), (10_000, 10), (10_000, 100), (100_000, 1), (100_000, 10), (100_000, 30),
-        (1_000_000, 1), (1_000_000, 3)]
+GRID = [
+    (10_000, 1),
+    (10_000, 10),
+    (10_000, 100),
+    (100_000, 1),
+    (100_000, 10),
+    (100_000, 30),
+    (1_000_000, 1),
+    (1_000_000, 3),
+]
 BIG = [(10_000_000, 1)]
 CHILD = """
 sys.argv[0] = "demsplit"  # as the console script: this process is the command (demsplit.runtime.command)
@@ -54,8 +62,17 @@ sys.exit(rc)
 
 def timed_run(script: Path, out: Path, jobs: int) -> tuple[float, float]:
     """Wall seconds and peak memory (MiB) of ``demsplit run`` in a fresh process."""
-    proc = harness.python(CHILD, "run", script, "-o", out, "-q", "--jobs", jobs,
-                          inputs=[p for p in script.parent.iterdir() if p.suffix == ".txt"])
+    proc = harness.python(
+        CHILD,
+        "run",
+        script,
+        "-o",
+        out,
+        "-q",
+        "--jobs",
+        jobs,
+        inputs=[p for p in script.parent.iterdir() if p.suffix == ".txt"],
+    )
     out.unlink(missing_ok=True)
     return proc.seconds, proc.peak_mib
 
@@ -91,13 +108,25 @@ def main(argv: list[str] | None = None) -> None:
             size = sum((d / f).stat().st_size for f in ("atoms.txt", "pairs.txt"))
             serial, rss = min(timed_run(d / "in.bench", Path(work) / "out.h5", 1) for _ in range(2))
             parallel, rss2 = timed_run(d / "in.bench", Path(work) / "out.h5", 2)
-            rows.append({"particles": particles, "frames": frames, "bytes": size, "seconds": serial,
-                         "peak_mib": rss, "seconds_jobs2": parallel, "peak_mib_jobs2": rss2,
-                         "load": harness.load()})
+            rows.append(
+                {
+                    "particles": particles,
+                    "frames": frames,
+                    "bytes": size,
+                    "seconds": serial,
+                    "peak_mib": rss,
+                    "seconds_jobs2": parallel,
+                    "peak_mib_jobs2": rss2,
+                    "load": harness.load(),
+                }
+            )
             r = rows[-1]
-            print(f"{particles:>10,d} particles x {frames:>3d} frames  {size / 1e6:8.0f} MB  {serial:7.2f} s  "
-                  f"{size / serial / 1e6:6.0f} MB/s  peak {rss:6.0f} MiB  | --jobs 2 {parallel:7.2f} s "
-                  f"({serial / parallel:.2f}x serial)  load {r['load']:.2f}", flush=True)
+            print(
+                f"{particles:>10,d} particles x {frames:>3d} frames  {size / 1e6:8.0f} MB  {serial:7.2f} s  "
+                f"{size / serial / 1e6:6.0f} MB/s  peak {rss:6.0f} MiB  | --jobs 2 {parallel:7.2f} s "
+                f"({serial / parallel:.2f}x serial)  load {r['load']:.2f}",
+                flush=True,
+            )
             if not a.keep:
                 shutil.rmtree(d)
         per_file = per_file_overhead(Path(work), a.files)
@@ -109,24 +138,34 @@ def main(argv: list[str] | None = None) -> None:
         if len(fit) >= 2:
             x = np.log([r["particles"] * r["frames"] for r in fit])
             b, log_a = np.polyfit(x, np.log([r["seconds"] for r in fit]), 1)
-            print(f"fit over the {len(fit)} cells of >= {floor:g} s: seconds = {np.exp(log_a):.3g} "
-                  f"(particles x frames)^{b:.3f}")
+            print(
+                f"fit over the {len(fit)} cells of >= {floor:g} s: seconds = {np.exp(log_a):.3g} "
+                f"(particles x frames)^{b:.3f}"
+            )
     if len(rows) >= 3:  # what makes the exponent less than 1: a cost per run and one per frame
         design = np.array([[1.0, r["frames"], r["particles"] * r["frames"]] for r in rows])
         (c0, c_frame, c_row), *_ = np.linalg.lstsq(design, [r["seconds"] for r in rows], rcond=None)
-        print(f"least squares over all cells: seconds = {c0:.2f} + {1e3 * c_frame:.1f} ms x frames + "
-              f"{1e9 * c_row:.0f} ns x particles x frames")
-        (m0, m1), *_ = np.linalg.lstsq(np.array([[1.0, r["particles"]] for r in rows]),
-                                      [r["peak_mib"] for r in rows], rcond=None)
+        print(
+            f"least squares over all cells: seconds = {c0:.2f} + {1e3 * c_frame:.1f} ms x frames + "
+            f"{1e9 * c_row:.0f} ns x particles x frames"
+        )
+        (m0, m1), *_ = np.linalg.lstsq(
+            np.array([[1.0, r["particles"]] for r in rows]), [r["peak_mib"] for r in rows], rcond=None
+        )
         print(f"peak memory: {m0:.0f} MiB + {m1 * 2**20:.0f} B x particles (of one frame; the frames do not add)")
     worst = max(rows, key=lambda r: r["seconds_jobs2"] / r["seconds"])
-    print(f"--jobs 2 against serial: slowest {worst['seconds_jobs2'] / worst['seconds']:.2f}x "
-          f"({worst['particles']:,d} particles x {worst['frames']} frames)")
-    print(f"{a.files} frames of 100 particles: one file per dump {per_file['single']:.2f} s, one file per timestep "
-          f"({2 * a.files} files) {per_file['series']:.2f} s: {per_file['per_file_ms']:.2f} ms per file")
+    print(
+        f"--jobs 2 against serial: slowest {worst['seconds_jobs2'] / worst['seconds']:.2f}x "
+        f"({worst['particles']:,d} particles x {worst['frames']} frames)"
+    )
+    print(
+        f"{a.files} frames of 100 particles: one file per dump {per_file['single']:.2f} s, one file per timestep "
+        f"({2 * a.files} files) {per_file['series']:.2f} s: {per_file['per_file_ms']:.2f} ms per file"
+    )
     if a.json:
-        a.json.write_text(json.dumps({"rows": rows, "per_file": per_file, "machine": before, "load_after": load1},
-                                     indent=1))
+        a.json.write_text(
+            json.dumps({"rows": rows, "per_file": per_file, "machine": before, "load_after": load1}, indent=1)
+        )
 
 
 def _written(keep: Path, particles: int, frames: int) -> Path:

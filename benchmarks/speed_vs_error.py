@@ -112,8 +112,10 @@ def study(frames: dict[str, list], reference: list, scene, fns, min_time: float)
         for split in SPLITS:
             per_contact, per_part, per_frame, n_total, t_total = [], [], [], 0, 0.0
             for k, ((c, p), (er, pr)) in enumerate(zip(vframes, ref_results)):
-                if not (np.array_equal(c["id1"], reference[k][0]["id1"])
-                        and np.array_equal(c["id2"], reference[k][0]["id2"])):
+                if not (
+                    np.array_equal(c["id1"], reference[k][0]["id1"])
+                    and np.array_equal(c["id2"], reference[k][0]["id2"])
+                ):
                     raise SystemExit(f"frame {k}: contacts of {variant!r} are not in the reference's order")
                 fn = fns[k]
                 e, pt = compute(variant, c, p, scene, split, fn)
@@ -125,9 +127,16 @@ def study(frames: dict[str, list], reference: list, scene, fns, min_time: float)
                 per_frame.append(abs(pt["u"].sum() - pr["u"].sum()) / pr["u"].sum())
                 t_total += timed(partial(compute, variant, c, p, scene, split, fn), min_time)
                 n_total += len(c["delta"])
-            rows.append({"variant": variant, "split": split, "contacts_per_s": n_total / t_total,
-                         "contact": stats(np.concatenate(per_contact)),
-                         "particle": stats(np.concatenate(per_part)), "frame": stats(per_frame)})
+            rows.append(
+                {
+                    "variant": variant,
+                    "split": split,
+                    "contacts_per_s": n_total / t_total,
+                    "contact": stats(np.concatenate(per_contact)),
+                    "particle": stats(np.concatenate(per_part)),
+                    "frame": stats(per_frame),
+                }
+            )
     return rows
 
 
@@ -135,28 +144,35 @@ def variants(script: Path, default: dict, full: dict | None, min_time: float) ->
     """Frames of every variant; the reference frames (full precision, or ``delta %g``)."""
     run = LiggghtsRun(script, **default, force_positions=True)
     g = pair_frames(run)
-    frames = {"delta %g": g,
-              "positions %g": [(delta_from_positions(c, p), p) for c, p in g]}
+    frames = {"delta %g": g, "positions %g": [(delta_from_positions(c, p), p) for c, p in g]}
     if full is not None:
         ref = pair_frames(LiggghtsRun(script, **full))
         frames["positions full"] = [(delta_from_positions(c, p), p) for c, p in ref]
     else:
         ref = g
     frames["(2/5)|Fn| delta"] = g
-    frames["float32"] = [({k: v.astype(np.float32) if v.dtype == np.float64 else v for k, v in c.items()},
-                          {k: v.astype(np.float32) if v.dtype == np.float64 else v for k, v in p.items()})
-                         for c, p in g]
+    frames["float32"] = [
+        (
+            {k: v.astype(np.float32) if v.dtype == np.float64 else v for k, v in c.items()},
+            {k: v.astype(np.float32) if v.dtype == np.float64 else v for k, v in p.items()},
+        )
+        for c, p in g
+    ]
     return frames, ref, run.scene, normal_force(run)
 
 
 def print_table(title: str, rows: list[dict]) -> None:
     print(title)
-    print(f"{'variant':18s} {'split':9s} {'Mcontacts/s':>11s} | {'per contact: median':>19s} {'p95':>9s} {'max':>9s} | "
-          f"{'per particle: median':>20s} {'p95':>9s} {'max':>9s} | {'frame total: max':>16s}")
+    print(
+        f"{'variant':18s} {'split':9s} {'Mcontacts/s':>11s} | {'per contact: median':>19s} {'p95':>9s} {'max':>9s} | "
+        f"{'per particle: median':>20s} {'p95':>9s} {'max':>9s} | {'frame total: max':>16s}"
+    )
     for r in rows:
         c, p, f = r["contact"], r["particle"], r["frame"]
-        print(f"{r['variant']:18s} {r['split']:9s} {r['contacts_per_s'] / 1e6:11.2f} | {c[0]:19.2e} {c[1]:9.2e} "
-              f"{c[2]:9.2e} | {p[0]:20.2e} {p[1]:9.2e} {p[2]:9.2e} | {f[2]:16.2e}")
+        print(
+            f"{r['variant']:18s} {r['split']:9s} {r['contacts_per_s'] / 1e6:11.2f} | {c[0]:19.2e} {c[1]:9.2e} "
+            f"{c[2]:9.2e} | {p[0]:20.2e} {p[1]:9.2e} {p[2]:9.2e} | {f[2]:16.2e}"
+        )
     print()
 
 
@@ -173,15 +189,22 @@ def main(argv: list[str] | None = None) -> None:
         s / "in.packing",
         {"atoms": s / "atoms.txt", "contacts": s / "pairs.txt", "walls": s / "wall.txt"},
         {"atoms": s / "atoms_full.txt.gz", "contacts": s / "pairs_full.txt.gz", "walls": s / "wall_full.txt.gz"},
-        a.min_time)
+        a.min_time,
+    )
     n = sum(len(c["delta"]) for c, _ in ref)
-    print_table(f"{s.name}: {len(ref)} frames, {n} particle-particle contacts; reference: full-precision dumps, "
-                "distribution law", study(frames, ref, scene, fns, a.min_time))
+    print_table(
+        f"{s.name}: {len(ref)} frames, {n} particle-particle contacts; reference: full-precision dumps, "
+        "distribution law",
+        study(frames, ref, scene, fns, a.min_time),
+    )
     if a.big:
         frames, ref, scene, fns = variants(a.big / "in.bench", {}, None, a.min_time)
         n = sum(len(c["delta"]) for c, _ in ref)
-        print_table(f"{a.big}: {len(ref)} frames, {n} contacts; reference: delta %g, distribution law "
-                    "(these dumps hold no full precision)", study(frames, ref, scene, fns, 0.0))
+        print_table(
+            f"{a.big}: {len(ref)} frames, {n} contacts; reference: delta %g, distribution law "
+            "(these dumps hold no full precision)",
+            study(frames, ref, scene, fns, 0.0),
+        )
 
 
 if __name__ == "__main__":

@@ -16,6 +16,7 @@ speed (one thread, MB/s of raw data) with the store's deflate (ISA-L level 1,
 ``isal``) and with zlib levels 1 and 4 (the store's before), and ``auto``'s
 choice.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -45,17 +46,25 @@ def real_frames(path: str) -> list[dict]:
 
 
 def column_table(tables: dict) -> None:
-    deflates = {"isal 1": lambda c: isal_zlib.compress(c, C.GZIP_LEVEL), "zlib 1": lambda c: zlib.compress(c, 1),
-                "zlib 4": lambda c: zlib.compress(c, 4)}
-    print("| column | first chunk, isal 1 | " + " | ".join(f"all, {k}" for k in deflates) + " | "
-          + " | ".join(f"MB/s {k}" for k in deflates) + " | auto |")
+    deflates = {
+        "isal 1": lambda c: isal_zlib.compress(c, C.GZIP_LEVEL),
+        "zlib 1": lambda c: zlib.compress(c, 1),
+        "zlib 4": lambda c: zlib.compress(c, 4),
+    }
+    print(
+        "| column | first chunk, isal 1 | "
+        + " | ".join(f"all, {k}" for k in deflates)
+        + " | "
+        + " | ".join(f"MB/s {k}" for k in deflates)
+        + " | auto |"
+    )
     print("|---" * (3 + 2 * len(deflates)) + "|")
     for name, table in tables.items():
         for col, values in table.items():
             whole = len(values) // C.CHUNK_ROWS * C.CHUNK_ROWS
             if not whole:
                 continue
-            chunks = [C._shuffled(values[k: k + C.CHUNK_ROWS]) for k in range(0, whole, C.CHUNK_ROWS)]
+            chunks = [C._shuffled(values[k : k + C.CHUNK_ROWS]) for k in range(0, whole, C.CHUNK_ROWS)]
             ratio, speed = {}, {}
             for key, deflate in deflates.items():
                 t0 = time.perf_counter()
@@ -63,9 +72,13 @@ def column_table(tables: dict) -> None:
                 speed[key] = whole * values.itemsize / (time.perf_counter() - t0) / 1e6
                 ratio[key] = size / (whole * values.itemsize)
             first = len(deflates["isal 1"](chunks[0])) / len(chunks[0])
-            print(f"| {name}/{col} | {first:.3f} | " + " | ".join(f"{ratio[k]:.3f}" for k in deflates) + " | "
-                  + " | ".join(f"{speed[k]:.0f}" for k in deflates)
-                  + f" | {C._choose_filter(np.asarray(values[:C.CHUNK_ROWS]))} |")
+            print(
+                f"| {name}/{col} | {first:.3f} | "
+                + " | ".join(f"{ratio[k]:.3f}" for k in deflates)
+                + " | "
+                + " | ".join(f"{speed[k]:.0f}" for k in deflates)
+                + f" | {C._choose_filter(np.asarray(values[: C.CHUNK_ROWS]))} |"
+            )
 
 
 def store_once(frames: list[dict], compression: str, directory: str) -> dict:
@@ -114,8 +127,10 @@ def main() -> None:
         best = {k: min(r[k] for r in runs) for k in ("size", "append", "close", "read")}
         label = compression + (f" (<= {ratio:g})" if compression == "auto" else "")
         total = min(r["append"] + r["close"] for r in runs)
-        print(f"| {label} | {best['size'] / 2**20:.1f} | {best['append']:.2f} | {best['close']:.2f} | {total:.2f} "
-              f"| {best['read']:.2f} |")
+        print(
+            f"| {label} | {best['size'] / 2**20:.1f} | {best['append']:.2f} | {best['close']:.2f} | {total:.2f} "
+            f"| {best['read']:.2f} |"
+        )
 
 
 if __name__ == "__main__":

@@ -51,32 +51,63 @@ def ovito_picture(dump: Path, out: Path) -> None:
 
     pipeline = import_file(str(dump))
     last = pipeline.source.num_frames - 1
-    pipeline.modifiers.append(ComputePropertyModifier(output_property="log10_u",
-                                                      expressions=["u > 0 ? log10(u) : -30"]))
+    pipeline.modifiers.append(
+        ComputePropertyModifier(output_property="log10_u", expressions=["u > 0 ? log10(u) : -30"])
+    )
     log_u = np.asarray(pipeline.compute(last).particles["log10_u"])
     log_u = log_u[log_u > -30]
-    coding = ColorCodingModifier(property="log10_u", gradient=ColorCodingModifier.Viridis(),
-                                 start_value=float(np.quantile(log_u, 0.02)), end_value=float(log_u.max()))
+    coding = ColorCodingModifier(
+        property="log10_u",
+        gradient=ColorCodingModifier.Viridis(),
+        start_value=float(np.quantile(log_u, 0.02)),
+        end_value=float(log_u.max()),
+    )
     pipeline.modifiers.append(coding)
     pipeline.add_to_scene()
     viewport = Viewport(type=Viewport.Type.Perspective, camera_dir=(1, 1.6, -0.9))
-    viewport.overlays.append(ColorLegendOverlay(
-        modifier=coding, title="log10 u (J)", orientation=QtCore.Qt.Orientation.Vertical,
-        alignment=QtCore.Qt.AlignmentFlag.AlignRight | QtCore.Qt.AlignmentFlag.AlignVCenter,
-        legend_size=0.5, font_size=0.07, format_string="%.1f"))
+    viewport.overlays.append(
+        ColorLegendOverlay(
+            modifier=coding,
+            title="log10 u (J)",
+            orientation=QtCore.Qt.Orientation.Vertical,
+            alignment=QtCore.Qt.AlignmentFlag.AlignRight | QtCore.Qt.AlignmentFlag.AlignVCenter,
+            legend_size=0.5,
+            font_size=0.07,
+            format_string="%.1f",
+        )
+    )
     viewport.zoom_all()
-    viewport.render_image(size=(800, 560), filename=str(out), background=(1, 1, 1), frame=last,
-                          renderer=TachyonRenderer(ambient_occlusion=False))
+    viewport.render_image(
+        size=(800, 560),
+        filename=str(out),
+        background=(1, 1, 1),
+        frame=last,
+        renderer=TachyonRenderer(ambient_occlusion=False),
+    )
 
 
 def page_picture(page: Path, out: Path, size: tuple[int, int] = FIRST_SCREEN) -> None:
     """The top of ``page`` as headless Chromium draws it in a window of ``size`` pixels."""
     chromium = shutil.which("chromium") or sys.exit("chromium is not installed (apt-get install chromium)")
     with tempfile.TemporaryDirectory() as profile:
-        subprocess.run([chromium, "--headless", "--disable-gpu", "--no-sandbox", "--hide-scrollbars",
-                        "--disable-background-networking", "--no-first-run", f"--user-data-dir={profile}",
-                        f"--window-size={size[0]},{size[1]}", f"--screenshot={out}", page.as_uri()],
-                        check=True, capture_output=True, timeout=300)
+        subprocess.run(
+            [
+                chromium,
+                "--headless",
+                "--disable-gpu",
+                "--no-sandbox",
+                "--hide-scrollbars",
+                "--disable-background-networking",
+                "--no-first-run",
+                f"--user-data-dir={profile}",
+                f"--window-size={size[0]},{size[1]}",
+                f"--screenshot={out}",
+                page.as_uri(),
+            ],
+            check=True,
+            capture_output=True,
+            timeout=300,
+        )
 
 
 def vtk_picture(vtk: Path, out: Path) -> None:
@@ -151,8 +182,11 @@ def vtk_picture(vtk: Path, out: Path) -> None:
     writer.Write()
 
 
-PICTURES = {"report": ("report-packing.png", "report-yade.png"), "vtk": ("vtk-packing.png",),
-            "ovito": ("ovito-packing.png",)}
+PICTURES = {
+    "report": ("report-packing.png", "report-yade.png"),
+    "vtk": ("vtk-packing.png",),
+    "ovito": ("ovito-packing.png",),
+}
 
 
 def main(which: list[str]) -> None:

@@ -13,21 +13,37 @@ from __future__ import annotations
 
 from importlib import import_module
 
-from .runtime import command  # noqa: F401 (first: sets the demsplit command's process up before numpy loads)
 from .errors import (
-    ContactError, DemsplitError, InputFormatError, MaterialError, PrecisionError, ScriptError, StoreError,
-    TruncatedFileError, UnsupportedModelError,
+    ContactError,
+    DemsplitError,
+    InputFormatError,
+    MaterialError,
+    PrecisionError,
+    ScriptError,
+    StoreError,
+    TruncatedFileError,
+    UnsupportedModelError,
 )
 from .frame import Box, Frame
 from .physics.elastic import (
-    hertz_energy, hertz_force, hooke_energy, power_law_energy, shear_spring_energy, tangential_spring_energy,
+    hertz_energy,
+    hertz_force,
+    hooke_energy,
+    power_law_energy,
+    shear_spring_energy,
+    tangential_spring_energy,
 )
 from .physics.laws.yade_mindlin import hertz_energy_from_kno
 from .physics.moduli import (
-    effective_modulus, effective_radius, effective_shear_modulus, mindlin_compliance, plane_strain_compliance,
+    effective_modulus,
+    effective_radius,
+    effective_shear_modulus,
+    mindlin_compliance,
+    plane_strain_compliance,
 )
 from .physics.partition import ContactEnergy, contact_energies, partition, per_particle
 from .physics.shares import contact_point, normal_share, overlap_depths, radius_share, springs_share, tangential_share
+from .runtime import command  # noqa: F401 (first: sets the demsplit command's process up before numpy loads)
 from .scene import ContactModel, Material, Scene, Wall
 
 __version__ = "0.1.0"
@@ -48,11 +64,42 @@ def __getattr__(name: str):
 
 
 __all__ = [
-    "Box", "ContactEnergy", "ContactError", "ContactModel", "DemsplitError", "Frame", "InputFormatError",
-    "Material", "MaterialError", "PrecisionError", "Scene", "ScriptError", "StoreError", "TruncatedFileError",
-    "UnsupportedModelError", "Wall", "contact_energies", "contact_point", "effective_modulus",
-    "effective_radius", "effective_shear_modulus", "hertz_energy", "hertz_energy_from_kno", "hertz_force",
-    "hooke_energy", "mindlin_compliance", "normal_share", "overlap_depths", "partition", "per_particle",
-    "plane_strain_compliance", "power_law_energy", "radius_share", "shear_spring_energy", "springs_share",
-    "tangential_share", "tangential_spring_energy", *_LAZY,
+    "Box",
+    "ContactEnergy",
+    "ContactError",
+    "ContactModel",
+    "DemsplitError",
+    "Frame",
+    "InputFormatError",
+    "Material",
+    "MaterialError",
+    "PrecisionError",
+    "Scene",
+    "ScriptError",
+    "StoreError",
+    "TruncatedFileError",
+    "UnsupportedModelError",
+    "Wall",
+    "contact_energies",
+    "contact_point",
+    "effective_modulus",
+    "effective_radius",
+    "effective_shear_modulus",
+    "hertz_energy",
+    "hertz_energy_from_kno",
+    "hertz_force",
+    "hooke_energy",
+    "mindlin_compliance",
+    "normal_share",
+    "overlap_depths",
+    "partition",
+    "per_particle",
+    "plane_strain_compliance",
+    "power_law_energy",
+    "radius_share",
+    "shear_spring_energy",
+    "springs_share",
+    "tangential_share",
+    "tangential_spring_energy",
+    *_LAZY,
 ]

@@ -32,7 +32,7 @@ from .outputs import check_output_path
 EXIT_ERROR = 2
 EXIT_BUG = 3
 EXIT_INTERRUPTED = 130  # 128 + SIGINT
-EXIT_TERMINATED = 143   # 128 + SIGTERM
+EXIT_TERMINATED = 143  # 128 + SIGTERM
 
 
 class Terminated(BaseException):
@@ -65,8 +65,10 @@ def _reader_options(args: argparse.Namespace) -> dict:
         opt = next((o for o in cls.cli_options if o.flags == flags), None)
         if opt is None:
             taken = sorted({o.flags[0] for o in cls.cli_options})
-            raise InputFormatError(f"{flags[0]} does not apply to {cls.formats[0]}.",
-                                   fix=f"leave it out; this input takes {', '.join(taken) or 'no input option'}.")
+            raise InputFormatError(
+                f"{flags[0]} does not apply to {cls.formats[0]}.",
+                fix=f"leave it out; this input takes {', '.join(taken) or 'no input option'}.",
+            )
         if opt.into:
             options.setdefault(opt.into, {})[opt.name] = opt.value(value)
         else:
@@ -81,11 +83,13 @@ def _dest(opt) -> str:
 
 def _argparse_type(convert):
     """A reader option's ``type`` for argparse: its ValueError becomes argparse's usage error with the text."""
+
     def parse(text: str):
         try:
             return convert(text)
         except ValueError as exc:
             raise argparse.ArgumentTypeError(str(exc)) from None
+
     parse.__name__ = getattr(convert, "__name__", "value")
     return parse
 
@@ -94,14 +98,22 @@ def _add_input(p: argparse.ArgumentParser) -> None:
     """The input argument and every registered reader's options, in its help section."""
     from .readers import readers
 
-    p.add_argument("input", nargs="*", default=None,
-                   help="the run: " + "; ".join(f for cls in readers() for f in cls.formats)
-                   + " (several files are one run only where the reader says so); omit it to describe a LIGGGHTS "
-                   "scene with --atoms, --contacts, --material and --columns")
-    p.add_argument("--simulator", choices=sorted({cls.simulator for cls in readers() if cls.simulator}),
-                   help="the simulator whose run the input is, where its words cannot tell (a LAMMPS and a LIGGGHTS "
-                   "script are text in the same language; demsplit recognises pair_style granular and gran/* as "
-                   "LAMMPS, pair_style gran model ... as LIGGGHTS)")
+    p.add_argument(
+        "input",
+        nargs="*",
+        default=None,
+        help="the run: "
+        + "; ".join(f for cls in readers() for f in cls.formats)
+        + " (several files are one run only where the reader says so); omit it to describe a LIGGGHTS "
+        "scene with --atoms, --contacts, --material and --columns",
+    )
+    p.add_argument(
+        "--simulator",
+        choices=sorted({cls.simulator for cls in readers() if cls.simulator}),
+        help="the simulator whose run the input is, where its words cannot tell (a LAMMPS and a LIGGGHTS "
+        "script are text in the same language; demsplit recognises pair_style granular and gran/* as "
+        "LAMMPS, pair_style gran model ... as LIGGGHTS)",
+    )
     groups: dict[str, argparse._ArgumentGroup] = {}
     added: set[tuple[str, ...]] = set()
     for cls in readers():
@@ -120,9 +132,14 @@ def _add_input(p: argparse.ArgumentParser) -> None:
 def _options(args: argparse.Namespace):
     from .pipeline import Options
 
-    return Options(tangential_rule=args.tangential_rule, compare=not args.no_compare,
-                   contacts=not args.no_contacts, allow_missing=tuple(args.allow_missing or ()),
-                   accuracy=not args.no_accuracy, split=args.split)
+    return Options(
+        tangential_rule=args.tangential_rule,
+        compare=not args.no_compare,
+        contacts=not args.no_contacts,
+        allow_missing=tuple(args.allow_missing or ()),
+        accuracy=not args.no_accuracy,
+        split=args.split,
+    )
 
 
 def cmd_run(args: argparse.Namespace) -> int:
@@ -134,11 +151,20 @@ def cmd_run(args: argparse.Namespace) -> int:
 
         first = args.input[0] if isinstance(args.input, list) else args.input
         options = {**reader_for(first).output_options(Path(args.output)), **options}
-    report, _ = run_to_store(args.input, args.output, options=_options(args), jobs=args.jobs, dask=args.dask,
-                             resume=args.resume, on_bad_frame=args.on_bad_frame,
-                             compression=None if args.compression == "none" else args.compression,
-                             progress=False if args.quiet else None, overwrite=args.overwrite,
-                             type_names=dict(args.type_name or ()), **options)
+    report, _ = run_to_store(
+        args.input,
+        args.output,
+        options=_options(args),
+        jobs=args.jobs,
+        dask=args.dask,
+        resume=args.resume,
+        on_bad_frame=args.on_bad_frame,
+        compression=None if args.compression == "none" else args.compression,
+        progress=False if args.quiet else None,
+        overwrite=args.overwrite,
+        type_names=dict(args.type_name or ()),
+        **options,
+    )
     if not args.quiet:
         from .results.report import text_summary
         from .results.store import read_last_frame
@@ -150,8 +176,11 @@ def cmd_run(args: argparse.Namespace) -> int:
             print(f"{len(report.bad_frames)} bad frame(s) skipped (listed in the output's provenance):")
             for bad in report.bad_frames:
                 print(f"  frame {bad['frame']} (step {bad['step']}): {bad['error']}")
-        print(f"wrote {args.output} ({report.frames_done} frame(s)"
-              + (f", {report.frames_resumed} resumed" if report.frames_resumed else "") + ")")
+        print(
+            f"wrote {args.output} ({report.frames_done} frame(s)"
+            + (f", {report.frames_resumed} resumed" if report.frames_resumed else "")
+            + ")"
+        )
     return 0
 
 
@@ -181,8 +210,14 @@ def cmd_report(args: argparse.Namespace) -> int:
     results = load_results(args.results)
     names = dict(args.type_name or ())
     if args.output:
-        write_html(results, args.output, step=args.step, names=names,
-                   inputs=protected_files(args.results, results.provenance), overwrite=args.overwrite)
+        write_html(
+            results,
+            args.output,
+            step=args.step,
+            names=names,
+            inputs=protected_files(args.results, results.provenance),
+            overwrite=args.overwrite,
+        )
         if not args.quiet:
             print(f"wrote {args.output}")
     else:
@@ -214,19 +249,21 @@ def _type_name(text: str) -> tuple[int, str]:
 
 def cmd_export(args: argparse.Namespace) -> int:
     from .results import load_results
-    from .results.exports.tables import export_tables
-    from .results.store import protected_files
-
     from .results.exports.dump import export_dump
+    from .results.exports.tables import export_tables
     from .results.exports.vtk import export_vtk
+    from .results.store import protected_files
 
     folders = [(fmt, d) for fmt, d in (("parquet", args.parquet), ("csv", args.csv), ("vtk", args.vtk)) if d]
     if not folders and not args.dump:
         raise DemsplitError("nothing to export to.", fix="give --parquet DIR, --csv DIR, --vtk DIR or --dump FILE.")
     same = [fmt for fmt, d in folders if sum(Path(d).absolute() == Path(o).absolute() for _, o in folders) > 1]
     if same:
-        raise DemsplitError(f"--{same[0]} and --{same[1]} name the same folder: an export folder holds one export.",
-                            file=dict(folders)[same[0]], fix="give each format its own folder.")
+        raise DemsplitError(
+            f"--{same[0]} and --{same[1]} name the same folder: an export folder holds one export.",
+            file=dict(folders)[same[0]],
+            fix="give each format its own folder.",
+        )
     results = load_results(args.results)
     inputs = protected_files(args.results, results.provenance)
     written = []
@@ -240,13 +277,21 @@ def cmd_export(args: argparse.Namespace) -> int:
             print(f"wrote {path}")
     if args.vtk:  # one line for the whole series, not one per file
         not_drawn: list[str] = []
-        vtk = export_vtk(results, args.vtk, inputs=inputs, overwrite=args.overwrite,
-                         progress=False if args.quiet else None, not_drawn=not_drawn)
+        vtk = export_vtk(
+            results,
+            args.vtk,
+            inputs=inputs,
+            overwrite=args.overwrite,
+            progress=False if args.quiet else None,
+            not_drawn=not_drawn,
+        )
         if not args.quiet:
             series = [p.name for p in vtk if p.suffix == ".pvd"]
-            print(f"wrote {len(vtk) - len(series)} VTK files of {len(results.steps)} frame(s) in {args.vtk}: open "
-                  f"{', '.join(series)} in ParaView" + (f" (walls not drawn: {'; '.join(not_drawn)})"
-                                                        if not_drawn else ""))
+            print(
+                f"wrote {len(vtk) - len(series)} VTK files of {len(results.steps)} frame(s) in {args.vtk}: open "
+                f"{', '.join(series)} in ParaView"
+                + (f" (walls not drawn: {'; '.join(not_drawn)})" if not_drawn else "")
+            )
     return 0
 
 
@@ -280,9 +325,11 @@ def cmd_prepare(args: argparse.Namespace) -> int:
     if not args.quiet:
         print(prepared.diff(read_text(script), str(script)))
         where = f"in {out.parent}" if len(paths) == 1 else f"one after the other in {out.parent}"
-        print(f"wrote {', '.join(map(str, paths))}: run {'it' if len(paths) == 1 else 'them'} with "
-              f"{'; '.join(f'{prepared.program} -in {p.name}' for p in paths)} {where}, then "
-              + "; ".join(f"'demsplit run {p} -o results{'' if k == 0 else k + 1}.h5'" for k, p in enumerate(paths)))
+        print(
+            f"wrote {', '.join(map(str, paths))}: run {'it' if len(paths) == 1 else 'them'} with "
+            f"{'; '.join(f'{prepared.program} -in {p.name}' for p in paths)} {where}, then "
+            + "; ".join(f"'demsplit run {p} -o results{'' if k == 0 else k + 1}.h5'" for k, p in enumerate(paths))
+        )
     return 0
 
 
@@ -306,19 +353,24 @@ def cmd_yade_path(args: argparse.Namespace) -> int:
 
 
 def _add_overwrite(p: argparse.ArgumentParser, what: str) -> None:
-    p.add_argument("--overwrite", action="store_true",
-                   help=f"replace {what} (by default only a file of the kind the command writes is replaced; a "
-                   "file of the run is never replaced)")
+    p.add_argument(
+        "--overwrite",
+        action="store_true",
+        help=f"replace {what} (by default only a file of the kind the command writes is replaced; a "
+        "file of the run is never replaced)",
+    )
 
 
 def build_parser() -> argparse.ArgumentParser:
     from . import __version__
 
     parser = argparse.ArgumentParser(
-        prog="demsplit", description="Per-particle elastic contact energy of LIGGGHTS, LAMMPS GRANULAR and YADE "
+        prog="demsplit",
+        description="Per-particle elastic contact energy of LIGGGHTS, LAMMPS GRANULAR and YADE "
         "runs, split between the two bodies by the Feng & Gao material law.",
         epilog="Errors print one message naming the file, timestep and line and how to fix it, and exit 2; --debug "
-        "shows the traceback. 'demsplit COMMAND -h' describes a command.")
+        "shows the traceback. 'demsplit COMMAND -h' describes a command.",
+    )
     parser.add_argument("--version", action="version", version=f"demsplit {__version__}")
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("--debug", action="store_true", help="show the traceback of an error")
@@ -333,37 +385,68 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", required=True, help="output HDF5 file")
     _add_overwrite(p, "an existing file that is not a result store")
     p.add_argument("--jobs", "-j", type=int, default=1, help="worker processes (frames in parallel)")
-    p.add_argument("--dask", metavar="ADDRESS",
-                   help="run on a Dask cluster: tcp://HOST:PORT, a scheduler file, or local:N")
+    p.add_argument(
+        "--dask", metavar="ADDRESS", help="run on a Dask cluster: tcp://HOST:PORT, a scheduler file, or local:N"
+    )
     p.add_argument("--resume", action="store_true", help="continue an interrupted run from its last complete frame")
-    p.add_argument("--on-bad-frame", choices=("stop", "skip"), default="stop",
-                   help="stop at a bad frame (default), or skip it and list it in the output")
-    p.add_argument("--tangential-rule", choices=("mindlin", "paper"), default="mindlin",
-                   help="tangential split factor: Mindlin (2-nu)/G (default) or the paper's eq. 22 (1-2nu)/G")
+    p.add_argument(
+        "--on-bad-frame",
+        choices=("stop", "skip"),
+        default="stop",
+        help="stop at a bad frame (default), or skip it and list it in the output",
+    )
+    p.add_argument(
+        "--tangential-rule",
+        choices=("mindlin", "paper"),
+        default="mindlin",
+        help="tangential split factor: Mindlin (2-nu)/G (default) or the paper's eq. 22 (1-2nu)/G",
+    )
     p.add_argument("--no-compare", action="store_true", help="skip the 50/50 and radius-weighted splits")
     p.add_argument("--no-contacts", action="store_true", help="do not store the per-contact table")
-    p.add_argument("--no-accuracy", action="store_true",
-                   help="skip the expected error of the split (a/R per contact, share_n1_error, u_n_error)")
-    p.add_argument("--split", choices=("material", "corrected"), default="material",
-                   help="material: the distribution law (default); corrected: its normal split corrected for "
-                   "finite bodies by the fitted finite-element model (docs/accuracy.md)")
-    p.add_argument("--allow-missing", action="append", metavar="NAME",
-                   help="go on without a wall (by name) or an energy mode (u_t, u_r, ...) that the run has but "
-                   "its files do not hold; its values are then marked not computed, never 0 (repeatable; "
-                   "'all' for everything). Without it such a run is refused")
-    p.add_argument("--compression", choices=("auto", "gzip", "lzf", "none"), default="auto",
-                   help="HDF5 compression of the output: auto (default; gzip for the columns whose first chunk "
-                   "compresses well, such as integers, shares and points, no filter for the others: docs/store.md), "
-                   "gzip (every column; smallest, slowest), lzf (h5py only), none (fastest, largest); "
-                   "any HDF5 tool reads auto, gzip and none")
-    p.add_argument("--type-name", action="append", type=_type_name, metavar="T=NAME",
-                   help="name material type T NAME, stored with the results and used by report and export "
-                   "(repeatable; YADE material labels are stored already)")
+    p.add_argument(
+        "--no-accuracy",
+        action="store_true",
+        help="skip the expected error of the split (a/R per contact, share_n1_error, u_n_error)",
+    )
+    p.add_argument(
+        "--split",
+        choices=("material", "corrected"),
+        default="material",
+        help="material: the distribution law (default); corrected: its normal split corrected for "
+        "finite bodies by the fitted finite-element model (docs/accuracy.md)",
+    )
+    p.add_argument(
+        "--allow-missing",
+        action="append",
+        metavar="NAME",
+        help="go on without a wall (by name) or an energy mode (u_t, u_r, ...) that the run has but "
+        "its files do not hold; its values are then marked not computed, never 0 (repeatable; "
+        "'all' for everything). Without it such a run is refused",
+    )
+    p.add_argument(
+        "--compression",
+        choices=("auto", "gzip", "lzf", "none"),
+        default="auto",
+        help="HDF5 compression of the output: auto (default; gzip for the columns whose first chunk "
+        "compresses well, such as integers, shares and points, no filter for the others: docs/store.md), "
+        "gzip (every column; smallest, slowest), lzf (h5py only), none (fastest, largest); "
+        "any HDF5 tool reads auto, gzip and none",
+    )
+    p.add_argument(
+        "--type-name",
+        action="append",
+        type=_type_name,
+        metavar="T=NAME",
+        help="name material type T NAME, stored with the results and used by report and export "
+        "(repeatable; YADE material labels are stored already)",
+    )
     p.set_defaults(func=cmd_run)
 
     p = add("info", "describe a dump or snapshot file: kind, frames, columns, precision")
-    p.add_argument("file", help="a LIGGGHTS or LAMMPS dump or input script, YADE snapshot or saved "
-                   "state, ingest cache or result store")
+    p.add_argument(
+        "file",
+        help="a LIGGGHTS or LAMMPS dump or input script, YADE snapshot or saved state, ingest cache or result store",
+    )
     p.set_defaults(func=cmd_info)
 
     p = add("check", "validate a run without computing energies")
@@ -375,37 +458,59 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", help="HTML file to write (default: the text summary on the terminal)")
     _add_overwrite(p, "an existing file that is not a demsplit report")
     p.add_argument("--step", type=int, metavar="N", help="the timestep of the detailed frame (default: the last)")
-    p.add_argument("--type-name", action="append", type=_type_name, metavar="T=NAME",
-                   help="name material type T NAME in the tables and figures (repeatable; overrides the names "
-                   "stored by run --type-name and YADE's material labels)")
+    p.add_argument(
+        "--type-name",
+        action="append",
+        type=_type_name,
+        metavar="T=NAME",
+        help="name material type T NAME in the tables and figures (repeatable; overrides the names "
+        "stored by run --type-name and YADE's material labels)",
+    )
     p.set_defaults(func=cmd_report)
 
     p = add("export", "export a result file's tables to Parquet or CSV, or as a VTK series for ParaView")
     p.add_argument("results", help="a store written by demsplit run")
     p.add_argument("--parquet", metavar="DIR", help="one Parquet file per table (units in the field metadata)")
     p.add_argument("--csv", metavar="DIR", help="one CSV file per table")
-    p.add_argument("--vtk", metavar="DIR",
-                   help="one VTK file per frame for particles (points), contacts (lines between the bodies) and "
-                        "walls (surfaces), and a .pvd series of each (needs the vtk extra: pip install "
-                        "'demsplit[vtk]')")
-    p.add_argument("--dump", metavar="FILE",
-                   help="the per-particle table as a LAMMPS-style dump (positions, radius, energies), "
-                        "which OVITO opens directly")
-    _add_overwrite(p, "files that are not a demsplit export of the format (in a folder: its other files are "
-                   "kept; an earlier export in it is replaced)")
+    p.add_argument(
+        "--vtk",
+        metavar="DIR",
+        help="one VTK file per frame for particles (points), contacts (lines between the bodies) and "
+        "walls (surfaces), and a .pvd series of each (needs the vtk extra: pip install "
+        "'demsplit[vtk]')",
+    )
+    p.add_argument(
+        "--dump",
+        metavar="FILE",
+        help="the per-particle table as a LAMMPS-style dump (positions, radius, energies), which OVITO opens directly",
+    )
+    _add_overwrite(
+        p,
+        "files that are not a demsplit export of the format (in a folder: its other files are "
+        "kept; an earlier export in it is replaced)",
+    )
     p.set_defaults(func=cmd_export)
 
     p = add("yade-path", "print the directory to site.addsitedir() inside YADE so that 'import demsplit.yade' works")
     p.set_defaults(func=cmd_yade_path)
 
-    p = add("prepare", "write a copy of a LIGGGHTS or LAMMPS input script with the dumps demsplit needs, and show "
-                       "the diff")
+    p = add(
+        "prepare", "write a copy of a LIGGGHTS or LAMMPS input script with the dumps demsplit needs, and show the diff"
+    )
     p.add_argument("input", help="the LIGGGHTS or LAMMPS input script")
-    p.add_argument("-o", "--output", help="prepared script (default: INPUT.demsplit next to the input; a script "
-                   "split at a mesh wall fix after a run also gets OUTPUT.part2, ...)")
-    p.add_argument("--every", type=_positive, metavar="N",
-                   help="timesteps between the frames of the dumps prepare adds (default: the interval of the "
-                   "script's own dumps, else of its thermo output, else 100 frames over its runs)")
+    p.add_argument(
+        "-o",
+        "--output",
+        help="prepared script (default: INPUT.demsplit next to the input; a script "
+        "split at a mesh wall fix after a run also gets OUTPUT.part2, ...)",
+    )
+    p.add_argument(
+        "--every",
+        type=_positive,
+        metavar="N",
+        help="timesteps between the frames of the dumps prepare adds (default: the interval of the "
+        "script's own dumps, else of its thermo output, else 100 frames over its runs)",
+    )
     _add_overwrite(p, "an existing file that is not a script prepare wrote, or one edited since")
     p.set_defaults(func=cmd_prepare)
 
@@ -451,8 +556,11 @@ def main(argv: list[str] | None = None) -> int:
     except Exception as exc:  # a bug: say so, keep the CLI's promise of one message
         if args.debug:
             traceback.print_exc()
-        print(f"demsplit: internal error ({type(exc).__name__}: {exc}). This is a bug in demsplit; "
-              "rerun with --debug and report the traceback.", file=sys.stderr)
+        print(
+            f"demsplit: internal error ({type(exc).__name__}: {exc}). This is a bug in demsplit; "
+            "rerun with --debug and report the traceback.",
+            file=sys.stderr,
+        )
         return EXIT_BUG
     finally:
         signal.signal(signal.SIGTERM, previous)

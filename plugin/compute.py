@@ -87,22 +87,25 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = DEFAULT_OPTIONS)
     require_columns(frame.contacts, CONTACT_REQUIRED, "contacts", file=source, step=frame.step)
     frame = validated_frame(frame, scene)  # canonical dtypes; every number finite, in range and plausible
     particles = frame.particles
-    contacts = FrameContacts(frame.contacts, scene, particles, ParticleIndex(particles["id"], file=source,
-                                                                            step=frame.step))
+    contacts = FrameContacts(
+        frame.contacts, scene, particles, ParticleIndex(particles["id"], file=source, step=frame.step)
+    )
     try:
         energies = law_energies(contacts)
-        check_finite_energies(energies.u, contacts.contacts, file=frame.source[-1] if frame.source else None,
-                              step=frame.step)
-        ratios = _radius_ratios(contacts.contacts) \
-            if options.accuracy or options.split == "corrected" else None  # a/R1, a/R2, once for both
+        check_finite_energies(
+            energies.u, contacts.contacts, file=frame.source[-1] if frame.source else None, step=frame.step
+        )
+        ratios = (
+            _radius_ratios(contacts.contacts) if options.accuracy or options.split == "corrected" else None
+        )  # a/R1, a/R2, once for both
         corrected = None
         if options.split == "corrected":
             x1, x2 = ratios
             bodies = contacts.bodies
-            corrected = np.broadcast_to(corrected_share(x1, x2, bodies.nu1, bodies.nu2, bodies.E1, bodies.E2),
-                                        x1.shape)
-        main = split_energies(contacts, energies, split="material", tangential_rule=options.tangential_rule,
-                              normal_shares=corrected)
+            corrected = np.broadcast_to(corrected_share(x1, x2, bodies.nu1, bodies.nu2, bodies.E1, bodies.E2), x1.shape)
+        main = split_energies(
+            contacts, energies, split="material", tangential_rule=options.tangential_rule, normal_shares=corrected
+        )
         contacts.without(_used_up(scene))  # what the partition used up: freed before the tables
         frame = replace(frame, contacts=contacts.contacts)  # (when the caller handed over its only reference)
         ptable, wtable = body_tables(contacts, main, n_walls=len(scene.walls))
@@ -118,11 +121,14 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = DEFAULT_OPTIONS)
         mode, why = next(iter(refused.items()))
         raise IncompleteRunError(
             f"{why}. The run has this energy but its files do not hold it"
-            + (f" (also missing: {', '.join(list(refused)[1:])})" if len(refused) > 1 else "") + ".",
-            file=source, step=frame.step,
+            + (f" (also missing: {', '.join(list(refused)[1:])})" if len(refused) > 1 else "")
+            + ".",
+            file=source,
+            step=frame.step,
             fix=f"dump the columns it needs where a dump can hold them (docs/liggghts-output.md and "
-                f"docs/lammps-output.md list them per model; 'demsplit check' names the lines), or go on without it "
-                f"with --allow-missing {mode}: its values are then marked not computed.")
+            f"docs/lammps-output.md list them per model; 'demsplit check' names the lines), or go on without it "
+            f"with --allow-missing {mode}: its values are then marked not computed.",
+        )
     for what, why in main.skipped.items():
         note = f"{what} is 0: {why}"
         if note not in frame.notes:
@@ -138,14 +144,23 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = DEFAULT_OPTIONS)
         present = np.isin(wtable["wall"], np.asarray(frame.walls, dtype=np.int64))
         wtable = {c: v[present] for c, v in wtable.items()}
     accuracy = _accuracy(contacts, ratios, main, ptable) if options.accuracy else {}
-    tables: Tables = {"particles": {"step": np.full(len(ptable["id"]), step), **ptable},
-                      "walls": {"step": np.full(len(wtable["wall"]), step), **wtable}}
+    tables: Tables = {
+        "particles": {"step": np.full(len(ptable["id"]), step), **ptable},
+        "walls": {"step": np.full(len(wtable["wall"]), step), **wtable},
+    }
     if options.contacts:
         if frame.box is not None and frame.box.any_periodic:
             main.cp = frame.box.wrap(main.cp)  # contact points of contacts across a boundary, back in the box
         c = contacts.contacts
-        ctable = {"step": np.full(n, step), "id1": c["id1"], "id2": c["id2"], "wall": c["wall"],
-                  "delta": c["delta"], **main.table(), **accuracy}
+        ctable = {
+            "step": np.full(n, step),
+            "id1": c["id1"],
+            "id2": c["id2"],
+            "wall": c["wall"],
+            "delta": c["delta"],
+            **main.table(),
+            **accuracy,
+        }
         if "cpx" in c:
             ctable.update(cpx_sim=c["cpx"], cpy_sim=c["cpy"], cpz_sim=c["cpz"])
         tables["contacts"] = ctable
@@ -161,8 +176,9 @@ def frame_tables(frame: Frame, scene: Scene, options: Options = DEFAULT_OPTIONS)
         **({ADHESION_COLUMN: np.array([main.u_adh.sum()])} if main.u_adh is not None else {}),
         "u_particles": np.array([ptable["u"].sum()]),
         "u_walls": np.array([wtable["u"].sum()]),
-        "overlap_max_rel_error": np.array([UNKNOWN if err is None or len(err) == 0 else
-                                           min(float(np.max(err)), UNBOUNDED)]),
+        "overlap_max_rel_error": np.array(
+            [UNKNOWN if err is None or len(err) == 0 else min(float(np.max(err)), UNBOUNDED)]
+        ),
     }
     if frame.box is not None:  # the simulation box: where the VTK export draws primitive walls (m)
         for k, axis in enumerate("xyz"):
@@ -191,6 +207,7 @@ def _radius_ratios(contacts: Table) -> tuple[np.ndarray, np.ndarray]:
 
     def piece(lo: int, hi: int) -> None:
         x1[lo:hi], x2[lo:hi] = contact_radius_ratios(*(contacts[c][lo:hi] for c in ("delta", "r1", "r2")))
+
     threads.map_ranges(piece, n, max_rows=ACCURACY_ROWS)
     return x1, x2
 
@@ -199,8 +216,9 @@ ACCURACY_ROWS = 1 << 16
 """Contacts per piece of the error model's evaluation: its two dozen temporaries stay a few MB a thread."""
 
 
-def _accuracy(contacts: FrameContacts, ratios: tuple[np.ndarray, np.ndarray], main: ContactEnergy,
-              ptable: Table) -> Table:
+def _accuracy(
+    contacts: FrameContacts, ratios: tuple[np.ndarray, np.ndarray], main: ContactEnergy, ptable: Table
+) -> Table:
     """How far the split can be trusted, from the fitted finite-element error model
     (:mod:`demsplit.physics.accuracy`, docs/accuracy.md): per contact ``a_over_r1 a_over_r2`` (the Hertz
     contact radius over each radius) and ``share_n1_error`` (expected FE share minus the law's share of
@@ -213,6 +231,7 @@ def _accuracy(contacts: FrameContacts, ratios: tuple[np.ndarray, np.ndarray], ma
     def piece(lo: int, hi: int) -> None:  # numpy releases the GIL: pieces of the contacts on every core
         E1, nu1, E2, nu2 = contacts.bodies.constants(lo, hi)
         err[lo:hi] = expected_share_error(x1[lo:hi], x2[lo:hi], nu1, nu2, E1, E2)
+
     threads.map_ranges(piece, len(err), max_rows=ACCURACY_ROWS)
     from .kernels import signed_particle_sums  # compiled, lazily
 
@@ -237,7 +256,8 @@ def refuse_missing_walls(scene: Scene, options: Options) -> None:
             f"the {w.kind} wall {w.name!r}{others} is part of this run, but {w.missing}",
             file=scene.source or None,
             fix=f"write its contacts as said above and rerun the simulation, or go on without them with "
-                f"--allow-missing {w.name}: the wall's energy is then marked not computed.")
+            f"--allow-missing {w.name}: the wall's energy is then marked not computed.",
+        )
 
 
 def _mark_missing_walls(scene: Scene, main: ContactEnergy, wtable: Table) -> None:
@@ -246,8 +266,7 @@ def _mark_missing_walls(scene: Scene, main: ContactEnergy, wtable: Table) -> Non
     if not walls:
         return
     every = sum(NOT_COMPUTED_BITS[m.column] for m in main.modes) + (
-        NOT_COMPUTED_BITS[ADHESION_COLUMN] if main.u_adh is not None else 0)
+        NOT_COMPUTED_BITS[ADHESION_COLUMN] if main.u_adh is not None else 0
+    )
     for i, _ in walls:
         wtable["not_computed"][i] |= every
-
-

@@ -145,8 +145,11 @@ def system_error(exc: OSError, path: str | Path | None = None, *, doing: str = "
         cause = f"a short write ({cause}): the file system is full, or a quota or file size limit is reached"
     elif exc.errno is None and where is not None and _no_space(Path(where)):
         cause = f"{os.strerror(errno.ENOSPC)} ({cause})"
-    return StoreError(f"{doing + ': ' if doing else ''}{cause}{note}.", file=where,
-                      fix="free space, or give a path you can write (and read), then run again.")
+    return StoreError(
+        f"{doing + ': ' if doing else ''}{cause}{note}.",
+        file=where,
+        fix="free space, or give a path you can write (and read), then run again.",
+    )
 
 
 def _no_space(path: Path) -> bool:

@@ -85,8 +85,9 @@ def serial(run: Run, indices: list[int], options: Options) -> Iterator[tuple[int
         del out  # held by the consumer until it is done with it; not by this generator
 
 
-def _windowed(submit: Callable[[int], object], result: Callable[[object], tuple], indices: list[int],
-              window: int) -> Iterator[tuple]:
+def _windowed(
+    submit: Callable[[int], object], result: Callable[[object], tuple], indices: list[int], window: int
+) -> Iterator[tuple]:
     """Submit frames ahead but at most ``window`` at a time, yield results in frame order
     (memory stays a few frames, whatever the number of frames)."""
     pending: deque = deque()
@@ -135,24 +136,29 @@ def processes(run: Run, indices: list[int], options: Options, jobs: int) -> Iter
     spec = run.spec
     key = _spec_key(spec)
     ctx = mp.get_context("forkserver" if sys.platform != "win32" else "spawn")
-    with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_worker_init,
-                             initargs=(os.getpid(), threads.THREADS // jobs)) as pool:
-        yield from _windowed(lambda k: pool.submit(_worker_frame, key, spec, k, options),
-                             lambda fut: fut.result(), indices, 2 * jobs)
+    with ProcessPoolExecutor(
+        max_workers=jobs, mp_context=ctx, initializer=_worker_init, initargs=(os.getpid(), threads.THREADS // jobs)
+    ) as pool:
+        yield from _windowed(
+            lambda k: pool.submit(_worker_frame, key, spec, k, options), lambda fut: fut.result(), indices, 2 * jobs
+        )
 
 
 def dask_cluster(run: Run, indices: list[int], options: Options, address: str) -> Iterator[tuple]:
     try:
         from distributed import Client, LocalCluster
     except ImportError:
-        raise DemsplitError("--dask needs dask.distributed, which is not installed.",
-                            fix="pip install 'demsplit[dask]', or use --jobs N (local cores).") from None
+        raise DemsplitError(
+            "--dask needs dask.distributed, which is not installed.",
+            fix="pip install 'demsplit[dask]', or use --jobs N (local cores).",
+        ) from None
 
     spec = run.spec
     key = _spec_key(spec)
     if address.startswith("local:"):
-        cluster = LocalCluster(n_workers=int(address.split(":", 1)[1]), threads_per_worker=1,
-                               processes=True, dashboard_address=":0")
+        cluster = LocalCluster(
+            n_workers=int(address.split(":", 1)[1]), threads_per_worker=1, processes=True, dashboard_address=":0"
+        )
         client = Client(cluster)
     elif Path(address).is_file():  # a scheduler file written by `dask scheduler --scheduler-file`
         cluster, client = None, Client(scheduler_file=address)
@@ -160,11 +166,13 @@ def dask_cluster(run: Run, indices: list[int], options: Options, address: str) -
         cluster, client = None, Client(address)
     try:
         workers = max(1, len(client.scheduler_info().get("workers", {})))
-        yield from _windowed(lambda k: client.submit(_worker_frame, key, spec, k, options, pure=False),
-                             lambda fut: fut.result(), indices, 2 * workers)
+        yield from _windowed(
+            lambda k: client.submit(_worker_frame, key, spec, k, options, pure=False),
+            lambda fut: fut.result(),
+            indices,
+            2 * workers,
+        )
     finally:
         client.close()
         if cluster is not None:
             cluster.close()
-
-

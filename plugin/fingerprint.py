@@ -24,6 +24,9 @@ def file_fingerprint(path: str | Path, *, wait: bool = True) -> dict:
     try:
         key, value = digest(path, wait=wait)
     except OSError as exc:
-        raise StoreError(f"cannot read input file to fingerprint it: {exc.strerror}.", file=path,
-                         fix="check that the file exists and is readable.") from exc
+        raise StoreError(
+            f"cannot read input file to fingerprint it: {exc.strerror}.",
+            file=path,
+            fix="check that the file exists and is readable.",
+        ) from exc
     return {"path": key[0], "size": key[1], DIGEST: value}

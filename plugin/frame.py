@@ -50,6 +50,7 @@ Table = dict[str, np.ndarray]
 PARTICLE_REQUIRED = ("id", "type", "x", "y", "z", "radius")
 CONTACT_REQUIRED = ("id1", "id2", "wall", "delta", "nx", "ny", "nz", "x1", "y1", "z1", "r1", "r2")
 
+
 def describe_steps(steps) -> str:
     """Human-readable range of timesteps: ``"first..last, every N"`` (``every``
     only when the spacing is regular), or ``"none"``."""
@@ -68,13 +69,18 @@ def table_length(table: Table) -> int:
     return 0
 
 
-def require_columns(table: Table, required: tuple[str, ...], what: str, *, file: str | None = None,
-                    step: int | None = None) -> None:
+def require_columns(
+    table: Table, required: tuple[str, ...], what: str, *, file: str | None = None, step: int | None = None
+) -> None:
     """Raise :class:`InputFormatError` naming the canonical columns ``table`` lacks."""
     missing = [c for c in required if c not in table]
     if missing:
-        raise InputFormatError(f"the {what} table lacks the columns {missing}.", file=file, step=step,
-                               fix="this is a reader's output: report it, with the input that caused it.")
+        raise InputFormatError(
+            f"the {what} table lacks the columns {missing}.",
+            file=file,
+            step=step,
+            fix="this is a reader's output: report it, with the input that caused it.",
+        )
 
 
 def take_rows(table: Table, rows: np.ndarray) -> Table:
@@ -114,8 +120,9 @@ class Box:
     def minimum_image(self, d: np.ndarray) -> np.ndarray:
         """Minimum-image version of difference vectors ``d`` (shape (n, 3), m)."""
         d = np.array(d, dtype=np.float64, copy=True)
-        d[:, 0], d[:, 1], d[:, 2] = minimum_image_components(d[:, 0], d[:, 1], d[:, 2], self.lengths, self.tilt,
-                                                             self.periodic)
+        d[:, 0], d[:, 1], d[:, 2] = minimum_image_components(
+            d[:, 0], d[:, 1], d[:, 2], self.lengths, self.tilt, self.periodic
+        )
         return d
 
     def wrap(self, x: np.ndarray) -> np.ndarray:
@@ -208,7 +215,8 @@ class ParticleIndex:
             dups = counts[0][counts[1] > 1][:5].tolist()
             raise InputFormatError(
                 f"{dup} duplicated particle id(s) in one frame, e.g. {dups}.",
-                file=file, step=step,
+                file=file,
+                step=step,
                 fix="each particle must appear once per frame; check that the dump is not the "
                 "concatenation of two runs or of several MPI ranks writing the same atoms.",
             )
@@ -233,7 +241,8 @@ class ParticleIndex:
             unknown = np.unique(q[bad])[:5].tolist()
             raise ContactError(
                 f"{int(bad.sum())} {what}(s) reference particle id(s) not in the atom dump, e.g. {unknown}.",
-                file=self.file, step=self.step,
+                file=self.file,
+                step=self.step,
                 fix="pair the contact dump with the atom dump of the same timestep "
                 "(both dumps must be written every N steps with the same N).",
             )

@@ -32,6 +32,7 @@ MAX_LISTED = 20
 
 # --------------------------------------------------------------------------- info
 
+
 def describe_file(path: str | Path) -> str:
     """A human-readable description of ``path`` (see the module docstring): a result store, a dump or a
     VTK file that is part of a run (none of which is a run), else what the reader that reads it says
@@ -52,8 +53,11 @@ def describe_file(path: str | Path) -> str:
     for cls in readers():  # readers that know their files by a signature (YADE states are compressed like dumps)
         if cls.priority > 0 and cls.detect(path, head):
             return cls.describe_file(path)
-    for looks_like, describe in ((looks_like_dump, describe_dump), (is_liggghts_vtk, describe_vtk_dump),
-                                 (is_vtk_part, describe_vtk)):
+    for looks_like, describe in (
+        (looks_like_dump, describe_dump),
+        (is_liggghts_vtk, describe_vtk_dump),
+        (is_vtk_part, describe_vtk),
+    ):
         if looks_like(path, head):
             return describe(path)
     return reader_for(path).describe_file(path)
@@ -75,10 +79,12 @@ def _describe_store(path: Path) -> str:
     with h5:
         prov = layout.provenance
         steps = layout.steps
-        lines = [f"{path}: demsplit result store (format version {int(h5.attrs['format_version'])}, "
-                 f"written by demsplit {_plain_text(h5.attrs.get('demsplit_version', '?'))})",
-                 f"  frames:   {len(steps)}, steps {describe_steps(steps)}",
-                 "  tables:"]
+        lines = [
+            f"{path}: demsplit result store (format version {int(h5.attrs['format_version'])}, "
+            f"written by demsplit {_plain_text(h5.attrs.get('demsplit_version', '?'))})",
+            f"  frames:   {len(steps)}, steps {describe_steps(steps)}",
+            "  tables:",
+        ]
         for name in ("particles", "contacts", "walls", "frames"):
             cols = layout.columns[name]
             lines.append(f"    {name:<10} {int(layout.offsets[name][-1]):>9} rows  {' '.join(cols)}")
@@ -113,6 +119,7 @@ def _walls(scene) -> str:
 
 # --------------------------------------------------------------------------- check
 
+
 def check_run(input: str | Path, **reader_options) -> tuple[str, bool]:
     """Validate the run ``input`` (a LIGGGHTS script or a YADE snapshot file)
     without computing energies. Returns the report and whether it found no problem."""
@@ -127,12 +134,17 @@ def check_run(input: str | Path, **reader_options) -> tuple[str, bool]:
     try:
         scene = run.scene
         out.append(f"  model:     {scene.model.describe()}")
-        out.append("  materials: " + ", ".join(f"{t}: E={m.E:g} Pa nu={m.nu:g}"
-                                              for t, m in sorted(scene.materials.items())))
+        out.append(
+            "  materials: " + ", ".join(f"{t}: E={m.E:g} Pa nu={m.nu:g}" for t, m in sorted(scene.materials.items()))
+        )
         out.append(f"  walls:     {_walls(scene)}")
         problems += run.check_files(out)
-        problems += [f"wall {w.name!r} ({w.kind}): {w.missing}; 'demsplit run' refuses the run unless given "
-                     f"--allow-missing {w.name}" for w in scene.walls if w.missing]
+        problems += [
+            f"wall {w.name!r} ({w.kind}): {w.missing}; 'demsplit run' refuses the run unless given "
+            f"--allow-missing {w.name}"
+            for w in scene.walls
+            if w.missing
+        ]
         types: set[int] = set()
         first: Frame | None = None  # the first frame with contacts, else the first readable one
         notes: list[str] = []  # every frame's, once (what a frame could not give, and why)
@@ -154,9 +166,11 @@ def check_run(input: str | Path, **reader_options) -> tuple[str, bool]:
             notes += [note for note in frame.notes if note not in notes]
             types.update(np.unique(frame.particles["type"]).tolist())
             bound = frame.overlap_error
-            out.append(f"  {k:>5}  {frame.step:<10}  {frame.n_particles:>9}  {frame.n_contacts:>8}  "
-                       f"{int(np.count_nonzero(frame.contacts['wall'] >= 0)):>13}  "
-                       + ("exact" if bound is None or len(bound) == 0 else f"{np.max(bound):.2g}"))
+            out.append(
+                f"  {k:>5}  {frame.step:<10}  {frame.n_particles:>9}  {frame.n_contacts:>8}  "
+                f"{int(np.count_nonzero(frame.contacts['wall'] >= 0)):>13}  "
+                + ("exact" if bound is None or len(bound) == 0 else f"{np.max(bound):.2g}")
+            )
             problems += _check_overlaps(run, frame)
         problems += _check_materials(scene, types)
         if first is not None:
@@ -194,21 +208,39 @@ def _check_overlaps(run, frame: Frame) -> list[str]:
     for model, rows in law_groups(c, run.scene, types):
         limit[rows] = model.contact_law.separation_limit(c["r1"][rows], c["r2"][rows])
     problems = []
-    for bad, what in ((~(delta > -limit), "overlap delta <= 0 (not in contact)" if not limit.any() else
-                       "a gap -delta at or beyond the largest its law acts across (0 but for a liquid bridge)"),
-                      (delta > overlap_limit(c, run.scene, frame.particles),
-                       "overlap larger than the smaller radius (or the largest its law allows)")):
+    for bad, what in (
+        (
+            ~(delta > -limit),
+            "overlap delta <= 0 (not in contact)"
+            if not limit.any()
+            else "a gap -delta at or beyond the largest its law acts across (0 but for a liquid bridge)",
+        ),
+        (
+            delta > overlap_limit(c, run.scene, frame.particles),
+            "overlap larger than the smaller radius (or the largest its law allows)",
+        ),
+    ):
         if bad.any():
             row = int(np.flatnonzero(bad)[0])
-            who = (f"particles {int(c['id1'][row])}-{int(c['id2'][row])}" if c["wall"][row] < 0
-                   else f"particle {int(c['id1'][row])} on wall {run.scene.walls[int(c['wall'][row])].name}")
+            who = (
+                f"particles {int(c['id1'][row])}-{int(c['id2'][row])}"
+                if c["wall"][row] < 0
+                else f"particle {int(c['id1'][row])} on wall {run.scene.walls[int(c['wall'][row])].name}"
+            )
             file, line = run.locate(frame, row)
-            problems.append(str(ContactError(
-                f"{int(np.count_nonzero(bad))} contact(s) with {what}, the first {who} with delta = "
-                f"{float(delta[row])!r} (r1 = {c['r1'][row]:g}, r2 = {c['r2'][row]:g}).",
-                file=file, step=frame.step, line=line,
-                fix="check that the contact and atom dumps belong to the same run and timestep, and that the "
-                    "run is physically sound (timestep, stiffness).")))
+            problems.append(
+                str(
+                    ContactError(
+                        f"{int(np.count_nonzero(bad))} contact(s) with {what}, the first {who} with delta = "
+                        f"{float(delta[row])!r} (r1 = {c['r1'][row]:g}, r2 = {c['r2'][row]:g}).",
+                        file=file,
+                        step=frame.step,
+                        line=line,
+                        fix="check that the contact and atom dumps belong to the same run and timestep, and that the "
+                        "run is physically sound (timestep, stiffness).",
+                    )
+                )
+            )
     return problems
 
 
@@ -222,8 +254,9 @@ def _check_materials(scene, types: set[int]) -> list[str]:
     return problems
 
 
-def _what_run_computes(run, frame: Frame, sources: dict[str, int], imprecise: int,
-                      notes: list[str]) -> tuple[list[str], list[str]]:
+def _what_run_computes(
+    run, frame: Frame, sources: dict[str, int], imprecise: int, notes: list[str]
+) -> tuple[list[str], list[str]]:
     """What ``demsplit run`` would compute from which columns (from ``frame``, the first readable frame with
     contacts: a frame without any, e.g. before particles are inserted, shows no column a contact needs): where
     the overlaps come from in the frames with contacts (``sources``: source -> frames; ``imprecise``: frames
@@ -233,13 +266,20 @@ def _what_run_computes(run, frame: Frame, sources: dict[str, int], imprecise: in
     from .physics.partition import contact_energies
 
     scene = run.scene
-    shown = [f"{source} ({n} frame{'s' if n > 1 else ''})" if len(sources) > 1 or imprecise else source
-             for source, n in sources.items() if source]
+    shown = [
+        f"{source} ({n} frame{'s' if n > 1 else ''})" if len(sources) > 1 or imprecise else source
+        for source, n in sources.items()
+        if source
+    ]
     if imprecise:
-        shown.append(f"positions printed with too few digits ({imprecise} frame{'s' if imprecise > 1 else ''} "
-                     "refused: see the problems)")
-    lines = ["run would compute:",
-             f"  overlaps:    {'; '.join(shown) or frame.overlap_source or 'as the reader gives them'}"]
+        shown.append(
+            f"positions printed with too few digits ({imprecise} frame{'s' if imprecise > 1 else ''} "
+            "refused: see the problems)"
+        )
+    lines = [
+        "run would compute:",
+        f"  overlaps:    {'; '.join(shown) or frame.overlap_source or 'as the reader gives them'}",
+    ]
     lines += [f"  law:         {model.describe()}" for model in scene.models()]
     problems = []
     try:  # the partition's own verdict on what the columns allow (one frame)
@@ -248,8 +288,10 @@ def _what_run_computes(run, frame: Frame, sources: dict[str, int], imprecise: in
             lines.append(f"  {what} is 0:     {why}")
         for what, why in energies.missing.items():
             lines.append(f"  NOT COMPUTED: {what}: {why}")
-            problems.append(f"{what}: {why}; dump its columns, or let 'demsplit run' go on without it with "
-                            f"--allow-missing {what} (its values are then marked not computed).")
+            problems.append(
+                f"{what}: {why}; dump its columns, or let 'demsplit run' go on without it with "
+                f"--allow-missing {what} (its values are then marked not computed)."
+            )
     except DemsplitError as exc:
         problems.append(str(exc))
     for note in run.notes + [n for n in notes if n not in run.notes]:

@@ -43,9 +43,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from .physics import formulas
 from .runtime import threads
 from .runtime.jit import kernel
-from .physics import formulas
 
 _clamped_overlap = kernel(formulas.clamped_overlap)
 _inverse_curvature_sum = kernel(formulas.inverse_curvature_sum)
@@ -66,6 +66,7 @@ def _stride(values):
     """Step through per-contact ``values`` given without code: 0 for one value for all."""
     return 0 if values.shape[0] == 1 else 1
 
+
 # Loops select values inline, ``values[code[i]] if coded else values[i * stride]``:
 # a helper function taking the arrays would not be inlined and would pay numba's
 # reference counting of both arrays on every call, which costs more than the loop's work. For the same
@@ -82,6 +83,7 @@ def contact_rows(row_of_id, id1, id2, wall):
 
     def piece(lo: int, hi: int) -> int:
         return _offset(_contact_rows(row_of_id, id1[lo:hi], id2[lo:hi], wall[lo:hi], rows1[lo:hi], rows2[lo:hi]), lo)
+
     return rows1, rows2, _first_found(threads.map_ranges(piece, len(id1)))
 
 
@@ -159,15 +161,30 @@ def hertz_history_energies(delta, r1, r2, E_eff, G_eff, code, shearx, sheary, sh
     n = len(delta)
     u_n = np.empty(n)
     u_t = np.empty(n)
-    per_contact = len(code) == 0   # E_eff, G_eff: one value per contact (cut with them) or one for all
+    per_contact = len(code) == 0  # E_eff, G_eff: one value per contact (cut with them) or one for all
 
     def moduli(values, lo: int, hi: int):
         return values[lo:hi] if per_contact and len(values) > 1 else values
 
     def piece(lo: int, hi: int) -> int:
-        return _offset(_hertz_history_energies(delta[lo:hi], r1[lo:hi], r2[lo:hi], moduli(E_eff, lo, hi),
-                                               moduli(G_eff, lo, hi), code[lo:hi], shearx[lo:hi], sheary[lo:hi],
-                                               shearz[lo:hi], with_shear, u_n[lo:hi], u_t[lo:hi]), lo)
+        return _offset(
+            _hertz_history_energies(
+                delta[lo:hi],
+                r1[lo:hi],
+                r2[lo:hi],
+                moduli(E_eff, lo, hi),
+                moduli(G_eff, lo, hi),
+                code[lo:hi],
+                shearx[lo:hi],
+                sheary[lo:hi],
+                shearz[lo:hi],
+                with_shear,
+                u_n[lo:hi],
+                u_t[lo:hi],
+            ),
+            lo,
+        )
+
     return u_n, u_t, _first_found(threads.map_ranges(piece, n))
 
 
@@ -183,8 +200,10 @@ def _hertz_history_energies(delta, r1, r2, E_eff, G_eff, code, shearx, sheary, s
         d = _clamped_overlap(delta[i])
         u_n[i] = _hertz_energy(d, R, E_eff[code[i]] if coded else E_eff[i * se])
         if with_shear and delta[i] > 0.0:
-            u_t[i] = _spring_energy(_hertz_kt(d, R, G_eff[code[i]] if coded else G_eff[i * sg]),
-                                    _squared_norm(shearx[i], sheary[i], shearz[i]))
+            u_t[i] = _spring_energy(
+                _hertz_kt(d, R, G_eff[code[i]] if coded else G_eff[i * sg]),
+                _squared_norm(shearx[i], sheary[i], shearz[i]),
+            )
         else:
             u_t[i] = 0.0
     return bad
@@ -204,11 +223,26 @@ def split_contacts(share_values, share_code, u, delta, x1, y1, z1, nx, ny, nz, r
 
     def piece(lo: int, hi: int) -> None:
         values = share_values[:, lo:hi] if per_contact else share_values
-        _split_contacts(values, share_code[lo:hi], tuple(u[:, lo:hi]), delta[lo:hi], x1[lo:hi], y1[lo:hi],
-                        z1[lo:hi], nx[lo:hi], ny[lo:hi], nz[lo:hi], r1[lo:hi], tuple(shares[:, lo:hi]),
-                        *(o[lo:hi] for o in out), cp[:, lo:hi])
+        _split_contacts(
+            values,
+            share_code[lo:hi],
+            tuple(u[:, lo:hi]),
+            delta[lo:hi],
+            x1[lo:hi],
+            y1[lo:hi],
+            z1[lo:hi],
+            nx[lo:hi],
+            ny[lo:hi],
+            nz[lo:hi],
+            r1[lo:hi],
+            tuple(shares[:, lo:hi]),
+            *(o[lo:hi] for o in out),
+            cp[:, lo:hi],
+        )
+
     threads.map_ranges(piece, n)
     return (shares, *out, cp)
+
 
 # The energies and shares of the modes go into the loops as tuples of 1-D arrays (rows of the (modes, n)
 # arrays, no copy): numba compiles one loop per number of modes, whose inner loop over the modes it unrolls.
@@ -399,8 +433,19 @@ def pair_geometry(rows1, rows2, xyzr, h, lengths, tilt, periodic, with_cp):
     cp = np.empty((3, n if with_cp else 0))
 
     def piece(lo: int, hi: int) -> None:
-        _pair_geometry(rows1[lo:hi], rows2[lo:hi], xyzr, h, lengths, tilt, periodic, *(o[lo:hi] for o in out),
-                       hmax[lo:hi], cp[:, lo:hi])
+        _pair_geometry(
+            rows1[lo:hi],
+            rows2[lo:hi],
+            xyzr,
+            h,
+            lengths,
+            tilt,
+            periodic,
+            *(o[lo:hi] for o in out),
+            hmax[lo:hi],
+            cp[:, lo:hi],
+        )
+
     threads.map_ranges(piece, n)
     return (*out, hmax, cp)
 

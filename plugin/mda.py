@@ -65,9 +65,13 @@ _ATTR_CLASSES = {
     column: type(
         f"DemsplitAttr_{singular}",
         (AtomAttr,),
-        {"attrname": plural, "singular": singular, "dtype": dtype,
-         "_gen_initial_values": staticmethod(lambda na, nr, ns, _d=dtype: _zeros(na, nr, ns, _d)),
-         "__doc__": f"demsplit per-particle {column} of one frame."},
+        {
+            "attrname": plural,
+            "singular": singular,
+            "dtype": dtype,
+            "_gen_initial_values": staticmethod(lambda na, nr, ns, _d=dtype: _zeros(na, nr, ns, _d)),
+            "__doc__": f"demsplit per-particle {column} of one frame.",
+        },
     )
     for column, (singular, plural, dtype) in ENERGY_ATTRIBUTES.items()
 }
@@ -83,8 +87,11 @@ def _box_lo(path: Path, offset: int) -> np.ndarray:
         f.seek(offset)
         head = [f.readline() for _ in range(8)]
     if not head[0].startswith("ITEM: TIMESTEP") or not head[4].startswith("ITEM: BOX BOUNDS"):
-        raise InputFormatError("cannot find the frame header MDAnalysis indexed.", file=path,
-                               fix="check that the file is an unmodified LAMMPS/LIGGGHTS dump.")
+        raise InputFormatError(
+            "cannot find the frame header MDAnalysis indexed.",
+            file=path,
+            fix="check that the file is an unmodified LAMMPS/LIGGGHTS dump.",
+        )
     rows = [np.array(line.split(), dtype=np.float64) for line in head[5:8]]
     lo = np.array([r[0] for r in rows])
     if len(rows[0]) == 3:  # triclinic: bounds are of the bounding box
@@ -117,7 +124,8 @@ def set_energies(universe, results: Results, step: int) -> None:
             f"the results hold no particles for timestep {step} "
             f"(they hold {len(steps)} frame(s), timesteps {steps.min() if len(steps) else '-'}"
             f"..{steps.max() if len(steps) else '-'}).",
-            step=step, fix="pick a timestep present in both the dump and the results.",
+            step=step,
+            fix="pick a timestep present in both the dump and the results.",
         )
     res_ids = rows["id"].to_numpy()
     order = np.argsort(res_ids, kind="stable")
@@ -130,7 +138,8 @@ def set_energies(universe, results: Results, step: int) -> None:
         raise InputFormatError(
             f"the dump has {len(atom_ids)} atoms and the results {len(res_ids)} particles at this timestep; "
             f"ids must match one to one" + (f" (e.g. atom ids {missing} have no result)." if missing else "."),
-            step=step, fix="use the atom dump the results were computed from.",
+            step=step,
+            fix="use the atom dump the results were computed from.",
         )
     take = order[pos]
     for column, attr_class in _ATTR_CLASSES.items():
@@ -143,8 +152,7 @@ def set_energies(universe, results: Results, step: int) -> None:
             universe.add_TopologyAttr(attr_class.attrname, values)
 
 
-def universe_with_energies(atom_dump_path: str | Path, results: Results, step: int, *,
-                           restore_origin: bool = True):
+def universe_with_energies(atom_dump_path: str | Path, results: Results, step: int, *, restore_origin: bool = True):
     """An ``MDAnalysis.Universe`` of a LAMMPS/LIGGGHTS atom dump, moved to the
     frame with timestep ``step``, with that frame's energies attached (see the
     module docstring for the attribute names). With ``restore_origin`` the
@@ -156,8 +164,11 @@ def universe_with_energies(atom_dump_path: str | Path, results: Results, step: i
     try:
         u = mda.Universe(str(path), format="LAMMPSDUMP")
     except (ValueError, OSError) as exc:
-        raise InputFormatError(f"MDAnalysis cannot read this atom dump: {exc}.", file=path,
-                               fix="pass a LAMMPS/LIGGGHTS 'dump custom' file with an id column.") from exc
+        raise InputFormatError(
+            f"MDAnalysis cannot read this atom dump: {exc}.",
+            file=path,
+            fix="pass a LAMMPS/LIGGGHTS 'dump custom' file with an id column.",
+        ) from exc
     if restore_origin:
         u.trajectory.add_transformations(_restore_origin(path, np.asarray(u.trajectory._offsets)))
     try:
@@ -165,11 +176,19 @@ def universe_with_energies(atom_dump_path: str | Path, results: Results, step: i
             if ts.data["step"] == step:
                 break
         else:
-            raise InputFormatError(f"the dump has no frame with timestep {step}.", file=path, step=step,
-                                   fix="pick a timestep present in the dump.")
+            raise InputFormatError(
+                f"the dump has no frame with timestep {step}.",
+                file=path,
+                step=step,
+                fix="pick a timestep present in the dump.",
+            )
     except ValueError as exc:  # e.g. "Number of atoms in trajectory changed"
-        raise InputFormatError(f"MDAnalysis cannot read this dump: {exc}.", file=path, step=step,
-                               fix="MDAnalysis needs a constant number of atoms; use demsplit's own reader "
-                               "for runs that insert or delete particles.") from exc
+        raise InputFormatError(
+            f"MDAnalysis cannot read this dump: {exc}.",
+            file=path,
+            step=step,
+            fix="MDAnalysis needs a constant number of atoms; use demsplit's own reader "
+            "for runs that insert or delete particles.",
+        ) from exc
     set_energies(u, results, step)
     return u

@@ -114,7 +114,7 @@ def _unedited_script(path: Path) -> bool:
     except OSError:
         return False
     found = _STAMP_LINE.match(data)
-    return found is not None and hashlib.sha256(data[found.end():]).hexdigest().encode() == found.group(1)
+    return found is not None and hashlib.sha256(data[found.end() :]).hexdigest().encode() == found.group(1)
 
 
 PREPARED_SCRIPT = OutputKind("script written by demsplit prepare and not edited since", _unedited_script)
@@ -129,8 +129,9 @@ def _head(path: Path) -> bytes:
         return b""
 
 
-def check_output_path(path: str | os.PathLike, inputs: Iterable[str | os.PathLike] = (), *, kind: OutputKind,
-                      overwrite: bool = False) -> Path:
+def check_output_path(
+    path: str | os.PathLike, inputs: Iterable[str | os.PathLike] = (), *, kind: OutputKind, overwrite: bool = False
+) -> Path:
     """``path`` as a :class:`~pathlib.Path`, or the :class:`~demsplit.errors.StoreError` that names it when
     writing it would break the policy (module docstring): it is empty, one of ``inputs`` (the protected
     files), a directory, not a regular file, a dangling link, in a missing directory, or an existing file
@@ -143,29 +144,45 @@ def check_output_path(path: str | os.PathLike, inputs: Iterable[str | os.PathLik
         st = os.stat(out)  # follows links: what would be written over
     except FileNotFoundError:
         if out.is_symlink():
-            raise StoreError("the output path is a link to nothing.", file=out,
-                             fix="give a new file name, not a dangling link.") from None
+            raise StoreError(
+                "the output path is a link to nothing.", file=out, fix="give a new file name, not a dangling link."
+            ) from None
         st = None
     except OSError as exc:
-        raise StoreError(f"the output path cannot be examined ({exc.strerror}).", file=out,
-                         fix="give a file name in a directory you can write.") from None
+        raise StoreError(
+            f"the output path cannot be examined ({exc.strerror}).",
+            file=out,
+            fix="give a file name in a directory you can write.",
+        ) from None
     if st is not None:
         if stat.S_ISDIR(st.st_mode):
             raise StoreError("the output path is a directory.", file=out, fix="give a file name inside it.")
         if not stat.S_ISREG(st.st_mode):
-            raise StoreError("the output path is not a regular file (a device, a pipe or a socket): "
-                             "demsplit replaces outputs whole and will not replace it.", file=out,
-                             fix="give a new file name.")
+            raise StoreError(
+                "the output path is not a regular file (a device, a pipe or a socket): "
+                "demsplit replaces outputs whole and will not replace it.",
+                file=out,
+                fix="give a new file name.",
+            )
         protected = _protected_as(out, inputs)
         if protected is not None:
-            raise StoreError(f"the output is one of the run's inputs or files its script names ({protected}); "
-                             "writing it would destroy that file.", file=out, fix="give another output path.")
+            raise StoreError(
+                f"the output is one of the run's inputs or files its script names ({protected}); "
+                "writing it would destroy that file.",
+                file=out,
+                fix="give another output path.",
+            )
         if not overwrite and not kind.ours(out):
-            raise StoreError(f"the output exists and is not a {kind.name}: demsplit replaces only a file of the "
-                             "kind it writes, and would destroy this one.", file=out, fix=OVERWRITE_FIX)
+            raise StoreError(
+                f"the output exists and is not a {kind.name}: demsplit replaces only a file of the "
+                "kind it writes, and would destroy this one.",
+                file=out,
+                fix=OVERWRITE_FIX,
+            )
     if not out.absolute().parent.is_dir():
-        raise StoreError("the output directory does not exist.", file=out.parent,
-                         fix="create it, or choose another output path.")
+        raise StoreError(
+            "the output directory does not exist.", file=out.parent, fix="create it, or choose another output path."
+        )
     return out
 
 
@@ -231,8 +248,14 @@ def write_atomic(path: str | Path, write: Callable[[BinaryIO], object], *, durab
         write(f)
 
 
-def write_output(path: str | Path, data: str | bytes, *, kind: OutputKind, inputs: Iterable[str | os.PathLike] = (),
-                 overwrite: bool = False) -> Path:
+def write_output(
+    path: str | Path,
+    data: str | bytes,
+    *,
+    kind: OutputKind,
+    inputs: Iterable[str | os.PathLike] = (),
+    overwrite: bool = False,
+) -> Path:
     """Write ``data`` (text is UTF-8) to the command output ``path`` of ``kind``: checked
     (:func:`check_output_path`), written atomically, a system error named with the path."""
     path = check_output_path(path, inputs, kind=kind, overwrite=overwrite)
@@ -287,8 +310,15 @@ class OutputFolder:
     folder this made is removed again). ``overwrite`` (``--overwrite``) writes into a folder that holds
     other files too (they are kept) or an export of another kind (which is replaced)."""
 
-    def __init__(self, directory: str | Path, names: Iterable[str], inputs: Iterable[str | os.PathLike] = (), *,
-                 kind: str, overwrite: bool = False) -> None:
+    def __init__(
+        self,
+        directory: str | Path,
+        names: Iterable[str],
+        inputs: Iterable[str | os.PathLike] = (),
+        *,
+        kind: str,
+        overwrite: bool = False,
+    ) -> None:
         if not os.fspath(directory):
             raise StoreError("the export folder's name is empty.", fix="give a folder name.")
         self.directory = Path(directory)
@@ -296,43 +326,65 @@ class OutputFolder:
         self.names = list(dict.fromkeys(names))
         self.earlier: dict | None = None  # the manifest of the export this one replaces
         if os.path.lexists(self.directory) and not self.directory.is_dir():
-            raise StoreError("the export folder is not a folder (a file, a dangling link or a device).",
-                             file=self.directory, fix="give a new folder name, or an empty folder.")
+            raise StoreError(
+                "the export folder is not a folder (a file, a dangling link or a device).",
+                file=self.directory,
+                fix="give a new folder name, or an empty folder.",
+            )
         self.existed = self.directory.is_dir()
         if self.existed:
             for name in [*self.names, EXPORT_MANIFEST]:
                 check_output_path(self.directory / name, inputs, kind=EXPORT_FILE)
             self._check_contents(overwrite)
         elif not self.directory.absolute().parent.is_dir():
-            raise StoreError("the export folder's parent directory does not exist.", file=self.directory,
-                             fix="create it, or choose another folder.")
+            raise StoreError(
+                "the export folder's parent directory does not exist.",
+                file=self.directory,
+                fix="create it, or choose another folder.",
+            )
 
     def _check_contents(self, overwrite: bool) -> None:
         """Refuse a folder that holds anything but an earlier export of this kind (unless ``overwrite``)."""
         try:
             entries = sorted(os.listdir(self.directory))
         except OSError as exc:
-            raise StoreError(f"the export folder cannot be listed ({exc.strerror}).", file=self.directory,
-                             fix="give a folder you can read and write.") from None
+            raise StoreError(
+                f"the export folder cannot be listed ({exc.strerror}).",
+                file=self.directory,
+                fix="give a folder you can read and write.",
+            ) from None
         self.earlier = read_manifest(self.directory)
         listed = self.earlier["files"] if self.earlier is not None else []
-        ours = {temporary(Path(EXPORT_MANIFEST)).name, *listed, *(temporary(Path(n)).name for n in listed),
-                *([EXPORT_MANIFEST] if self.earlier is not None else [])}  # a manifest not ours is foreign
-        foreign = [e for e in entries if e not in ours or os.path.islink(self.directory / e)
-                   or not os.path.isfile(self.directory / e)]
+        ours = {
+            temporary(Path(EXPORT_MANIFEST)).name,
+            *listed,
+            *(temporary(Path(n)).name for n in listed),
+            *([EXPORT_MANIFEST] if self.earlier is not None else []),
+        }  # a manifest not ours is foreign
+        foreign = [
+            e
+            for e in entries
+            if e not in ours or os.path.islink(self.directory / e) or not os.path.isfile(self.directory / e)
+        ]
         if overwrite:
             return
         if foreign:
             more = f" and {len(foreign) - 1} more" if len(foreign) > 1 else ""
-            raise StoreError(f"the export folder holds files that are not a demsplit export, such as "
-                             f"{foreign[0]!r}{more}: demsplit writes into a new or empty folder, or one that holds "
-                             "only an earlier export of the same kind.", file=self.directory,
-                             fix="export into a new or empty folder, or add --overwrite to write into this one "
-                                 "(its other files are kept).")
+            raise StoreError(
+                f"the export folder holds files that are not a demsplit export, such as "
+                f"{foreign[0]!r}{more}: demsplit writes into a new or empty folder, or one that holds "
+                "only an earlier export of the same kind.",
+                file=self.directory,
+                fix="export into a new or empty folder, or add --overwrite to write into this one "
+                "(its other files are kept).",
+            )
         if self.earlier is not None and self.earlier["kind"] != self.kind:
-            raise StoreError(f"the export folder holds a demsplit {self.earlier['kind']} export, not a {self.kind} "
-                             "one: an export replaces only an earlier export of its kind.", file=self.directory,
-                             fix="export into a new or empty folder, or add --overwrite to replace that export.")
+            raise StoreError(
+                f"the export folder holds a demsplit {self.earlier['kind']} export, not a {self.kind} "
+                "one: an export replaces only an earlier export of its kind.",
+                file=self.directory,
+                fix="export into a new or empty folder, or add --overwrite to replace that export.",
+            )
 
     def write(self, name: str, write: Callable[[Path], object]) -> Path:
         """Call ``write(temporary path)`` for the file ``name`` (one of ``names``); a system error names the
@@ -397,11 +449,17 @@ def read_manifest(directory: Path) -> dict | None:
         manifest = json.loads(path.read_bytes())
     except (OSError, ValueError):
         return None
-    if not (isinstance(manifest, dict) and manifest.get("format") == _MANIFEST_FORMAT
-            and isinstance(manifest.get("kind"), str) and isinstance(manifest.get("files"), list)):
+    if not (
+        isinstance(manifest, dict)
+        and manifest.get("format") == _MANIFEST_FORMAT
+        and isinstance(manifest.get("kind"), str)
+        and isinstance(manifest.get("files"), list)
+    ):
         return None
     files = manifest["files"]
-    if not all(isinstance(f, str) and f and f not in (".", "..", EXPORT_MANIFEST) and "/" not in f and "\0" not in f
-               for f in files):
+    if not all(
+        isinstance(f, str) and f and f not in (".", "..", EXPORT_MANIFEST) and "/" not in f and "\0" not in f
+        for f in files
+    ):
         return None
     return manifest

@@ -38,11 +38,18 @@ class RunReport:
     notes: list[str] = field(default_factory=list)
 
 
-
-def process_run(run: Run, options: Options = DEFAULT_OPTIONS, *, jobs: int = 1, dask: str | None = None,
-                on_bad_frame: str = "stop", skip_steps: set[int] | None = None,
-                steps: list[int] | None = None, progress: bool | None = None,
-                report: RunReport | None = None) -> Iterator[Tables]:
+def process_run(
+    run: Run,
+    options: Options = DEFAULT_OPTIONS,
+    *,
+    jobs: int = 1,
+    dask: str | None = None,
+    on_bad_frame: str = "stop",
+    skip_steps: set[int] | None = None,
+    steps: list[int] | None = None,
+    progress: bool | None = None,
+    report: RunReport | None = None,
+) -> Iterator[Tables]:
     """Yield the tables of every frame of ``run`` in order.
 
     jobs : worker processes (1: in this process), at most :func:`worker_processes` of them (a note
@@ -64,8 +71,9 @@ def process_run(run: Run, options: Options = DEFAULT_OPTIONS, *, jobs: int = 1, 
             report.notes.append(note)
     all_steps = run_steps(run)
     wanted = set(steps) if steps is not None else None
-    indices = [k for k, s in enumerate(all_steps)
-               if (wanted is None or s in wanted) and not (skip_steps and s in skip_steps)]
+    indices = [
+        k for k, s in enumerate(all_steps) if (wanted is None or s in wanted) and not (skip_steps and s in skip_steps)
+    ]
     damaged = [k for k in indices if all_steps[k] is None]
     if damaged and on_bad_frame == "stop":  # known bad at opening: the run is refused before any frame is computed
         run.frame(damaged[0])  # raises that frame's error
@@ -73,9 +81,11 @@ def process_run(run: Run, options: Options = DEFAULT_OPTIONS, *, jobs: int = 1, 
     workers = worker_processes(jobs)
     if workers < jobs and not dask:
         used = "the frames computed in this process" if workers == 1 else f"{workers} worker processes"
-        report.notes.append(f"--jobs {jobs} on {threads.THREADS} cores: {used}; a worker process needs "
-                            f"{MIN_THREADS_PER_WORKER} cores to be faster than the serial path, which parses and "
-                            "compresses on every core (measured: docs/performance.md).")
+        report.notes.append(
+            f"--jobs {jobs} on {threads.THREADS} cores: {used}; a worker process needs "
+            f"{MIN_THREADS_PER_WORKER} cores to be faster than the serial path, which parses and "
+            "compresses on every core (measured: docs/performance.md)."
+        )
     if dask:
         results = dask_cluster(run, indices, options, dask)
     elif workers > 1:
@@ -94,8 +104,9 @@ def process_run(run: Run, options: Options = DEFAULT_OPTIONS, *, jobs: int = 1, 
             if isinstance(out, DemsplitError):
                 if on_bad_frame == "stop":
                     raise out
-                report.bad_frames.append({"frame": k, "step": int(all_steps[k]) if all_steps[k] is not None else None,
-                                          "error": str(out)})
+                report.bad_frames.append(
+                    {"frame": k, "step": int(all_steps[k]) if all_steps[k] is not None else None, "error": str(out)}
+                )
                 continue
             for note in notes:
                 if note not in report.notes:
@@ -114,9 +125,17 @@ def run_steps(run: Run) -> list[int | None]:
     return steps + [None] * (len(run) - len(steps))
 
 
-def analyze(path: str | Path, *, options: Options = DEFAULT_OPTIONS, jobs: int = 1, dask: str | None = None,
-            on_bad_frame: str = "stop", progress: bool | None = False,
-            type_names: Mapping[int, str] | None = None, **reader_options):
+def analyze(
+    path: str | Path,
+    *,
+    options: Options = DEFAULT_OPTIONS,
+    jobs: int = 1,
+    dask: str | None = None,
+    on_bad_frame: str = "stop",
+    progress: bool | None = False,
+    type_names: Mapping[int, str] | None = None,
+    **reader_options,
+):
     """Analyse a run in memory and return :class:`~demsplit.results.Results`.
 
     ``path``: any input a reader of :mod:`demsplit.readers` takes (a LIGGGHTS or LAMMPS input script, YADE
@@ -133,10 +152,16 @@ def analyze(path: str | Path, *, options: Options = DEFAULT_OPTIONS, jobs: int =
     try:
         report = RunReport()
         hash_in_background(run.sources)  # the provenance's digests, while frames are computed
-        frames = list(process_run(run, options, jobs=jobs, dask=dask, on_bad_frame=on_bad_frame,
-                                  progress=progress, report=report))
-        provenance = build_provenance(run.sources, scene=run.scene, options=asdict(options),
-                                      type_names=_type_names(type_names), **_report_provenance(run, report))
+        frames = list(
+            process_run(run, options, jobs=jobs, dask=dask, on_bad_frame=on_bad_frame, progress=progress, report=report)
+        )
+        provenance = build_provenance(
+            run.sources,
+            scene=run.scene,
+            options=asdict(options),
+            type_names=_type_names(type_names),
+            **_report_provenance(run, report),
+        )
         return Results.from_frames(frames, provenance, walls_meta_from_scene(run.scene))
     finally:
         run.close()
@@ -173,16 +198,27 @@ def _first_frame_rows(path: str | Path | list | None, options: Mapping) -> tuple
     try:
         options = dict(options)
         return reader_for(path, options.pop("simulator", None)).first_frame_rows(
-            None if path is None else Path(path), **options)
+            None if path is None else Path(path), **options
+        )
     except DemsplitError:  # the opening that follows reports it
         return None
 
 
-def run_to_store(path: str | Path, out: str | Path, *, options: Options = DEFAULT_OPTIONS, jobs: int = 1,
-                 dask: str | None = None, resume: bool = False, on_bad_frame: str = "stop",
-                 progress: bool | None = None, compression: str | None = "auto",
-                 type_names: Mapping[int, str] | None = None, overwrite: bool = False,
-                 **reader_options) -> tuple[RunReport, Scene]:
+def run_to_store(
+    path: str | Path,
+    out: str | Path,
+    *,
+    options: Options = DEFAULT_OPTIONS,
+    jobs: int = 1,
+    dask: str | None = None,
+    resume: bool = False,
+    on_bad_frame: str = "stop",
+    progress: bool | None = None,
+    compression: str | None = "auto",
+    type_names: Mapping[int, str] | None = None,
+    overwrite: bool = False,
+    **reader_options,
+) -> tuple[RunReport, Scene]:
     """Analyse a run and stream the results into the HDF5 store ``out``
     (written to a temporary name and renamed when complete; ``resume``
     continues an interrupted run from its last complete frame).
@@ -212,21 +248,46 @@ def run_to_store(path: str | Path, out: str | Path, *, options: Options = DEFAUL
         check_output_path(out, named, kind=STORE, overwrite=overwrite)  # before anything is written
         report = RunReport()
         hash_in_background(sources)  # on idle cores; the writer fills the digests in when they are known
-        provenance = build_provenance(sources, scene=run.scene, options=asdict(options), run=run.describe(),
-                                      type_names=_type_names(type_names), named_files=_absolute(named), wait=False)
-        with ResultWriter(out, provenance, resume=resume, overwrite=overwrite,
-                          walls_meta=walls_meta_from_scene(run.scene),
-                          compression=compression, final_step=int(run.steps[-1]) if len(run.steps) else None) as writer:
-            for tables in process_run(run, options, jobs=jobs, dask=dask, on_bad_frame=on_bad_frame,
-                                      skip_steps=writer.done_steps, progress=progress, report=report):
+        provenance = build_provenance(
+            sources,
+            scene=run.scene,
+            options=asdict(options),
+            run=run.describe(),
+            type_names=_type_names(type_names),
+            named_files=_absolute(named),
+            wait=False,
+        )
+        with ResultWriter(
+            out,
+            provenance,
+            resume=resume,
+            overwrite=overwrite,
+            walls_meta=walls_meta_from_scene(run.scene),
+            compression=compression,
+            final_step=int(run.steps[-1]) if len(run.steps) else None,
+        ) as writer:
+            for tables in process_run(
+                run,
+                options,
+                jobs=jobs,
+                dask=dask,
+                on_bad_frame=on_bad_frame,
+                skip_steps=writer.done_steps,
+                progress=progress,
+                report=report,
+            ):
                 writer.append(tables)
                 del tables  # stored: free it before the next frame is computed
             if report.bad_frames and not writer.done_steps:  # nothing to store: a failed run, with or without -q
-                listed = "; ".join(f"frame {b['frame']} (step {b['step']}): {b['error']}"
-                                   for b in report.bad_frames[:3])
-                raise InputFormatError(f"every frame of the run is bad ({len(report.bad_frames)}), so there is "
-                                       f"nothing to store: {listed}.", file=sources[0] if sources else None,
-                                       fix="fix the first bad frame; --on-bad-frame skip only leaves out some.")
+                listed = "; ".join(
+                    f"frame {b['frame']} (step {b['step']}): {b['error']}" for b in report.bad_frames[:3]
+                )
+                raise InputFormatError(
+                    f"every frame of the run is bad ({len(report.bad_frames)}), so there is "
+                    f"nothing to store: {listed}.",
+                    file=sources[0] if sources else None,
+                    fix="fix the first bad frame; --on-bad-frame skip only leaves out some.",
+                )
             writer.provenance.update(bad_frames=report.bad_frames, notes=report.notes)
         return report, run.scene
     finally:

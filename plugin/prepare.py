@@ -57,8 +57,19 @@ from .readers.liggghts import PREPARED_MARK
 from .readers.liggghts_script import DumpSpec, LiggghtsScript, local_layout, read_script
 from .readers.liggghts_wallforce import BALANCE_COLUMNS, stored_force_columns
 
-KEYWORDS = ["pos", "vel", "id", "force", "force_normal", "force_tangential", "torque", "history", "contactArea",
-            "delta", "contactPoint"]
+KEYWORDS = [
+    "pos",
+    "vel",
+    "id",
+    "force",
+    "force_normal",
+    "force_tangential",
+    "torque",
+    "history",
+    "contactArea",
+    "delta",
+    "contactPoint",
+]
 """Keywords of the contact computes prepare adds (``history`` dropped when the law keeps none)."""
 ATOM_COLUMNS = "id type x y z vx vy vz fx fy fz omegax omegay omegaz radius mass"
 STORE_FORCE = "store_force yes"
@@ -68,13 +79,46 @@ FRAMES_WITHOUT_OUTPUT = 100
 """Frames over the script's runs when it writes no output whose interval the added dumps could follow."""
 RESTART = "ds_split{k}.restart"
 """The restart file between part k and part k + 1 of a split script."""
-BEFORE_READ_RESTART = frozenset({"units", "atom_style", "atom_modify", "boundary", "newton", "communicate",
-                                 "comm_modify", "processors", "dimension"})
+BEFORE_READ_RESTART = frozenset(
+    {
+        "units",
+        "atom_style",
+        "atom_modify",
+        "boundary",
+        "newton",
+        "communicate",
+        "comm_modify",
+        "processors",
+        "dimension",
+    }
+)
 """Commands that must precede ``read_restart`` (they define how the box and atoms are read)."""
-NOT_REPEATED = frozenset({"create_box", "create_atoms", "read_data", "read_dump", "read_restart", "set", "velocity",
-                          "delete_atoms", "displace_atoms", "change_box", "replicate", "reset_timestep", "run",
-                          "rerun", "minimize", "write_restart", "write_data", "write_dump", "print", "shell", "log",
-                          "clear"})
+NOT_REPEATED = frozenset(
+    {
+        "create_box",
+        "create_atoms",
+        "read_data",
+        "read_dump",
+        "read_restart",
+        "set",
+        "velocity",
+        "delete_atoms",
+        "displace_atoms",
+        "change_box",
+        "replicate",
+        "reset_timestep",
+        "run",
+        "rerun",
+        "minimize",
+        "write_restart",
+        "write_data",
+        "write_dump",
+        "print",
+        "shell",
+        "log",
+        "clear",
+    }
+)
 """Commands of part 1 not repeated in part 2: they create, move or change atoms (the restart holds the
 result), run, or write once (they would overwrite part 1's files)."""
 NOT_SPLITTABLE = frozenset({"include", "jump", "label", "next", "if", "python"})
@@ -105,8 +149,9 @@ class Prepared:
         out, part, k = [], self, 1
         while part is not None:
             label = f"{name} (prepared by demsplit" + (f", part {k})" if self.part2 is not None else ")")
-            out += difflib.unified_diff(original.splitlines(True), part.text.splitlines(True), fromfile=name,
-                                        tofile=label)
+            out += difflib.unified_diff(
+                original.splitlines(True), part.text.splitlines(True), fromfile=name, tofile=label
+            )
             part, k = part.part2, k + 1
         return "".join(out).encode("utf-8", errors="surrogateescape").decode("utf-8", errors="backslashreplace")
 
@@ -125,8 +170,12 @@ def _full_atom_dump(script: LiggghtsScript, declared: set[str], needed: list[str
     """A full-precision atom dump (among the dump ids ``declared``) with what demsplit reads (``id type x y z
     radius`` and the ``needed`` columns of the laws), or None."""
     for d in script.dumps:
-        if d.id in declared and d.style == "custom" and d.full_precision and \
-                {"id", "type", "x", "y", "z", "radius", *needed} <= set(d.keywords):
+        if (
+            d.id in declared
+            and d.style == "custom"
+            and d.full_precision
+            and {"id", "type", "x", "y", "z", "radius", *needed} <= set(d.keywords)
+        ):
             return d
     return None
 
@@ -139,8 +188,14 @@ def _laws(script: LiggghtsScript) -> list[ContactLaw]:
 def _has_local_dump(script: LiggghtsScript, declared: set[str], kind: str, needed: set[str]) -> bool:
     """A full-precision ``dump local`` (among the dump ids ``declared``) of a ``kind`` compute holding the
     ``needed`` columns."""
-    return any(d.id in declared and d.layout is not None and d.layout.kind == kind and d.full_precision
-               and needed <= set(d.layout.columns) for d in script.dumps)
+    return any(
+        d.id in declared
+        and d.layout is not None
+        and d.layout.kind == kind
+        and d.full_precision
+        and needed <= set(d.layout.columns)
+        for d in script.dumps
+    )
 
 
 def _is_mesh_wall_fix(words: list[str]) -> bool:
@@ -156,7 +211,7 @@ def _mesh_names(words: list[str]) -> list[str]:
     except ValueError:
         return [words[1]]
     at = words.index("meshes") + 1
-    return words[at:at + n]
+    return words[at : at + n]
 
 
 def _is_primitive_wall_fix(words: list[str]) -> bool:
@@ -178,7 +233,7 @@ def _store_forces(lines: list[str], commands: list[tuple[int, list[str]]]) -> tu
         while lines[last].rstrip().endswith("&"):
             last += 1
         code = strip_comment(lines[last]).rstrip()
-        lines[last] = code + f" {STORE_FORCE}" + lines[last][len(code):]
+        lines[last] = code + f" {STORE_FORCE}" + lines[last][len(code) :]
         commands[k] = (line, [*words, *STORE_FORCE.split()])
         changed.append(words[1])
     return lines, changed
@@ -206,8 +261,9 @@ def split_points(commands: list[tuple[int, list[str]]]) -> list[int]:
     return points
 
 
-def output_interval(script: LiggghtsScript, commands: list[tuple[int, list[str]]],
-                    every: int | None = None) -> tuple[int, str]:
+def output_interval(
+    script: LiggghtsScript, commands: list[tuple[int, list[str]]], every: int | None = None
+) -> tuple[int, str]:
     """The interval (timesteps) of the dumps prepare adds, and why: ``every`` when given; else the script's
     own output, the smallest interval of its dumps, else of its ``thermo`` lines (a run whose output the user
     sized should not get frames far more often, which costs disk and time in proportion); else
@@ -217,13 +273,17 @@ def output_interval(script: LiggghtsScript, commands: list[tuple[int, list[str]]
     if script.dumps:
         d = min(script.dumps, key=lambda d: d.every)
         return d.every, f"the interval of the script's own dump {d.id}"
-    thermo = [int(words[1]) for _, words in commands if words[0] == "thermo" and len(words) > 1
-              and words[1].isdigit() and int(words[1]) > 0]
+    thermo = [
+        int(words[1])
+        for _, words in commands
+        if words[0] == "thermo" and len(words) > 1 and words[1].isdigit() and int(words[1]) > 0
+    ]
     if thermo:
         return min(thermo), "the interval of the script's thermo output"
     steps = sum(end - start for start, end in script.runs)
-    return max(1, -(-steps // FRAMES_WITHOUT_OUTPUT)), (f"{FRAMES_WITHOUT_OUTPUT} frames over the script's "
-                                                         f"{steps} steps of runs (it writes no output to follow)")
+    return max(1, -(-steps // FRAMES_WITHOUT_OUTPUT)), (
+        f"{FRAMES_WITHOUT_OUTPUT} frames over the script's {steps} steps of runs (it writes no output to follow)"
+    )
 
 
 def prepare_script(path: str | Path, every: int | None = None) -> Prepared:
@@ -237,8 +297,11 @@ def prepare_script(path: str | Path, every: int | None = None) -> Prepared:
     histories = {kind: script.local_histories.get(kind, law.history_columns()) for kind in ("pair", "wall")}
     commands = _commands(path)
     if not any(words[0] == "run" for _, words in commands):
-        raise ScriptError("the script has no 'run' command: there is nothing to dump.", file=path,
-                          fix="pass the script that runs the simulation.")
+        raise ScriptError(
+            "the script has no 'run' command: there is nothing to dump.",
+            file=path,
+            fix="pass the script that runs the simulation.",
+        )
     lines, stored = _store_forces(read_text(path).split("\n"), commands)
     points = split_points(commands)
     interval = output_interval(script, commands, every)
@@ -251,21 +314,30 @@ def prepare_script(path: str | Path, every: int | None = None) -> Prepared:
         last = k == len(bounds) - 2
         header = _replayed(commands, start, k + 1)
         footer = [] if last else ["", f"write_restart {RESTART.format(k=k + 1)}"]
-        parts.append(_prepare_part(path, script, histories, commands, lines, start, end, k + 1 if points else 0,
-                                   header, footer, interval))
+        parts.append(
+            _prepare_part(
+                path, script, histories, commands, lines, start, end, k + 1 if points else 0, header, footer, interval
+            )
+        )
     for part, after in zip(parts, parts[1:]):
         part.part2 = after
     if stored:
-        parts[0].notes.insert(0, f"primitive walls: store_force yes added to the fix{'es' if len(stored) > 1 else ''} "
-                              f"{', '.join(stored)}: the force each applies, dumped with the torques, gives back "
-                              "their contacts' history (the trajectory is the same).")
+        parts[0].notes.insert(
+            0,
+            f"primitive walls: store_force yes added to the fix{'es' if len(stored) > 1 else ''} "
+            f"{', '.join(stored)}: the force each applies, dumped with the torques, gives back "
+            "their contacts' history (the trajectory is the same).",
+        )
     if points:
-        parts[0].notes.insert(0, f"split: the mesh wall fix{'es' if len(points) > 1 else ''} on line"
-                              f"{'s' if len(points) > 1 else ''} {', '.join(map(str, points))} come"
-                              f"{'' if len(points) > 1 else 's'} after a 'run', where LIGGGHTS cannot dump "
-                              f"{'their' if len(points) > 1 else 'its'} contacts; the script is split there into "
-                              f"{len(parts)} parts joined by write_restart/read_restart (the same physics), run "
-                              "one after the other in the same directory.")
+        parts[0].notes.insert(
+            0,
+            f"split: the mesh wall fix{'es' if len(points) > 1 else ''} on line"
+            f"{'s' if len(points) > 1 else ''} {', '.join(map(str, points))} come"
+            f"{'' if len(points) > 1 else 's'} after a 'run', where LIGGGHTS cannot dump "
+            f"{'their' if len(points) > 1 else 'its'} contacts; the script is split there into "
+            f"{len(parts)} parts joined by write_restart/read_restart (the same physics), run "
+            "one after the other in the same directory.",
+        )
     return parts[0]
 
 
@@ -277,10 +349,13 @@ def _check_splittable(path: Path, commands: list[tuple[int, list[str]]], points:
                 f"the mesh wall fix on line {points[0]} comes after a 'run', so the script must be split there "
                 f"(LIGGGHTS dumps a mesh wall's contacts only when its compute comes before the first run), but "
                 f"line {line} ('{words[0]}') includes another file or branches, which prepare cannot carry into "
-                "the second part.", file=path, line=line,
+                "the second part.",
+                file=path,
+                line=line,
                 fix="split it by hand: end the first part with 'write_restart part1.restart'; start the second "
-                    "with the settings (units, atom_style, boundary...), 'read_restart part1.restart', the fixes, "
-                    "pair_style and computes again (same IDs), then the wall fix; run 'demsplit prepare' on each.")
+                "with the settings (units, atom_style, boundary...), 'read_restart part1.restart', the fixes, "
+                "pair_style and computes again (same IDs), then the wall fix; run 'demsplit prepare' on each.",
+            )
 
 
 def _replayed(commands: list[tuple[int, list[str]]], start: int, k: int) -> list[str]:
@@ -291,9 +366,14 @@ def _replayed(commands: list[tuple[int, list[str]]], start: int, k: int) -> list
     before = [words for line, words in commands if line < start and words[0] not in NOT_REPEATED]
     head = [" ".join(w) for w in before if w[0] in BEFORE_READ_RESTART]
     rest = [" ".join(_renamed_dump(w, k)) for w in before if w[0] not in BEFORE_READ_RESTART]
-    return [f"# --- part {k} of the script split by 'demsplit prepare': the settings a restart file does not "
-            "keep, then the state of the previous part ---", *head, f"read_restart {RESTART.format(k=k - 1)}",
-            *rest, "# --- the script continues ---"]
+    return [
+        f"# --- part {k} of the script split by 'demsplit prepare': the settings a restart file does not "
+        "keep, then the state of the previous part ---",
+        *head,
+        f"read_restart {RESTART.format(k=k - 1)}",
+        *rest,
+        "# --- the script continues ---",
+    ]
 
 
 def _renamed_dump(words: list[str], k: int) -> list[str]:
@@ -306,9 +386,19 @@ def _renamed_dump(words: list[str], k: int) -> list[str]:
     return [*words[:5], renamed, *words[6:]]
 
 
-def _prepare_part(path: Path, script: LiggghtsScript, histories: dict[str, list[str]],
-                  commands: list[tuple[int, list[str]]], lines: list[str], start: int, end: int, k: int,
-                  header: list[str], footer: list[str], interval: tuple[int, str]) -> Prepared:
+def _prepare_part(
+    path: Path,
+    script: LiggghtsScript,
+    histories: dict[str, list[str]],
+    commands: list[tuple[int, list[str]]],
+    lines: list[str],
+    start: int,
+    end: int,
+    k: int,
+    header: list[str],
+    footer: list[str],
+    interval: tuple[int, str],
+) -> Prepared:
     """Lines ``start``..``end - 1`` of the script (part ``k``; 0 when not split) with ``header`` and
     ``footer`` and, before the part's first run, the computes and dumps it lacks; ``histories``: the
     history columns of the pair and the wall compute (``'pair'``, ``'wall'``); ``interval``: the added dumps'
@@ -322,7 +412,7 @@ def _prepare_part(path: Path, script: LiggghtsScript, histories: dict[str, list[
     declared = {words[1] for line, words in commands if line < end and words[0] == "dump" and len(words) > 1}
     mesh = [name for line, words in commands if line < end and _is_mesh_wall_fix(words) for name in _mesh_names(words)]
     runs = [line for line, words in commands if start <= line < end and words[0] == "run"]
-    body = lines[start - 1:end - 1]
+    body = lines[start - 1 : end - 1]
     notes, block = [], []
     laws = _laws(script)
     extra = list(dict.fromkeys(c for law in laws for c in law.particle_columns if c not in ATOM_COLUMNS.split()))
@@ -338,54 +428,76 @@ def _prepare_part(path: Path, script: LiggghtsScript, histories: dict[str, list[
     wall_columns = [*BALANCE_COLUMNS, *(c for fid in forces for c in stored_force_columns(fid))] if forces else []
     extra = list(dict.fromkeys(c for c in [*extra, *wall_columns] if c not in ATOM_COLUMNS.split()))
     if undumped:
-        notes.append(f"{label}primitive walls {', '.join(undumped)}: defined after the atom dump, or removed by "
-                     "unfix, so no atom dump holds their stored force: their contacts' history stays not computed.")
+        notes.append(
+            f"{label}primitive walls {', '.join(undumped)}: defined after the atom dump, or removed by "
+            "unfix, so no atom dump holds their stored force: their contacts' history stays not computed."
+        )
     beside: list[str] = []
     if own is not None and set(wall_columns) <= set(own.keywords):
         every = own.every
-        notes.append(f"{label}atoms: the script's full-precision atom dump (every {every} steps) is used, and the "
-                     "contact dumps follow its interval"
-                     + (f" (--every {interval[0]} does not apply: the contacts are read at the atom dump's "
-                        "timesteps)." if interval[1] == GIVEN and interval[0] != every else "."))
+        notes.append(
+            f"{label}atoms: the script's full-precision atom dump (every {every} steps) is used, and the "
+            "contact dumps follow its interval"
+            + (
+                f" (--every {interval[0]} does not apply: the contacts are read at the atom dump's timesteps)."
+                if interval[1] == GIVEN and interval[0] != every
+                else "."
+            )
+        )
     elif place is not None:
         every = own.every
         columns = " ".join([ATOM_COLUMNS, *extra])
-        beside = [f"dump dsAtoms all custom {every} ds_atoms{suffix}.txt {columns}",
-                  'dump_modify dsAtoms format "%d %d' + " %.17g" * (len(columns.split()) - 2) + '" sort id']
-        notes.append(f"{label}atoms: a full-precision atom dump with the torques and the primitive walls' stored "
-                     f"forces beside the script's own {own.id} (every {every} steps, ds_atoms{suffix}.txt).")
+        beside = [
+            f"dump dsAtoms all custom {every} ds_atoms{suffix}.txt {columns}",
+            'dump_modify dsAtoms format "%d %d' + " %.17g" * (len(columns.split()) - 2) + '" sort id',
+        ]
+        notes.append(
+            f"{label}atoms: a full-precision atom dump with the torques and the primitive walls' stored "
+            f"forces beside the script's own {own.id} (every {every} steps, ds_atoms{suffix}.txt)."
+        )
     else:
         every, why = interval
         columns = " ".join([ATOM_COLUMNS, *extra])
         fixes = {words[1] for line, words in commands if line < end and words[0] == "fix" and len(words) > 1}
         setup = [c for c in dict.fromkeys(c for law in laws for c in law.dump_setup()) if c.split()[1] not in fixes]
-        block += [*setup, f"dump dsAtoms all custom {every} ds_atoms{suffix}.txt {columns}",
-                  'dump_modify dsAtoms format "%d %d' + " %.17g" * (len(columns.split()) - 2) + '" sort id']
-        notes.append(f"{label}atoms: a full-precision atom dump every {every} steps ({why}; another with --every N) "
-                     f"in ds_atoms{suffix}.txt.")
+        block += [
+            *setup,
+            f"dump dsAtoms all custom {every} ds_atoms{suffix}.txt {columns}",
+            'dump_modify dsAtoms format "%d %d' + " %.17g" * (len(columns.split()) - 2) + '" sort id',
+        ]
+        notes.append(
+            f"{label}atoms: a full-precision atom dump every {every} steps ({why}; another with --every N) "
+            f"in ds_atoms{suffix}.txt."
+        )
         if setup:
-            notes.append(f"{label}atoms: {' and '.join(extra)} from the fix the cohesion model creates at the first "
-                         "run, created just before the dump (LIGGGHTS checks a dump's f_ columns when it reads "
-                         "it); the run is the same.")
+            notes.append(
+                f"{label}atoms: {' and '.join(extra)} from the fix the cohesion model creates at the first "
+                "run, created just before the dump (LIGGGHTS checks a dump's f_ columns when it reads "
+                "it); the run is the same."
+            )
     if _has_local_dump(script, declared, "pair", needed):
         notes.append(f"{label}pairs: the script's full-precision pair dump holds every column the law needs.")
     else:
         block += _local("pair", "dsPair", keywords["pair"], histories["pair"], every, suffix)
         width = len(local_layout("pair", keywords["pair"], len(histories["pair"]), history=histories["pair"]))
-        notes.append(f"{label}pairs: compute dsPair and a full-precision dump of its {width} columns "
-                     f"(ds_pairs{suffix}.txt).")
+        notes.append(
+            f"{label}pairs: compute dsPair and a full-precision dump of its {width} columns (ds_pairs{suffix}.txt)."
+        )
     if mesh and not _has_local_dump(script, declared, "wall", needed - {"id2"}):
         block += _local("wall", "dsWall", keywords["wall"], histories["wall"], every, suffix)
-        notes.append(f"{label}mesh walls ({', '.join(mesh)}): compute dsWall and its full-precision dump "
-                     f"(ds_walls{suffix}.txt).")
+        notes.append(
+            f"{label}mesh walls ({', '.join(mesh)}): compute dsWall and its full-precision dump (ds_walls{suffix}.txt)."
+        )
     elif not mesh:
-        notes.append(f"{label}walls: no mesh wall, so no wall/gran/local compute (LIGGGHTS refuses it with "
-                     "primitive walls only); primitive-wall contacts are rebuilt from positions, their history from "
-                     "the walls' stored forces.")
+        notes.append(
+            f"{label}walls: no mesh wall, so no wall/gran/local compute (LIGGGHTS refuses it with "
+            "primitive walls only); primitive-wall contacts are rebuilt from positions, their history from "
+            "the walls' stored forces."
+        )
     if not runs:
         block, beside = [], []
         notes.append(f"{label}no 'run': nothing to dump.")
-    if not block and not beside and not header and not footer and body == original[start - 1:end - 1]:
+    if not block and not beside and not header and not footer and body == original[start - 1 : end - 1]:
         return Prepared(path.read_text(), [], notes + ["nothing to add: the script writes everything demsplit needs."])
     at = runs[0] - start if block else len(body)  # just before the part's first run: after every fix so far
     insertions = [(at, _added(block))]
@@ -402,8 +514,17 @@ def _prepare_part(path: Path, script: LiggghtsScript, histories: dict[str, list[
 
 def _added(block: list[str]) -> list[str]:
     """Lines prepare adds, between the comments that mark them."""
-    return ["", f"{PREPARED_MARK}: the contact output demsplit reads (docs/liggghts-output.md) ---",
-            *block, "# --- end of the lines added by demsplit ---", ""] if block else []
+    return (
+        [
+            "",
+            f"{PREPARED_MARK}: the contact output demsplit reads (docs/liggghts-output.md) ---",
+            *block,
+            "# --- end of the lines added by demsplit ---",
+            "",
+        ]
+        if block
+        else []
+    )
 
 
 def _local(kind: str, cid: str, keywords: list[str], history: list[str], every: int, suffix: str = "") -> list[str]:
@@ -411,7 +532,8 @@ def _local(kind: str, cid: str, keywords: list[str], history: list[str], every: 
     width = len(local_layout(kind, keywords, len(history), history=history))
     name = f"ds_pairs{suffix}.txt" if kind == "pair" else f"ds_walls{suffix}.txt"
     columns = " ".join(f"c_{cid}[{k}]" for k in range(1, width + 1))
-    return [f"compute {cid} all {kind}/gran/local {' '.join(keywords)}",
-            f"dump d{cid} all local {every} {name} {columns}",
-            f'dump_modify d{cid} format "{" ".join(["%.17g"] * width)}"']
-
+    return [
+        f"compute {cid} all {kind}/gran/local {' '.join(keywords)}",
+        f"dump d{cid} all local {every} {name} {columns}",
+        f'dump_modify d{cid} format "{" ".join(["%.17g"] * width)}"',
+    ]

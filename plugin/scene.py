@@ -205,8 +205,9 @@ def scene_to_dict(scene: Scene) -> dict:
     ``model``, ``walls`` (every field), ``units``, ``source``, and ``pair_models`` (``"t1 t2"`` -> model)
     when the scene has them."""
     out = {
-        "materials": {str(t): {k: v for k, v in asdict(m).items() if k != "name" or v}
-                      for t, m in sorted(scene.materials.items())},
+        "materials": {
+            str(t): {k: v for k, v in asdict(m).items() if k != "name" or v} for t, m in sorted(scene.materials.items())
+        },
         "model": asdict(scene.model),
         "walls": [asdict(w) for w in scene.walls],
         "units": scene.units,
@@ -228,5 +229,11 @@ def scene_from_dict(d: dict) -> Scene:
         return Wall(**w)
 
     pairs = {tuple(int(t) for t in key.split()): ContactModel(**m) for key, m in d.get("pair_models", {}).items()}
-    return Scene({int(t): Material(**m) for t, m in d["materials"].items()}, ContactModel(**d["model"]),
-                 [wall(w) for w in d["walls"]], d["units"], d["source"], pairs)
+    return Scene(
+        {int(t): Material(**m) for t, m in d["materials"].items()},
+        ContactModel(**d["model"]),
+        [wall(w) for w in d["walls"]],
+        d["units"],
+        d["source"],
+        pairs,
+    )

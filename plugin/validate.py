@@ -41,9 +41,19 @@ from .physics.bodies import FrameContacts
 from .physics.partition import law_groups
 from .scene import Scene
 
-INTEGER_COLUMNS = {"id": np.int64, "type": np.int32, "clump": np.int64, "id1": np.int64, "id2": np.int64,
-                   "wall": np.int64, "type1": np.int64, "type2": np.int64, "history_unknown": np.int8,
-                   "unknown_modes": np.int8, "unknown_why": np.int8}
+INTEGER_COLUMNS = {
+    "id": np.int64,
+    "type": np.int32,
+    "clump": np.int64,
+    "id1": np.int64,
+    "id2": np.int64,
+    "wall": np.int64,
+    "type1": np.int64,
+    "type2": np.int64,
+    "history_unknown": np.int8,
+    "unknown_modes": np.int8,
+    "unknown_why": np.int8,
+}
 """Integer columns and their canonical dtypes; every other column is a real (float64)."""
 NOT_NEGATIVE = ("kn", "ks", "kno", "kso", "kr", "ktw", "mb", "mtw", "mass")
 MAY_BE_INFINITE = ("r2",)  # a plane: R = inf
@@ -61,11 +71,17 @@ def validated_frame(frame: Frame, scene: Scene) -> Frame:
     if frame.box is not None:
         lo, hi = frame.box.lo, frame.box.hi
         if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi)) and np.all(lo < hi)):
-            raise InputFormatError(f"the box bounds are not finite with lo < hi (lo {lo.tolist()}, hi "
-                                   f"{hi.tolist()}).", **where, fix="check the box lines of the file.")
+            raise InputFormatError(
+                f"the box bounds are not finite with lo < hi (lo {lo.tolist()}, hi {hi.tolist()}).",
+                **where,
+                fix="check the box lines of the file.",
+            )
     if frame.time is not None and not (np.isfinite(frame.time) and frame.time >= 0):
-        raise InputFormatError(f"the frame's time {float(frame.time)!r} s is not a finite time >= 0.", **where,
-                               fix="check the run's timestep and the frame's step.")
+        raise InputFormatError(
+            f"the frame's time {float(frame.time)!r} s is not a finite time >= 0.",
+            **where,
+            fix="check the run's timestep and the frame's step.",
+        )
     if contacts and len(contacts["delta"]):
         _check_geometry(contacts, particles, scene, {**where, "file": source})
     return replace(frame, particles=particles, contacts=contacts)
@@ -87,8 +103,11 @@ def _canonical(table: str, t: Table, where: dict) -> Table:
             out[col] = _integers(table, col, values, INTEGER_COLUMNS[col], where)
             continue
         if values.dtype.kind not in "fiub":
-            raise InputFormatError(f"column {table}.{col} holds {values.dtype} values, not numbers.", **where,
-                                   fix="the reader or the file is damaged: check the file.")
+            raise InputFormatError(
+                f"column {table}.{col} holds {values.dtype} values, not numbers.",
+                **where,
+                fix="the reader or the file is damaged: check the file.",
+            )
         values = values.astype(np.float64, copy=False)
         bad = ~np.isfinite(values)
         if col in MAY_BE_INFINITE:
@@ -106,26 +125,38 @@ def _integers(table: str, col: str, values: np.ndarray, dtype, where: dict) -> n
     if values.dtype.kind in "iu":
         info = np.iinfo(dtype)
         if len(values) and (values.min() < info.min or values.max() > info.max):
-            raise InputFormatError(f"column {table}.{col} has values beyond {np.dtype(dtype).name}.", **where,
-                                   fix="check the file: ids and types this large are not a DEM run's.")
+            raise InputFormatError(
+                f"column {table}.{col} has values beyond {np.dtype(dtype).name}.",
+                **where,
+                fix="check the file: ids and types this large are not a DEM run's.",
+            )
         return values.astype(dtype, copy=False)
     if values.dtype.kind == "f":
         bad = ~np.isfinite(values) | (values != np.round(values))
         if bad.any():
             row = int(np.flatnonzero(bad)[0])
-            raise InputFormatError(f"column {table}.{col} must hold integers, row {row} holds {float(values[row])!r}.",
-                                   **where, fix="check the file: ids and types are exact integers.")
+            raise InputFormatError(
+                f"column {table}.{col} must hold integers, row {row} holds {float(values[row])!r}.",
+                **where,
+                fix="check the file: ids and types are exact integers.",
+            )
         return values.astype(dtype)
-    raise InputFormatError(f"column {table}.{col} holds {values.dtype} values, not integers.", **where,
-                           fix="the reader or the file is damaged: check the file.")
+    raise InputFormatError(
+        f"column {table}.{col} holds {values.dtype} values, not integers.",
+        **where,
+        fix="the reader or the file is damaged: check the file.",
+    )
 
 
 def _refuse(bad: np.ndarray, table: str, col: str, values: np.ndarray, what: str, t: Table, where: dict) -> None:
     if bad.any():
         row = int(np.flatnonzero(bad)[0])
-        raise InputFormatError(f"{_who(table, t, row)} (row {row}): {col} = {float(values[row])!r} {what}; "
-                               f"{int(np.count_nonzero(bad))} such value(s) in column {table}.{col}.", **where,
-                               fix="check the file at that row: a damaged or foreign value.")
+        raise InputFormatError(
+            f"{_who(table, t, row)} (row {row}): {col} = {float(values[row])!r} {what}; "
+            f"{int(np.count_nonzero(bad))} such value(s) in column {table}.{col}.",
+            **where,
+            fix="check the file at that row: a damaged or foreign value.",
+        )
 
 
 def _check_geometry(c: Table, particles: Table, scene: Scene, where: dict) -> None:
@@ -140,8 +171,10 @@ def _check_geometry(c: Table, particles: Table, scene: Scene, where: dict) -> No
         raise ContactError(
             f"{_who('contacts', c, row)} (row {row}) has an overlap of {float(c['delta'][row]):g} m, larger than "
             f"{what} ({float(limit[row]):g} m): not a plausible DEM contact; "
-            f"{int(np.count_nonzero(too_deep))} such contact(s).", **where,
-            fix="check that the contact and atom dumps belong to the same run and timestep.")
+            f"{int(np.count_nonzero(too_deep))} such contact(s).",
+            **where,
+            fix="check that the contact and atom dumps belong to the same run and timestep.",
+        )
 
 
 def overlap_limit(c: Table, scene: Scene, particles: Table | None = None) -> np.ndarray:
@@ -164,17 +197,29 @@ def check_finite_energies(u: np.ndarray, contacts: Table, *, file: str | None, s
         bad = bad.any(axis=0)
     if bad.any():
         row = int(np.flatnonzero(bad)[0])
-        raise ContactError(f"{_who('contacts', contacts, row)} (row {row}) has an energy that is not finite: "
-                           "a stored force, stiffness or spring history of an implausible size; "
-                           f"{int(np.count_nonzero(bad))} such contact(s).", file=file, step=step,
-                           fix="check the contact file at that row (a damaged or foreign value).")
+        raise ContactError(
+            f"{_who('contacts', contacts, row)} (row {row}) has an energy that is not finite: "
+            "a stored force, stiffness or spring history of an implausible size; "
+            f"{int(np.count_nonzero(bad))} such contact(s).",
+            file=file,
+            step=step,
+            fix="check the contact file at that row (a damaged or foreign value).",
+        )
 
 
 COLUMN_KINDS = ("int", "real", "text")
 
 
-def typed_columns(table, schema: dict[str, str], *, name: str, optional: dict[str, str] | None = None,
-                  file=None, step: int | None = None, where: str = "") -> dict[str, np.ndarray]:
+def typed_columns(
+    table,
+    schema: dict[str, str],
+    *,
+    name: str,
+    optional: dict[str, str] | None = None,
+    file=None,
+    step: int | None = None,
+    where: str = "",
+) -> dict[str, np.ndarray]:
     """The columns of a reader's raw ``table`` named in ``schema`` (required) and ``optional`` (kept when
     present), each cast to its kind (:data:`COLUMN_KINDS`): ``int`` to int64 (integer dtypes within its
     range, or finite integral reals), ``real`` to float64 (integer, real or boolean dtypes; values are
@@ -184,13 +229,21 @@ def typed_columns(table, schema: dict[str, str], *, name: str, optional: dict[st
     prefix = f"{where}: " if where else ""
 
     def bad(col: str, what: str) -> InputFormatError:
-        return InputFormatError(f"{prefix}column {name}.{col} {what}.", file=file, step=step,
-                                fix="the file is damaged or was not written by the simulator's exporter: "
-                                    "rewrite it (rerun the simulation).")
+        return InputFormatError(
+            f"{prefix}column {name}.{col} {what}.",
+            file=file,
+            step=step,
+            fix="the file is damaged or was not written by the simulator's exporter: "
+            "rewrite it (rerun the simulation).",
+        )
 
     if not isinstance(table, dict):
-        raise InputFormatError(f"{prefix}table {name} is missing or not a table of columns.", file=file, step=step,
-                               fix="the file is damaged: rewrite it (rerun the simulation).")
+        raise InputFormatError(
+            f"{prefix}table {name} is missing or not a table of columns.",
+            file=file,
+            step=step,
+            fix="the file is damaged: rewrite it (rerun the simulation).",
+        )
     out: dict[str, np.ndarray] = {}
     length = None
     for col, kind in {**schema, **(optional or {})}.items():

@@ -65,6 +65,7 @@ YADE_PREFIX = "yade:"
 # Collecting the state of a running YADE simulation
 # --------------------------------------------------------------------------
 
+
 def _plain(value):
     """A JSON-able copy of a YADE attribute value: mpf -> float, vectors,
     matrices and quaternions -> lists, anything else unknown -> its str."""
@@ -158,8 +159,15 @@ def _materials(O) -> tuple[list[dict], dict]:
         key = _material_key(m)
         if key not in inline:
             inline[key] = len(out)
-            out.append({"class": type(m).__name__, **_plain(m.dict()), "id": len(out), "inline": True,
-                        "label": m.label or "inline %s of body %d" % (type(m).__name__, b.id)})
+            out.append(
+                {
+                    "class": type(m).__name__,
+                    **_plain(m.dict()),
+                    "id": len(out),
+                    "inline": True,
+                    "label": m.label or "inline %s of body %d" % (type(m).__name__, b.id),
+                }
+            )
     return out, inline
 
 
@@ -191,26 +199,52 @@ def _body_table(O, inline: dict) -> dict[str, np.ndarray]:
             verts = sum((_vec(pos + b.state.ori * v) for v in b.shape.vertices), ())
         else:
             verts = nan3 * 3
-        rows.append((
-            b.id, kind, shape_class, -1 if mat is None else mat.id if mat.id >= 0 else inline[_material_key(mat)],
-            float(getattr(mat, "young", np.nan)), float(getattr(mat, "poisson", np.nan)),
-            float(getattr(mat, "density", np.nan)), radius,
-            *_vec(pos), *_vec(O.cell.wrap(pos) if periodic else pos),
-            *_vec(b.state.vel), *_vec(b.state.angVel), float(b.state.mass), *_vec(b.state.ori),
-            b.clumpId, bool(b.dynamic), axis, sense,
-            *(_vec(b.shape.extents) if kind == "box" else nan3), *verts,
-        ))
-    cols = ("id kind shape_class material young poisson density radius x y z xw yw zw "
-            "vx vy vz wx wy wz mass qx qy qz qw clump dynamic wall_axis wall_sense ex ey ez "
-            "v0x v0y v0z v1x v1y v1z v2x v2y v2z").split()
+        rows.append(
+            (
+                b.id,
+                kind,
+                shape_class,
+                -1 if mat is None else mat.id if mat.id >= 0 else inline[_material_key(mat)],
+                float(getattr(mat, "young", np.nan)),
+                float(getattr(mat, "poisson", np.nan)),
+                float(getattr(mat, "density", np.nan)),
+                radius,
+                *_vec(pos),
+                *_vec(O.cell.wrap(pos) if periodic else pos),
+                *_vec(b.state.vel),
+                *_vec(b.state.angVel),
+                float(b.state.mass),
+                *_vec(b.state.ori),
+                b.clumpId,
+                bool(b.dynamic),
+                axis,
+                sense,
+                *(_vec(b.shape.extents) if kind == "box" else nan3),
+                *verts,
+            )
+        )
+    cols = (
+        "id kind shape_class material young poisson density radius x y z xw yw zw "
+        "vx vy vz wx wy wz mass qx qy qz qw clump dynamic wall_axis wall_sense ex ey ez "
+        "v0x v0y v0z v1x v1y v1z v2x v2y v2z"
+    ).split()
     data = list(zip(*rows)) if rows else [()] * len(cols)
-    dtypes = {"id": np.int64, "material": np.int64, "clump": np.int64, "dynamic": np.bool_,
-              "wall_axis": np.int8, "wall_sense": np.int8, "kind": "S8", "shape_class": "S32"}
+    dtypes = {
+        "id": np.int64,
+        "material": np.int64,
+        "clump": np.int64,
+        "dynamic": np.bool_,
+        "wall_axis": np.int8,
+        "wall_sense": np.int8,
+        "kind": "S8",
+        "shape_class": "S32",
+    }
     return {c: np.asarray(d, dtype=dtypes.get(c, np.float64)) for c, d in zip(cols, data)}
 
 
-GEOMETRY_COLUMNS = ("id1 id2 geom_class phys_class depth nx ny nz cpx cpy cpz refR1 refR2 cdx cdy cdz "
-                    "iter_made_real").split()
+GEOMETRY_COLUMNS = (
+    "id1 id2 geom_class phys_class depth nx ny nz cpx cpy cpz refR1 refR2 cdx cdy cdz iter_made_real"
+).split()
 """The interactions table's columns every interaction has (its ScGeom); the physics' columns follow, as the
 laws declare them (:class:`demsplit.physics.laws._yade.Phys`)."""
 
@@ -224,9 +258,19 @@ def _interaction_table(O, high_precision: bool, attributes: list) -> dict[str, n
     for i in O.interactions:
         g, p = i.geom, i.phys
         d = g.penetrationDepth
-        row = [i.id1, i.id2, type(g).__name__, type(p).__name__, float(d),
-               *_vec(g.normal), *_vec(g.contactPoint), float(g.refR1), float(g.refR2),
-               *(int(c) for c in i.cellDist), i.iterMadeReal]
+        row = [
+            i.id1,
+            i.id2,
+            type(g).__name__,
+            type(p).__name__,
+            float(d),
+            *_vec(g.normal),
+            *_vec(g.contactPoint),
+            float(g.refR1),
+            float(g.refR2),
+            *(int(c) for c in i.cellDist),
+            i.iterMadeReal,
+        ]
         for a in attributes:
             row += [float(getattr(p, a.yade, nan))] if a.shape == "scalar" else _vec(getattr(p, a.yade, nan3))
         rows.append(row)
@@ -234,16 +278,25 @@ def _interaction_table(O, high_precision: bool, attributes: list) -> dict[str, n
             depth_text.append(str(d))
     cols = GEOMETRY_COLUMNS + [c for a in attributes for c in a.columns]
     data = list(zip(*rows)) if rows else [()] * len(cols)
-    dtypes = {"id1": np.int64, "id2": np.int64, "cdx": np.int64, "cdy": np.int64, "cdz": np.int64,
-              "iter_made_real": np.int64, "geom_class": "S32", "phys_class": "S32"}
+    dtypes = {
+        "id1": np.int64,
+        "id2": np.int64,
+        "cdx": np.int64,
+        "cdy": np.int64,
+        "cdz": np.int64,
+        "iter_made_real": np.int64,
+        "geom_class": "S32",
+        "phys_class": "S32",
+    }
     table = {c: np.asarray(d, dtype=dtypes.get(c, np.float64)) for c, d in zip(cols, data)}
     if high_precision:
         table["depth_text"] = np.asarray(depth_text, dtype=bytes) if depth_text else np.zeros(0, "S1")
     return table
 
 
-def collect(O=None, *, law_energies: bool = True,
-            loaded: bool = False) -> tuple[dict, dict[str, dict[str, np.ndarray]]]:
+def collect(
+    O=None, *, law_energies: bool = True, loaded: bool = False
+) -> tuple[dict, dict[str, dict[str, np.ndarray]]]:
     """The current state of YADE's ``O`` as ``(meta, tables)``.
 
     ``tables`` has ``bodies`` and ``interactions`` (column name -> array);
@@ -291,19 +344,24 @@ def collect(O=None, *, law_energies: bool = True,
         "n_interactions_potential": n_potential,
         "n_interactions_real": n_real,
     }
-    tables = {"bodies": _body_table(O, inline),
-              "interactions": _interaction_table(O, high_precision, _phys_attributes(O))}
+    tables = {
+        "bodies": _body_table(O, inline),
+        "interactions": _interaction_table(O, high_precision, _phys_attributes(O)),
+    }
     if len(tables["interactions"]["id1"]) != n_real:
         raise InputFormatError(
             f"iterating O.interactions gave {len(tables['interactions']['id1'])} interactions "
             f"but O.interactions.countReal() is {n_real}.",
-            step=int(O.iter), fix="report this YADE version to the demsplit developers.")
+            step=int(O.iter),
+            fix="report this YADE version to the demsplit developers.",
+        )
     return meta, tables
 
 
 # --------------------------------------------------------------------------
 # Writing: one snapshot per call, appended atomically
 # --------------------------------------------------------------------------
+
 
 def h5py_or_none():
     """The h5py module, or None when it cannot be imported (Debian's YADE
@@ -330,7 +388,9 @@ def sniff_format(path: str | Path) -> str | None:
     raise InputFormatError(
         f"not a demsplit YADE snapshot file: it starts with {head[:16]!r}, expected the HDF5 "
         f"signature or {NPY_STREAM_MAGIC.strip()!r}.",
-        file=path, fix="give the file written by demsplit.yade.snapshot().")
+        file=path,
+        fix="give the file written by demsplit.yade.snapshot().",
+    )
 
 
 def snapshot(path: str | Path, *, format: str = "auto", O=None, law_energies: bool = True) -> int:
@@ -348,8 +408,9 @@ def snapshot(path: str | Path, *, format: str = "auto", O=None, law_energies: bo
     return write_snapshot(path, meta, tables, format=format)
 
 
-def write_snapshot(path: str | Path, meta: dict, tables: dict[str, dict[str, np.ndarray]],
-                   *, format: str = "auto") -> int:
+def write_snapshot(
+    path: str | Path, meta: dict, tables: dict[str, dict[str, np.ndarray]], *, format: str = "auto"
+) -> int:
     """Append one snapshot ``(meta, tables)`` to ``path`` (see :func:`snapshot`)."""
     path = Path(path)
     existing = sniff_format(path)
@@ -360,7 +421,9 @@ def write_snapshot(path: str | Path, meta: dict, tables: dict[str, dict[str, np.
     if existing is not None and existing != format:
         raise InputFormatError(
             f"the file is in the {existing} snapshot format; cannot append a {format} snapshot.",
-            file=path, fix="use a new file name or format='auto'.")
+            file=path,
+            fix="use a new file name or format='auto'.",
+        )
     if format == "hdf5":
         return _write_hdf5(path, meta, tables)
     return _write_npy(path, meta, tables)
@@ -372,8 +435,11 @@ def _write_hdf5(path: Path, meta: dict, tables: dict) -> int:
     full disk) is recognisable. The file is opened and closed per snapshot."""
     h5py = h5py_or_none()
     if h5py is None:
-        raise InputFormatError("h5py cannot be imported in this Python.", file=path,
-                               fix="continue this run in a new file with format='npy'.")
+        raise InputFormatError(
+            "h5py cannot be imported in this Python.",
+            file=path,
+            fix="continue this run in a new file with format='npy'.",
+        )
     with h5py.File(path, "a") as f:
         f.attrs["format"] = FORMAT_NAME
         f.attrs["format_version"] = FORMAT_VERSION
@@ -382,7 +448,9 @@ def _write_hdf5(path: Path, meta: dict, tables: dict) -> int:
             if not snaps[name].attrs.get("complete", False):
                 raise TruncatedFileError(
                     f"snapshot group {name!r} is incomplete (a previous write was cut short).",
-                    file=path, fix="start a new snapshot file; the reader reports the broken snapshot.")
+                    file=path,
+                    fix="start a new snapshot file; the reader reports the broken snapshot.",
+                )
         index = len(snaps)
         g = snaps.create_group(f"{index:06d}")
         g.attrs["iter"] = meta["iter"]
@@ -420,23 +488,28 @@ def npy_records(path: Path) -> tuple[list[tuple[int, int]], str | None]:
             head = f.read(RECORD_HEAD)
             k = len(records)
             if len(head) < RECORD_HEAD or not head.startswith(b"DSREC ") or head[-1:] != b"\n":
-                return records, (f"snapshot {k} at byte {offset} is cut short or damaged: its record header "
-                                 f"reads {head[:24]!r}")
+                return records, (
+                    f"snapshot {k} at byte {offset} is cut short or damaged: its record header reads {head[:24]!r}"
+                )
             try:
                 length = int(head[6:22])
             except ValueError:
                 length = -1
             if length < 0:  # a record always moves forward; beyond the file, the end marker check below fails
-                return records, (f"snapshot {k} at byte {offset} is cut short or damaged: its record header "
-                                 f"declares a length of {head[6:22]!r}")
+                return records, (
+                    f"snapshot {k} at byte {offset} is cut short or damaged: its record header "
+                    f"declares a length of {head[6:22]!r}"
+                )
             end = offset + RECORD_HEAD + length
             tail = b""
             if end + RECORD_TAIL <= size:  # else the file ends before the record does
                 f.seek(end)
                 tail = f.read(RECORD_TAIL)
             if len(tail) < RECORD_TAIL or not tail.startswith(b"DSEND ") or tail[-1:] != b"\n":
-                return records, (f"snapshot {k} at byte {offset} is cut short or damaged: it declares {length} "
-                                 f"bytes but the file ends or is damaged before its end marker")
+                return records, (
+                    f"snapshot {k} at byte {offset} is cut short or damaged: it declares {length} "
+                    f"bytes but the file ends or is damaged before its end marker"
+                )
             records.append((offset + RECORD_HEAD, length))
             offset = end + RECORD_TAIL
     return records, None
@@ -449,14 +522,16 @@ def _write_npy(path: Path, meta: dict, tables: dict) -> int:
     if path.exists() and path.stat().st_size > 0:
         records, problem = npy_records(path)
         if problem:
-            raise TruncatedFileError(f"cannot append: {problem}.", file=path,
-                                     fix="start a new snapshot file; the reader reports the broken snapshot.")
+            raise TruncatedFileError(
+                f"cannot append: {problem}.",
+                file=path,
+                fix="start a new snapshot file; the reader reports the broken snapshot.",
+            )
         index, prefix = len(records), b""
     else:
         index, prefix = 0, NPY_STREAM_MAGIC
     payload = _npy_payload(meta, tables)
-    record = (prefix + b"DSREC %016d\n" % len(payload) + payload
-              + b"DSEND %08x\n" % (zlib.crc32(payload) & 0xFFFFFFFF))
+    record = prefix + b"DSREC %016d\n" % len(payload) + payload + b"DSEND %08x\n" % (zlib.crc32(payload) & 0xFFFFFFFF)
     with open(path, "ab") as f:
         f.write(record)
         f.flush()

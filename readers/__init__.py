@@ -62,30 +62,40 @@ def reader_for(path: str | Path | None, simulator: str | None = None) -> type[Ru
         own = [cls for cls in readers() if cls.simulator == simulator]
         if not own:
             known = sorted({cls.simulator for cls in readers() if cls.simulator})
-            raise InputFormatError(f"no reader reads {simulator!r} runs.", file=path,
-                                   fix=f"use --simulator with one of {', '.join(known)}.")
+            raise InputFormatError(
+                f"no reader reads {simulator!r} runs.",
+                file=path,
+                fix=f"use --simulator with one of {', '.join(known)}.",
+            )
         return next((cls for cls in own if cls.detect(path, head)), own[-1])
     for cls in readers():
         if cls.detect(path, head):
             return cls
     if path is not None and path.is_dir():
         found = sorted(p.name for p in path.iterdir() if p.is_file() and _looks_like_a_run(p))
-        raise InputFormatError("this is a directory, not a run.", file=path,
-                               fix=("give one of the runs it holds: " + ", ".join(found[:30])
-                                    + (f" (and {len(found) - 30} more)" if len(found) > 30 else "")) if found
-                               else "give the run's input script or snapshot file.")
+        raise InputFormatError(
+            "this is a directory, not a run.",
+            file=path,
+            fix=(
+                "give one of the runs it holds: "
+                + ", ".join(found[:30])
+                + (f" (and {len(found) - 30} more)" if len(found) > 30 else "")
+            )
+            if found
+            else "give the run's input script or snapshot file.",
+        )
     if path is not None and not path.exists():
-        raise InputFormatError("no such file (and no file matches it as a pattern).", file=path,
-                               fix="check the path.")
+        raise InputFormatError("no such file (and no file matches it as a pattern).", file=path, fix="check the path.")
     if b"ITEM: TIMESTEP" in head:
         raise InputFormatError(
             "this is a dump file, not a run: demsplit needs the run's input script for the materials, "
-            "the contact model and the column layout of the contact dumps.", file=path,
+            "the contact model and the column layout of the contact dumps.",
+            file=path,
             fix="pass the LIGGGHTS input script (demsplit run in.script --atoms DUMP --contacts DUMP), "
-            "or describe the scene with --material TYPE:E:NU and --columns.")
+            "or describe the scene with --material TYPE:E:NU and --columns.",
+        )
     accepted = "; ".join(f for cls in readers() for f in cls.formats)
-    raise InputFormatError("unrecognised file: no reader reads it.", file=path,
-                           fix=f"pass one of: {accepted}.")
+    raise InputFormatError("unrecognised file: no reader reads it.", file=path, fix=f"pass one of: {accepted}.")
 
 
 def open_run(path: str | Path | list | None, simulator: str | None = None, **options) -> Run:
@@ -101,13 +111,18 @@ def open_run(path: str | Path | list | None, simulator: str | None = None, **opt
         paths = [Path(p) for p in path]
         cls = reader_for(paths[0], simulator)
         if not cls.several_files:
-            raise InputFormatError(f"several inputs were given, but {paths[0].name} is {cls.formats[0]}, which is "
-                                   "a run by itself.", file=paths[0],
-                                   fix="give one run (several files are one run only for YADE saved states).")
+            raise InputFormatError(
+                f"several inputs were given, but {paths[0].name} is {cls.formats[0]}, which is a run by itself.",
+                file=paths[0],
+                fix="give one run (several files are one run only for YADE saved states).",
+            )
         for other in paths[1:]:
             if reader_for(other, simulator) is not cls:
-                raise InputFormatError(f"this input is not {cls.formats[0]}, as {paths[0].name} is.", file=other,
-                                       fix="give the files of one run.")
+                raise InputFormatError(
+                    f"this input is not {cls.formats[0]}, as {paths[0].name} is.",
+                    file=other,
+                    fix="give the files of one run.",
+                )
         run = cls.open(paths, **options)
         run.spec = {"path": [str(p) for p in path], **options}
         return run

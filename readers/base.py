@@ -63,24 +63,44 @@ def material_spec(text: str) -> tuple[int, Material]:
         raise ValueError(f"expected TYPE:E:NU (e.g. 1:5e7:0.3), got {text!r}") from None
 
 
-MATERIALS = Option("materials", ("--material",), "the elastic constants of a material type, TYPE:E:NU (Pa, -), "
-                   "completing or overriding what the run's files say (repeatable)",
-                   {"action": "append", "type": material_spec, "metavar": "TYPE:E:NU"}, convert=dict)
+MATERIALS = Option(
+    "materials",
+    ("--material",),
+    "the elastic constants of a material type, TYPE:E:NU (Pa, -), "
+    "completing or overriding what the run's files say (repeatable)",
+    {"action": "append", "type": material_spec, "metavar": "TYPE:E:NU"},
+    convert=dict,
+)
 """The option every reader with materials takes."""
-OVERLAP_TOLERANCE = Option("overlap_tolerance", ("--overlap-tolerance",), "largest relative overlap error "
-                           "accepted when overlaps must be recomputed from printed positions (default 1e-3)",
-                           {"type": float, "metavar": "REL"})
+OVERLAP_TOLERANCE = Option(
+    "overlap_tolerance",
+    ("--overlap-tolerance",),
+    "largest relative overlap error accepted when overlaps must be recomputed from printed positions (default 1e-3)",
+    {"type": float, "metavar": "REL"},
+)
 """The option of readers that may recompute overlaps from printed positions."""
 
 
 SCRIPT_FILES = "Input scripts, LIGGGHTS and LAMMPS (default: the files the script's dump lines write)"
 """The help section of the options every input-script reader takes."""
-ATOMS = Option("atoms", ("--atoms",), "atom dump (dump custom: text; LIGGGHTS also binary .bin or compressed)",
-               group=SCRIPT_FILES)
-CONTACTS = Option("contacts", ("--contacts",), "pair contact dump (LIGGGHTS: dump local of compute pair/gran/local; "
-                  "LAMMPS: dump local of compute property/local and pair/local)", group=SCRIPT_FILES)
-VARIABLES = Option("variables", ("--var",), "script variable, as liggghts -var or lmp -var NAME VALUE",
-                   {"nargs": 2, "action": "append", "metavar": ("NAME", "VALUE")}, convert=dict, group=SCRIPT_FILES)
+ATOMS = Option(
+    "atoms", ("--atoms",), "atom dump (dump custom: text; LIGGGHTS also binary .bin or compressed)", group=SCRIPT_FILES
+)
+CONTACTS = Option(
+    "contacts",
+    ("--contacts",),
+    "pair contact dump (LIGGGHTS: dump local of compute pair/gran/local; "
+    "LAMMPS: dump local of compute property/local and pair/local)",
+    group=SCRIPT_FILES,
+)
+VARIABLES = Option(
+    "variables",
+    ("--var",),
+    "script variable, as liggghts -var or lmp -var NAME VALUE",
+    {"nargs": 2, "action": "append", "metavar": ("NAME", "VALUE")},
+    convert=dict,
+    group=SCRIPT_FILES,
+)
 """The options of the readers of input scripts."""
 
 
@@ -137,8 +157,11 @@ class Run(ABC):
         taken = list(inspect.signature(cls.__init__).parameters)[2:]  # after self and the path
         unknown = sorted(set(options) - set(taken))
         if unknown:
-            raise InputFormatError(f"option(s) {unknown} do not apply to {cls.formats[0]}.", file=path,
-                                   fix=f"leave them out; this reader takes {sorted(taken) or 'none'}.")
+            raise InputFormatError(
+                f"option(s) {unknown} do not apply to {cls.formats[0]}.",
+                file=path,
+                fix=f"leave them out; this reader takes {sorted(taken) or 'none'}.",
+            )
         return cls(path, **options)
 
     @classmethod
@@ -152,11 +175,14 @@ class Run(ABC):
         """What ``demsplit info`` prints about a file this reader reads."""
         with cls.open(path) as run:
             scene = run.scene
-            lines = [f"{path}: {cls.formats[0]}", f"  frames:   {len(run)}",
-                     f"  model:    {scene.model.describe()}",
-                     "  materials: " + ", ".join(f"{t}: E={m.E:g} Pa nu={m.nu:g}"
-                                                 for t, m in sorted(scene.materials.items())),
-                     f"  walls:    {len(scene.walls)}"]
+            lines = [
+                f"{path}: {cls.formats[0]}",
+                f"  frames:   {len(run)}",
+                f"  model:    {scene.model.describe()}",
+                "  materials: "
+                + ", ".join(f"{t}: E={m.E:g} Pa nu={m.nu:g}" for t, m in sorted(scene.materials.items())),
+                f"  walls:    {len(scene.walls)}",
+            ]
         return "\n".join(lines)
 
     @classmethod

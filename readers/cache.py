@@ -51,10 +51,10 @@ from .. import errors
 from ..errors import ContactError, DemsplitError, InputFormatError
 from ..frame import CONTACT_REQUIRED, PARTICLE_REQUIRED, Box, Frame, ParticleIndex, require_columns
 from ..outputs import HDF5_SIGNATURE, atomic_path, check_output_path, hdf5_kind, output_errors, text_attribute
-from ..scene import scene_from_dict, scene_to_dict
 from ..runtime.threads import pool
-from .base import Run
+from ..scene import scene_from_dict, scene_to_dict
 from ..validate import validated_frame
+from .base import Run
 from .hdf5_inputs import refuse_foreign_storage
 
 FORMAT = "demsplit-ingest-cache"
@@ -69,6 +69,7 @@ CACHE = hdf5_kind("demsplit ingest cache", FORMAT)
 # --------------------------------------------------------------------------- scene <-> JSON
 
 # --------------------------------------------------------------------------- writing
+
 
 def convert_run(input: str | Path, output: str | Path, *, overwrite: bool = False, **reader_options) -> Path:
     """Write every frame of the run ``input`` to the cache ``output`` (atomically).
@@ -96,11 +97,19 @@ def convert_run(input: str | Path, output: str | Path, *, overwrite: bool = Fals
                 try:
                     frame = run.frame(k)
                 except DemsplitError as exc:  # kept, and raised again when the frame is read
-                    g.attrs["error"] = json.dumps({"class": type(exc).__name__, "message": exc.message,
-                                                   "file": exc.file, "step": exc.step, "line": exc.line,
-                                                   "fix": exc.fix})
-                    steps.append(exc.step if exc.step is not None else int(run.steps[k]) if k < len(run.steps)
-                                 else None)  # a damaged frame past the readable ones: its step is not known
+                    g.attrs["error"] = json.dumps(
+                        {
+                            "class": type(exc).__name__,
+                            "message": exc.message,
+                            "file": exc.file,
+                            "step": exc.step,
+                            "line": exc.line,
+                            "fix": exc.fix,
+                        }
+                    )
+                    steps.append(
+                        exc.step if exc.step is not None else int(run.steps[k]) if k < len(run.steps) else None
+                    )  # a damaged frame past the readable ones: its step is not known
                     continue
                 _write_frame(g, frame)
                 steps.append(frame.step)
@@ -134,6 +143,7 @@ def _write_frame(g: h5py.Group, frame: Frame) -> None:
 
 # --------------------------------------------------------------------------- reading
 
+
 def is_cache(path: str | Path) -> bool:
     """True when ``path`` is an HDF5 file written by :func:`convert_run`."""
     try:
@@ -158,9 +168,12 @@ class CacheRun(Run):
     def open(cls, path: Path | None, **options) -> CacheRun:
         """Open an ingest cache; reader options are not accepted (they were applied by ``convert``)."""
         if options:
-            raise InputFormatError(f"reader options {sorted(options)} do not apply to an ingest cache: they "
-                                   "were fixed when it was written.", file=path,
-                                   fix="convert the run again with these options, or pass the original run.")
+            raise InputFormatError(
+                f"reader options {sorted(options)} do not apply to an ingest cache: they "
+                "were fixed when it was written.",
+                file=path,
+                fix="convert the run again with these options, or pass the original run.",
+            )
         return cls(path)
 
     def __init__(self, path: str | Path) -> None:
@@ -173,8 +186,9 @@ class CacheRun(Run):
             self._open()
         except H5_FAULTS as exc:
             self._h5.close()
-            raise self._damaged(f"it cannot be read ({type(exc).__name__}: {' '.join(str(exc).split())[:200]}).") \
-                from None
+            raise self._damaged(
+                f"it cannot be read ({type(exc).__name__}: {' '.join(str(exc).split())[:200]})."
+            ) from None
         except BaseException:
             self._h5.close()
             raise
@@ -182,31 +196,40 @@ class CacheRun(Run):
 
     def _damaged(self, what: str, k: int | None = None, step: int | None = None) -> InputFormatError:
         """The error of a cache whose content is not what convert wrote: it names the cache (and the frame)."""
-        return InputFormatError(f"the ingest cache is damaged: {'' if k is None else f'frame {k}: '}{what}",
-                                file=self.path, step=step,
-                                fix="convert the run again (demsplit convert RUN -o CACHE.h5), or give the run itself.")
+        return InputFormatError(
+            f"the ingest cache is damaged: {'' if k is None else f'frame {k}: '}{what}",
+            file=self.path,
+            step=step,
+            fix="convert the run again (demsplit convert RUN -o CACHE.h5), or give the run itself.",
+        )
 
     def _open(self) -> None:
         """Check the cache's attributes and frame groups (what :func:`convert_run` writes) and read the scene."""
         attrs = self._h5.attrs
         if text_attribute(self._h5, "format") != FORMAT:
-            raise InputFormatError(f"not a demsplit ingest cache (its format attribute is not {FORMAT!r}).",
-                                   file=self.path, fix="write one with 'demsplit convert RUN -o CACHE.h5'.")
+            raise InputFormatError(
+                f"not a demsplit ingest cache (its format attribute is not {FORMAT!r}).",
+                file=self.path,
+                fix="write one with 'demsplit convert RUN -o CACHE.h5'.",
+            )
         version = attrs.get("version")
         if not isinstance(version, (int, np.integer)):
             raise self._damaged("its version attribute is not an integer.")
         if int(version) != VERSION:
-            raise InputFormatError(f"cache format version {int(version)} is "
-                                   f"{'newer' if version > VERSION else 'older'} than this demsplit reads "
-                                   f"({VERSION}).", file=self.path,
-                                   fix="convert the run again with this version of demsplit.")
+            raise InputFormatError(
+                f"cache format version {int(version)} is "
+                f"{'newer' if version > VERSION else 'older'} than this demsplit reads "
+                f"({VERSION}).",
+                file=self.path,
+                fix="convert the run again with this version of demsplit.",
+            )
         refuse_foreign_storage(self._h5, self.path)
         steps = attrs.get("steps")
         if not (isinstance(steps, np.ndarray) and steps.ndim == 1 and steps.dtype.kind in "iu"):
             raise self._damaged("its steps attribute is not a list of integers.")
         steps = steps.astype(np.int64)
         self._n_frames = len(steps)  # a damaged frame past the readable ones is stored with step -1
-        self.steps = steps[:len(steps) - int(np.argmax(steps[::-1] >= 0)) if (steps >= 0).any() else 0]
+        self.steps = steps[: len(steps) - int(np.argmax(steps[::-1] >= 0)) if (steps >= 0).any() else 0]
         self.sources = [self.path] + self._json(attrs, "sources", list, str)
         self._describe = self._json(attrs, "describe", dict)
         try:
@@ -218,8 +241,11 @@ class CacheRun(Run):
         self.notes = []
         frames = self._h5.get("frames")
         names = [f"{k:06d}" for k in range(self._n_frames)]
-        if not isinstance(frames, h5py.Group) or sorted(frames) != names or \
-                not all(isinstance(frames[n], h5py.Group) for n in names):
+        if (
+            not isinstance(frames, h5py.Group)
+            or sorted(frames) != names
+            or not all(isinstance(frames[n], h5py.Group) for n in names)
+        ):
             raise self._damaged(f"its frames group does not hold one group per frame ({self._n_frames}).")
         if attrs.get("n_frames", self._n_frames) != self._n_frames:
             raise self._damaged("its n_frames attribute is not the number of its frames.")
@@ -233,8 +259,12 @@ class CacheRun(Run):
         except (KeyError, TypeError, ValueError):
             value = None
         if not isinstance(value, kind) or (item is not None and not all(isinstance(v, item) for v in value)):
-            raise self._damaged(f"its {name} attribute is not a JSON {kind.__name__}"
-                                + (f" of {item.__name__}" if item is not None else "") + ".", k)
+            raise self._damaged(
+                f"its {name} attribute is not a JSON {kind.__name__}"
+                + (f" of {item.__name__}" if item is not None else "")
+                + ".",
+                k,
+            )
         return value
 
     def __len__(self) -> int:
@@ -250,8 +280,9 @@ class CacheRun(Run):
         try:
             frame = self._frame(k)
         except H5_FAULTS as exc:  # what h5py raises on damaged metadata or chunks
-            raise self._damaged(f"it cannot be read ({type(exc).__name__}: {' '.join(str(exc).split())[:200]}).",
-                                k, self._step(k)) from None
+            raise self._damaged(
+                f"it cannot be read ({type(exc).__name__}: {' '.join(str(exc).split())[:200]}).", k, self._step(k)
+            ) from None
         self._check(frame, k)
         return frame
 
@@ -272,17 +303,20 @@ class CacheRun(Run):
             if ("box_lo" in a) != self._boxed:  # a reader gives every frame a box, or none
                 raise self._damaged("its box attributes are not those of its other frames.", k, step)
             if "box_lo" in a:
-                box = Box(*(np.array(a[n], dtype=np.float64).reshape(3) for n in ("box_lo", "box_hi")),
-                          tuple(bool(p) for p in np.array(a["box_periodic"]).reshape(3)),
-                          np.array(a["box_tilt"], dtype=np.float64).reshape(3))
+                box = Box(
+                    *(np.array(a[n], dtype=np.float64).reshape(3) for n in ("box_lo", "box_hi")),
+                    tuple(bool(p) for p in np.array(a["box_periodic"]).reshape(3)),
+                    np.array(a["box_tilt"], dtype=np.float64).reshape(3),
+                )
             time = float(a["time"])
             overlap_source = a["overlap_source"]
             if not isinstance(overlap_source, str):
                 raise TypeError("overlap_source")
             walls = _walls(a)
         except (KeyError, TypeError, ValueError) as exc:
-            raise self._damaged(f"an attribute is missing or of another kind ({type(exc).__name__}: {exc}).",
-                                k, step) from None
+            raise self._damaged(
+                f"an attribute is missing or of another kind ({type(exc).__name__}: {exc}).", k, step
+            ) from None
         datasets = {}
         for name in ("particles", "contacts"):
             order = self._json(g[name].attrs if isinstance(g.get(name), h5py.Group) else {}, "order", list, str, k)
@@ -292,17 +326,26 @@ class CacheRun(Run):
         if "overlap_error" in g:
             datasets["overlap_error", None] = self._dataset(g, "overlap_error", None, k, step)
         arrays = self._read(datasets)
-        particles, contacts = ({col: v for (name, col), v in arrays.items() if name == table}
-                               for table in ("particles", "contacts"))
-        frame = Frame(step=step, particles=particles, contacts=contacts, box=box,
-                      time=None if np.isnan(time) else time, source=tuple(self._json(a, "source", list, str, k=k)),
-                      overlap_source=overlap_source, overlap_error=arrays.get(("overlap_error", None)),
-                      notes=self._json(a, "notes", list, str, k=k), walls=walls)
+        particles, contacts = (
+            {col: v for (name, col), v in arrays.items() if name == table} for table in ("particles", "contacts")
+        )
+        frame = Frame(
+            step=step,
+            particles=particles,
+            contacts=contacts,
+            box=box,
+            time=None if np.isnan(time) else time,
+            source=tuple(self._json(a, "source", list, str, k=k)),
+            overlap_source=overlap_source,
+            overlap_error=arrays.get(("overlap_error", None)),
+            notes=self._json(a, "notes", list, str, k=k),
+            walls=walls,
+        )
         return frame
 
     def _dataset(self, g, name: str, col: str | None, k: int, step: int):
         """The dataset of a frame's column: 1-D, of numbers, every chunk in the file."""
-        d = (g.get(name) if col is None else g[name].get(col))
+        d = g.get(name) if col is None else g[name].get(col)
         what = name if col is None else f"{name} column {col}"
         if not isinstance(d, h5py.Dataset) or d.ndim != 1 or d.dtype.kind not in "biuf" or d.dtype.itemsize > 8:
             raise self._damaged(f"{what} is not a 1-D column of numbers.", k, step)
@@ -326,8 +369,10 @@ class CacheRun(Run):
             c = checked.contacts
             wall = c["wall"]
             if len(wall) and (wall.min() < -1 or wall.max() >= len(self.scene.walls)):
-                raise ContactError(f"a contact names wall {int(wall[(wall < -1) | (wall >= len(self.scene.walls))][0])}"
-                                   f"; the scene has {len(self.scene.walls)}.")
+                raise ContactError(
+                    f"a contact names wall {int(wall[(wall < -1) | (wall >= len(self.scene.walls))][0])}"
+                    f"; the scene has {len(self.scene.walls)}."
+                )
             from ..kernels import repeated_pair  # compiled, lazily
 
             index = ParticleIndex(checked.particles["id"])
@@ -336,8 +381,11 @@ class CacheRun(Run):
             first, repeat = repeated_pair(rows1[pair], rows2[pair], len(index.ids))
             if repeat >= 0:
                 ids = c["id1"][pair][repeat], c["id2"][pair][repeat]
-                raise ContactError(f"particle {int(ids[0])} is paired with itself." if first == repeat else
-                                   f"the contact of particles {int(ids[0])} and {int(ids[1])} is listed twice.")
+                raise ContactError(
+                    f"particle {int(ids[0])} is paired with itself."
+                    if first == repeat
+                    else f"the contact of particles {int(ids[0])} and {int(ids[1])} is listed twice."
+                )
         except DemsplitError as exc:
             raise self._damaged(exc.message, k, frame.step) from None
 
@@ -345,8 +393,12 @@ class CacheRun(Run):
         """The error a refused frame was stored as, raised again with its class and message."""
         cls = getattr(errors, str(e.get("class")), None)
         fields = {"file": str, "step": int, "line": int, "fix": str}
-        if not (isinstance(cls, type) and issubclass(cls, DemsplitError) and isinstance(e.get("message"), str)
-                and all(e.get(f) is None or isinstance(e.get(f), t) for f, t in fields.items())):
+        if not (
+            isinstance(cls, type)
+            and issubclass(cls, DemsplitError)
+            and isinstance(e.get("message"), str)
+            and all(e.get(f) is None or isinstance(e.get(f), t) for f, t in fields.items())
+        ):
             raise self._damaged("its stored error is not one demsplit wrote.", k, self._step(k))
         return cls(e["message"], **{f: e.get(f) for f in fields})
 
@@ -383,8 +435,11 @@ class CacheRun(Run):
         while done < len(view):
             got = os.preadv(self._fd, [view[done:]], offset + done)
             if not got:
-                raise InputFormatError(f"the cache ends inside a dataset (byte {offset + done}).", file=self.path,
-                                       fix="the file was cut short: convert the run again.")
+                raise InputFormatError(
+                    f"the cache ends inside a dataset (byte {offset + done}).",
+                    file=self.path,
+                    fix="the file was cut short: convert the run again.",
+                )
             done += got
 
 

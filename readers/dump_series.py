@@ -51,8 +51,11 @@ class DumpSeries(DumpFile):
     def __init__(self, pattern: str | Path, files: Sequence[Path], columns: Sequence[str] | None = None) -> None:
         super().__init__(Path(pattern))
         if not files:
-            raise InputFormatError("no file matches this dump's name.", file=pattern,
-                                   fix="check the dump's file name and that the run wrote it.")
+            raise InputFormatError(
+                "no file matches this dump's name.",
+                file=pattern,
+                fix="check the dump's file name and that the run wrote it.",
+            )
         self._dumps = [open_dump(f, columns) for f in files]
         first = self._dumps[0]
         self.kind, self.label, self.columns, self.head_rows = first.kind, first.label, first.columns, first.head_rows

@@ -55,16 +55,16 @@ MARKER = b"ITEM: TIMESTEP"
 _MARKER = np.frombuffer(MARKER, dtype=np.uint8).copy()
 
 # statuses of parse_rows
-OK = 0          # every row well formed, every requested token converted
-SHAPE = 1       # a row is not ncols single-space-separated fields (+ trailing space) and a newline
-FALLBACK = 2    # rows well formed, but a requested token is outside the fast path: not all converted
+OK = 0  # every row well formed, every requested token converted
+SHAPE = 1  # a row is not ncols single-space-separated fields (+ trailing space) and a newline
+FALLBACK = 2  # rows well formed, but a requested token is outside the fast path: not all converted
 
-_FAST, _SLOW, _NOT_DECIMAL = 0, 1, 2                # what _real found
+_FAST, _SLOW, _NOT_DECIMAL = 0, 1, 2  # what _real found
 
-_POW10 = np.array([10.0 ** k for k in range(23)])   # 1e0 .. 1e22, each an exact double
-_MAX_EXACT = 1 << 53                                # largest mantissa that is an exact double
-_SEP = 32                                           # bytes <= 32 separate fields (LAMMPS writes ' ' and '\n')
-_BLOCK = 64                                         # bytes per step of a mask (jit.bytes_below: one bit each)
+_POW10 = np.array([10.0**k for k in range(23)])  # 1e0 .. 1e22, each an exact double
+_MAX_EXACT = 1 << 53  # largest mantissa that is an exact double
+_SEP = 32  # bytes <= 32 separate fields (LAMMPS writes ' ' and '\n')
+_BLOCK = 64  # bytes per step of a mask (jit.bytes_below: one bit each)
 
 # Word-at-a-time constants (8 bytes in a uint64, the first byte of the text the lowest)
 _U = np.uint64
@@ -72,9 +72,9 @@ _EACH_21, _EACH_30, _EACH_06 = _U(0x2121212121212121), _U(0x3030303030303030), _
 _EACH_0F, _EACH_F0 = _U(0x0F0F0F0F0F0F0F0F), _U(0xF0F0F0F0F0F0F0F0)
 _EACH_7F, _EACH_80 = _U(0x7F7F7F7F7F7F7F7F), _U(0x8080808080808080)
 _EACH_5F, _EACH_60 = _U(0x5F5F5F5F5F5F5F5F), _U(0x6060606060606060)
-_POW10_INT = np.array([10 ** k for k in range(20)], dtype=np.uint64)   # 10**0 .. 10**19, exact
+_POW10_INT = np.array([10**k for k in range(20)], dtype=np.uint64)  # 10**0 .. 10**19, exact
 _MAX_EXACT_U = _U(1 << 53)
-_WORD_TOKEN = 24    # a real is read word-wise when this many bytes follow its start (else byte by byte)
+_WORD_TOKEN = 24  # a real is read word-wise when this many bytes follow its start (else byte by byte)
 
 
 @kernel
@@ -151,8 +151,8 @@ def _digit_run(x: np.uint64) -> int:
     """How many of the word's bytes, from its first, are ASCII digits (0-8). A byte b is a digit when
     its high nibble is 3 and that of b + 6 too; a carry out of a byte (b >= 0xFA, not a digit) only
     disturbs the bytes after it."""
-    m = ((x & _EACH_F0) ^ _EACH_30) | (((x + _EACH_06) & _EACH_F0) ^ _EACH_30)   # 0 for a digit byte
-    nonzero = (((m & _EACH_7F) + _EACH_7F) | m) & _EACH_80                     # exact: no carry between bytes
+    m = ((x & _EACH_F0) ^ _EACH_30) | (((x + _EACH_06) & _EACH_F0) ^ _EACH_30)  # 0 for a digit byte
+    nonzero = (((m & _EACH_7F) + _EACH_7F) | m) & _EACH_80  # exact: no carry between bytes
     if nonzero == 0:
         return 8
     return np.int64(trailing_zeros(nonzero) >> _U(3))
@@ -164,9 +164,9 @@ def _digits_value(x: np.uint64, n: int) -> np.uint64:
     the digits are moved to the top of the word (the bytes below read as leading zeros) and combined
     pairwise in three multiplications."""
     v = (x - _EACH_30) << _U(8 * (8 - n))
-    v = ((v & _EACH_0F) * _U(2561)) >> _U(8)                                  # pairs of digits
-    v = ((v & _U(0x00FF00FF00FF00FF)) * _U(6553601)) >> _U(16)               # groups of four
-    return ((v & _U(0x0000FFFF0000FFFF)) * _U(42949672960001)) >> _U(32)     # all eight
+    v = ((v & _EACH_0F) * _U(2561)) >> _U(8)  # pairs of digits
+    v = ((v & _U(0x00FF00FF00FF00FF)) * _U(6553601)) >> _U(16)  # groups of four
+    return ((v & _U(0x0000FFFF0000FFFF)) * _U(42949672960001)) >> _U(32)  # all eight
 
 
 @inlined
@@ -180,7 +180,7 @@ def _real(base: int, p: int, end: int) -> tuple[int, float, int]:
     start = p
     sign = byte_at(base, p) if p < end else 0
     neg = sign == 45
-    p += (sign == 45) | (sign == 43)       # no branch: a sign is as likely as none
+    p += (sign == 45) | (sign == 43)  # no branch: a sign is as likely as none
     if p + _WORD_TOKEN > end:
         return _real_bytewise(base, start, end)
     x = word_at(base, p)
@@ -209,7 +209,7 @@ def _real(base: int, p: int, end: int) -> tuple[int, float, int]:
                 return _real_bytewise(base, start, end)
     if total == 0:
         return _NOT_DECIMAL, 0.0, p
-    if p < end and (byte_at(base, p) | 32) == 101:                # e or E
+    if p < end and (byte_at(base, p) | 32) == 101:  # e or E
         p, ok, ex = _exponent(base, p + 1, end)
         if not ok:
             return _NOT_DECIMAL, 0.0, p
@@ -228,7 +228,7 @@ def _exponent(base: int, p: int, end: int) -> tuple[int, bool, int]:
     value), the value saturating beyond 100000 (past +-22 only a zero mantissa is fast anyway)."""
     sign = byte_at(base, p) if p < end else 0
     neg = sign == 45
-    p += (sign == 45) | (sign == 43)       # no branch: a sign is as likely as none
+    p += (sign == 45) | (sign == 43)  # no branch: a sign is as likely as none
     ex = 0
     digits = 0
     while p < end and 48 <= byte_at(base, p) <= 57:
@@ -251,12 +251,12 @@ def _real_bytewise(base: int, p: int, end: int) -> tuple[int, float, int]:
     """
     sign = byte_at(base, p) if p < end else 0
     neg = sign == 45
-    p += (sign == 45) | (sign == 43)       # no branch: a sign is as likely as none
+    p += (sign == 45) | (sign == 43)  # no branch: a sign is as likely as none
     m = 0
-    digits = 0          # significant digits (from the first nonzero one); m holds the first 18
-    seen = False        # any mantissa digit at all
+    digits = 0  # significant digits (from the first nonzero one); m holds the first 18
+    seen = False  # any mantissa digit at all
     e10 = 0
-    point = False       # past the decimal point: each digit lowers the exponent
+    point = False  # past the decimal point: each digit lowers the exponent
     while p < end:
         if 48 <= byte_at(base, p) <= 57:
             d = byte_at(base, p) - 48
@@ -274,7 +274,7 @@ def _real_bytewise(base: int, p: int, end: int) -> tuple[int, float, int]:
         p += 1
     if not seen:
         return _NOT_DECIMAL, 0.0, p
-    if p < end and (byte_at(base, p) | 32) == 101:                # e or E
+    if p < end and (byte_at(base, p) | 32) == 101:  # e or E
         p, ok, ex = _exponent(base, p + 1, end)
         if not ok:
             return _NOT_DECIMAL, 0.0, p
@@ -347,15 +347,15 @@ def _skip_fields(base: int, p: int, end: int, n: int) -> int:
     same steps on the two layouts of flags, written out twice on purpose: one loop over both (the 8-byte
     flags gathered into a bit per byte) or none for the last bytes (-2 within 64 bytes of ``end``) made
     the kernel slower."""
-    before = _U(1)          # a separator just before the step: one at its first byte ends an empty field
+    before = _U(1)  # a separator just before the step: one at its first byte ends an empty field
     left = n
     while p + _BLOCK <= end:
         sep = bytes_below(base, p, _SEP + 1)
-        other = bytes_below(base, p, _SEP)              # bytes < 32: a separator but not a space
+        other = bytes_below(base, p, _SEP)  # bytes < 32: a separator but not a space
         k = np.int64(popcount(sep))
         if k >= left:
             m = _nth_lowest(sep, left)
-            upto = m ^ (m - _U(1))                      # the bytes up to the n-th separator
+            upto = m ^ (m - _U(1))  # the bytes up to the n-th separator
             sep &= upto
             if (other & upto) != 0 or (sep & ((sep << _U(1)) | before)) != 0:
                 return -1
@@ -365,16 +365,16 @@ def _skip_fields(base: int, p: int, end: int, n: int) -> int:
         before = sep >> _U(63)
         left -= k
         p += _BLOCK
-    before <<= _U(7)        # the same flag, as the 8-byte steps place it: bit 7 of byte 0
+    before <<= _U(7)  # the same flag, as the 8-byte steps place it: bit 7 of byte 0
     while p + 8 <= end:
         x = word_at(base, p)
         low = x & _EACH_7F
         sep = ~((low + _EACH_5F) | x) & _EACH_80
-        other = ~((low + _EACH_60) | x) & _EACH_80     # bytes < 32: a separator but not a space
+        other = ~((low + _EACH_60) | x) & _EACH_80  # bytes < 32: a separator but not a space
         k = np.int64(popcount(sep))
         if k >= left:
             m = _nth_lowest(sep, left)
-            upto = m ^ (m - _U(1))                      # the bytes up to the n-th separator
+            upto = m ^ (m - _U(1))  # the bytes up to the n-th separator
             sep &= upto
             if (other & upto) != 0 or (sep & ((sep << _U(8)) | before)) != 0:
                 return -1
@@ -396,9 +396,20 @@ def _nth_lowest(bits: np.uint64, n: int) -> np.uint64:
 
 
 @kernel
-def parse_rows(a: np.ndarray, start: int, end: int, ncols: int, trailing: bool, kind: np.ndarray,
-               slot: np.ndarray, reals: np.ndarray, ints: np.ndarray, row0: int, max_rows: int,
-               slow: np.ndarray) -> tuple[int, int, int, int]:
+def parse_rows(
+    a: np.ndarray,
+    start: int,
+    end: int,
+    ncols: int,
+    trailing: bool,
+    kind: np.ndarray,
+    slot: np.ndarray,
+    reals: np.ndarray,
+    ints: np.ndarray,
+    row0: int,
+    max_rows: int,
+    slow: np.ndarray,
+) -> tuple[int, int, int, int]:
     """Check and convert the whole rows in ``a[start:end]`` (ending with ``\\n``).
 
     Column ``c`` of a row is written, when ``kind[c]`` is 1, as float64 to
@@ -423,7 +434,7 @@ def parse_rows(a: np.ndarray, start: int, end: int, ncols: int, trailing: bool, 
     n_slow = 0
     convert = True
     first_fallback = -1
-    skip = np.zeros(ncols, np.int64)    # columns not requested from c on, before the last column
+    skip = np.zeros(ncols, np.int64)  # columns not requested from c on, before the last column
     for c in range(ncols - 2, -1, -1):
         skip[c] = skip[c + 1] + 1 if kind[c] == 0 else 0
     while p < end:
@@ -441,10 +452,10 @@ def parse_rows(a: np.ndarray, start: int, end: int, ncols: int, trailing: bool, 
                     c += n_skip
                     continue
             k = kind[c] if convert else 0
-            q = _field_end(base, p, end)    # first: the next field's start does not wait for the conversion
+            q = _field_end(base, p, end)  # first: the next field's start does not wait for the conversion
             if k == 1:
                 found, v, t = _real(base, p, end)
-                if t != q:                  # the literal is not the whole field
+                if t != q:  # the literal is not the whole field
                     found = _NOT_DECIMAL
                 if found == _FAST:
                     reals[slot[c], row0 + r] = v
@@ -464,7 +475,7 @@ def parse_rows(a: np.ndarray, start: int, end: int, ncols: int, trailing: bool, 
                 else:
                     convert = False
                     first_fallback = r
-            if q == p or q == end:          # empty field, or no newline at the end
+            if q == p or q == end:  # empty field, or no newline at the end
                 return SHAPE, r, r, n_slow
             if c < ncols - 1:
                 if a[q] != 32:

@@ -24,14 +24,19 @@ def refuse_foreign_storage(group, path: Path | str, _seen: set | None = None) ->
     for name in group:
         link = group.get(name, getlink=True)
         if isinstance(link, (h5py.ExternalLink, h5py.SoftLink)):
-            raise InputFormatError(f"{group.name.rstrip('/')}/{name} is a {type(link).__name__}: the file refers "
-                                   "to data outside itself.", file=path,
-                                   fix="give the file as demsplit or YADE wrote it; links are never written.")
+            raise InputFormatError(
+                f"{group.name.rstrip('/')}/{name} is a {type(link).__name__}: the file refers to data outside itself.",
+                file=path,
+                fix="give the file as demsplit or YADE wrote it; links are never written.",
+            )
         obj = group[name]
         if isinstance(obj, h5py.Group):
             if h5py.h5o.get_info(obj.id).addr not in seen:
                 refuse_foreign_storage(obj, path, seen)
         elif isinstance(obj, h5py.Dataset) and (obj.external or obj.is_virtual):
-            raise InputFormatError(f"dataset {obj.name} is stored outside the file ("
-                                   f"{'virtual' if obj.is_virtual else 'external storage'}).", file=path,
-                                   fix="give the file as demsplit or YADE wrote it.")
+            raise InputFormatError(
+                f"dataset {obj.name} is stored outside the file ("
+                f"{'virtual' if obj.is_virtual else 'external storage'}).",
+                file=path,
+                fix="give the file as demsplit or YADE wrote it.",
+            )

@@ -33,8 +33,9 @@ CG_ITERATIONS = 2000
 """Most conjugate-gradient iterations of the twisting torques' least squares."""
 
 
-def _sums(n_atoms: int, rows1: np.ndarray, rows2: np.ndarray, on1: np.ndarray, on2: np.ndarray
-          ) -> tuple[np.ndarray, np.ndarray]:
+def _sums(
+    n_atoms: int, rows1: np.ndarray, rows2: np.ndarray, on1: np.ndarray, on2: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Per atom, the sum of the contacts' vectors (``on1`` on body 1, ``on2`` on body 2; a wall has no body 2) and
     the sum of their magnitudes; NaN where a term is unknown."""
     total, scale = np.zeros((n_atoms, 3)), np.zeros(n_atoms)
@@ -79,11 +80,15 @@ def close_balances(a, gravity: tuple[float, float, float] | None) -> None:
     open_torques = _close_torques(a, r, n_L)
     notes = []
     if resolved:
-        notes.append("springs that single() wrote at their limit but the step had not capped were pinned by the atoms' "
-                     "force balance")
+        notes.append(
+            "springs that single() wrote at their limit but the step had not capped were pinned by the atoms' "
+            "force balance"
+        )
     if open_forces or open_torques:
-        notes.append("atoms whose force or torque balance does not close (a term of the step is not what the dumps "
-                     "and the script say): the springs of their pair contacts are not computed")
+        notes.append(
+            "atoms whose force or torque balance does not close (a term of the step is not what the dumps "
+            "and the script say): the springs of their pair contacts are not computed"
+        )
     a.notes += notes
 
 
@@ -129,7 +134,7 @@ def _close_forces(a, r: Rebuilt, n_L: np.ndarray, weight: np.ndarray) -> int:
     for col, c in enumerate(candidates):
         for atom, sign in ((rows1[c], 1.0), (rows2[c], -1.0)):
             if atom >= 0 and int(atom) in where:
-                A[3 * where[int(atom)]:3 * where[int(atom)] + 3, col] = sign * w[col]
+                A[3 * where[int(atom)] : 3 * where[int(atom)] + 3, col] = sign * w[col]
     dL = np.linalg.lstsq(A, res[involved].reshape(-1), rcond=None)[0]
     after = res[involved] - (A @ dL).reshape(-1, 3)
     L = r.spring_limit_t[candidates] + dL

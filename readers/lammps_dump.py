@@ -53,25 +53,29 @@ if TYPE_CHECKING:  # polars is imported where the fallback parse needs it
 __all__ = ["open_dump", "describe_dump", "looks_like_dump", "DumpFile", "DumpFrame"]
 
 MARKER = b"ITEM: TIMESTEP"
-HEADER_LINES = 9            # TIMESTEP, step, NUMBER OF, n, BOX BOUNDS, 3 bounds, ITEM: <label> names
-HEADER_MAX = 1 << 16        # bytes a header may occupy (hundreds of column names fit)
-CHUNK = 1 << 24             # index scan chunk (16 MiB)
-CHECKPOINT = 1 << 20        # the index records the newlines before every CHECKPOINT bytes (1 MiB)
-ROW_MAX = 1 << 16           # bytes a slice reads past its end to finish its last row
-DIGITS_SAMPLE = 1 << 17     # bytes of rows sampled per frame for DumpFrame.digits
-BLOCK = 1 << 24             # bytes of rows parsed at a time (16 MiB)
-LOW_VARIETY = 16            # distinct values at or below which a column gets the frame's precision
+HEADER_LINES = 9  # TIMESTEP, step, NUMBER OF, n, BOX BOUNDS, 3 bounds, ITEM: <label> names
+HEADER_MAX = 1 << 16  # bytes a header may occupy (hundreds of column names fit)
+CHUNK = 1 << 24  # index scan chunk (16 MiB)
+CHECKPOINT = 1 << 20  # the index records the newlines before every CHECKPOINT bytes (1 MiB)
+ROW_MAX = 1 << 16  # bytes a slice reads past its end to finish its last row
+DIGITS_SAMPLE = 1 << 17  # bytes of rows sampled per frame for DumpFrame.digits
+BLOCK = 1 << 24  # bytes of rows parsed at a time (16 MiB)
+LOW_VARIETY = 16  # distinct values at or below which a column gets the frame's precision
 
 _MAGIC = {b"\x1f\x8b": gzip.open, b"BZh": bz2.open, b"\xfd7zXZ\x00": lzma.open}
 _BOUNDARY = {0: "p", 1: "f", 2: "s", 3: "m"}  # LAMMPS binary boundary codes
 
-FIX_COUNT = ("rewrite the dump, or cut the damaged frame with a text editor; the header count "
-             "and the rows of a frame must agree")
-FIX_TRUNCATED = ("the run was interrupted while writing: rerun, or drop the incomplete last frame "
-                 "(truncate the file before its last 'ITEM: TIMESTEP')")
+FIX_COUNT = (
+    "rewrite the dump, or cut the damaged frame with a text editor; the header count and the rows of a frame must agree"
+)
+FIX_TRUNCATED = (
+    "the run was interrupted while writing: rerun, or drop the incomplete last frame "
+    "(truncate the file before its last 'ITEM: TIMESTEP')"
+)
 
 
 # --------------------------------------------------------------------------- frames
+
 
 @dataclass
 class DumpFrame:
@@ -115,8 +119,8 @@ class DumpFrame:
         if col.dtype.kind in "iu":
             return col.astype(np.int64, copy=False)
         p = self.digits.get(name)
-        limit = np.inf if p is None else 10.0 ** p
-        bad = (col != np.rint(col)) | ~(np.abs(col) < min(limit, 2.0 ** 53))
+        limit = np.inf if p is None else 10.0**p
+        bad = (col != np.rint(col)) | ~(np.abs(col) < min(limit, 2.0**53))
         if bad.any():
             row = int(np.flatnonzero(bad)[0])
             raise PrecisionError(
@@ -124,28 +128,32 @@ class DumpFrame:
                 f"{col[row].item()!r}, which is not an exact integer"
                 + (f" at the {p} significant digits printed" if p is not None else "")
                 + "; ids printed with %g above 999999 are destroyed",
-                file=self.file, step=self.step, line=self.line_of(row),
+                file=self.file,
+                step=self.step,
+                line=self.line_of(row),
                 fix="write ids with dump_modify format using %d (dump custom) or %.17g (dump local), "
-                    "or use a binary dump")
+                "or use a binary dump",
+            )
         return col.astype(np.int64)
 
 
 # --------------------------------------------------------------------------- index entries
+
 
 @dataclass(frozen=True)
 class _TextEntry:
     """Where one text frame lives in the (decompressed) file."""
 
     step: int
-    n_rows: int                 # header count
+    n_rows: int  # header count
     box: Box
     label: str
     names: tuple[str, ...]
-    header_line: int            # 1-based line of 'ITEM: TIMESTEP'
-    data_start: int             # byte offset of the first row
-    data_end: int               # byte offset after the last row
-    n_lines: int                # lines found between data_start and data_end
-    last: bool                  # last frame of the file
+    header_line: int  # 1-based line of 'ITEM: TIMESTEP'
+    data_start: int  # byte offset of the first row
+    data_end: int  # byte offset after the last row
+    n_lines: int  # lines found between data_start and data_end
+    last: bool  # last frame of the file
     ends_with_newline: bool
 
     @property
@@ -159,10 +167,11 @@ class _BinaryEntry:
     n_rows: int
     box: Box
     n_cols: int
-    chunks: tuple[tuple[int, int], ...]     # (byte offset of the doubles, number of doubles)
+    chunks: tuple[tuple[int, int], ...]  # (byte offset of the doubles, number of doubles)
 
 
 # --------------------------------------------------------------------------- opening
+
 
 def open_dump(path: str | Path, columns: Sequence[str] | None = None) -> DumpFile:
     """Open a LAMMPS/LIGGGHTS dump, sniffing its format from its first bytes.
@@ -179,20 +188,31 @@ def open_dump(path: str | Path, columns: Sequence[str] | None = None) -> DumpFil
     with open(path, "rb") as f:
         head = f.read(HEADER_MAX)
     if not head:
-        raise InputFormatError("the file is empty; expected a LAMMPS dump starting with 'ITEM: TIMESTEP'",
-                               file=path, line=1, fix="check that the run wrote this dump (dump every N, run length)")
+        raise InputFormatError(
+            "the file is empty; expected a LAMMPS dump starting with 'ITEM: TIMESTEP'",
+            file=path,
+            line=1,
+            fix="check that the run wrote this dump (dump every N, run length)",
+        )
     opener = next((op for magic, op in _MAGIC.items() if head.startswith(magic)), None)
     if opener is not None:
         with opener(path, "rb") as f:
             buf = bytearray(HEADER_MAX)
-            head = bytes(buf[:_read_into(f, memoryview(buf))])  # a stream damaged at once reads as empty
+            head = bytes(buf[: _read_into(f, memoryview(buf))])  # a stream damaged at once reads as empty
         if not head:
-            raise TruncatedFileError("the compressed file holds no data: it is cut or damaged at its start",
-                                     file=path, line=1, fix=FIX_TRUNCATED)
+            raise TruncatedFileError(
+                "the compressed file holds no data: it is cut or damaged at its start",
+                file=path,
+                line=1,
+                fix=FIX_TRUNCATED,
+            )
         if not head.startswith(MARKER):
             raise InputFormatError(
-                "the decompressed file does not start with 'ITEM: TIMESTEP'; compressed binary dumps are not "
-                "supported", file=path, line=1, fix="decompress it, or write a text dump")
+                "the decompressed file does not start with 'ITEM: TIMESTEP'; compressed binary dumps are not supported",
+                file=path,
+                line=1,
+                fix="decompress it, or write a text dump",
+            )
         return TextDump(path, opener, head, columns)
     if head.startswith(MARKER):
         return TextDump(path, None, head, columns)
@@ -200,8 +220,12 @@ def open_dump(path: str | Path, columns: Sequence[str] | None = None) -> DumpFil
         return BinaryDump(path, columns)
     first = head.split(b"\n", 1)[0]
     excerpt = repr(first[:40])[2:-1] + ("..." if len(first) > 40 else "")  # bounded and printable
-    raise InputFormatError(f"expected a LAMMPS dump starting with 'ITEM: TIMESTEP', found '{excerpt}'",
-                           file=path, line=1, fix="pass a file written by the dump command")
+    raise InputFormatError(
+        f"expected a LAMMPS dump starting with 'ITEM: TIMESTEP', found '{excerpt}'",
+        file=path,
+        line=1,
+        fix="pass a file written by the dump command",
+    )
 
 
 def _looks_like_text(head: bytes) -> bool:
@@ -220,27 +244,37 @@ def describe_dump(path: str | Path) -> str:
     """What ``demsplit info`` prints about a dump: format, kind, frames, steps, rows per frame,
     damaged headers, and the first frame's box and columns with their printed significant digits."""
     dump = open_dump(path)
-    form = ("binary (LAMMPS dump custom, native byte order; no column names in the file)"
-            if isinstance(dump, BinaryDump) else
-            f"text{', ' + dump.compression + '-compressed' if dump.compression else ''}")
+    form = (
+        "binary (LAMMPS dump custom, native byte order; no column names in the file)"
+        if isinstance(dump, BinaryDump)
+        else f"text{', ' + dump.compression + '-compressed' if dump.compression else ''}"
+    )
     rows = dump.rows
     lo, hi = (int(rows.min()), int(rows.max())) if len(rows) else (0, 0)
-    lines = [f"{path}: LAMMPS/LIGGGHTS dump",
-             f"  format:   {form}",
-             f"  kind:     {dump.kind} (label {dump.label})",
-             f"  frames:   {dump.n_frames}, steps {describe_steps(dump.steps)}",
-             f"  rows:     {lo if lo == hi else f'{lo}..{hi}'} per frame"]
+    lines = [
+        f"{path}: LAMMPS/LIGGGHTS dump",
+        f"  format:   {form}",
+        f"  kind:     {dump.kind} (label {dump.label})",
+        f"  frames:   {dump.n_frames}, steps {describe_steps(dump.steps)}",
+        f"  rows:     {lo if lo == hi else f'{lo}..{hi}'} per frame",
+    ]
     lines += [f"  DAMAGED frame header: {err}" for err in dump.damaged]
     if dump.n_frames:
         first = dump.frame(0)
-        lines.append(f"  box (first frame): lo {first.box.lo.tolist()}, hi {first.box.hi.tolist()}, "
-                     f"periodic {list(first.box.periodic)}")
-        lines.append(f"  columns ({len(first.columns)}), printed significant digits in the first frame "
-                     "('exact': integers or full precision):")
+        lines.append(
+            f"  box (first frame): lo {first.box.lo.tolist()}, hi {first.box.hi.tolist()}, "
+            f"periodic {list(first.box.periodic)}"
+        )
+        lines.append(
+            f"  columns ({len(first.columns)}), printed significant digits in the first frame "
+            "('exact': integers or full precision):"
+        )
         for name, values in first.columns.items():
             d = first.digits.get(name)
-            lines.append(f"    {name:<16} {'exact' if d is None else d:>5}   "
-                         + (f"{np.min(values):.6g} .. {np.max(values):.6g}" if len(values) else "(no rows)"))
+            lines.append(
+                f"    {name:<16} {'exact' if d is None else d:>5}   "
+                + (f"{np.min(values):.6g} .. {np.max(values):.6g}" if len(values) else "(no rows)")
+            )
     return "\n".join(lines)
 
 
@@ -319,9 +353,13 @@ class DumpFile(ABC):
         """The first frame written at timestep ``step``."""
         hits = np.flatnonzero(self.steps == step)
         if hits.size == 0:
-            raise InputFormatError(f"no frame at timestep {step}; the dump has {len(self.steps)} frame(s), "
-                                   f"steps {describe_steps(self.steps)}",
-                                   file=self.path, step=step, fix="pick one of the dumped timesteps")
+            raise InputFormatError(
+                f"no frame at timestep {step}; the dump has {len(self.steps)} frame(s), "
+                f"steps {describe_steps(self.steps)}",
+                file=self.path,
+                step=step,
+                fix="pick one of the dumped timesteps",
+            )
         return self.frame(int(hits[0]), columns)
 
     def frames(self, columns: Sequence[str] | None = None) -> Iterator[DumpFrame]:
@@ -351,8 +389,12 @@ class DumpFile(ABC):
             return list(range(len(names)))
         missing = [c for c in columns if c not in names]
         if missing:
-            raise InputFormatError(f"no column {missing} in this frame; its columns are {list(names)}",
-                                   file=self.path, step=step, fix="request columns the dump line writes")
+            raise InputFormatError(
+                f"no column {missing} in this frame; its columns are {list(names)}",
+                file=self.path,
+                step=step,
+                fix="request columns the dump line writes",
+            )
         return [names.index(c) for c in columns]
 
     def __repr__(self) -> str:
@@ -360,6 +402,7 @@ class DumpFile(ABC):
 
 
 # --------------------------------------------------------------------------- text dumps
+
 
 class TextDump(DumpFile):
     """A text dump (plain or compressed)."""
@@ -376,9 +419,12 @@ class TextDump(DumpFile):
         self.columns = list(first["names"])
         self.head_rows = first["n"]
         if columns is not None and list(columns) != self.columns:
-            raise InputFormatError(f"columns {list(columns)} given, but the header names {self.columns}",
-                                   file=self.path, line=HEADER_LINES,
-                                   fix="omit columns= for text dumps (the header names them)")
+            raise InputFormatError(
+                f"columns {list(columns)} given, but the header names {self.columns}",
+                file=self.path,
+                line=HEADER_LINES,
+                fix="omit columns= for text dumps (the header names them)",
+            )
 
     def _stream(self):
         return (self._opener or open)(self.path, "rb")
@@ -412,8 +458,21 @@ class TextDump(DumpFile):
             ends_nl = last_byte == b"\n" if last else True
             if data_end > data_start and not ends_nl:
                 n_lines += 1
-            entries.append(_TextEntry(h["step"], h["n"], h["box"], h["label"], h["names"], header_line,
-                                      data_start, data_end, n_lines, last, ends_nl))
+            entries.append(
+                _TextEntry(
+                    h["step"],
+                    h["n"],
+                    h["box"],
+                    h["label"],
+                    h["names"],
+                    header_line,
+                    data_start,
+                    data_end,
+                    n_lines,
+                    last,
+                    ends_nl,
+                )
+            )
         return entries, damaged
 
     # -- frames
@@ -426,9 +485,12 @@ class TextDump(DumpFile):
         try:  # a forward seek in a compressed stream decompresses only the header
             stream.seek(e.data_start)
         except (*_DECOMPRESSION_ERRORS, OSError):
-            raise TruncatedFileError(f"the compressed data is damaged before the frame at timestep {e.step} "
-                                     f"(line {e.header_line})", file=self.path, step=e.step,
-                                     fix=FIX_TRUNCATED) from None
+            raise TruncatedFileError(
+                f"the compressed data is damaged before the frame at timestep {e.step} (line {e.header_line})",
+                file=self.path,
+                step=e.step,
+                fix=FIX_TRUNCATED,
+            ) from None
         return self._parse(e, stream, idx)
 
     def _check_count(self, e: _TextEntry) -> None:
@@ -438,23 +500,39 @@ class TextDump(DumpFile):
             raise TruncatedFileError(
                 f"the file ends in the middle of a row (line {e.first_line + e.n_lines - 1}, row {e.n_lines} "
                 f"of the {e.n_rows} the header announces; no newline at the end)",
-                file=self.path, step=e.step, line=e.first_line + e.n_lines - 1, fix=FIX_TRUNCATED)
+                file=self.path,
+                step=e.step,
+                line=e.first_line + e.n_lines - 1,
+                fix=FIX_TRUNCATED,
+            )
         if e.n_lines == e.n_rows:
             return
         if e.last and e.n_lines < e.n_rows:
             raise TruncatedFileError(
                 f"the file ends after {e.n_lines} of the {e.n_rows} rows announced by '{what}' "
-                f"(line {e.header_line + 3})", file=self.path, step=e.step,
-                line=e.first_line + e.n_lines, fix=FIX_TRUNCATED)
+                f"(line {e.header_line + 3})",
+                file=self.path,
+                step=e.step,
+                line=e.first_line + e.n_lines,
+                fix=FIX_TRUNCATED,
+            )
         if e.n_lines > e.n_rows:
             raise InputFormatError(
                 f"'{what}' (line {e.header_line + 3}) says {e.n_rows} rows but {e.n_lines} lines follow "
                 f"before the next frame; the first extra row is this line",
-                file=self.path, step=e.step, line=e.first_line + e.n_rows, fix=FIX_COUNT)
+                file=self.path,
+                step=e.step,
+                line=e.first_line + e.n_rows,
+                fix=FIX_COUNT,
+            )
         raise InputFormatError(
             f"'{what}' (line {e.header_line + 3}) says {e.n_rows} rows but only {e.n_lines} lines follow "
             f"before the next 'ITEM: TIMESTEP', which is this line",
-            file=self.path, step=e.step, line=e.first_line + e.n_lines, fix=FIX_COUNT)
+            file=self.path,
+            step=e.step,
+            line=e.first_line + e.n_lines,
+            fix=FIX_COUNT,
+        )
 
     def _parse(self, e: _TextEntry, stream: BinaryIO, idx: list[int]) -> DumpFrame:
         """Parse the rows of frame ``e`` (``stream`` is positioned at its first row) into
@@ -462,8 +540,9 @@ class TextDump(DumpFile):
         every core (:meth:`_parse_slices`), a compressed stream block by block (:meth:`_parse_blocks`)."""
         names = [e.names[i] for i in idx]
         if e.n_rows == 0:
-            return DumpFrame(e.step, 0, e.box, {n: np.empty(0) for n in names}, self.path,
-                             e.first_line, {n: None for n in names})
+            return DumpFrame(
+                e.step, 0, e.box, {n: np.empty(0) for n in names}, self.path, e.first_line, {n: None for n in names}
+            )
         ncols = len(e.names)
         row = None
         if self._opener is None:
@@ -474,10 +553,13 @@ class TextDump(DumpFile):
             stream.seek(e.data_start)
             cols, row, sample, int_like = self._parse_blocks(e, stream, idx)
         if row != e.n_rows:  # the file shrank since it was indexed
-            raise TruncatedFileError(f"the frame ends after {row} of its {e.n_rows} rows: the file changed "
-                                     "after it was indexed", file=self.path, step=e.step,
-                                     line=e.first_line + row, fix="read the run once the simulation has "
-                                     "finished writing it")
+            raise TruncatedFileError(
+                f"the frame ends after {row} of its {e.n_rows} rows: the file changed after it was indexed",
+                file=self.path,
+                step=e.step,
+                line=e.first_line + row,
+                fix="read the run once the simulation has finished writing it",
+            )
         out = {n: cols.column(i) for n, i in zip(names, idx)}
         for n, i in zip(names, idx):
             bad = ~np.isfinite(out[n]) if out[n].dtype.kind == "f" else None
@@ -485,12 +567,16 @@ class TextDump(DumpFile):
                 row = int(np.flatnonzero(bad)[0])
                 raise InputFormatError(
                     f"column {i + 1} ('{n}') of row {row + 1} is {out[n][row].item()!r}; expected a finite number",
-                    file=self.path, step=e.step, line=e.first_line + row,
+                    file=self.path,
+                    step=e.step,
+                    line=e.first_line + row,
                     fix="the simulation produced NaN/inf (unstable run: smaller timestep, check materials); "
-                        "dump a frame before it diverged")
+                    "dump a frame before it diverged",
+                )
         digits = _digits(sample, ncols, idx, out, int_like)
-        return DumpFrame(e.step, e.n_rows, e.box, out, self.path, e.first_line,
-                         {n: digits[i] for n, i in zip(names, idx)})
+        return DumpFrame(
+            e.step, e.n_rows, e.box, out, self.path, e.first_line, {n: digits[i] for n, i in zip(names, idx)}
+        )
 
     def _layout(self, e: _TextEntry, idx: list[int], head: bytes) -> tuple[_Columns, bool, tuple, np.ndarray]:
         """From the first bytes of the frame's rows: the arrays to fill, whether rows end with
@@ -534,8 +620,10 @@ class TextDump(DumpFile):
         Returns the rows parsed, or None when a row is longer than a slice's margin (``ROW_MAX``
         bytes past its end): the caller then parses the whole frame block by block."""
         cuts = _slice_cuts(self._checkpoints, e.data_start, e.data_end, e.first_line - 1, threads.count())
-        jobs = [(fd, lo, hi, e.data_start, e.data_end, nl - (e.first_line - 1), e.n_rows, trailing, cols)
-                for (lo, nl), hi in zip(cuts, [c for c, _ in cuts[1:]] + [e.data_end])]
+        jobs = [
+            (fd, lo, hi, e.data_start, e.data_end, nl - (e.first_line - 1), e.n_rows, trailing, cols)
+            for (lo, nl), hi in zip(cuts, [c for c, _ in cuts[1:]] + [e.data_end])
+        ]
         results = list(threads.pool().map(lambda job: _parse_slice(*job), jobs))
         if any(status is None for status, *_ in results):
             return None
@@ -553,8 +641,7 @@ class TextDump(DumpFile):
             row += n
         return row
 
-    def _parse_block(self, e: _TextEntry, block: bytes, row: int, n: int, trailing: bool,
-                     cols: _Columns) -> None:
+    def _parse_block(self, e: _TextEntry, block: bytes, row: int, n: int, trailing: bool, cols: _Columns) -> None:
         """polars parse of one block of ``n`` whole, well-formed rows (the fallback of
         the compiled parse) into ``cols`` from ``row`` on; an integer-looking column
         that holds a real here turns every integer column of the frame into float64."""
@@ -573,7 +660,7 @@ class TextDump(DumpFile):
         if table.height != n:
             raise self._diagnose(e, block, row, trailing)
         for i in cols.dtypes:
-            cols.column(i)[row: row + n] = table.get_column(f"c{i}").to_numpy()
+            cols.column(i)[row : row + n] = table.get_column(f"c{i}").to_numpy()
 
     def _diagnose(self, e: _TextEntry, text: bytes, row0: int, trailing: bool) -> DemsplitError:
         """Slow pass over one block (starting at row ``row0``) that failed the fast parse: first bad line."""
@@ -586,19 +673,33 @@ class TextDump(DumpFile):
             if raw.endswith(b"\r"):
                 return InputFormatError(
                     f"row {row0 + k + 1} ends with a carriage return (CR LF, Windows line ends); LAMMPS writes LF",
-                    file=self.path, step=e.step, line=line,
-                    fix="convert the file's line ends to LF (dos2unix FILE), or read the run's original dump")
+                    file=self.path,
+                    step=e.step,
+                    line=line,
+                    fix="convert the file's line ends to LF (dos2unix FILE), or read the run's original dump",
+                )
             if b"" in tokens:
-                gap = ("starts with a space" if raw.startswith(b" ") else
-                       f"has two spaces in a row before value {tokens.index(b'') + 1}")
-                return InputFormatError(f"row {row0 + k + 1} {gap}; LAMMPS separates values by one space",
-                                        file=self.path, step=e.step, line=line,
-                                        fix="the row was edited or damaged: rewrite the dump, or repair that line")
+                gap = (
+                    "starts with a space"
+                    if raw.startswith(b" ")
+                    else f"has two spaces in a row before value {tokens.index(b'') + 1}"
+                )
+                return InputFormatError(
+                    f"row {row0 + k + 1} {gap}; LAMMPS separates values by one space",
+                    file=self.path,
+                    step=e.step,
+                    line=line,
+                    fix="the row was edited or damaged: rewrite the dump, or repair that line",
+                )
             if len(tokens) != ncols:
                 return InputFormatError(
                     f"row {row0 + k + 1} has {len([t for t in tokens if t])} values, expected {ncols} (one per "
                     f"header name{', then a trailing space' if trailing else ''}, single spaces between)",
-                    file=self.path, step=e.step, line=line, fix=FIX_COUNT)
+                    file=self.path,
+                    step=e.step,
+                    line=line,
+                    fix=FIX_COUNT,
+                )
             for c, tok in enumerate(tokens):
                 try:
                     float(tok)
@@ -606,9 +707,18 @@ class TextDump(DumpFile):
                     return InputFormatError(
                         f"column {c + 1} ('{e.names[c]}') of row {row0 + k + 1} is "
                         f"'{tok.decode('utf-8', 'replace')}'; expected a number",
-                        file=self.path, step=e.step, line=line, fix=FIX_COUNT)
-        return InputFormatError("the rows of this frame could not be parsed", file=self.path, step=e.step,
-                                line=e.first_line + row0, fix=FIX_COUNT)
+                        file=self.path,
+                        step=e.step,
+                        line=line,
+                        fix=FIX_COUNT,
+                    )
+        return InputFormatError(
+            "the rows of this frame could not be parsed",
+            file=self.path,
+            step=e.step,
+            line=e.first_line + row0,
+            fix=FIX_COUNT,
+        )
 
 
 def _csv(block: bytes, n_fields: int, dtypes: dict[int, np.dtype]) -> pl.DataFrame:
@@ -618,8 +728,7 @@ def _csv(block: bytes, n_fields: int, dtypes: dict[int, np.dtype]) -> pl.DataFra
 
     schema = {f"c{k}": pl.String for k in range(n_fields)}
     schema.update({f"c{i}": pl.Int64 if d.kind == "i" else pl.Float64 for i, d in dtypes.items()})
-    return pl.read_csv(block, separator=" ", has_header=False, quote_char=None, schema=schema,
-                       columns=sorted(dtypes))
+    return pl.read_csv(block, separator=" ", has_header=False, quote_char=None, schema=schema, columns=sorted(dtypes))
 
 
 def _blocks(stream: BinaryIO, size: int) -> Iterator[np.ndarray]:
@@ -634,7 +743,7 @@ def _blocks(stream: BinaryIO, size: int) -> Iterator[np.ndarray]:
     while size > 0:
         if kept == len(buf):  # a row longer than the buffer
             buf = buf + bytearray(len(buf))
-        got = _read_into(stream, memoryview(buf)[kept: kept + min(len(buf) - kept, size)])
+        got = _read_into(stream, memoryview(buf)[kept : kept + min(len(buf) - kept, size)])
         size -= got
         n = kept + got
         end = n if size == 0 or not got else buf.rfind(b"\n", 0, n) + 1
@@ -677,12 +786,13 @@ class _Columns:
         self.ints = self.ints[:0]
 
 
-SLICE_OK, SLICE_FALLBACK, SLICE_SHAPE = "ok", "fallback", "shape"   # what _parse_slice found
+SLICE_OK, SLICE_FALLBACK, SLICE_SHAPE = "ok", "fallback", "shape"  # what _parse_slice found
 _thread_buffers = threading.local()
 
 
-def _slice_cuts(checkpoints: np.ndarray, start: int, end: int, newlines_before: int,
-                n_threads: int) -> list[tuple[int, int]]:
+def _slice_cuts(
+    checkpoints: np.ndarray, start: int, end: int, newlines_before: int, n_threads: int
+) -> list[tuple[int, int]]:
     """Where :meth:`TextDump._parse_slices` cuts the rows in ``[start, end)`` (``newlines_before``
     ``start``): checkpoints (offset, newlines before it) about a quarter of a thread's share apart
     (so that slices of uneven cost still end together), at least ``CHECKPOINT`` and at most
@@ -696,8 +806,17 @@ def _slice_cuts(checkpoints: np.ndarray, start: int, end: int, newlines_before: 
     return cuts
 
 
-def _parse_slice(fd: int, lo: int, hi: int, data_start: int, data_end: int, row_base: int, n_rows: int,
-                 trailing: bool, cols: _Columns) -> tuple[str | None, int, int, int, int]:
+def _parse_slice(
+    fd: int,
+    lo: int,
+    hi: int,
+    data_start: int,
+    data_end: int,
+    row_base: int,
+    n_rows: int,
+    trailing: bool,
+    cols: _Columns,
+) -> tuple[str | None, int, int, int, int]:
     """Read and parse the rows of a frame (bytes ``[data_start, data_end)`` of the file ``fd``) that
     start in ``[lo, hi)``, ``row_base`` being the rows before ``lo``, into ``cols``; run by one thread.
 
@@ -714,7 +833,7 @@ def _parse_slice(fd: int, lo: int, hi: int, data_start: int, data_end: int, row_
     begin = lo if lo == data_start else lo - 1
     stop = min(hi + ROW_MAX, data_end)
     a = _thread_buffer(stop - begin)
-    a = a[: _read_at(fd, a, begin)]                 # shorter only when the file shrank since the index
+    a = a[: _read_at(fd, a, begin)]  # shorter only when the file shrank since the index
     p = 0 if lo == data_start else next_newline(a, 0)
     row0 = row_base + (0 if lo == data_start or p == 1 else 1)
     q = a.size if hi == data_end else next_newline(a, hi - 1 - begin)
@@ -723,8 +842,9 @@ def _parse_slice(fd: int, lo: int, hi: int, data_start: int, data_end: int, row_
     if p >= q or row0 >= n_rows:
         return SLICE_OK, row0, 0, begin + q, begin + q
     slow = np.empty((_SLOW_MAX, 4), dtype=np.int64)
-    status, _, n, n_slow = parse_rows(a, p, q, len(cols.kind), trailing, cols.kind, cols.slot, cols.reals,
-                                      cols.ints, row0, n_rows - row0, slow)
+    status, _, n, n_slow = parse_rows(
+        a, p, q, len(cols.kind), trailing, cols.kind, cols.slot, cols.reals, cols.ints, row0, n_rows - row0, slow
+    )
     if status == SHAPE:
         return SLICE_SHAPE, row0, n, begin + p, begin + q
     if status == FALLBACK:
@@ -760,12 +880,13 @@ def _pread(fd: int, offset: int, n: int) -> bytes:
     return out[: _read_at(fd, out, offset)].tobytes()
 
 
-_SLICE_MIN = 1 << 20        # bytes below which a block is parsed by one thread
-_SLOW_MAX = 4096            # reals outside the compiled fast path converted by float() per slice, at most
+_SLICE_MIN = 1 << 20  # bytes below which a block is parsed by one thread
+_SLOW_MAX = 4096  # reals outside the compiled fast path converted by float() per slice, at most
 
 
-def _parse_fast(a: np.ndarray, ncols: int, trailing: bool, cols: _Columns, row0: int,
-                rows_left: int) -> tuple[int | None, bool]:
+def _parse_fast(
+    a: np.ndarray, ncols: int, trailing: bool, cols: _Columns, row0: int, rows_left: int
+) -> tuple[int | None, bool]:
     """Compiled parse (:func:`~demsplit.readers.fastparse.parse_rows`) of the whole
     rows in ``a`` into ``cols`` from row ``row0`` on, in line-aligned slices on
     every core (the same result as one slice). The few reals outside the
@@ -783,9 +904,23 @@ def _parse_fast(a: np.ndarray, ncols: int, trailing: bool, cols: _Columns, row0:
     rows = [count_newlines(a, lo, hi) for lo, hi in zip(cuts[:-2], cuts[1:-1])]
     rows.append(rows_left - sum(rows))
     first = np.cumsum([0] + rows[:-1]).tolist()
-    jobs = [(a, lo, hi, ncols, trailing, cols.kind, cols.slot, cols.reals, cols.ints, row0 + r, m,
-             np.empty((_SLOW_MAX, 4), dtype=np.int64))
-            for lo, hi, r, m in zip(cuts[:-1], cuts[1:], first, rows)]
+    jobs = [
+        (
+            a,
+            lo,
+            hi,
+            ncols,
+            trailing,
+            cols.kind,
+            cols.slot,
+            cols.reals,
+            cols.ints,
+            row0 + r,
+            m,
+            np.empty((_SLOW_MAX, 4), dtype=np.int64),
+        )
+        for lo, hi, r, m in zip(cuts[:-1], cuts[1:], first, rows)
+    ]
     if n_slices == 1:
         results = [parse_rows(*jobs[0])]
     else:
@@ -838,8 +973,15 @@ def _scan(f: BinaryIO) -> tuple[list[int], list[bytes], list[int], int, int, byt
         checkpoints.append(marks)
         newlines += nl
         total, last_byte = end, last or last_byte
-    return (markers, headers, lines_before, total, newlines, last_byte,
-            np.concatenate(checkpoints) if checkpoints else np.zeros((0, 2), np.int64))
+    return (
+        markers,
+        headers,
+        lines_before,
+        total,
+        newlines,
+        last_byte,
+        np.concatenate(checkpoints) if checkpoints else np.zeros((0, 2), np.int64),
+    )
 
 
 def _scan_window(start: int, window: np.ndarray, limit: int) -> tuple[list, int, np.ndarray, int, bytes]:
@@ -858,7 +1000,7 @@ def _scan_window(start: int, window: np.ndarray, limit: int) -> tuple[list, int,
     for k, lo in enumerate(range(0, limit, step)):
         n, nl = scan_chunk(window[lo:], min(step, limit - lo), pos_out, nl_out)
         for pos, before in zip(pos_out[:n].tolist(), nl_out[:n].tolist()):
-            head = window[lo + pos: lo + pos + HEADER_MAX].tobytes()
+            head = window[lo + pos : lo + pos + HEADER_MAX].tobytes()
             nxt = head.find(MARKER, 1)
             found.append((start + lo + pos, newlines + before, head if nxt == -1 else head[:nxt]))
         marks[k] = start + lo, newlines
@@ -889,7 +1031,7 @@ def _windows(f: BinaryIO) -> Iterator[tuple[int, np.ndarray, int]]:
     buf = bytearray(HEADER_MAX + CHUNK)
     kept, limit, start = 0, 0, 0
     while True:
-        buf[:kept] = buf[limit: limit + kept]
+        buf[:kept] = buf[limit : limit + kept]
         got = _read_into(f, memoryview(buf)[kept:])
         size = kept + got
         limit = size if got == 0 else max(size - HEADER_MAX, 0)
@@ -911,7 +1053,7 @@ def _read_into(f: BinaryIO, view: memoryview) -> int:
     step = DECOMPRESSED_STEP if isinstance(f, (gzip.GzipFile, bz2.BZ2File, lzma.LZMAFile)) else len(view)
     while total < len(view):
         try:
-            n = f.readinto(view[total:total + step])
+            n = f.readinto(view[total : total + step])
         except _DECOMPRESSION_ERRORS:
             break
         except OSError:  # bz2 says "Invalid data stream" with a plain OSError
@@ -931,11 +1073,14 @@ DECOMPRESSED_STEP = 1 << 16
 
 
 def _header_short(path: str, header_line: int, n_complete: int, last: bool) -> DemsplitError:
-    msg = (f"the frame header starting at line {header_line} has {n_complete} complete lines, expected "
-           f"{HEADER_LINES} (TIMESTEP, step, NUMBER OF, count, BOX BOUNDS, 3 bounds, the column names)")
+    msg = (
+        f"the frame header starting at line {header_line} has {n_complete} complete lines, expected "
+        f"{HEADER_LINES} (TIMESTEP, step, NUMBER OF, count, BOX BOUNDS, 3 bounds, the column names)"
+    )
     if last:
-        return TruncatedFileError(msg + " before the end of the file", file=path,
-                                  line=header_line + n_complete, fix=FIX_TRUNCATED)
+        return TruncatedFileError(
+            msg + " before the end of the file", file=path, line=header_line + n_complete, fix=FIX_TRUNCATED
+        )
     return InputFormatError(msg, file=path, line=header_line + n_complete, fix=FIX_COUNT)
 
 
@@ -946,8 +1091,13 @@ def _parse_header(lines: list[bytes], path: str, line0: int, last: bool) -> dict
     text = [x.decode("utf-8", "replace").rstrip("\r") for x in lines]
 
     def bad(k: int, expected: str, step: int | None = None) -> InputFormatError:
-        return InputFormatError(f"expected {expected}, found '{text[k][:120]}'", file=path, step=step,
-                                line=line0 + k, fix="the frame header is damaged; rewrite the dump")
+        return InputFormatError(
+            f"expected {expected}, found '{text[k][:120]}'",
+            file=path,
+            step=step,
+            line=line0 + k,
+            fix="the frame header is damaged; rewrite the dump",
+        )
 
     if text[0].strip() != "ITEM: TIMESTEP":
         raise bad(0, "'ITEM: TIMESTEP'")
@@ -967,7 +1117,7 @@ def _parse_header(lines: list[bytes], path: str, line0: int, last: bool) -> dict
         raise bad(3, "a row count >= 0", step)
     if not text[4].startswith("ITEM: BOX BOUNDS"):
         raise bad(4, "'ITEM: BOX BOUNDS [xy xz yz] <flags>'", step)
-    flags = text[4][len("ITEM: BOX BOUNDS"):].split()
+    flags = text[4][len("ITEM: BOX BOUNDS") :].split()
     triclinic = flags[:3] == ["xy", "xz", "yz"]
     flags = flags[3:] if triclinic else flags
     if flags and (len(flags) != 3 or any(len(f) != 2 or set(f) - set("pfsm") for f in flags)):
@@ -980,15 +1130,20 @@ def _parse_header(lines: list[bytes], path: str, line0: int, last: bool) -> dict
         raise bad(5, f"three lines of {3 if triclinic else 2} box numbers", step) from None
     if not text[8].startswith("ITEM: "):
         raise bad(8, "'ITEM: <label> <column names>'", step)
-    words = text[8][len("ITEM: "):].split()
+    words = text[8][len("ITEM: ") :].split()
     label, names = words[0], tuple(words[1:])
-    if text[2][len("ITEM: NUMBER OF "):].strip() != label:
-        raise bad(8, f"'ITEM: {text[2][len('ITEM: NUMBER OF '):].strip()} ...' to match line {line0 + 2}", step)
+    if text[2][len("ITEM: NUMBER OF ") :].strip() != label:
+        raise bad(8, f"'ITEM: {text[2][len('ITEM: NUMBER OF ') :].strip()} ...' to match line {line0 + 2}", step)
     if not names:
         raise bad(8, "column names after the label", step)
     periodic = tuple(f == "pp" for f in flags) if flags else (False, False, False)
-    return {"step": step, "n": n, "label": label, "names": names,
-            "box": _box(b[:, 0], b[:, 1], periodic, b[:, 2] if triclinic else None)}
+    return {
+        "step": step,
+        "n": n,
+        "label": label,
+        "names": names,
+        "box": _box(b[:, 0], b[:, 1], periodic, b[:, 2] if triclinic else None),
+    }
 
 
 def _box(lo_bound: np.ndarray, hi_bound: np.ndarray, periodic, tilt: np.ndarray | None) -> Box:
@@ -1033,8 +1188,13 @@ def _integer_columns(sample: tuple[np.ndarray, np.ndarray, np.ndarray], ncols: i
     return present & ~col_non_int
 
 
-def _digits(sample: tuple[np.ndarray, np.ndarray, np.ndarray], ncols: int, idx: list[int],
-            cols: dict[str, np.ndarray], int_like: np.ndarray) -> dict[int, int | None]:
+def _digits(
+    sample: tuple[np.ndarray, np.ndarray, np.ndarray],
+    ncols: int,
+    idx: list[int],
+    cols: dict[str, np.ndarray],
+    int_like: np.ndarray,
+) -> dict[int, int | None]:
     """Printed significant digits of the requested columns (module docstring)."""
     a, tok, col = sample
     inside = tok >= 0
@@ -1043,10 +1203,12 @@ def _digits(sample: tuple[np.ndarray, np.ndarray, np.ndarray], ncols: int, idx: 
     ntok = col.size
     # per byte: has this token seen an exponent marker / a nonzero digit up to here?
     first_byte = np.concatenate(([0], np.flatnonzero(np.diff(tok) != 0) + 1))
+
     def seen(mask: np.ndarray) -> np.ndarray:
         c = np.cumsum(mask)
         base = np.repeat(c[first_byte] - mask[first_byte], np.diff(np.append(first_byte, a.size)))
         return c - base > 0
+
     significant = inside & is_digit & ~seen(is_exp) & seen(inside & (a >= 49) & (a <= 57))
     per_tok = np.bincount(tok[significant], minlength=ntok)
     observed = np.zeros(ncols + 1, dtype=np.int64)
@@ -1066,7 +1228,7 @@ def _digits(sample: tuple[np.ndarray, np.ndarray, np.ndarray], ncols: int, idx: 
 
 # --------------------------------------------------------------------------- binary dumps
 
-_BIN_HEAD = struct.Struct("=qqi6i")     # step, n, triclinic, boundary[6]
+_BIN_HEAD = struct.Struct("=qqi6i")  # step, n, triclinic, boundary[6]
 
 
 class BinaryDump(DumpFile):
@@ -1079,9 +1241,12 @@ class BinaryDump(DumpFile):
         with open(path, "rb") as f:
             entry, _ = self._header(f, 0, _file_size(path))
         if self._given is not None and len(self._given) != entry.n_cols:
-            raise InputFormatError(f"{len(self._given)} column names given but the binary frame has "
-                                   f"{entry.n_cols} columns", file=path, step=entry.step,
-                                   fix="pass one name per keyword of the dump custom line, in order")
+            raise InputFormatError(
+                f"{len(self._given)} column names given but the binary frame has {entry.n_cols} columns",
+                file=path,
+                step=entry.step,
+                fix="pass one name per keyword of the dump custom line, in order",
+            )
         self.columns = self._given or [f"col{k + 1}" for k in range(entry.n_cols)]
         self.head_rows = entry.n_rows
 
@@ -1092,19 +1257,29 @@ class BinaryDump(DumpFile):
 
         def fail(what: str, step: int | None = None, truncated: bool = False) -> DemsplitError:
             cls = TruncatedFileError if truncated else InputFormatError
-            return cls(f"binary frame at byte {offset}: {what}", file=self.path, step=step,
-                       fix=FIX_TRUNCATED if truncated else
-                       "this is not a LAMMPS binary dump custom file (or not in this machine's byte order)")
+            return cls(
+                f"binary frame at byte {offset}: {what}",
+                file=self.path,
+                step=step,
+                fix=FIX_TRUNCATED
+                if truncated
+                else "this is not a LAMMPS binary dump custom file (or not in this machine's byte order)",
+            )
 
         if len(raw) < _BIN_HEAD.size:
             raise fail(f"file ends inside the header ({len(raw)} of {_BIN_HEAD.size} bytes)", truncated=True)
         step, n, tri, *bnd = _BIN_HEAD.unpack(raw)
         if step < 0:
-            raise fail(f"timestep {step} < 0 (newer LAMMPS binary dumps start with a magic string; "
-                       "only the LIGGGHTS/old LAMMPS layout is supported)")
+            raise fail(
+                f"timestep {step} < 0 (newer LAMMPS binary dumps start with a magic string; "
+                "only the LIGGGHTS/old LAMMPS layout is supported)"
+            )
         if tri not in (0, 1) or any(b not in _BOUNDARY for b in bnd) or n < 0:
-            raise fail(f"expected triclinic flag 0/1, boundary codes 0-3 and rows >= 0, found "
-                       f"triclinic={tri}, boundary={bnd}, rows={n}", step)
+            raise fail(
+                f"expected triclinic flag 0/1, boundary codes 0-3 and rows >= 0, found "
+                f"triclinic={tri}, boundary={bnd}, rows={n}",
+                step,
+            )
         nb = 9 if tri else 6
         raw = f.read(8 * nb + 8)
         if len(raw) < 8 * nb + 8:

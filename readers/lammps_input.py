@@ -64,8 +64,23 @@ from pathlib import Path
 
 from ..errors import ScriptError
 
-__all__ = ["Where", "Unevaluable", "excerpt", "read_text", "logical_lines", "strip_comment", "split_words", "Variables",
-           "substitute", "TOKEN", "FUNCTIONS", "CONSTANTS", "MAX_LINE", "MAX_CHARACTERS", "MAX_OPERATIONS"]
+__all__ = [
+    "Where",
+    "Unevaluable",
+    "excerpt",
+    "read_text",
+    "logical_lines",
+    "strip_comment",
+    "split_words",
+    "Variables",
+    "substitute",
+    "TOKEN",
+    "FUNCTIONS",
+    "CONSTANTS",
+    "MAX_LINE",
+    "MAX_CHARACTERS",
+    "MAX_OPERATIONS",
+]
 
 MAX_LINE = 1 << 20
 """Characters of one logical line, before and after its variables are substituted."""
@@ -73,8 +88,10 @@ MAX_CHARACTERS = 64 << 20
 """Characters of lines and substituted values one script (with its includes) hands to its commands."""
 MAX_OPERATIONS = 1_000_000
 """Operations (numbers, variables, arithmetic) the formulas of one script may take to evaluate."""
-_FIX_BOUND = ("a LIGGGHTS input script is far smaller: check that this is the run's script, and that its "
-              "variables do not grow by referring to each other.")
+_FIX_BOUND = (
+    "a LIGGGHTS input script is far smaller: check that this is the run's script, and that its "
+    "variables do not grow by referring to each other."
+)
 
 
 @dataclass(frozen=True)
@@ -122,20 +139,25 @@ def logical_lines(path: Path) -> Iterator[tuple[int, str]]:
     not UTF-8 are kept)."""
     try:
         if path.stat().st_size > MAX_CHARACTERS:
-            raise ScriptError(f"the file is {path.stat().st_size} bytes, more than the {MAX_CHARACTERS} an input "
-                              "script may be.", file=path, fix="give the run's input script, and check its include "
-                              "lines.")
+            raise ScriptError(
+                f"the file is {path.stat().st_size} bytes, more than the {MAX_CHARACTERS} an input script may be.",
+                file=path,
+                fix="give the run's input script, and check its include lines.",
+            )
         text = read_text(path)
     except OSError as exc:
-        raise ScriptError(f"cannot read the input script ({exc.strerror}).", file=path,
-                          fix="check the path.") from None
+        raise ScriptError(f"cannot read the input script ({exc.strerror}).", file=path, fix="check the path.") from None
     bad = _CONTROL.search(text)
     if bad:
         line = text.count("\n", 0, bad.start()) + 1
         column = bad.start() - (text.rfind("\n", 0, bad.start()) + 1) + 1
-        raise ScriptError(f"character 0x{ord(bad.group()):02x} (a control character) at column {column} is "
-                          "not text; expected a LIGGGHTS input script.", file=path, line=line,
-                          fix="pass the input script (a text file), or remove the control characters.")
+        raise ScriptError(
+            f"character 0x{ord(bad.group()):02x} (a control character) at column {column} is "
+            "not text; expected a LIGGGHTS input script.",
+            file=path,
+            line=line,
+            fix="pass the input script (a text file), or remove the control characters.",
+        )
     physical = text.split("\n")
     if physical[-1] == "":
         physical.pop()
@@ -145,8 +167,12 @@ def logical_lines(path: Path) -> Iterator[tuple[int, str]]:
         if not pending:
             start = number
         if len(body) > MAX_LINE or sum(map(len, pending)) + len(body) > MAX_LINE:
-            raise ScriptError(f"the command that starts here is longer than {MAX_LINE} characters.", file=path,
-                              line=start, fix=_FIX_BOUND)
+            raise ScriptError(
+                f"the command that starts here is longer than {MAX_LINE} characters.",
+                file=path,
+                line=start,
+                fix=_FIX_BOUND,
+            )
         if body.endswith("&"):
             pending.append(body[:-1])
             continue
@@ -168,7 +194,7 @@ def strip_comment(text: str) -> str:
         if found is None:
             return text
         if found.group() == "#":
-            return text[:found.start()]
+            return text[: found.start()]
         end = text.find(found.group(), found.end())
         if end < 0:
             return text
@@ -187,12 +213,17 @@ def split_words(text: str, where: Where) -> list[str]:
         if text[i] in "\"'":
             stop = text.find(text[i], i + 1)
             if stop < 0:
-                raise ScriptError(f"unbalanced quotes in: {excerpt(text)}.", file=where.file,
-                                  line=where.line, fix="close the quote.")
+                raise ScriptError(
+                    f"unbalanced quotes in: {excerpt(text)}.", file=where.file, line=where.line, fix="close the quote."
+                )
             if stop + 1 < n and not text[stop + 1].isspace():
-                raise ScriptError(f"a closing quote must be followed by a blank: {excerpt(text)}.",
-                                  file=where.file, line=where.line, fix="add a space after the quote.")
-            words.append(text[i + 1:stop])
+                raise ScriptError(
+                    f"a closing quote must be followed by a blank: {excerpt(text)}.",
+                    file=where.file,
+                    line=where.line,
+                    fix="add a space after the quote.",
+                )
+            words.append(text[i + 1 : stop])
             i = stop + 1
         else:
             words.append(found.group())
@@ -213,9 +244,21 @@ def _round(x: float) -> float:
 
 
 FUNCTIONS: dict[str, Callable[[float], float]] = {
-    "sqrt": math.sqrt, "exp": math.exp, "ln": math.log, "log": math.log10, "abs": abs,
-    "sin": math.sin, "cos": math.cos, "tan": math.tan, "asin": math.asin, "acos": math.acos,
-    "atan": math.atan, "floor": math.floor, "ceil": math.ceil, "round": _round}
+    "sqrt": math.sqrt,
+    "exp": math.exp,
+    "ln": math.log,
+    "log": math.log10,
+    "abs": abs,
+    "sin": math.sin,
+    "cos": math.cos,
+    "tan": math.tan,
+    "asin": math.asin,
+    "acos": math.acos,
+    "atan": math.atan,
+    "floor": math.floor,
+    "ceil": math.ceil,
+    "round": _round,
+}
 """The one-argument math functions of an equal-style formula (``log`` is base 10, ``ln`` natural)."""
 
 CONSTANTS = {"PI": math.pi}
@@ -225,8 +268,10 @@ _NAME = re.compile(r"\w+", re.ASCII)
 _COPIED = ("index", "loop", "world", "universe", "uloop", "string", "getenv")
 """Styles whose value is text ``retrieve`` hands back as is."""
 
-_FIX_DOMAIN = ("keep each function's argument in its domain (sqrt: x >= 0; ln and log: x > 0; asin and acos: "
-               "-1 <= x <= 1), and raise a negative number to whole powers only.")
+_FIX_DOMAIN = (
+    "keep each function's argument in its domain (sqrt: x >= 0; ln and log: x > 0; asin and acos: "
+    "-1 <= x <= 1), and raise a negative number to whole powers only."
+)
 _FIX_OVERFLOW = "keep every value of the formula within +-1.8e308: rescale it (e.g. other units, smaller factors)."
 _FIX_ZERO = "make sure no divisor, and no base raised to a negative power, is 0."
 _FIX_POWER_0 = "write 1 for x^0: LIGGGHTS 3.8 stops on it ('Power by 0 in variable formula')."
@@ -251,16 +296,25 @@ class Variables:
         """Count ``characters`` more handed to the commands; past :data:`MAX_CHARACTERS` the script is refused."""
         self.characters += characters
         if self.characters > MAX_CHARACTERS:
-            raise ScriptError(f"the script and its includes, with their variables substituted, pass "
-                              f"{MAX_CHARACTERS} characters here.", file=where.file, line=where.line, fix=_FIX_BOUND)
+            raise ScriptError(
+                f"the script and its includes, with their variables substituted, pass "
+                f"{MAX_CHARACTERS} characters here.",
+                file=where.file,
+                line=where.line,
+                fix=_FIX_BOUND,
+            )
 
     def operation(self, where: Where) -> None:
         """Count one operation of a formula; past :data:`MAX_OPERATIONS` the script is refused."""
         self.operations += 1
         if self.operations > MAX_OPERATIONS:
-            raise ScriptError(f"the script's formulas take more than {MAX_OPERATIONS} operations to evaluate "
-                              "(equal-style variables that refer to each other many times).", file=where.file,
-                              line=where.line, fix=_FIX_BOUND)
+            raise ScriptError(
+                f"the script's formulas take more than {MAX_OPERATIONS} operations to evaluate "
+                "(equal-style variables that refer to each other many times).",
+                file=where.file,
+                line=where.line,
+                fix=_FIX_BOUND,
+            )
 
     def environment(self) -> list[str]:
         """The values of the ``getenv`` variables (text from the environment, never quoted in a message)."""
@@ -271,8 +325,12 @@ class Variables:
         Index-like styles keep their first definition, ``string`` and ``equal``
         are redefined, ``delete`` removes the variable."""
         if len(words) < 2:
-            raise ScriptError(f"variable command needs NAME STYLE ARGS, got {excerpt(' '.join(words))}.",
-                              file=where.file, line=where.line, fix="complete the variable command.")
+            raise ScriptError(
+                f"variable command needs NAME STYLE ARGS, got {excerpt(' '.join(words))}.",
+                file=where.file,
+                line=where.line,
+                fix="complete the variable command.",
+            )
         name, style, args = words[0], words[1], words[2:]
         self._evaluated.clear()  # a definition may change any equal-style value
         if name in self.cli:
@@ -281,14 +339,22 @@ class Variables:
             self.values.pop(name, None)
             return
         if not _NAME.fullmatch(name):
-            raise ScriptError(f"variable name {excerpt(name)} is not letters, digits and underscores "
-                              "(LIGGGHTS: 'Variable name must be alphanumeric or underscore characters').",
-                              file=where.file, line=where.line, fix="rename the variable.")
+            raise ScriptError(
+                f"variable name {excerpt(name)} is not letters, digits and underscores "
+                "(LIGGGHTS: 'Variable name must be alphanumeric or underscore characters').",
+                file=where.file,
+                line=where.line,
+                fix="rename the variable.",
+            )
         if style in ("index", "loop", "world", "universe", "uloop") and name in self.values:
             return  # the first definition wins (variable.cpp: "if (find(arg[0]) >= 0) return")
         if style in _COPIED + ("equal",) and not args:
-            raise ScriptError(f"variable {name} {excerpt(style)} needs a value.", file=where.file,
-                              line=where.line, fix=f"give variable {name} a value.")
+            raise ScriptError(
+                f"variable {name} {excerpt(style)} needs a value.",
+                file=where.file,
+                line=where.line,
+                fix=f"give variable {name} a value.",
+            )
         if style == "loop":  # loop N [pad] counts from 1, loop N1 N2 [pad] from N1
             value = "1" if len(args) == 1 or args[1] == "pad" else args[0]
         elif style in ("index", "world", "universe", "uloop", "string"):
@@ -306,9 +372,12 @@ class Variables:
         if name not in self.values:
             shown = name if _NAME.fullmatch(name) and len(name) <= 60 else "NAME"
             raise ScriptError(
-                f"variable {excerpt(name)} is used but not defined.", file=where.file, line=where.line,
+                f"variable {excerpt(name)} is used but not defined.",
+                file=where.file,
+                line=where.line,
                 fix=f"define it in the script ('variable {shown} index VALUE') or pass it with --var {shown} VALUE "
-                "(LIGGGHTS: -var).")
+                "(LIGGGHTS: -var).",
+            )
         style, value = self.values[name]
         if style == "equal":
             if name not in self._evaluated:
@@ -323,8 +392,12 @@ class Variables:
         number, :class:`Unevaluable` when it needs what only the run knows, or
         a :class:`ScriptError` naming ``where`` when it cannot be evaluated."""
         if depth > 50:
-            raise ScriptError(f"variables refer to each other in a loop ({excerpt(expr)}).", file=where.file,
-                              line=where.line, fix="break the circular variable definitions.")
+            raise ScriptError(
+                f"variables refer to each other in a loop ({excerpt(expr)}).",
+                file=where.file,
+                line=where.line,
+                fix="break the circular variable definitions.",
+            )
         tokens, pos = [], 0
         expr = expr.strip()
         while pos < len(expr):
@@ -338,11 +411,19 @@ class Variables:
         try:
             return _Evaluator(tokens, self, where, depth).run(expr)
         except _Fault as fault:
-            raise ScriptError(f"the formula {excerpt(expr)} cannot be evaluated: {fault.reason}.",
-                              file=where.file, line=where.line, fix=fault.fix) from None
+            raise ScriptError(
+                f"the formula {excerpt(expr)} cannot be evaluated: {fault.reason}.",
+                file=where.file,
+                line=where.line,
+                fix=fault.fix,
+            ) from None
         except RecursionError:
-            raise ScriptError(f"the formula {excerpt(expr)} is nested too deeply to evaluate.", file=where.file,
-                              line=where.line, fix="split it into several equal-style variables.") from None
+            raise ScriptError(
+                f"the formula {excerpt(expr)} is nested too deeply to evaluate.",
+                file=where.file,
+                line=where.line,
+                fix="split it into several equal-style variables.",
+            ) from None
 
 
 class _Fault(Exception):
@@ -386,8 +467,10 @@ class _Evaluator:
         except ValueError:
             raise _Fault(f"{_operation(show, args)} is outside the function's domain", _FIX_DOMAIN) from None
         if isinstance(value, complex):
-            raise _Fault(f"{_operation(show, args)} is outside the domain of ^ (a negative number to a "
-                         "fractional power)", _FIX_DOMAIN)
+            raise _Fault(
+                f"{_operation(show, args)} is outside the domain of ^ (a negative number to a fractional power)",
+                _FIX_DOMAIN,
+            )
         value = float(value)
         if not math.isfinite(value):
             raise _Fault(f"{_operation(show, args)} overflows", _FIX_OVERFLOW)
@@ -413,16 +496,16 @@ class _Evaluator:
         value = self.product()
         while self.peek() in ("+", "-"):
             op = self.take()[1]
-            value = self.apply(operator.add if op == "+" else operator.sub, (value, self.product()),
-                               "{0}" + op + "{1}")
+            value = self.apply(operator.add if op == "+" else operator.sub, (value, self.product()), "{0}" + op + "{1}")
         return value
 
     def product(self) -> float:
         value = self.power()
         while self.peek() in ("*", "/"):
             op = self.take()[1]
-            value = self.apply(operator.mul if op == "*" else operator.truediv, (value, self.power()),
-                               "{0}" + op + "{1}")
+            value = self.apply(
+                operator.mul if op == "*" else operator.truediv, (value, self.power()), "{0}" + op + "{1}"
+            )
         return value
 
     def power(self) -> float:
@@ -474,11 +557,15 @@ class _Evaluator:
         try:
             value = float(text)
         except ValueError:
-            raise _Fault(f"{excerpt('v_' + name, 30)} is {excerpt(text, 30)}, not a number",
-                         "give the variable a number (LIGGGHTS would compute with 0 where demsplit refuses).") from None
+            raise _Fault(
+                f"{excerpt('v_' + name, 30)} is {excerpt(text, 30)}, not a number",
+                "give the variable a number (LIGGGHTS would compute with 0 where demsplit refuses).",
+            ) from None
         if not math.isfinite(value):
-            raise _Fault(f"{excerpt('v_' + name, 30)} is {excerpt(text, 30)}, not a finite number",
-                         "give the variable a finite number.")
+            raise _Fault(
+                f"{excerpt('v_' + name, 30)} is {excerpt(text, 30)}, not a finite number",
+                "give the variable a finite number.",
+            )
         return value
 
 
@@ -508,9 +595,13 @@ def substitute(text: str, variables: Variables, where: Where) -> str:
         if text.startswith("{", j + 1):
             end = text.find("}", j + 2)
             if end < 0:
-                raise ScriptError(f"'${{' without '}}' in: {excerpt(text)}.", file=where.file,
-                                  line=where.line, fix="close the variable name with '}'.")
-            value = variables.retrieve(text[j + 2:end], where)
+                raise ScriptError(
+                    f"'${{' without '}}' in: {excerpt(text)}.",
+                    file=where.file,
+                    line=where.line,
+                    fix="close the variable name with '}'.",
+                )
+            value = variables.retrieve(text[j + 2 : end], where)
             i = end + 1
         elif text.startswith("(", j + 1):
             level, k = 0, j + 2
@@ -520,21 +611,33 @@ def substitute(text: str, variables: Variables, where: Where) -> str:
                     break
                 level += 1 if paren.group() == "(" else -1
             else:
-                raise ScriptError(f"'$(' without ')' in: {excerpt(text)}.", file=where.file,
-                                  line=where.line, fix="close the immediate variable with ')'.")
-            value = f"{variables.evaluate(text[j + 2:k], where):.20g}"
+                raise ScriptError(
+                    f"'$(' without ')' in: {excerpt(text)}.",
+                    file=where.file,
+                    line=where.line,
+                    fix="close the immediate variable with ')'.",
+                )
+            value = f"{variables.evaluate(text[j + 2 : k], where):.20g}"
             i = k + 1
         elif j + 1 < n:
             value = variables.retrieve(text[j + 1], where)
             i = j + 2
         else:
-            raise ScriptError("'$' at the end of a line.", file=where.file, line=where.line,
-                              fix="remove the '$' or name a variable after it.")
+            raise ScriptError(
+                "'$' at the end of a line.",
+                file=where.file,
+                line=where.line,
+                fix="remove the '$' or name a variable after it.",
+            )
         out.append(value)
         size += len(value)
         if size + len(text) > MAX_LINE:
-            raise ScriptError(f"with its variables substituted, the command is longer than {MAX_LINE} characters.",
-                              file=where.file, line=where.line, fix=_FIX_BOUND)
+            raise ScriptError(
+                f"with its variables substituted, the command is longer than {MAX_LINE} characters.",
+                file=where.file,
+                line=where.line,
+                fix=_FIX_BOUND,
+            )
     result = "".join(out)
     variables.charge(len(result), where)
     return result

@@ -26,8 +26,7 @@ import numpy as np
 from ..errors import ContactError, InputFormatError
 from ..frame import Box, ParticleIndex, Table
 from ..physics.bodies import FrameContacts, LawRows
-from ..physics.laws._lammps import (CURVATURE, DUMP_ROW, UNKNOWN_MODES, UNKNOWN_WHY, Rebuilt,
-                                    norm)
+from ..physics.laws._lammps import CURVATURE, DUMP_ROW, UNKNOWN_MODES, UNKNOWN_WHY, Rebuilt, norm
 from ..physics.modes import NOT_COMPUTED_BITS
 from ..scene import ContactModel, Scene
 from .lammps_dump import DumpFrame
@@ -35,8 +34,27 @@ from .lammps_input import Variables, Where
 from .lammps_script import LammpsScript, WallFix
 from .lammps_walls import fix_contacts
 
-ATOM_COLUMNS = ("id", "type", "x", "y", "z", "vx", "vy", "vz", "omegax", "omegay", "omegaz", "fx", "fy", "fz",
-                "tqx", "tqy", "tqz", "radius", "mass")
+ATOM_COLUMNS = (
+    "id",
+    "type",
+    "x",
+    "y",
+    "z",
+    "vx",
+    "vy",
+    "vz",
+    "omegax",
+    "omegay",
+    "omegaz",
+    "fx",
+    "fy",
+    "fz",
+    "tqx",
+    "tqy",
+    "tqz",
+    "radius",
+    "mass",
+)
 """Atom dump columns a LAMMPS run needs: the half-step velocities are rebuilt from the forces and torques."""
 WALL_POINT_TOLERANCE = 1e-9
 """Largest distance between the wall point a fix wrote and demsplit's, over the particle's radius."""
@@ -118,8 +136,19 @@ class LammpsJoin:
         else:
             v_h = v - 0.5 * dt * f / m[:, None]
             w_h = w - 0.5 * dt * tq / (0.4 * m * r * r)[:, None]
-        return {"id": integers(af, "id"), "type": integers(af, "type"), "x": x, "v": v, "w": w, "f": f, "tq": tq,
-                "r": r, "m": m, "v_h": v_h, "w_h": w_h}
+        return {
+            "id": integers(af, "id"),
+            "type": integers(af, "type"),
+            "x": x,
+            "v": v,
+            "w": w,
+            "f": f,
+            "tq": tq,
+            "r": r,
+            "m": m,
+            "v_h": v_h,
+            "w_h": w_h,
+        }
 
     def setup_frame(self, step: int) -> bool:
         """Whether the dump wrote ``step`` at a run's setup: the start of the first run it writes in."""
@@ -132,15 +161,17 @@ class LammpsJoin:
         """The pair contacts of the local-dump frame ``lf`` with the rebuild's columns, and the atom rows of their
         bodies."""
         names = self.pair_names
-        col = {k: np.asarray(lf.columns[t], dtype=np.float64) for k, t in names.items() if k not in ("patom1",
-                                                                                                     "patom2")}
+        col = {
+            k: np.asarray(lf.columns[t], dtype=np.float64) for k, t in names.items() if k not in ("patom1", "patom2")
+        }
         id1, id2 = integers(lf, names["patom1"]), integers(lf, names["patom2"])
         try:
             i, j = index.rows(id1), index.rows(id2)
         except ContactError as exc:
             known = np.isin(id1, index.ids) & np.isin(id2, index.ids)
-            raise ContactError(exc.message, file=lf.file, step=lf.step, line=lf.line_of(int(np.flatnonzero(~known)[0])),
-                               fix=exc.fix) from None
+            raise ContactError(
+                exc.message, file=lf.file, step=lf.step, line=lf.line_of(int(np.flatnonzero(~known)[0])), fix=exc.fix
+            ) from None
         raw = atoms["x"][i] - atoms["x"][j]
         image = box.minimum_image(raw)
         if self.legacy:
@@ -148,16 +179,21 @@ class LammpsJoin:
         else:
             d = np.stack([col["p10"], col["p11"], col["p12"]], axis=-1)
             d = np.where(np.all(d == 0, axis=1)[:, None], image, d)  # a row single() wrote as zeros (jkr)
-        dumped = {"fn_dumped": col["force"], "ft_dumped": np.stack([col["p1"], col["p2"], col["p3"]], axis=-1),
-                  "fr_dumped": np.zeros((len(i), 3)) if self.legacy
-                  else np.stack([col["p5"], col["p6"], col["p7"]], axis=-1)}
+        dumped = {
+            "fn_dumped": col["force"],
+            "ft_dumped": np.stack([col["p1"], col["p2"], col["p3"]], axis=-1),
+            "fr_dumped": np.zeros((len(i), 3)) if self.legacy else np.stack([col["p5"], col["p6"], col["p7"]], axis=-1),
+        }
         return pair_table(atoms, i, j, d, col["dist"], dumped), i, j
 
     def necks(self, atoms: dict, box: Box) -> tuple[Table, np.ndarray, np.ndarray]:
         """The pairs apart by less than their model's reach (a jkr neck that may still hold, which no ``cutoff
         radius`` row lists), as contacts whose every value is unknown, and their atom rows."""
-        reach = {pair: m.contact_law for pair, m in self.script.pair_models.items()
-                 if np.any(m.contact_law.reach(np.ones(1)) > 0)}
+        reach = {
+            pair: m.contact_law
+            for pair, m in self.script.pair_models.items()
+            if np.any(m.contact_law.reach(np.ones(1)) > 0)
+        }
         x, r, t = atoms["x"], atoms["r"], atoms["type"]
         found_i, found_j = [np.zeros(0, dtype=np.int64)], [np.zeros(0, dtype=np.int64)]
         if reach and len(r):
@@ -181,8 +217,11 @@ class LammpsJoin:
                 found_j.append(jj[hit])
         i, j = np.concatenate(found_i), np.concatenate(found_j)
         d = box.minimum_image(x[i] - x[j])
-        unknown = {"fn_dumped": np.full(len(i), np.nan), "ft_dumped": np.full((len(i), 3), np.nan),
-                   "fr_dumped": np.full((len(i), 3), np.nan)}
+        unknown = {
+            "fn_dumped": np.full(len(i), np.nan),
+            "ft_dumped": np.full((len(i), 3), np.nan),
+            "fr_dumped": np.full((len(i), 3), np.nan),
+        }
         return pair_table(atoms, i, j, d, np.sqrt(np.einsum("ak,ak->a", d, d)), unknown), i, j
 
     def as_ghosts(self, contacts: Table, atoms: dict, i: np.ndarray, j: np.ndarray, rows: np.ndarray) -> Table:
@@ -190,8 +229,14 @@ class LammpsJoin:
         (a ghost of another process)."""
         sub = {c: v[rows].copy() for c, v in contacts.items()}
         vj, wj = atoms["v_h"][j], atoms["w_h"][j]
-        _put_vectors(sub, {"dv_s": atoms["v"][i] - vj, "wr_s": atoms["w"][i] - wj,
-                           "ws_s": atoms["r"][i, None] * atoms["w"][i] + atoms["r"][j, None] * wj})
+        _put_vectors(
+            sub,
+            {
+                "dv_s": atoms["v"][i] - vj,
+                "wr_s": atoms["w"][i] - wj,
+                "ws_s": atoms["r"][i, None] * atoms["w"][i] + atoms["r"][j, None] * wj,
+            },
+        )
         return sub
 
     # -- walls ------------------------------------------------------------------------------------------------
@@ -225,9 +270,14 @@ class LammpsJoin:
         chosen = which[rows_list[0]]
         if np.any(chosen < 0):
             a = int(rows_list[0][np.flatnonzero(chosen < 0)[0]])
-            raise ContactError(f"fix {fix.id} wrote a contact of atom {int(atoms['id'][a])} that demsplit's geometry "
-                               "of the wall does not find.", file=af.file, step=af.step, line=af.line_of(a),
-                               fix="check that the script is the one that wrote this dump (the wall's geometry).")
+            raise ContactError(
+                f"fix {fix.id} wrote a contact of atom {int(atoms['id'][a])} that demsplit's geometry "
+                "of the wall does not find.",
+                file=af.file,
+                step=af.step,
+                line=af.line_of(a),
+                fix="check that the script is the one that wrote this dump (the wall's geometry).",
+            )
         for s, (_, _, _, touch) in enumerate(surfaces):
             extra = np.flatnonzero(touch & (which != s))
             if len(extra):
@@ -253,20 +303,47 @@ class LammpsJoin:
         F = np.where(extra[:, None], np.nan, force[i])
         fn = np.einsum("ij,ij->i", F, n_L)
         v_h, w_h = atoms["v_h"][i], atoms["w_h"][i]
-        out: Table = {"id1": atoms["id"][i], "id2": np.full(len(i), -1, np.int64), "wall": np.full(len(i), index),
-                      "delta": r[i] - dist, "nx": -n_L[:, 0], "ny": -n_L[:, 1], "nz": -n_L[:, 2],
-                      "x1": x[i, 0], "y1": x[i, 1], "z1": x[i, 2], "r1": r[i], "r2": np.full(len(i), np.inf),
-                      "m1": atoms["m"][i], "m2": np.full(len(i), np.inf), CURVATURE: curvature,
-                      DUMP_ROW: np.full(len(i), -1.0), "fn_dumped": fn}
+        out: Table = {
+            "id1": atoms["id"][i],
+            "id2": np.full(len(i), -1, np.int64),
+            "wall": np.full(len(i), index),
+            "delta": r[i] - dist,
+            "nx": -n_L[:, 0],
+            "ny": -n_L[:, 1],
+            "nz": -n_L[:, 2],
+            "x1": x[i, 0],
+            "y1": x[i, 1],
+            "z1": x[i, 2],
+            "r1": r[i],
+            "r2": np.full(len(i), np.inf),
+            "m1": atoms["m"][i],
+            "m2": np.full(len(i), np.inf),
+            CURVATURE: curvature,
+            DUMP_ROW: np.full(len(i), -1.0),
+            "fn_dumped": fn,
+        }
         ws = r[i, None] * w_h
-        _put_vectors(out, {"dv_s": v_h - vwall, "dv_h": v_h - vwall, "ws_s": ws, "ws_h": ws, "wr_s": w_h, "wr_h": w_h,
-                           "ft_dumped": F - fn[:, None] * n_L, "fr_dumped": np.zeros((len(i), 3))})
+        _put_vectors(
+            out,
+            {
+                "dv_s": v_h - vwall,
+                "dv_h": v_h - vwall,
+                "ws_s": ws,
+                "ws_h": ws,
+                "wr_s": w_h,
+                "wr_h": w_h,
+                "ft_dumped": F - fn[:, None] * n_L,
+                "fr_dumped": np.zeros((len(i), 3)),
+            },
+        )
         out["extra_contact"] = extra
         notes = []
         if extra.any():
-            notes.append(f"fix {fix.id}: particles touching a second surface of region {fix.region.id} have that "
-                         "contact's tangential spring not computed (the fix's contacts array holds the last contact "
-                         "only)")
+            notes.append(
+                f"fix {fix.id}: particles touching a second surface of region {fix.region.id} have that "
+                "contact's tangential spring not computed (the fix's contacts array holds the last contact "
+                "only)"
+            )
         return out, i, notes
 
     def region_turn(self, fix: WallFix, step: int, run: int) -> tuple[float, np.ndarray | None]:
@@ -279,17 +356,22 @@ class LammpsJoin:
         formula = formulas[run] if run < len(formulas) else None
         where = Where(self.script.path, region.where.line)
         if formula is None:
-            raise InputFormatError(f"region {region.id} rotates by v_{region.rotate[0]}, which is not an equal-style "
-                                   "formula demsplit can evaluate in this run.", file=self.script.path,
-                                   line=region.where.line, fix="define the angle as an equal-style variable.")
+            raise InputFormatError(
+                f"region {region.id} rotates by v_{region.rotate[0]}, which is not an equal-style "
+                "formula demsplit can evaluate in this run.",
+                file=self.script.path,
+                line=region.where.line,
+                fix="define the angle as an equal-style variable.",
+            )
         start, dt = self.script.runs[run][0], self.script.timestep
         theta = step_value(formula, step, start, dt, where)
         before = step_value(formula, step - 1, start, dt, where)
         axis = np.asarray(region.rotate[2], dtype=np.float64)
         return theta, (theta - before) / dt * axis / np.linalg.norm(axis)
 
-    def check_wall_points(self, fix: WallFix, af: DumpFrame, atoms: dict, i: np.ndarray, d: np.ndarray,
-                          dumped: np.ndarray) -> None:
+    def check_wall_points(
+        self, fix: WallFix, af: DumpFrame, atoms: dict, i: np.ndarray, d: np.ndarray, dumped: np.ndarray
+    ) -> None:
         """The wall point x - d the fix wrote must be demsplit's, to WALL_POINT_TOLERANCE of the radius."""
         off = norm(atoms["x"][i] - d - dumped) > WALL_POINT_TOLERANCE * atoms["r"][i]
         if off.any():
@@ -297,8 +379,11 @@ class LammpsJoin:
             raise ContactError(
                 f"fix {fix.id} wrote the wall point of atom {int(atoms['id'][a])} at {dumped[np.flatnonzero(off)[0]]}, "
                 f"not where demsplit's geometry of its {fix.geometry} puts it ({int(off.sum())} such contact(s)).",
-                file=af.file, step=af.step, line=af.line_of(a),
-                fix="check that the script is the one that wrote this dump (the wall's geometry and motion).")
+                file=af.file,
+                step=af.step,
+                line=af.line_of(a),
+                fix="check that the script is the one that wrote this dump (the wall's geometry and motion).",
+            )
 
     # -- rebuild ----------------------------------------------------------------------------------------------
 
@@ -310,15 +395,17 @@ class LammpsJoin:
         wall = contacts["wall"]
         groups: list[tuple[ContactModel, np.ndarray, int]] = []
         for w in np.unique(wall[wall >= 0]):
-            groups.append((self.scene.walls[int(w)].model, np.flatnonzero(wall == w),
-                           run - walls_first_run[int(w)] + 1))
+            groups.append(
+                (self.scene.walls[int(w)].model, np.flatnonzero(wall == w), run - walls_first_run[int(w)] + 1)
+            )
         pair = np.flatnonzero(wall < 0)
         if len(pair):
             t1, t2 = (np.asarray(t)[pair] for t in frame.types())
             lo, hi = np.minimum(t1, t2), np.maximum(t1, t2)
             for a, b in sorted(set(zip(lo.tolist(), hi.tolist()))):
-                groups.append((self.pair_model(a, b, contacts, pair[(lo == a) & (hi == b)]),
-                               pair[(lo == a) & (hi == b)], 1))
+                groups.append(
+                    (self.pair_model(a, b, contacts, pair[(lo == a) & (hi == b)]), pair[(lo == a) & (hi == b)], 1)
+                )
         parts = []
         for model, rows, inits in groups:
             parts.append((rows, model.contact_law.rebuild(LawRows(frame, rows, model.law), inits=inits)))
@@ -332,8 +419,10 @@ class LammpsJoin:
             raise ContactError(
                 f"{len(rows)} contact(s) join atom types {a} and {b}, whose model no pair_coeff line sets: LAMMPS "
                 "29 Sep 2021 leaves the models of a mixed granular pair unset, so their forces are not a model's.",
-                file=self.script.path, fix=f"add 'pair_coeff {a} {b} ...' to the script and rerun (for material "
-                "models: E = 2E*, nu = 0, k_t = 8G* of the two materials give the mixed values).")
+                file=self.script.path,
+                fix=f"add 'pair_coeff {a} {b} ...' to the script and rerun (for material "
+                "models: E = 2E*, nu = 0, k_t = 8G* of the two materials give the mixed values).",
+            )
         return model
 
 
@@ -347,14 +436,19 @@ def integers(f: DumpFrame, name: str) -> np.ndarray:
     bad = ~(values == np.rint(values)) | ~(np.abs(values) < 2.0**53)
     if bad.any():
         row = int(np.flatnonzero(bad)[0])
-        raise InputFormatError(f"column '{name}' must hold integers, but row {row + 1} of the frame holds "
-                               f"{values[row].item()!r}.", file=f.file, step=f.step, line=f.line_of(row),
-                               fix="pass the dump the script's line writes (LAMMPS prints ids with %d).")
+        raise InputFormatError(
+            f"column '{name}' must hold integers, but row {row + 1} of the frame holds {values[row].item()!r}.",
+            file=f.file,
+            step=f.step,
+            line=f.line_of(row),
+            fix="pass the dump the script's line writes (LAMMPS prints ids with %d).",
+        )
     return values.astype(np.int64)
 
 
-def pair_table(atoms: dict, i: np.ndarray, j: np.ndarray, d: np.ndarray, dist: np.ndarray,
-               dumped: dict[str, np.ndarray]) -> Table:
+def pair_table(
+    atoms: dict, i: np.ndarray, j: np.ndarray, d: np.ndarray, dist: np.ndarray, dumped: dict[str, np.ndarray]
+) -> Table:
     """Pair contacts of atom rows ``i``, ``j`` separated by ``d`` = x_i - x_j as LAMMPS used it (a periodic image:
     j a ghost, whose velocities single() read at the half step) at distance ``dist``, with the rebuild's columns
     and the ``dumped`` force (``fn_dumped`` (n,), ``ft_dumped``, ``fr_dumped`` (n, 3))."""
@@ -365,16 +459,38 @@ def pair_table(atoms: dict, i: np.ndarray, j: np.ndarray, d: np.ndarray, dist: n
     vj_s = np.where(ghost[:, None], atoms["v_h"][j], atoms["v"][j])
     wj_s = np.where(ghost[:, None], atoms["w_h"][j], atoms["w"][j])
     v_h, w_h = atoms["v_h"], atoms["w_h"]
-    out: Table = {"id1": atoms["id"][i], "id2": atoms["id"][j], "wall": np.full(len(i), -1, np.int64),
-                  "delta": ri + rj - dist, "nx": -n_L[:, 0], "ny": -n_L[:, 1], "nz": -n_L[:, 2],
-                  "x1": x[i, 0], "y1": x[i, 1], "z1": x[i, 2], "r1": ri, "r2": rj,
-                  "m1": atoms["m"][i], "m2": atoms["m"][j], CURVATURE: np.zeros(len(i)),
-                  DUMP_ROW: np.arange(len(i), dtype=np.float64), "fn_dumped": dumped["fn_dumped"]}
-    _put_vectors(out, {"dv_s": atoms["v"][i] - vj_s, "dv_h": v_h[i] - v_h[j],
-                       "ws_s": ri[:, None] * atoms["w"][i] + rj[:, None] * wj_s,
-                       "ws_h": ri[:, None] * w_h[i] + rj[:, None] * w_h[j],
-                       "wr_s": atoms["w"][i] - wj_s, "wr_h": w_h[i] - w_h[j],
-                       "ft_dumped": dumped["ft_dumped"], "fr_dumped": dumped["fr_dumped"]})
+    out: Table = {
+        "id1": atoms["id"][i],
+        "id2": atoms["id"][j],
+        "wall": np.full(len(i), -1, np.int64),
+        "delta": ri + rj - dist,
+        "nx": -n_L[:, 0],
+        "ny": -n_L[:, 1],
+        "nz": -n_L[:, 2],
+        "x1": x[i, 0],
+        "y1": x[i, 1],
+        "z1": x[i, 2],
+        "r1": ri,
+        "r2": rj,
+        "m1": atoms["m"][i],
+        "m2": atoms["m"][j],
+        CURVATURE: np.zeros(len(i)),
+        DUMP_ROW: np.arange(len(i), dtype=np.float64),
+        "fn_dumped": dumped["fn_dumped"],
+    }
+    _put_vectors(
+        out,
+        {
+            "dv_s": atoms["v"][i] - vj_s,
+            "dv_h": v_h[i] - v_h[j],
+            "ws_s": ri[:, None] * atoms["w"][i] + rj[:, None] * wj_s,
+            "ws_h": ri[:, None] * w_h[i] + rj[:, None] * w_h[j],
+            "wr_s": atoms["w"][i] - wj_s,
+            "wr_h": w_h[i] - w_h[j],
+            "ft_dumped": dumped["ft_dumped"],
+            "fr_dumped": dumped["fr_dumped"],
+        },
+    )
     return out
 
 
@@ -401,8 +517,9 @@ def _gather(parts: list[tuple[np.ndarray, Rebuilt]], n: int) -> Rebuilt:
     return Rebuilt(**out)
 
 
-def unknown_columns(rebuilt: Rebuilt, extra: np.ndarray, neck: np.ndarray,
-                    rolling: bool) -> tuple[np.ndarray, np.ndarray]:
+def unknown_columns(
+    rebuilt: Rebuilt, extra: np.ndarray, neck: np.ndarray, rolling: bool
+) -> tuple[np.ndarray, np.ndarray]:
     """The ``unknown_modes`` bits and ``unknown_why`` codes of every contact: the rebuild's, a region's second
     contact (its tangential and rolling springs) and a possible jkr neck (every mode)."""
     springs = NOT_COMPUTED_BITS["u_t"] | (NOT_COMPUTED_BITS["u_r"] if rolling else 0)
@@ -413,5 +530,4 @@ def unknown_columns(rebuilt: Rebuilt, extra: np.ndarray, neck: np.ndarray,
     return bits.astype(np.int8), why.astype(np.int8)
 
 
-__all__ = ["ATOM_COLUMNS", "Assembled", "LammpsJoin", "UNKNOWN_MODES", "UNKNOWN_WHY", "run_of_step",
-           "unknown_columns"]
+__all__ = ["ATOM_COLUMNS", "Assembled", "LammpsJoin", "UNKNOWN_MODES", "UNKNOWN_WHY", "run_of_step", "unknown_columns"]

@@ -44,13 +44,32 @@ LEGACY_STYLES = ("gran/hooke", "gran/hooke/history", "gran/hertz/history")
 """The legacy granular pair styles (their models are registered as ``lammps:gran/...``)."""
 _PLANES = {"xplane": 0, "yplane": 1, "zplane": 2}
 _TANGENTIAL_ARGS = {"linear_nohistory": 2}  # the others take kt xgammat mu
-_SETS_FORCES = {"addforce", "aveforce", "setforce", "viscous", "efield", "spring", "spring/self", "drag",
-                "lineforce", "planeforce", "wall/lj93", "wall/lj126", "wall/harmonic", "wall/region", "move",
-                "freeze", "smd"}
+_SETS_FORCES = {
+    "addforce",
+    "aveforce",
+    "setforce",
+    "viscous",
+    "efield",
+    "spring",
+    "spring/self",
+    "drag",
+    "lineforce",
+    "planeforce",
+    "wall/lj93",
+    "wall/lj126",
+    "wall/harmonic",
+    "wall/region",
+    "move",
+    "freeze",
+    "smd",
+}
 """Fix styles that add to the atoms' forces or torques (besides gravity and the granular walls): with one of
 them, the per-atom balance that pins a spring single() capped cannot be closed."""
-_DETECT = re.compile(rb"^[ \t]*(pair_style[ \t]+(granular|gran/hooke|gran/hooke/history|gran/hertz/history)\b|"
-                     rb"fix[ \t]+\S+[ \t]+\S+[ \t]+wall/gran(/region)?[ \t]+granular\b)", re.MULTILINE)
+_DETECT = re.compile(
+    rb"^[ \t]*(pair_style[ \t]+(granular|gran/hooke|gran/hooke/history|gran/hertz/history)\b|"
+    rb"fix[ \t]+\S+[ \t]+\S+[ \t]+wall/gran(/region)?[ \t]+granular\b)",
+    re.MULTILINE,
+)
 
 
 def is_lammps_script(text: bytes) -> bool:
@@ -167,14 +186,18 @@ class _LammpsReader(_Reader):
     def cmd_units(self, args: list[str], where: Where) -> None:
         self.need(args, 1, where, "units", "units si|lj")
         if args[0] not in ("si", "lj"):
-            raise self.error(UnsupportedModelError, f"units {excerpt(args[0])}: demsplit reads LAMMPS runs in "
-                             "units si or lj.", where, "run the simulation with 'units si' (or lj).")
+            raise self.error(
+                UnsupportedModelError,
+                f"units {excerpt(args[0])}: demsplit reads LAMMPS runs in units si or lj.",
+                where,
+                "run the simulation with 'units si' (or lj).",
+            )
         self.units = args[0]
 
     def cmd_change_box(self, args: list[str], where: Where) -> None:
         if "boundary" in args[:-3]:
             k = args.index("boundary")
-            self.periodic = tuple("p" in a for a in args[k + 1:k + 4])
+            self.periodic = tuple("p" in a for a in args[k + 1 : k + 4])
 
     def cmd_run(self, args: list[str], where: Where) -> None:
         super().cmd_run(args, where)
@@ -191,9 +214,12 @@ class _LammpsReader(_Reader):
         self.need(args, 1, where, "pair_style", "pair_style granular")
         style = args[0]
         if style != "granular" and style not in LEGACY_STYLES:
-            raise self.error(UnsupportedModelError, f"pair_style {excerpt(style)} is not a granular style demsplit "
-                             "reads.", where, "use pair_style granular, gran/hooke, gran/hooke/history or "
-                             "gran/hertz/history.")
+            raise self.error(
+                UnsupportedModelError,
+                f"pair_style {excerpt(style)} is not a granular style demsplit reads.",
+                where,
+                "use pair_style granular, gran/hooke, gran/hooke/history or gran/hertz/history.",
+            )
         self.pair_style, self.pair_where, self.legacy_args = style, where, args[1:]
         self.coeffs = []
 
@@ -208,8 +234,11 @@ class _LammpsReader(_Reader):
         numbers: list = []
         if nargs is not None:
             self.need(rest, nargs, where, f"region {rid} {style}", f"region {rid} {style} ...")
-            numbers = [rest[0]] + [self.region_number(v, where, f"region {rid}") for v in rest[1:nargs]] \
-                if style == "cylinder" else [self.number(v, where, f"region {rid}") for v in rest[:nargs]]
+            numbers = (
+                [rest[0]] + [self.region_number(v, where, f"region {rid}") for v in rest[1:nargs]]
+                if style == "cylinder"
+                else [self.number(v, where, f"region {rid}") for v in rest[:nargs]]
+            )
         side_in, opened, rotate = True, [], None
         k = nargs or 0
         while k < len(rest):
@@ -222,9 +251,13 @@ class _LammpsReader(_Reader):
             elif word == "rotate" and k + 7 < len(rest):
                 var = rest[k + 1]
                 if not var.startswith("v_"):
-                    raise self.error(ScriptError, f"region {rid}: rotate takes v_NAME, found {excerpt(var)}.", where,
-                                     "write rotate v_NAME Px Py Pz Ax Ay Az.")
-                nums = [self.number(v, where, f"region {rid} rotate") for v in rest[k + 2:k + 8]]
+                    raise self.error(
+                        ScriptError,
+                        f"region {rid}: rotate takes v_NAME, found {excerpt(var)}.",
+                        where,
+                        "write rotate v_NAME Px Py Pz Ax Ay Az.",
+                    )
+                nums = [self.number(v, where, f"region {rid} rotate") for v in rest[k + 2 : k + 8]]
                 rotate = (var[2:], tuple(nums[:3]), tuple(nums[3:]))
                 k += 8
             elif word == "move":  # a moving region: refused where a wall fix uses it
@@ -277,16 +310,22 @@ class _LammpsReader(_Reader):
             self.current_gravity = tuple(float(v) for v in g * d)
         except (ValueError, IndexError):
             self.current_gravity = None
-            self.warnings.append(f"{where.file}:{where.line}: fix {fid} gravity is not read (a variable or a style "
-                                 "demsplit does not evaluate); the atoms' force balance is not used.")
+            self.warnings.append(
+                f"{where.file}:{where.line}: fix {fid} gravity is not read (a variable or a style "
+                "demsplit does not evaluate); the atoms' force balance is not used."
+            )
 
     def granular_words(self, words: list[str], where: Where, wall: bool, what: str) -> tuple[str, dict, int]:
         """The law key, the parameters and the number of words of the ``granular`` model words ``words``
         (pair_granular.cpp coeff() :781-980, fix_wall_gran.cpp :113-343)."""
         normals = {w: k for w, k in simulator_words("lammps").items() if not w.startswith("gran/")}
         if not words or words[0] not in normals:
-            raise self.error(UnsupportedModelError, f"{what}: normal model {excerpt(words[0] if words else '')} is "
-                             "not supported.", where, f"use one of {', '.join(normals)}.")
+            raise self.error(
+                UnsupportedModelError,
+                f"{what}: normal model {excerpt(words[0] if words else '')} is not supported.",
+                where,
+                f"use one of {', '.join(normals)}.",
+            )
         name = words[0]
         law = law_class(normals[name])
         nums = law.line_coefficients
@@ -296,27 +335,27 @@ class _LammpsReader(_Reader):
         while k < len(words):
             w = words[k]
             if w == "damping":
-                self.need(words[k + 1:], 1, where, what, "damping MODEL")
+                self.need(words[k + 1 :], 1, where, what, "damping MODEL")
                 params["damping"], k = words[k + 1], k + 2
             elif w == "tangential":
-                self.need(words[k + 1:], 1, where, what, "tangential MODEL ...")
+                self.need(words[k + 1 :], 1, where, what, "tangential MODEL ...")
                 model = words[k + 1]
                 n = _TANGENTIAL_ARGS.get(model, 3)
-                self.need(words[k + 2:], n, where, what, f"tangential {model} ...")
-                values = words[k + 2:k + 2 + n]
+                self.need(words[k + 2 :], n, where, what, f"tangential {model} ...")
+                values = words[k + 2 : k + 2 + n]
                 params["tangential"] = model
                 if n == 3:
                     params["kt"] = None if values[0] == "NULL" else self.number(values[0], where, what)
                 params["xgammat"], params["mu"] = (self.number(v, where, what) for v in values[-2:])
                 k += 2 + n
             elif w in ("rolling", "twisting"):
-                self.need(words[k + 1:], 1, where, what, f"{w} MODEL ...")
+                self.need(words[k + 1 :], 1, where, what, f"{w} MODEL ...")
                 model = words[k + 1]
                 params[w] = model
                 if model == "sds":
-                    self.need(words[k + 2:], 3, where, what, f"{w} sds K GAMMA MU")
+                    self.need(words[k + 2 :], 3, where, what, f"{w} sds K GAMMA MU")
                     names = ("kr", "gammar", "mur") if w == "rolling" else ("ktw", "gammatw", "mutw")
-                    params.update({p: self.number(v, where, what) for p, v in zip(names, words[k + 2:k + 5])})
+                    params.update({p: self.number(v, where, what) for p, v in zip(names, words[k + 2 : k + 5])})
                     k += 5
                 else:
                     k += 2
@@ -327,8 +366,12 @@ class _LammpsReader(_Reader):
             else:
                 break
         if "tangential" not in params:
-            raise self.error(ScriptError, f"{what}: no tangential model (LAMMPS requires one).", where,
-                             "add 'tangential MODEL ...' as the run had it.")
+            raise self.error(
+                ScriptError,
+                f"{what}: no tangential model (LAMMPS requires one).",
+                where,
+                "add 'tangential MODEL ...' as the run had it.",
+            )
         params["wall"] = wall
         params.setdefault("history", False)  # a wall keeps its own flag; the pair style's is set with all lines
         try:
@@ -342,10 +385,15 @@ class _LammpsReader(_Reader):
         361-380, fix_wall_gran.cpp:96-122)."""
         self.need(words, 6, where, what, f"{style} KN KT GAMMAN GAMMAT XMU DAMPFLAG")
         kn, kt, gn, gt, mu = words[:5]
-        params = {"kn": self.number(kn, where, what), "kt": None if kt == "NULL" else self.number(kt, where, what),
-                  "gamman": self.number(gn, where, what),
-                  "gammat": None if gt == "NULL" else self.number(gt, where, what),
-                  "mu": self.number(mu, where, what), "dampflag": self.integer(words[5], where, what), "wall": wall}
+        params = {
+            "kn": self.number(kn, where, what),
+            "kt": None if kt == "NULL" else self.number(kt, where, what),
+            "gamman": self.number(gn, where, what),
+            "gammat": None if gt == "NULL" else self.number(gt, where, what),
+            "mu": self.number(mu, where, what),
+            "dampflag": self.integer(words[5], where, what),
+            "wall": wall,
+        }
         k = 6
         if len(words) > 6 and words[6] == "limit_damping":
             params["limit_damping"], k = True, 7
@@ -358,16 +406,24 @@ class _LammpsReader(_Reader):
             key, params, k = self.granular_words(rest[1:], where, True, what)
             k += 1
             if key == "lammps:jkr":
-                raise self.error(UnsupportedModelError, f"{what}: a jkr wall is not supported: that version's wall "
-                                 "fix computes the pull-off distance with the radius where the pair uses R^2 "
-                                 "(fix_wall_gran.cpp:1699), so its contacts outlive pull-off and give NaN forces.",
-                                 where, "use a hertz/material or dmt wall.")
+                raise self.error(
+                    UnsupportedModelError,
+                    f"{what}: a jkr wall is not supported: that version's wall "
+                    "fix computes the pull-off distance with the radius where the pair uses R^2 "
+                    "(fix_wall_gran.cpp:1699), so its contacts outlive pull-off and give NaN forces.",
+                    where,
+                    "use a hertz/material or dmt wall.",
+                )
         elif f"gran/{rest[0]}" in LEGACY_STYLES:
             key, params, k = self.legacy_words(rest[0], rest[1:], where, True, what)
             k += 1
         else:
-            raise self.error(UnsupportedModelError, f"{what}: model {excerpt(rest[0])} is not supported.", where,
-                             "use granular, hooke, hooke/history or hertz/history.")
+            raise self.error(
+                UnsupportedModelError,
+                f"{what}: model {excerpt(rest[0])} is not supported.",
+                where,
+                "use granular, hooke, hooke/history or hertz/history.",
+            )
         try:
             model = ContactModel(key, params)
         except DemsplitError as exc:
@@ -376,16 +432,25 @@ class _LammpsReader(_Reader):
         fix = WallFix(fid, model, "", first_run=len(self.runs), where=where)
         if style == "wall/gran/region":
             if len(geo) < 2 or geo[0] != "region":
-                raise self.error(ScriptError, f"{what}: expected 'region RID' after the model.", where,
-                                 "write 'region RID'.")
+                raise self.error(
+                    ScriptError, f"{what}: expected 'region RID' after the model.", where, "write 'region RID'."
+                )
             region = self.regions.get(geo[1])
             if region is None:
-                raise self.error(ScriptError, f"{what}: region {excerpt(geo[1])} is not defined before.", where,
-                                 "define the region first.")
+                raise self.error(
+                    ScriptError,
+                    f"{what}: region {excerpt(geo[1])} is not defined before.",
+                    where,
+                    "define the region first.",
+                )
             if region.style not in ("plane", "cylinder"):
-                raise self.error(UnsupportedModelError, f"{what}: region {region.id} is a {region.style} region; "
-                                 "demsplit rebuilds the contacts of plane and cylinder regions (static or rotating).",
-                                 where, "use a plane or cylinder region.")
+                raise self.error(
+                    UnsupportedModelError,
+                    f"{what}: region {region.id} is a {region.style} region; "
+                    "demsplit rebuilds the contacts of plane and cylinder regions (static or rotating).",
+                    where,
+                    "use a plane or cylinder region.",
+                )
             fix.geometry, fix.region, tail = "region", region, geo[2:]
         elif geo and geo[0] in _PLANES:
             self.need(geo, 3, where, what, f"{geo[0]} LO HI")
@@ -396,21 +461,33 @@ class _LammpsReader(_Reader):
             self.need(geo, 2, where, what, "zcylinder R")
             fix.geometry, fix.radius, tail = "zcylinder", self.number(geo[1], where, what), geo[2:]
         else:
-            raise self.error(UnsupportedModelError, f"{what}: wall {excerpt(geo[0] if geo else '')} is not "
-                             "supported.", where, "use xplane, yplane, zplane, zcylinder or a region.")
+            raise self.error(
+                UnsupportedModelError,
+                f"{what}: wall {excerpt(geo[0] if geo else '')} is not supported.",
+                where,
+                "use xplane, yplane, zplane, zcylinder or a region.",
+            )
         k = 0
         while k < len(tail):
             if tail[k] == "shear":
-                self.need(tail[k + 1:], 2, where, what, "shear DIM V")
+                self.need(tail[k + 1 :], 2, where, what, "shear DIM V")
                 if fix.geometry == "zcylinder":
-                    raise self.error(UnsupportedModelError, f"{what}: a shearing zcylinder is not supported (its "
-                                     "velocity at the contact is not a plain translation, fix_wall_gran.cpp:664).",
-                                     where, "analyse a run whose cylinder wall does not shear.")
+                    raise self.error(
+                        UnsupportedModelError,
+                        f"{what}: a shearing zcylinder is not supported (its "
+                        "velocity at the contact is not a plain translation, fix_wall_gran.cpp:664).",
+                        where,
+                        "analyse a run whose cylinder wall does not shear.",
+                    )
                 fix.shear = ("xyz".index(tail[k + 1]), self.number(tail[k + 2], where, what))
                 k += 3
             elif tail[k] == "wiggle":
-                raise self.error(UnsupportedModelError, f"{what}: a wiggling wall is not supported.", where,
-                                 "analyse a run without wiggle.")
+                raise self.error(
+                    UnsupportedModelError,
+                    f"{what}: a wiggling wall is not supported.",
+                    where,
+                    "analyse a run without wiggle.",
+                )
             elif tail[k] == "contacts":
                 fix.contacts, k = True, k + 1
             else:
@@ -426,7 +503,7 @@ class _LammpsReader(_Reader):
             words, cutoff = args[3:], "type"
             if "cutoff" in words[:-1]:
                 k = words.index("cutoff")
-                cutoff, words = words[k + 1], words[:k] + words[k + 2:]
+                cutoff, words = words[k + 1], words[:k] + words[k + 2 :]
             self.local[args[0]] = LocalCompute(args[0], args[2], words, cutoff, where)
 
     def cmd_dump_modify(self, args: list[str], where: Where) -> None:
@@ -434,8 +511,12 @@ class _LammpsReader(_Reader):
         self.need(args, 1, where, "dump_modify", "dump_modify ID KEYWORD VALUE ...")
         dump = self.dumps.get(args[0])
         if dump is None:
-            raise self.error(ScriptError, f"dump_modify: no dump with id {excerpt(args[0])} is defined before.",
-                             where, "define the dump before modifying it.")
+            raise self.error(
+                ScriptError,
+                f"dump_modify: no dump with id {excerpt(args[0])} is defined before.",
+                where,
+                "define the dump before modifying it.",
+            )
         rest, k = args[1:], 0
         while k < len(rest):
             if rest[k] == "format" and k + 1 < len(rest):
@@ -457,8 +538,11 @@ class _LammpsReader(_Reader):
     def pair_models(self) -> tuple[dict[tuple[int, int], ContactModel], dict[tuple[int, int], Where]]:
         """Every type pair's model set by a line (i <= j) and the line that set it."""
         if self.pair_style is None:
-            raise ScriptError("the script has no granular pair_style.", file=self.root,
-                              fix="give the run's input script (pair_style granular or gran/*).")
+            raise ScriptError(
+                "the script has no granular pair_style.",
+                file=self.root,
+                fix="give the run's input script (pair_style granular or gran/*).",
+            )
         n = self.ntypes or 0
         lines: dict[tuple[int, int], tuple[list[str], Where]] = {}
         for ti, tj, words, where in self.coeffs:
@@ -467,13 +551,18 @@ class _LammpsReader(_Reader):
                     if i <= j:
                         lines[(i, j)] = (words, where)
         if self.pair_style in LEGACY_STYLES:
-            key, params, _ = self.legacy_words(self.pair_style, self.legacy_args, self.pair_where, False,
-                                               f"pair_style {self.pair_style}")
+            key, params, _ = self.legacy_words(
+                self.pair_style, self.legacy_args, self.pair_where, False, f"pair_style {self.pair_style}"
+            )
             model = ContactModel(key, params)
-            return ({(i, j): model for i in range(1, n + 1) for j in range(i, n + 1)},
-                    {(i, j): self.pair_where for i in range(1, n + 1) for j in range(i, n + 1)})
-        parsed = {pair: self.granular_words(words, where, False, f"pair_coeff {pair[0]} {pair[1]}")
-                  for pair, (words, where) in lines.items()}
+            return (
+                {(i, j): model for i in range(1, n + 1) for j in range(i, n + 1)},
+                {(i, j): self.pair_where for i in range(1, n + 1) for j in range(i, n + 1)},
+            )
+        parsed = {
+            pair: self.granular_words(words, where, False, f"pair_coeff {pair[0]} {pair[1]}")
+            for pair, (words, where) in lines.items()
+        }
         history = any(law_class(key)(params).has_spring for key, params, _ in parsed.values())
         models = {pair: ContactModel(key, {**params, "history": history}) for pair, (key, params, _) in parsed.items()}
         return models, {pair: where for pair, (_, where) in lines.items()}
@@ -483,8 +572,9 @@ class _LammpsReader(_Reader):
         if "*" not in word:
             return range(self.integer(word, where, "pair_coeff type"), self.integer(word, where, "pair_coeff") + 1)
         lo, hi = word.split("*", 1)
-        return range(self.integer(lo, where, "pair_coeff") if lo else 1,
-                     (self.integer(hi, where, "pair_coeff") if hi else n) + 1)
+        return range(
+            self.integer(lo, where, "pair_coeff") if lo else 1, (self.integer(hi, where, "pair_coeff") if hi else n) + 1
+        )
 
     def line_materials(self, models: dict[tuple[int, int], ContactModel]) -> dict[int, Material]:
         """E and nu of type i from its ``i i`` line where the model carries them."""
@@ -508,11 +598,26 @@ class _LammpsReader(_Reader):
         models, lines = self.pair_models()
         self.finish_dumps()
         return LammpsScript(
-            path=self.root, units=self.units or "lj", periodic=self.periodic, ntypes=self.ntypes,
-            timestep=self.timestep, runs=self.runs, pair_style=self.pair_style, pair_models=models, pair_lines=lines,
-            line_materials=self.line_materials(models), walls=self.lammps_walls, regions=self.regions,
-            computes=self.local, dumps=list(self.dumps.values()), rotations=self.rotations, gravity=self.gravities,
-            other_forces=self.other_forces, warnings=self.warnings, included=self.included)
+            path=self.root,
+            units=self.units or "lj",
+            periodic=self.periodic,
+            ntypes=self.ntypes,
+            timestep=self.timestep,
+            runs=self.runs,
+            pair_style=self.pair_style,
+            pair_models=models,
+            pair_lines=lines,
+            line_materials=self.line_materials(models),
+            walls=self.lammps_walls,
+            regions=self.regions,
+            computes=self.local,
+            dumps=list(self.dumps.values()),
+            rotations=self.rotations,
+            gravity=self.gravities,
+            other_forces=self.other_forces,
+            warnings=self.warnings,
+            included=self.included,
+        )
 
 
 def read_lammps_script(path: str | Path, variables: dict[str, str] | None = None) -> LammpsScript:

@@ -91,8 +91,9 @@ def region_contacts(region: Region, x: np.ndarray, radius: np.ndarray, theta: fl
         with np.errstate(invalid="ignore", divide="ignore"):
             side[:, a], side[:, b] = e1 * (1.0 - R / rho), e2 * (1.0 - R / rho)
         r_side = R - rho
-        out.append((side, r_side, np.full(len(rho), -0.5 / R), inside & (r_side < radius) & (rho > 0)
-                    & (3 not in region.open)))
+        out.append(
+            (side, r_side, np.full(len(rho), -0.5 / R), inside & (r_side < radius) & (rho > 0) & (3 not in region.open))
+        )
         for gap, sign, face in ((x[:, axis] - lo, 1.0, 1), (hi - x[:, axis], -1.0, 2)):
             cap = np.zeros_like(x)
             cap[:, axis] = sign * gap
@@ -107,6 +108,9 @@ def fix_contacts(fix: WallFix, x: np.ndarray, radius: np.ndarray, theta: float =
     surface, in the fix's order: the last touching one is the one its contacts array holds)."""
     if fix.geometry == "region":
         return region_contacts(fix.region, x, radius, theta)
-    parts = plane_fix_contacts(fix, x, radius) if fix.geometry in ("xplane", "yplane", "zplane") \
+    parts = (
+        plane_fix_contacts(fix, x, radius)
+        if fix.geometry in ("xplane", "yplane", "zplane")
         else zcylinder_contacts(fix, x, radius)
+    )
     return [(d, r, k, r < radius) for d, r, k in parts]

@@ -38,7 +38,8 @@ PRIMITIVE_HISTORY_UNKNOWN = (
     "the energies that depend on a contact's history (tangential and rolling springs, elasto-plastic normal "
     "state, an easo liquid bridge across a gap) of primitive-wall contacts are NOT COMPUTED: LIGGGHTS never writes "
     "the history of primitive-wall contacts (their rows carry not_computed bits). An equivalent mesh wall (fix "
-    "mesh/surface of the same plane or cylinder, with compute wall/gran/local) would give them.")
+    "mesh/surface of the same plane or cylinder, with compute wall/gran/local) would give them."
+)
 """The note of a run whose law reads a history and which has primitive walls."""
 
 
@@ -75,32 +76,50 @@ class StepJoin:
     wall_force: WallForce | None = None
     primitive_note: str = PRIMITIVE_HISTORY_UNKNOWN
 
-    def frame(self, af: DumpFrame, pf: DumpFrame, wf: DumpFrame | None, walls: tuple[int, ...] | None,
-              kind: tuple[bool | None, float | None] = (None, None)) -> Frame:
+    def frame(
+        self,
+        af: DumpFrame,
+        pf: DumpFrame,
+        wf: DumpFrame | None,
+        walls: tuple[int, ...] | None,
+        kind: tuple[bool | None, float | None] = (None, None),
+    ) -> Frame:
         """The Frame of one timestep's atom, pair and mesh-wall dump frames; ``walls``: the scene's walls
         that exist at this step (None: every one), the primitive ones rebuilt only where they exist; ``kind``:
         whether the frame was written at the setup of a run (None: unknown) and that run's timestep (s), for the
         rebuilding of the primitive walls' history (:attr:`wall_force`)."""
         step = af.step
-        box = Box(af.box.lo, af.box.hi, tuple(p or q for p, q in zip(af.box.periodic, self.periodic)),
-                  af.box.tilt)
-        particles: Table = {"id": af.int_column("id"), "type": af.int_column("type").astype(np.int32),
-                            "x": af.columns["x"], "y": af.columns["y"], "z": af.columns["z"],
-                            "radius": af.columns["radius"]}
-        particles.update({c: af.columns[c] for c in self.atom_columns[len(ATOM_COLUMNS):]})
+        box = Box(af.box.lo, af.box.hi, tuple(p or q for p, q in zip(af.box.periodic, self.periodic)), af.box.tilt)
+        particles: Table = {
+            "id": af.int_column("id"),
+            "type": af.int_column("type").astype(np.int32),
+            "x": af.columns["x"],
+            "y": af.columns["y"],
+            "z": af.columns["z"],
+            "radius": af.columns["radius"],
+        }
+        particles.update({c: af.columns[c] for c in self.atom_columns[len(ATOM_COLUMNS) :]})
         if np.any(~(particles["radius"] > 0)):
             row = int(np.flatnonzero(~(particles["radius"] > 0))[0])
-            raise InputFormatError(f"particle radius must be > 0, found {float(particles['radius'][row])!r}.",
-                                   file=af.file, step=step, line=af.line_of(row),
-                                   fix="check the atom dump's radius column.")
+            raise InputFormatError(
+                f"particle radius must be > 0, found {float(particles['radius'][row])!r}.",
+                file=af.file,
+                step=step,
+                line=af.line_of(row),
+                fix="check the atom dump's radius column.",
+            )
         unknown = ~np.isin(particles["type"], list(self.scene.materials))
         if unknown.any():
             row = int(np.flatnonzero(unknown)[0])
-            raise MaterialError(f"particle type {int(particles['type'][row])} has no material (materials are "
-                                f"defined for types {sorted(self.scene.materials)}).",
-                                file=af.file, step=step, line=af.line_of(row),
-                                fix="define youngsModulus and poissonsRatio for every type in the input script, "
-                                    "or pass --material TYPE:E:NU.")
+            raise MaterialError(
+                f"particle type {int(particles['type'][row])} has no material (materials are "
+                f"defined for types {sorted(self.scene.materials)}).",
+                file=af.file,
+                step=step,
+                line=af.line_of(row),
+                fix="define youngsModulus and poissonsRatio for every type in the input script, "
+                "or pass --material TYPE:E:NU.",
+            )
         try:
             index = ParticleIndex(particles["id"], file=af.file, step=step)
         except InputFormatError as exc:  # duplicated ids: name the line of the first repeat
@@ -119,10 +138,15 @@ class StepJoin:
             parts.append(self._mesh_walls(wf, particles, index, xyz, h))
         # printed positions can hide a contact: keep those within their uncertainty (bound inf); and those apart
         # that the wall's law still acts across (a liquid bridge), as LIGGGHTS evaluates them
-        reach = [(w.model or self.scene.model).contact_law.separation_limit(particles["radius"], np.inf)
-                 for w in self.scene.walls]
-        primitive = primitive_wall_contacts(particles, self.scene.walls, margin=np.sqrt(3.0) * h, reach=reach,
-                                            present=walls) if has_primitive else {}
+        reach = [
+            (w.model or self.scene.model).contact_law.separation_limit(particles["radius"], np.inf)
+            for w in self.scene.walls
+        ]
+        primitive = (
+            primitive_wall_contacts(particles, self.scene.walls, margin=np.sqrt(3.0) * h, reach=reach, present=walls)
+            if has_primitive
+            else {}
+        )
         notes = []
         # the law reads a contact history, which LIGGGHTS never writes for primitive walls: every frame's
         # contacts say which rows lack it (history_unknown), so that their modes are "not computed"
@@ -134,13 +158,17 @@ class StepJoin:
             rows = index.rows(primitive["id1"])
             # a contact apart beyond the positions' uncertainty (a liquid bridge's): the bound of its gap
             gap = -primitive["delta"]
-            primitive["bound"] = np.where(gap >= np.sqrt(3.0) * h[rows], position_error(h[rows], gap),
-                                          position_error(h[rows], primitive["delta"]))
+            primitive["bound"] = np.where(
+                gap >= np.sqrt(3.0) * h[rows], position_error(h[rows], gap), position_error(h[rows], primitive["delta"])
+            )
             # LIGGGHTS' own point for a wall contact is on the wall: the particle takes the whole overlap
             primitive["cpx"], primitive["cpy"], primitive["cpz"] = contact_point(
                 np.stack([primitive[c] for c in ("x1", "y1", "z1")], -1),
                 np.stack([primitive[c] for c in ("nx", "ny", "nz")], -1),
-                primitive["r1"], primitive["delta"], 1.0).T
+                primitive["r1"],
+                primitive["delta"],
+                1.0,
+            ).T
             for c in history:  # columns every part must have; the flag below says they are unknown here
                 primitive[c] = np.zeros(len(primitive["delta"]))
             if history:
@@ -153,30 +181,62 @@ class StepJoin:
         contacts = {c: np.concatenate([p[c] for p in parts]) if len(parts) > 1 else parts[0][c] for c in parts[0]}
         source, error = self._overlap_policy(contacts, contacts.pop("bound"), af, pf, step)
         time = None if self.timestep is None else step * self.timestep
-        return Frame(step=step, particles=particles, contacts=contacts, box=box, time=time,
-                     source=(str(af.file), str(pf.file)) + ((str(wf.file),) if wf is not None else ()),
-                     overlap_source=source, overlap_error=error, notes=notes, walls=walls)
+        return Frame(
+            step=step,
+            particles=particles,
+            contacts=contacts,
+            box=box,
+            time=time,
+            source=(str(af.file), str(pf.file)) + ((str(wf.file),) if wf is not None else ()),
+            overlap_source=source,
+            overlap_error=error,
+            notes=notes,
+            walls=walls,
+        )
 
-    def _rebuild(self, primitive: Table, history: list[str], particles: Table, parts: list[Table], af: DumpFrame,
-                 pf: DumpFrame, wf: DumpFrame | None, box: Box, kind: tuple[bool | None, float | None]) -> list[str]:
+    def _rebuild(
+        self,
+        primitive: Table,
+        history: list[str],
+        particles: Table,
+        parts: list[Table],
+        af: DumpFrame,
+        pf: DumpFrame,
+        wf: DumpFrame | None,
+        box: Box,
+        kind: tuple[bool | None, float | None],
+    ) -> list[str]:
         """The primitive-wall rows' history rebuilt from the stored forces (:attr:`wall_force`), in place; the
         notes of the reasons of what stays unknown."""
         setup, dt = kind
         pairs = {**parts[0], "periodic": pf.columns[self.pair_names["periodic"]]}
         atom_digits = [af.digits.get(c) for c in ("x", "y", "z", "radius", *self.wall_force.particle_columns())]
-        local_digits = [f.digits.get(names[c]) for f, names in ((pf, self.pair_names), (wf, self.wall_names))
-                        if f is not None for c in (*history, "delta") if c in names]
+        local_digits = [
+            f.digits.get(names[c])
+            for f, names in ((pf, self.pair_names), (wf, self.wall_names))
+            if f is not None
+            for c in (*history, "delta")
+            if c in names
+        ]
         print_rtol = max(relative_rounding(d) for d in atom_digits + local_digits)
-        rebuilt = self.wall_force.rebuild(particles, pairs, parts[1] if wf is not None else None, primitive, box,
-                                          setup, dt, print_rtol, "delta" in self.wall_names)
+        rebuilt = self.wall_force.rebuild(
+            particles,
+            pairs,
+            parts[1] if wf is not None else None,
+            primitive,
+            box,
+            setup,
+            dt,
+            print_rtol,
+            "delta" in self.wall_names,
+        )
         for c in history:
             if c in rebuilt.columns:
                 primitive[c] = rebuilt.columns[c]
         primitive["history_unknown"] = rebuilt.unknown
         return [REASONS[r] for r in rebuilt.reasons]
 
-    def _pairs(self, pf: DumpFrame, index: ParticleIndex, xyzr: np.ndarray, h: np.ndarray | None,
-               box: Box) -> Table:
+    def _pairs(self, pf: DumpFrame, index: ParticleIndex, xyzr: np.ndarray, h: np.ndarray | None, box: Box) -> Table:
         from demsplit.kernels import pair_geometry  # compiled, lazily
         from demsplit.kernels import repeated_pair as repeated_rows
 
@@ -188,19 +248,37 @@ class StepJoin:
         first, repeat = repeated_rows(rows1, rows2, len(index.ids))
         if repeat >= 0:
             raise ContactError(
-                f"particle {int(id1[first])} is paired with itself." if first == repeat else
-                f"the contact of particles {int(id1[repeat])} and {int(id2[repeat])} is listed twice in this frame "
+                f"particle {int(id1[first])} is paired with itself."
+                if first == repeat
+                else f"the contact of particles {int(id1[repeat])} and {int(id2[repeat])} is listed twice in this "
+                f"frame "
                 f"(rows {first + 1} and {repeat + 1}, lines {pf.line_of(first)} and {pf.line_of(repeat)}).",
-                file=pf.file, step=pf.step, line=pf.line_of(repeat),
+                file=pf.file,
+                step=pf.step,
+                line=pf.line_of(repeat),
                 fix="each contact must appear once per frame: check that the dump is not the concatenation of "
-                    "two runs or of two MPI ranks' output for the same step.")
+                "two runs or of two MPI ranks' output for the same step.",
+            )
         dumped_cp = all(c in col for c in ("cpx", "cpy", "cpz"))
         nx, ny, nz, x1, y1, z1, r1, r2, gap, hmax, cp = pair_geometry(
-            rows1, rows2, xyzr, np.zeros(0) if h is None else h, box.lengths, box.tilt, box.periodic, not dumped_cp)
+            rows1, rows2, xyzr, np.zeros(0) if h is None else h, box.lengths, box.tilt, box.periodic, not dumped_cp
+        )
         if "delta" in col and len(hmax):
             _refuse_overlaps_off_positions(pf, names["delta"], col["delta"], gap, hmax, r1 + r2, id1, id2)
-        out: Table = {"id1": id1, "id2": id2, "wall": wall, "delta": col["delta"] if "delta" in col else gap,
-                      "nx": nx, "ny": ny, "nz": nz, "x1": x1, "y1": y1, "z1": z1, "r1": r1, "r2": r2}
+        out: Table = {
+            "id1": id1,
+            "id2": id2,
+            "wall": wall,
+            "delta": col["delta"] if "delta" in col else gap,
+            "nx": nx,
+            "ny": ny,
+            "nz": nz,
+            "x1": x1,
+            "y1": y1,
+            "z1": z1,
+            "r1": r1,
+            "r2": r2,
+        }
         out["bound"] = self._delta_error(pf, names, hmax, gap)
         out.update({c: col[c] for c in self.law_columns if c in col})
         # the dumped point, else LIGGGHTS' own radius-weighted point, (x1 r2 + x2 r1)/(r1 + r2), from the join
@@ -210,8 +288,9 @@ class StepJoin:
         out.update(cpx=cpx, cpy=cpy, cpz=cpz)
         return out
 
-    def _mesh_walls(self, wf: DumpFrame, particles: Table, index: ParticleIndex, xyz: np.ndarray,
-                    h: np.ndarray) -> Table:
+    def _mesh_walls(
+        self, wf: DumpFrame, particles: Table, index: ParticleIndex, xyz: np.ndarray, h: np.ndarray
+    ) -> Table:
         names = self.wall_names
         col = {c: wf.columns[t] for c, t in names.items() if t in wf.columns}
         pid = wf.int_column(names["id1"])
@@ -221,30 +300,51 @@ class StepJoin:
             row = int(np.flatnonzero((mesh < 0) | (mesh >= len(wall_of_mesh)))[0])
             raise InputFormatError(
                 f"mesh index {int(mesh[row])} is not one of the {len(wall_of_mesh)} meshes of the script's "
-                "last mesh 'fix wall/gran'.", file=wf.file, step=wf.step, line=wf.line_of(row),
-                fix="pass the input script that wrote this dump.")
+                "last mesh 'fix wall/gran'.",
+                file=wf.file,
+                step=wf.step,
+                line=wf.line_of(row),
+                fix="pass the input script that wrote this dump.",
+            )
         self._refuse_repeated_wall_contacts(wf, pid, mesh, col)
         (rows,) = self._rows(index, wf, pid)
         r = particles["radius"][rows]
         if all(c in col for c in ("wall_cpx", "wall_cpy", "wall_cpz")):
             on_wall = np.stack([col["wall_cpx"], col["wall_cpy"], col["wall_cpz"]], axis=-1)
         else:
-            raise InputFormatError("the wall contact dump lacks the 'pos' columns, so the wall normal is unknown.",
-                                   file=wf.file, step=wf.step,
-                                   fix="add 'pos' to the compute wall/gran/local keywords.")
+            raise InputFormatError(
+                "the wall contact dump lacks the 'pos' columns, so the wall normal is unknown.",
+                file=wf.file,
+                step=wf.step,
+                fix="add 'pos' to the compute wall/gran/local keywords.",
+            )
         d = on_wall - xyz[rows]
         dist = np.sqrt(np.einsum("ij,ij->i", d, d))
         n = d / np.where(dist > 0, dist, 1.0)[:, None]
-        out: Table = {"id1": pid, "id2": np.full(len(pid), -1, np.int64), "wall": wall_of_mesh[mesh],
-                      "delta": col["delta"] if "delta" in col else r - dist,
-                      "nx": n[:, 0], "ny": n[:, 1], "nz": n[:, 2],
-                      "x1": xyz[rows, 0], "y1": xyz[rows, 1], "z1": xyz[rows, 2],
-                      "r1": r, "r2": np.full(len(pid), np.inf)}
+        out: Table = {
+            "id1": pid,
+            "id2": np.full(len(pid), -1, np.int64),
+            "wall": wall_of_mesh[mesh],
+            "delta": col["delta"] if "delta" in col else r - dist,
+            "nx": n[:, 0],
+            "ny": n[:, 1],
+            "nz": n[:, 2],
+            "x1": xyz[rows, 0],
+            "y1": xyz[rows, 1],
+            "z1": xyz[rows, 2],
+            "r1": r,
+            "r2": np.full(len(pid), np.inf),
+        }
         wall_digits = min((wf.digits.get(names[c]) or 17) for c in ("wall_cpx", "wall_cpy", "wall_cpz"))
         h_wall = np.max(printed_step(on_wall, wall_digits), axis=1)
         out["bound"] = self._delta_error(wf, names, np.maximum(h[rows], h_wall), r - dist)
-        out.update({c: col[c] if c in col else np.zeros(len(pid)) for c in self.law_columns
-                    if c in col or c in self.pair_names})  # 0: a column only the pairs' law reads
+        out.update(
+            {
+                c: col[c] if c in col else np.zeros(len(pid))
+                for c in self.law_columns
+                if c in col or c in self.pair_names
+            }
+        )  # 0: a column only the pairs' law reads
         out.update(cpx=on_wall[:, 0], cpy=on_wall[:, 1], cpz=on_wall[:, 2])
         return out
 
@@ -253,8 +353,11 @@ class StepJoin:
         frame would be counted twice: a ContactError naming both lines."""
         if len(pid) < 2:
             return
-        keys = [pid, mesh] + ([wf.int_column(self.wall_names["tri_id"])] if "tri_id" in self.wall_names
-                              else [col[c] for c in ("delta", "wall_cpx", "wall_cpy", "wall_cpz") if c in col])
+        keys = [pid, mesh] + (
+            [wf.int_column(self.wall_names["tri_id"])]
+            if "tri_id" in self.wall_names
+            else [col[c] for c in ("delta", "wall_cpx", "wall_cpy", "wall_cpz") if c in col]
+        )
         order = np.lexsort(keys[::-1])
         same = np.ones(len(pid) - 1, dtype=bool)
         for k in keys:
@@ -264,13 +367,18 @@ class StepJoin:
             first, repeat = sorted((int(order[at]), int(order[at + 1])))
             raise ContactError(
                 f"the contact of particle {int(pid[repeat])} with mesh {int(mesh[repeat])} is listed twice in this "
-                f"frame (lines {wf.line_of(first)} and {wf.line_of(repeat)}).", file=wf.file, step=wf.step,
-                line=wf.line_of(repeat), fix="each contact must appear once per frame: check that the dump is "
-                "not the concatenation of two runs or of two MPI ranks' output for the same step.")
+                f"frame (lines {wf.line_of(first)} and {wf.line_of(repeat)}).",
+                file=wf.file,
+                step=wf.step,
+                line=wf.line_of(repeat),
+                fix="each contact must appear once per frame: check that the dump is "
+                "not the concatenation of two runs or of two MPI ranks' output for the same step.",
+            )
 
     @staticmethod
-    def _pair_rows(index: ParticleIndex, f: DumpFrame, id1: np.ndarray, id2: np.ndarray,
-                   wall: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _pair_rows(
+        index: ParticleIndex, f: DumpFrame, id1: np.ndarray, id2: np.ndarray, wall: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`ParticleIndex.contact_rows` of the particle pairs of contact dump frame
         ``f``; an unknown id is a ContactError naming the dump and the line of its first row."""
         try:
@@ -291,8 +399,9 @@ class StepJoin:
             raise ContactError(exc.message, file=f.file, step=f.step, line=f.line_of(row), fix=exc.fix) from None
 
     @staticmethod
-    def _delta_error(f: DumpFrame, names: dict[str, str], h: np.ndarray,
-                     delta_from_positions: np.ndarray) -> np.ndarray:
+    def _delta_error(
+        f: DumpFrame, names: dict[str, str], h: np.ndarray, delta_from_positions: np.ndarray
+    ) -> np.ndarray:
         """Relative error bound of each contact's overlap: the rounding of the
         dumped ``delta`` column, or the position bound when there is none."""
         token = names.get("delta")
@@ -300,8 +409,9 @@ class StepJoin:
             return np.full(len(delta_from_positions), relative_rounding(f.digits.get(token)))
         return position_error(h, delta_from_positions)
 
-    def _overlap_policy(self, contacts: Table, error: np.ndarray, af: DumpFrame, pf: DumpFrame,
-                        step: int) -> tuple[str, np.ndarray | None]:
+    def _overlap_policy(
+        self, contacts: Table, error: np.ndarray, af: DumpFrame, pf: DumpFrame, step: int
+    ) -> tuple[str, np.ndarray | None]:
         """Where the overlaps come from, their per-contact relative error bound,
         and refusal when overlaps recomputed from printed positions are too imprecise."""
         delta = self.pair_names.get("delta")
@@ -322,16 +432,26 @@ class StepJoin:
                 f"{k} of {len(error)} overlaps have an error bound above the tolerance {self.overlap_tolerance:g} "
                 f"(median {np.median(error):.2g}, max {np.max(error):.2g}): they were recomputed from positions "
                 f"printed with {digits} significant digits ({source}); their energies would be unreliable.",
-                file=af.file, step=step,
+                file=af.file,
+                step=step,
                 fix="dump the overlap ('delta' keyword of compute pair/gran/local and wall/gran/local), or write "
-                    "positions at full precision (dump_modify ID format with %.17g, or a binary .bin atom dump); "
-                    "primitive-wall overlaps always come from positions. Or raise --overlap-tolerance, or use "
-                    "--force-positions to accept the error, which is then reported per contact.")
+                "positions at full precision (dump_modify ID format with %.17g, or a binary .bin atom dump); "
+                "primitive-wall overlaps always come from positions. Or raise --overlap-tolerance, or use "
+                "--force-positions to accept the error, which is then reported per contact.",
+            )
         return source, error
 
 
-def _refuse_overlaps_off_positions(pf: DumpFrame, token: str, delta: np.ndarray, gap: np.ndarray, h: np.ndarray,
-                                   r: np.ndarray, id1: np.ndarray, id2: np.ndarray) -> None:
+def _refuse_overlaps_off_positions(
+    pf: DumpFrame,
+    token: str,
+    delta: np.ndarray,
+    gap: np.ndarray,
+    h: np.ndarray,
+    r: np.ndarray,
+    id1: np.ndarray,
+    id2: np.ndarray,
+) -> None:
     """A dumped overlap must be the one the positions give, r1 + r2 - |x2 - x1| (LIGGGHTS computes it from
     the same positions, at the same step: they agree to 4e-18 m in the samples), within what the printing of
     both allows: twice sqrt(3) h for the centres, the dumped value's own rounding, and 1e-9 of r1 + r2 for
@@ -354,8 +474,12 @@ def _refuse_overlaps_off_positions(pf: DumpFrame, token: str, delta: np.ndarray,
         raise ContactError(
             f"the contact of particles {int(id1[row])} and {int(id2[row])} has a dumped overlap of "
             f"{float(delta[row]):.6g} m, but its particles' positions give {float(gap[row]):.6g} m (the printing "
-            f"allows {float(tol[row]):.2g} m); {int(off.sum())} such contact(s).", file=pf.file, step=pf.step,
-            line=pf.line_of(row), fix="check that the pair and atom dumps belong to the same run and timestep.")
+            f"allows {float(tol[row]):.2g} m); {int(off.sum())} such contact(s).",
+            file=pf.file,
+            step=pf.step,
+            line=pf.line_of(row),
+            fix="check that the pair and atom dumps belong to the same run and timestep.",
+        )
 
 
 def _largest_printed_step(coordinates: list[np.ndarray], digits: list[int | None]) -> np.ndarray:
@@ -365,7 +489,6 @@ def _largest_printed_step(coordinates: list[np.ndarray], digits: list[int | None
 
     def piece(lo: int, hi: int) -> None:
         h[lo:hi] = np.max([printed_step(x[lo:hi], d) for x, d in zip(coordinates, digits)], axis=0)
+
     threads.map_ranges(piece, len(h))
     return h
-
-

@@ -83,11 +83,10 @@ import numpy as np
 from ..errors import DemsplitError, MaterialError, ScriptError, UnsupportedModelError
 from ..physics.laws import ContactLaw, law_class, simulator_words
 from ..physics.laws._liggghts import COHESION_MODELS, ROLLING_MODELS, TANGENTIAL_MODELS
-from ..physics.laws._liquid_bridge import BRIDGE_MODELS
 from ..physics.laws._liggghts import SHEAR as SHEAR_COLUMNS
+from ..physics.laws._liquid_bridge import BRIDGE_MODELS
 from ..scene import ContactModel, Material, Scene, Wall
-from .lammps_input import (Unevaluable, Variables, Where, excerpt, logical_lines, split_words,
-                           strip_comment, substitute)
+from .lammps_input import Unevaluable, Variables, Where, excerpt, logical_lines, split_words, strip_comment, substitute
 
 __all__ = ["read_script", "LiggghtsScript", "DumpSpec", "LocalLayout", "local_layout", "history_columns"]
 
@@ -95,8 +94,21 @@ __all__ = ["read_script", "LiggghtsScript", "DumpSpec", "LocalLayout", "local_la
 # Column layouts of compute pair/gran/local and wall/gran/local
 # --------------------------------------------------------------------------
 
-CODE_ORDER = ("pos", "vel", "id", "force", "force_normal", "force_tangential", "torque",
-              "torque_normal", "torque_tangential", "history", "contactArea", "delta", "contactPoint")
+CODE_ORDER = (
+    "pos",
+    "vel",
+    "id",
+    "force",
+    "force_normal",
+    "force_tangential",
+    "torque",
+    "torque_normal",
+    "torque_tangential",
+    "history",
+    "contactArea",
+    "delta",
+    "contactPoint",
+)
 """Blocks in the order ``add_pair``/``add_wall_2`` write them (``heatFlux`` goes last)."""
 
 DEFAULT_KEYWORDS = ("pos", "vel", "id", "force", "torque", "history", "contactArea")
@@ -147,8 +159,9 @@ def history_columns(law: ContactLaw, kind: str, *, elastic_potential: bool = Fal
     return names
 
 
-def local_layout(kind: str, keywords: Sequence[str], dnum: int = 3, *,
-                 history: Sequence[str] | None = None) -> list[str]:
+def local_layout(
+    kind: str, keywords: Sequence[str], dnum: int = 3, *, history: Sequence[str] | None = None
+) -> list[str]:
     """Canonical name of every column of a ``compute pair/gran/local``
     (``kind='pair'``) or ``wall/gran/local`` (``kind='wall'``) with these
     keywords, in the order the code writes them (see the module docstring).
@@ -163,12 +176,15 @@ def local_layout(kind: str, keywords: Sequence[str], dnum: int = 3, *,
     unknown = [k for k in keywords if k not in _KEYWORDS]
     if unknown:
         raise ScriptError(
-            f"compute {kind}/gran/local: unknown keyword(s) {unknown}; LIGGGHTS 3.8 knows "
-            f"{sorted(_KEYWORDS)}.", fix="correct the compute line (LIGGGHTS refuses it too).")
+            f"compute {kind}/gran/local: unknown keyword(s) {unknown}; LIGGGHTS 3.8 knows {sorted(_KEYWORDS)}.",
+            fix="correct the compute line (LIGGGHTS refuses it too).",
+        )
     if "ms_id" in keywords:
         raise UnsupportedModelError(
             f"compute {kind}/gran/local ms_id needs fix multisphere, which LIGGGHTS-PUBLIC does not have "
-            "(Debian's 3.8.0 crashes on it).", fix="remove ms_id from the compute.")
+            "(Debian's 3.8.0 crashes on it).",
+            fix="remove ms_id from the compute.",
+        )
     if history is None:
         history = list(SHEAR_COLUMNS) if dnum == 3 else [f"history{k}" for k in range(1, dnum + 1)]
     elif len(history) != dnum:
@@ -176,9 +192,9 @@ def local_layout(kind: str, keywords: Sequence[str], dnum: int = 3, *,
     flags = set(keywords) if keywords else set(DEFAULT_KEYWORDS)
     if "history" in flags and dnum == 0:
         raise ScriptError(
-            f"compute {kind}/gran/local asks for 'history' but the contact model stores none "
-            "(tangential no_history).",
-            fix="use 'tangential history', or drop 'history' from the compute.")
+            f"compute {kind}/gran/local asks for 'history' but the contact model stores none (tangential no_history).",
+            fix="use 'tangential history', or drop 'history' from the compute.",
+        )
     blocks = _PAIR_BLOCKS if kind == "pair" else _WALL_BLOCKS
     columns: list[str] = []
     for block in CODE_ORDER:
@@ -369,9 +385,9 @@ class _ModelSpec:
         return self.settings.get(name, "off") in ("on", "yes")
 
 
-
-def _parse_model(words: list[str], stop: tuple[str, ...], where: Where,
-                 warnings: list[str], what: str) -> tuple[_ModelSpec, int]:
+def _parse_model(
+    words: list[str], stop: tuple[str, ...], where: Where, warnings: list[str], what: str
+) -> tuple[_ModelSpec, int]:
     """Parse ``model X tangential Y [cohesion C] [rolling_friction R] [surface S]
     [setting on|off ...]`` up to a word in ``stop``; return the spec and the
     index of that word."""
@@ -380,35 +396,44 @@ def _parse_model(words: list[str], stop: tuple[str, ...], where: Where,
     i = 0
     while i < len(words) and words[i] not in stop:
         if i + 1 >= len(words):
-            raise ScriptError(f"{what}: '{words[i]}' needs a value.", file=where.file, line=where.line,
-                              fix="complete the command.")
+            raise ScriptError(
+                f"{what}: '{words[i]}' needs a value.", file=where.file, line=where.line, fix="complete the command."
+            )
         (kinds if words[i] in _MODEL_KEYS else settings)[words[i]] = words[i + 1]
         i += 2
 
     def unsupported(message: str, supported: str) -> UnsupportedModelError:
-        return UnsupportedModelError(f"{what}: {message} Supported: {supported}.", file=where.file,
-                                     line=where.line, fix="rerun with a supported model, or describe "
-                                     "the contact energy yourself.")
+        return UnsupportedModelError(
+            f"{what}: {message} Supported: {supported}.",
+            file=where.file,
+            line=where.line,
+            fix="rerun with a supported model, or describe the contact energy yourself.",
+        )
 
     normal = kinds.get("model")
     if normal is None:
-        raise ScriptError(f"{what}: no 'model' keyword.", file=where.file, line=where.line,
-                          fix="give 'model hertz' or 'model hooke'.")
+        raise ScriptError(
+            f"{what}: no 'model' keyword.", file=where.file, line=where.line, fix="give 'model hertz' or 'model hooke'."
+        )
     normals = simulator_words("liggghts")  # every law registered as liggghts:WORD, when the line is read
     if normal not in normals:
         raise unsupported(f"normal model {normal!r} is not supported.", ", ".join(f"model {w}" for w in normals))
     tangential = kinds.get("tangential", "no_history")  # LIGGGHTS' default (measured)
     if tangential not in TANGENTIAL:
-        raise unsupported(f"tangential model {tangential!r} is not supported.",
-                          ", ".join(f"tangential {w}" for w in TANGENTIAL))
+        raise unsupported(
+            f"tangential model {tangential!r} is not supported.", ", ".join(f"tangential {w}" for w in TANGENTIAL)
+        )
     cohesion = kinds.get("cohesion", "off")
     if cohesion not in COHESION_MODELS:
-        raise unsupported(f"cohesion model {cohesion!r} is not supported.",
-                          ", ".join(f"cohesion {c}" for c in COHESION_MODELS))
+        raise unsupported(
+            f"cohesion model {cohesion!r} is not supported.", ", ".join(f"cohesion {c}" for c in COHESION_MODELS)
+        )
     rolling = kinds.get("rolling_friction", "off")
     if rolling not in ROLLING_MODELS:
-        raise unsupported(f"rolling friction model {rolling!r} is not supported.",
-                          ", ".join(f"rolling_friction {r}" for r in ROLLING_MODELS))
+        raise unsupported(
+            f"rolling friction model {rolling!r} is not supported.",
+            ", ".join(f"rolling_friction {r}" for r in ROLLING_MODELS),
+        )
     surface = kinds.get("surface", "default")
     if surface != "default":
         raise unsupported(f"surface model {surface!r} is not supported.", "surface default")
@@ -419,20 +444,73 @@ def _parse_model(words: list[str], stop: tuple[str, ...], where: Where,
 # The interpreter
 # --------------------------------------------------------------------------
 
-_INTERPRETED = {"units", "boundary", "create_box", "variable", "include", "fix", "pair_style",
-                "compute", "dump", "dump_modify", "timestep", "run", "create_atoms", "unfix", "reset_timestep"}
+_INTERPRETED = {
+    "units",
+    "boundary",
+    "create_box",
+    "variable",
+    "include",
+    "fix",
+    "pair_style",
+    "compute",
+    "dump",
+    "dump_modify",
+    "timestep",
+    "run",
+    "create_atoms",
+    "unfix",
+    "reset_timestep",
+}
 _CONTROL_FLOW = {"jump", "if", "next", "label", "clear"}
 _COMMAND_NAME = re.compile(r"[a-z][a-z0-9_/]*")
 """What a LIGGGHTS command name looks like (input.cpp's commands and styles): a line of another kind of
 text file (``root:x:0:0``, ``KEY=value``) is not one."""
-_BENIGN_FIXES = {"nve/sphere", "nve", "nve/limit", "property/atom", "particledistribution/discrete",
-                 "insert/pack", "insert/stream", "insert/rate/region", "print", "ave/time", "ave/atom",
-                 "ave/histo", "ave/spatial", "ave/euler", "check/timestep/gran", "viscous", "freeze",
-                 "enforce2d", "momentum", "heat/gran", "heat/gran/conduction", "property/global"}
-_BALANCE_NEUTRAL_FIXES = {"nve/sphere", "property/atom", "property/global", "print", "check/timestep/gran",
-                          "heat/gran", "heat/gran/conduction", "mesh/surface", "mesh/surface/stress", "wall/gran",
-                          "gravity", "particledistribution/discrete", "insert/pack", "insert/stream",
-                          "insert/rate/region", "ave/time", "ave/atom", "ave/histo", "ave/spatial", "ave/euler"}
+_BENIGN_FIXES = {
+    "nve/sphere",
+    "nve",
+    "nve/limit",
+    "property/atom",
+    "particledistribution/discrete",
+    "insert/pack",
+    "insert/stream",
+    "insert/rate/region",
+    "print",
+    "ave/time",
+    "ave/atom",
+    "ave/histo",
+    "ave/spatial",
+    "ave/euler",
+    "check/timestep/gran",
+    "viscous",
+    "freeze",
+    "enforce2d",
+    "momentum",
+    "heat/gran",
+    "heat/gran/conduction",
+    "property/global",
+}
+_BALANCE_NEUTRAL_FIXES = {
+    "nve/sphere",
+    "property/atom",
+    "property/global",
+    "print",
+    "check/timestep/gran",
+    "heat/gran",
+    "heat/gran/conduction",
+    "mesh/surface",
+    "mesh/surface/stress",
+    "wall/gran",
+    "gravity",
+    "particledistribution/discrete",
+    "insert/pack",
+    "insert/stream",
+    "insert/rate/region",
+    "ave/time",
+    "ave/atom",
+    "ave/histo",
+    "ave/spatial",
+    "ave/euler",
+}
 """Fix styles that leave each particle's force, torque and Verlet integration as the contacts, gravity (read apart)
 and ``fix nve/sphere`` make them (a ``particletemplate/...`` too)."""
 _MOVING_WALL_KEYWORDS = ("shear", "wiggle")
@@ -440,16 +518,36 @@ _MOVING_WALL_KEYWORDS = ("shear", "wiggle")
 _PLANES = {"xplane": 0, "yplane": 1, "zplane": 2}
 _CYLINDERS = {"xcylinder": 0, "ycylinder": 1, "zcylinder": 2}
 _MATERIAL_PROPERTIES = ("youngsModulus", "poissonsRatio")
-_DUMP_MODIFY_ARITY = {"format": 1, "label": 1, "sort": 1, "append": 1, "buffer": 1, "every": 1,
-                      "fileper": 1, "first": 1, "flush": 1, "header": 1, "image": 1, "nfile": 1,
-                      "pad": 1, "precision": 1, "region": 1, "scale": 1, "unwrap": 1, "thresh": 3}
+_DUMP_MODIFY_ARITY = {
+    "format": 1,
+    "label": 1,
+    "sort": 1,
+    "append": 1,
+    "buffer": 1,
+    "every": 1,
+    "fileper": 1,
+    "first": 1,
+    "flush": 1,
+    "header": 1,
+    "image": 1,
+    "nfile": 1,
+    "pad": 1,
+    "precision": 1,
+    "region": 1,
+    "scale": 1,
+    "unwrap": 1,
+    "thresh": 3,
+}
 _CONVERSION = re.compile(r"%[-+ #0]*\d*(?:\.(\d*))?[hlLqjzt]*([diouxXeEfFgGaAcsp%])")
 
 
 def _format_conversions(fmt: str) -> list[tuple[str, int | None]]:
     """(conversion letter, precision or None) of each conversion of a printf format."""
-    return [(m.group(2), None if m.group(1) is None else int(m.group(1) or 0))
-            for m in _CONVERSION.finditer(fmt) if m.group(2) != "%"]
+    return [
+        (m.group(2), None if m.group(1) is None else int(m.group(1) or 0))
+        for m in _CONVERSION.finditer(fmt)
+        if m.group(2) != "%"
+    ]
 
 
 def _format_full_precision(fmt: str, local: bool) -> bool:
@@ -503,8 +601,9 @@ class _Reader:
 
     def read(self, path: Path) -> None:
         if path in self.include_stack:
-            raise ScriptError(f"{path} includes itself.", file=self.include_stack[-1],
-                              fix="remove the circular include.")
+            raise ScriptError(
+                f"{path} includes itself.", file=self.include_stack[-1], fix="remove the circular include."
+            )
         self.include_stack.append(path)
         for number, text in logical_lines(path):
             self.command(text, Where(path, number))
@@ -542,15 +641,21 @@ class _Reader:
                 "this line does not start with a LIGGGHTS command name (lower-case letters, digits, _ and /; "
                 "LIGGGHTS stops on it: 'Unknown command'; the line is not quoted: it may not be a script's)"
                 + (f"; this file was included from {self.include_stack[-2]}" if len(self.include_stack) > 1 else "")
-                + ": this is not an input script of a run.", file=where.file, line=where.line,
-                fix="give the run's input script, and check its include lines.")
+                + ": this is not an input script of a run.",
+                file=where.file,
+                line=where.line,
+                fix="give the run's input script, and check its include lines.",
+            )
         try:
             words = split_words(substitute(stripped, self.vars, where), where)
         except Unevaluable as exc:
             if words0[0] in _INTERPRETED:
-                raise ScriptError(f"{exc}: its value is only known while LIGGGHTS runs.",
-                                  file=where.file, line=where.line,
-                                  fix="replace it by a number, or pass the value with --var NAME VALUE.") from None
+                raise ScriptError(
+                    f"{exc}: its value is only known while LIGGGHTS runs.",
+                    file=where.file,
+                    line=where.line,
+                    fix="replace it by a number, or pass the value with --var NAME VALUE.",
+                ) from None
             self.warnings.append(f"{where.file}:{where.line}: {excerpt(words0[0])} ignored ({exc}).")
             return
         if not words:
@@ -560,8 +665,9 @@ class _Reader:
         if handler is not None:
             handler(args, where)
         elif name in _CONTROL_FLOW:
-            self.warnings.append(f"{where.file}:{where.line}: '{name}' is not followed; demsplit reads "
-                                 "the script once, top to bottom.")
+            self.warnings.append(
+                f"{where.file}:{where.line}: '{name}' is not followed; demsplit reads the script once, top to bottom."
+            )
 
     def error(self, cls: type[DemsplitError], message: str, where: Where, fix: str) -> DemsplitError:
         return cls(message, file=where.file, line=where.line, fix=fix)
@@ -570,24 +676,34 @@ class _Reader:
         try:
             value = float(text)
         except ValueError:
-            raise self.error(ScriptError, f"{what}: expected a number, found {excerpt(text)}.", where,
-                             "write a number (or a variable that holds one).") from None
+            raise self.error(
+                ScriptError,
+                f"{what}: expected a number, found {excerpt(text)}.",
+                where,
+                "write a number (or a variable that holds one).",
+            ) from None
         if not math.isfinite(value):  # nan, inf, or a literal beyond the doubles such as 1e400
-            raise self.error(ScriptError, f"{what}: {excerpt(text)} is not a finite number.", where,
-                             "write a finite number.")
+            raise self.error(
+                ScriptError, f"{what}: {excerpt(text)} is not a finite number.", where, "write a finite number."
+            )
         return value
 
     def integer(self, text: str, where: Where, what: str) -> int:
         try:
             return int(text)
         except ValueError:
-            raise self.error(ScriptError, f"{what}: expected an integer, found {excerpt(text)}.", where,
-                             "write an integer.") from None
+            raise self.error(
+                ScriptError, f"{what}: expected an integer, found {excerpt(text)}.", where, "write an integer."
+            ) from None
 
     def need(self, args: list[str], n: int, where: Where, what: str, syntax: str) -> None:
         if len(args) < n:
-            raise self.error(ScriptError, f"{what}: expected '{syntax}', found {excerpt(' '.join(args))}.",
-                             where, f"write '{syntax}'.")
+            raise self.error(
+                ScriptError,
+                f"{what}: expected '{syntax}', found {excerpt(' '.join(args))}.",
+                where,
+                f"write '{syntax}'.",
+            )
 
     # -- commands ----------------------------------------------------------
 
@@ -600,19 +716,31 @@ class _Reader:
         if not target.is_absolute():
             target = self.root.parent / target
         if not target.is_file():
-            raise self.error(ScriptError, f"include: no file {target}.", where,
-                             "check the path (relative paths are taken from the main script's directory).")
+            raise self.error(
+                ScriptError,
+                f"include: no file {target}.",
+                where,
+                "check the path (relative paths are taken from the main script's directory).",
+            )
         if len(self.include_stack) >= MAX_INCLUDE_DEPTH:
-            raise self.error(ScriptError, f"include: files include each other more than {MAX_INCLUDE_DEPTH} deep.",
-                             where, "include files from the main script, or fewer levels deep.")
+            raise self.error(
+                ScriptError,
+                f"include: files include each other more than {MAX_INCLUDE_DEPTH} deep.",
+                where,
+                "include files from the main script, or fewer levels deep.",
+            )
         self.included.append(target)
         self.read(target)
 
     def cmd_units(self, args: list[str], where: Where) -> None:
         self.need(args, 1, where, "units", "units si")
         if args[0] != "si":
-            raise self.error(UnsupportedModelError, f"units {excerpt(args[0])}: demsplit reads SI runs only.",
-                             where, "run the simulation with 'units si'.")
+            raise self.error(
+                UnsupportedModelError,
+                f"units {excerpt(args[0])}: demsplit reads SI runs only.",
+                where,
+                "run the simulation with 'units si'.",
+            )
         self.units = "si"
 
     def cmd_boundary(self, args: list[str], where: Where) -> None:
@@ -627,8 +755,12 @@ class _Reader:
         self.need(args, 1, where, "timestep", "timestep DT")
         self.timestep = self.number(args[0], where, "timestep")
         if self.timestep <= 0:
-            raise self.error(ScriptError, f"timestep {excerpt(args[0])}: the timestep must be > 0.", where,
-                             "write the run's timestep (s).")
+            raise self.error(
+                ScriptError,
+                f"timestep {excerpt(args[0])}: the timestep must be > 0.",
+                where,
+                "write the run's timestep (s).",
+            )
 
     def cmd_run(self, args: list[str], where: Where) -> None:
         self.need(args, 1, where, "run", "run N")
@@ -654,8 +786,12 @@ class _Reader:
     def cmd_pair_style(self, args: list[str], where: Where) -> None:
         self.need(args, 1, where, "pair_style", "pair_style gran model hertz tangential history")
         if args[0] != "gran":
-            raise self.error(UnsupportedModelError, f"pair_style {excerpt(args[0])} is not supported.", where,
-                             "use 'pair_style gran model hertz|hooke tangential history|no_history'.")
+            raise self.error(
+                UnsupportedModelError,
+                f"pair_style {excerpt(args[0])} is not supported.",
+                where,
+                "use 'pair_style gran model hertz|hooke tangential history|no_history'.",
+            )
         self.pair, _ = _parse_model(args[1:], (), where, self.warnings, "pair_style gran")
 
     def cmd_neigh_modify(self, args: list[str], where: Where) -> None:
@@ -678,14 +814,21 @@ class _Reader:
         elif style in ("mesh/surface", "mesh/surface/stress"):
             self.mesh_surface(fid, rest, where)
         elif "liquidtransfer" in style.split("/"):
-            raise self.error(UnsupportedModelError, f"fix {fid} {style}: a mesh that holds liquid is not supported: "
-                             "washino/capillary/viscous bridges take its per-triangle liquid content, which LIGGGHTS "
-                             "does not dump.", where, "use a dry mesh (fix ID all mesh/surface ...).")
+            raise self.error(
+                UnsupportedModelError,
+                f"fix {fid} {style}: a mesh that holds liquid is not supported: "
+                "washino/capillary/viscous bridges take its per-triangle liquid content, which LIGGGHTS "
+                "does not dump.",
+                where,
+                "use a dry mesh (fix ID all mesh/surface ...).",
+            )
         elif style == "gravity":
             self.gravity_fixes += 1
             if args[1] != "all" or self.gravity_fixes > 1:
-                self.unmodelled_forces.append(f"fix {fid} gravity of group {args[1]}"
-                                              + (" (a second gravity fix)" if self.gravity_fixes > 1 else ""))
+                self.unmodelled_forces.append(
+                    f"fix {fid} gravity of group {args[1]}"
+                    + (" (a second gravity fix)" if self.gravity_fixes > 1 else "")
+                )
             self.fix_gravity(rest, where)
         elif style.startswith("particletemplate/"):
             if style != "particletemplate/sphere":
@@ -694,11 +837,15 @@ class _Reader:
                 t = rest[rest.index("atom_type") + 1]
                 self.type_uses.append((self.integer(t, where, f"fix {style} atom_type"), f"fix {fid} {style}", where))
         elif style == "move/mesh":
-            self.warnings.append(f"{where.file}:{where.line}: fix {fid} move/mesh moves a mesh: its "
-                                 "geometry from the mesh file is only valid before it moves.")
+            self.warnings.append(
+                f"{where.file}:{where.line}: fix {fid} move/mesh moves a mesh: its "
+                "geometry from the mesh file is only valid before it moves."
+            )
         elif style not in _BENIGN_FIXES:
-            self.warnings.append(f"{where.file}:{where.line}: fix style {style} ({fid}) is not "
-                                 "interpreted by demsplit; check that it does not change the contacts.")
+            self.warnings.append(
+                f"{where.file}:{where.line}: fix style {style} ({fid}) is not "
+                "interpreted by demsplit; check that it does not change the contacts."
+            )
         if style == "nve/sphere":
             self.integrated = True
         elif style not in _BALANCE_NEUTRAL_FIXES and not style.startswith("particletemplate/"):
@@ -713,11 +860,19 @@ class _Reader:
             n = self.integer(values[0], where, what)
             nums = [self.number(v, where, what) for v in values[1:]]
             if self.ntypes is not None and n != self.ntypes:
-                raise self.error(MaterialError, f"{what}: N = {n}, but create_box defines {self.ntypes} "
-                                 "atom types.", where, f"give a {self.ntypes} x {self.ntypes} table.")
+                raise self.error(
+                    MaterialError,
+                    f"{what}: N = {n}, but create_box defines {self.ntypes} atom types.",
+                    where,
+                    f"give a {self.ntypes} x {self.ntypes} table.",
+                )
             if len(nums) != n * n:
-                raise self.error(MaterialError, f"{what}: expected {n}x{n} = {n * n} values, found "
-                                 f"{len(nums)}.", where, "give one value per pair of types, row by row.")
+                raise self.error(
+                    MaterialError,
+                    f"{what}: expected {n}x{n} = {n * n} values, found {len(nums)}.",
+                    where,
+                    "give one value per pair of types, row by row.",
+                )
             value: object = np.array(nums).reshape(n, n)
         elif style == "scalar":
             self.need(values, 1, where, what, f"{name} scalar VALUE")
@@ -725,17 +880,22 @@ class _Reader:
         else:
             nums = [self.number(v, where, what) for v in values]
             if style == "peratomtype" and self.ntypes is not None and len(nums) != self.ntypes:
-                raise self.error(MaterialError, f"{what}: expected {self.ntypes} values (one per atom "
-                                 f"type, create_box {self.ntypes}), found {len(nums)}.", where,
-                                 "give one value per atom type, wall types included.")
+                raise self.error(
+                    MaterialError,
+                    f"{what}: expected {self.ntypes} values (one per atom "
+                    f"type, create_box {self.ntypes}), found {len(nums)}.",
+                    where,
+                    "give one value per atom type, wall types included.",
+                )
             value = np.array(nums)
         self.properties[name] = (style, value, where)
 
     def fix_gravity(self, rest: list[str], where: Where) -> None:
         self.need(rest, 2, where, "fix gravity", "fix ID GROUP gravity G vector X Y Z")
         if rest[1] != "vector" or len(rest) < 5:
-            self.warnings.append(f"{where.file}:{where.line}: fix gravity style {excerpt(rest[1])} is not read; "
-                                 "script.gravity is None.")
+            self.warnings.append(
+                f"{where.file}:{where.line}: fix gravity style {excerpt(rest[1])} is not read; script.gravity is None."
+            )
             self.unmodelled_forces.append(f"fix gravity of style {rest[1]} (not read)")
             return
         try:
@@ -744,22 +904,29 @@ class _Reader:
             if not (math.isfinite(g) and np.all(np.isfinite(d))):
                 raise ValueError
         except ValueError:
-            self.warnings.append(f"{where.file}:{where.line}: fix gravity with a variable "
-                                 f"({' '.join(rest)}) is not read; script.gravity is None.")
+            self.warnings.append(
+                f"{where.file}:{where.line}: fix gravity with a variable "
+                f"({' '.join(rest)}) is not read; script.gravity is None."
+            )
             self.unmodelled_forces.append(f"fix gravity {' '.join(rest)} (a variable, not read)")
             return
         norm = float(np.linalg.norm(d))
         if norm == 0.0:
-            raise self.error(ScriptError, "fix gravity: the direction vector is zero.", where,
-                             "give a non-zero direction.")
+            raise self.error(
+                ScriptError, "fix gravity: the direction vector is zero.", where, "give a non-zero direction."
+            )
         self.gravity = g * d / norm
 
     def mesh_surface(self, fid: str, rest: list[str], where: Where) -> None:
         syntax = "fix ID GROUP mesh/surface file FILE type T [scale S] [move DX DY DZ] [rotate axis AX AY AZ angle DEG]"
         self.need(rest, 4, where, f"fix {fid} mesh/surface", syntax)
         if rest[0] != "file" or rest[2] != "type":
-            raise self.error(ScriptError, f"fix {fid} mesh/surface: expected 'file FILE type T', found "
-                             f"{excerpt(' '.join(rest[:4]))}.", where, f"write '{syntax}'.")
+            raise self.error(
+                ScriptError,
+                f"fix {fid} mesh/surface: expected 'file FILE type T', found {excerpt(' '.join(rest[:4]))}.",
+                where,
+                f"write '{syntax}'.",
+            )
         file = Path(rest[1])
         if not file.is_absolute():
             file = self.root.parent / file
@@ -770,20 +937,25 @@ class _Reader:
             word = rest[i]
             what = f"fix {fid} mesh/surface {word}"
             if word == "scale":
-                self.need(rest[i + 1:], 1, where, what, "scale S")
+                self.need(rest[i + 1 :], 1, where, what, "scale S")
                 transforms.append(("scale", (self.number(rest[i + 1], where, what),)))
                 i += 2
             elif word == "move":
-                self.need(rest[i + 1:], 3, where, what, "move DX DY DZ")
-                transforms.append(("move", tuple(self.number(v, where, what) for v in rest[i + 1:i + 4])))
+                self.need(rest[i + 1 :], 3, where, what, "move DX DY DZ")
+                transforms.append(("move", tuple(self.number(v, where, what) for v in rest[i + 1 : i + 4])))
                 i += 4
             elif word == "rotate":
-                part = rest[i + 1:i + 7]
+                part = rest[i + 1 : i + 7]
                 if len(part) < 6 or part[0] != "axis" or part[4] != "angle":
-                    raise self.error(ScriptError, f"{what}: expected 'rotate axis AX AY AZ angle DEG'.",
-                                     where, "write 'rotate axis AX AY AZ angle DEG'.")
-                transforms.append(("rotate", tuple(self.number(v, where, what)
-                                                   for v in (part[1], part[2], part[3], part[5]))))
+                    raise self.error(
+                        ScriptError,
+                        f"{what}: expected 'rotate axis AX AY AZ angle DEG'.",
+                        where,
+                        "write 'rotate axis AX AY AZ angle DEG'.",
+                    )
+                transforms.append(
+                    ("rotate", tuple(self.number(v, where, what) for v in (part[1], part[2], part[3], part[5])))
+                )
                 i += 7
             else:
                 i += 1
@@ -795,48 +967,78 @@ class _Reader:
         what = f"fix {fid} wall/gran"
         spec, i = _parse_model(rest, ("primitive", "mesh"), where, self.warnings, what)
         if i >= len(rest):
-            raise self.error(ScriptError, f"{what}: expected 'primitive type T ...' or 'mesh n_meshes K "
-                             "meshes M1 ...'.", where, "complete the wall/gran command.")
+            raise self.error(
+                ScriptError,
+                f"{what}: expected 'primitive type T ...' or 'mesh n_meshes K meshes M1 ...'.",
+                where,
+                "complete the wall/gran command.",
+            )
         walls: list[Wall] = []
         if rest[i] == "primitive":
-            geo = rest[i + 1:]
+            geo = rest[i + 1 :]
             syntax = "primitive type T xplane|yplane|zplane C  or  primitive type T zcylinder R C1 C2"
             self.need(geo, 4, where, what, syntax)
             if geo[0] != "type":
-                raise self.error(ScriptError, f"{what}: expected 'primitive type T', found {excerpt(geo[0])}.",
-                                 where, f"write '{syntax}'.")
+                raise self.error(
+                    ScriptError,
+                    f"{what}: expected 'primitive type T', found {excerpt(geo[0])}.",
+                    where,
+                    f"write '{syntax}'.",
+                )
             wall_type = self.integer(geo[1], where, f"{what} type")
             shape = geo[2]
             if shape in _PLANES:
-                wall = Wall(name=fid, kind="plane", type=wall_type, axis=_PLANES[shape],
-                            position=self.number(geo[3], where, f"{what} {shape}"))
+                wall = Wall(
+                    name=fid,
+                    kind="plane",
+                    type=wall_type,
+                    axis=_PLANES[shape],
+                    position=self.number(geo[3], where, f"{what} {shape}"),
+                )
             elif shape in _CYLINDERS:
                 self.need(geo, 6, where, what, f"primitive type T {shape} RADIUS C1 C2")
                 r, c1, c2 = (self.number(v, where, f"{what} {shape}") for v in geo[3:6])
-                wall = Wall(name=fid, kind="cylinder", type=wall_type, axis=_CYLINDERS[shape],
-                            radius=r, center=(c1, c2))
+                wall = Wall(
+                    name=fid, kind="cylinder", type=wall_type, axis=_CYLINDERS[shape], radius=r, center=(c1, c2)
+                )
             else:
-                raise self.error(UnsupportedModelError, f"{what}: primitive {excerpt(shape)} is not supported.",
-                                 where, "use xplane|yplane|zplane or xcylinder|ycylinder|zcylinder, or a mesh.")
+                raise self.error(
+                    UnsupportedModelError,
+                    f"{what}: primitive {excerpt(shape)} is not supported.",
+                    where,
+                    "use xplane|yplane|zplane or xcylinder|ycylinder|zcylinder, or a mesh.",
+                )
             self.type_uses.append((wall_type, what, where))
             walls.append(wall)
-            tail = geo[6 if shape in _CYLINDERS else 4:]
+            tail = geo[6 if shape in _CYLINDERS else 4 :]
         else:
-            geo = rest[i + 1:]
+            geo = rest[i + 1 :]
             if len(geo) < 3 or geo[0] != "n_meshes" or geo[2] != "meshes":
-                raise self.error(ScriptError, f"{what}: expected 'mesh n_meshes K meshes M1 ...'.", where,
-                                 "write 'mesh n_meshes K meshes M1 ... MK'.")
+                raise self.error(
+                    ScriptError,
+                    f"{what}: expected 'mesh n_meshes K meshes M1 ...'.",
+                    where,
+                    "write 'mesh n_meshes K meshes M1 ... MK'.",
+                )
             k = self.integer(geo[1], where, f"{what} n_meshes")
-            names = geo[3:3 + k]
+            names = geo[3 : 3 + k]
             if len(names) != k:
-                raise self.error(ScriptError, f"{what}: n_meshes {k} but {len(names)} mesh ids follow.",
-                                 where, "list exactly n_meshes mesh fix ids after 'meshes'.")
+                raise self.error(
+                    ScriptError,
+                    f"{what}: n_meshes {k} but {len(names)} mesh ids follow.",
+                    where,
+                    "list exactly n_meshes mesh fix ids after 'meshes'.",
+                )
             for m in names:
                 if m not in self.meshes:
-                    raise self.error(ScriptError, f"{what}: mesh {excerpt(m)} is not a fix mesh/surface defined "
-                                     "before.", where, "define 'fix M all mesh/surface file F type T' first.")
+                    raise self.error(
+                        ScriptError,
+                        f"{what}: mesh {excerpt(m)} is not a fix mesh/surface defined before.",
+                        where,
+                        "define 'fix M all mesh/surface file F type T' first.",
+                    )
                 walls.append(self.meshes[m])
-            tail = geo[3 + k:]
+            tail = geo[3 + k :]
         # fix wall/gran takes its on/off settings after the geometry (measured:
         # 'computeElasticPotential on' before 'mesh' is "wrong keyword order")
         spec.settings.update({a: b for a, b in zip(tail, tail[1:]) if b in ("on", "off")})
@@ -845,8 +1047,9 @@ class _Reader:
         for fix in self.walls:  # a fix defined again under its id replaces the one that exists
             if fix.id == fid and fix.end_run is None:
                 fix.end_run = len(self.runs)
-        self.walls.append(WallFix(fid, walls, spec, rest[i] == "mesh", len(self.runs), store_force=store_force,
-                                  moving=moving))
+        self.walls.append(
+            WallFix(fid, walls, spec, rest[i] == "mesh", len(self.runs), store_force=store_force, moving=moving)
+        )
 
     def cmd_compute(self, args: list[str], where: Where) -> None:
         self.need(args, 3, where, "compute", "compute ID GROUP STYLE ...")
@@ -861,25 +1064,32 @@ class _Reader:
         file = Path(args[4])
         if not file.is_absolute():
             file = self.root.parent / file
-        self.dumps[did] = DumpSpec(id=did, style=style, every=every, file=str(file), keywords=args[5:],
-                                   first_run=len(self.runs))
+        self.dumps[did] = DumpSpec(
+            id=did, style=style, every=every, file=str(file), keywords=args[5:], first_run=len(self.runs)
+        )
         self.dump_where[did] = where
 
     def cmd_dump_modify(self, args: list[str], where: Where) -> None:
         self.need(args, 1, where, "dump_modify", "dump_modify ID KEYWORD VALUE ...")
         dump = self.dumps.get(args[0])
         if dump is None:
-            raise self.error(ScriptError, f"dump_modify: no dump with id {excerpt(args[0])} is defined before.",
-                             where, "define the dump before modifying it.")
+            raise self.error(
+                ScriptError,
+                f"dump_modify: no dump with id {excerpt(args[0])} is defined before.",
+                where,
+                "define the dump before modifying it.",
+            )
         i, rest = 0, args[1:]
         while i < len(rest):
             key = rest[i]
             arity = _DUMP_MODIFY_ARITY.get(key)
             if arity is None:
-                self.warnings.append(f"{where.file}:{where.line}: dump_modify keyword {excerpt(key)} not "
-                                     "understood; the rest of the line is ignored.")
+                self.warnings.append(
+                    f"{where.file}:{where.line}: dump_modify keyword {excerpt(key)} not "
+                    "understood; the rest of the line is ignored."
+                )
                 return
-            self.need(rest[i + 1:], arity, where, f"dump_modify {key}", f"{key} VALUE")
+            self.need(rest[i + 1 :], arity, where, f"dump_modify {key}", f"{key} VALUE")
             if key in ("format", "label", "sort"):
                 setattr(dump, key, rest[i + 1])
             i += 1 + arity
@@ -896,9 +1106,13 @@ class _Reader:
             value = self.properties.get(prop)
             if value is None:
                 if declared[name][0] is ContactLaw.REQUIRED:
-                    raise self.error(ScriptError, f"{spec.law} needs 'fix ID all property/global {prop} ...' "
-                                     f"({declared[name][1]}), which the script does not define.", spec.where,
-                                     f"add the {prop} the run used.")
+                    raise self.error(
+                        ScriptError,
+                        f"{spec.law} needs 'fix ID all property/global {prop} ...' "
+                        f"({declared[name][1]}), which the script does not define.",
+                        spec.where,
+                        f"add the {prop} the run used.",
+                    )
                 continue
             params[name] = float(value[1]) if np.ndim(value[1]) == 0 else value[1]
         for setting, (name, on, off) in law.simulator_settings.items():
@@ -911,9 +1125,13 @@ class _Reader:
             if spec.on("modifyLbVolume"):
                 lb = self.properties.get("lbVolumeFraction")
                 if lb is None:
-                    raise self.error(ScriptError, "washino/capillary/viscous with modifyLbVolume on needs 'fix ID all "
-                                     "property/global lbVolumeFraction scalar F', which the script does not define.",
-                                     spec.where, "add the lbVolumeFraction the run used.")
+                    raise self.error(
+                        ScriptError,
+                        "washino/capillary/viscous with modifyLbVolume on needs 'fix ID all "
+                        "property/global lbVolumeFraction scalar F', which the script does not define.",
+                        spec.where,
+                        "add the lbVolumeFraction the run used.",
+                    )
                 params["bridge_volume_fraction"] = float(lb[1])
         try:
             return ContactModel(spec.law, params)
@@ -926,37 +1144,59 @@ class _Reader:
         if missing:
             if self.pair is None and not self.walls:
                 return {}
-            raise ScriptError(f"the script defines no {' and no '.join(missing)}.", file=self.root,
-                              fix="add 'fix ID all property/global youngsModulus|poissonsRatio "
-                              "peratomtype V1 ... VN'.")
+            raise ScriptError(
+                f"the script defines no {' and no '.join(missing)}.",
+                file=self.root,
+                fix="add 'fix ID all property/global youngsModulus|poissonsRatio peratomtype V1 ... VN'.",
+            )
         for name, (style, _values, where) in found.items():
             if style != "peratomtype":
-                raise self.error(MaterialError, f"{name} must be given 'peratomtype', found {excerpt(style)}.",
-                                 where, f"write 'property/global {name} peratomtype V1 ... VN'.")
+                raise self.error(
+                    MaterialError,
+                    f"{name} must be given 'peratomtype', found {excerpt(style)}.",
+                    where,
+                    f"write 'property/global {name} peratomtype V1 ... VN'.",
+                )
         (_, E, wE), (_, nu, wnu) = found["youngsModulus"], found["poissonsRatio"]
         if len(E) != len(nu):
-            raise self.error(MaterialError, f"youngsModulus has {len(E)} values (line {wE.line}) but "
-                             f"poissonsRatio has {len(nu)}.", wnu, "give both one value per atom type.")
+            raise self.error(
+                MaterialError,
+                f"youngsModulus has {len(E)} values (line {wE.line}) but poissonsRatio has {len(nu)}.",
+                wnu,
+                "give both one value per atom type.",
+            )
         for k in range(len(E)):
             if not E[k] > 0:
-                raise self.error(MaterialError, f"youngsModulus of type {k + 1} is {float(E[k])!r}; it must be "
-                                 "> 0.", wE, "correct the Young's modulus.")
+                raise self.error(
+                    MaterialError,
+                    f"youngsModulus of type {k + 1} is {float(E[k])!r}; it must be > 0.",
+                    wE,
+                    "correct the Young's modulus.",
+                )
             if not 0.0 <= nu[k] <= 0.5:
-                raise self.error(MaterialError, f"poissonsRatio of type {k + 1} is {float(nu[k])!r}; LIGGGHTS "
-                                 "accepts 0 <= nu <= 0.5.", wnu, "correct the Poisson's ratio.")
+                raise self.error(
+                    MaterialError,
+                    f"poissonsRatio of type {k + 1} is {float(nu[k])!r}; LIGGGHTS accepts 0 <= nu <= 0.5.",
+                    wnu,
+                    "correct the Poisson's ratio.",
+                )
         return {k + 1: Material(float(E[k]), float(nu[k])) for k in range(len(E))}
 
-    def local_layouts(self, pair_model: _ModelSpec | None,
-                      mesh_fix: tuple | None) -> dict[str, LocalLayout]:
+    def local_layouts(self, pair_model: _ModelSpec | None, mesh_fix: tuple | None) -> dict[str, LocalLayout]:
         layouts = {}
         for cid, (kind, keywords, where) in self.computes.items():
             spec = pair_model if kind == "pair" else (mesh_fix[1] if mesh_fix else None)
             if spec is None:
-                raise self.error(ScriptError, f"compute {cid} {kind}/gran/local needs "
-                                 + ("a 'pair_style gran'." if kind == "pair" else "a mesh 'fix wall/gran'."),
-                                 where, "define it before the compute, as LIGGGHTS requires.")
-            history = history_columns(self.model(spec).contact_law, kind,
-                                      elastic_potential=spec.on("computeElasticPotential"))
+                raise self.error(
+                    ScriptError,
+                    f"compute {cid} {kind}/gran/local needs "
+                    + ("a 'pair_style gran'." if kind == "pair" else "a mesh 'fix wall/gran'."),
+                    where,
+                    "define it before the compute, as LIGGGHTS requires.",
+                )
+            history = history_columns(
+                self.model(spec).contact_law, kind, elastic_potential=spec.on("computeElasticPotential")
+            )
             try:
                 columns = local_layout(kind, keywords, len(history), history=history)
             except DemsplitError as exc:
@@ -968,27 +1208,37 @@ class _Reader:
         where = self.dump_where[dump.id]
         binary = dump.file.endswith(".bin")
         if dump.style == "local" and binary:
-            self.warnings.append(f"dump {dump.id}: dump local to a .bin file writes text headers and "
-                                 "unreadable rows in LIGGGHTS 3.8.0; use a text file and dump_modify format.")
+            self.warnings.append(
+                f"dump {dump.id}: dump local to a .bin file writes text headers and "
+                "unreadable rows in LIGGGHTS 3.8.0; use a text file and dump_modify format."
+            )
         dump.full_precision = (binary and dump.style != "local") or (
-            dump.format is not None and _format_full_precision(dump.format, dump.style == "local"))
+            dump.format is not None and _format_full_precision(dump.format, dump.style == "local")
+        )
         if dump.format is not None:
             conversions = _format_conversions(dump.format)
             if len(conversions) != len(dump.keywords):
-                self.warnings.append(f"dump {dump.id}: the format has {len(conversions)} conversions for "
-                                     f"{len(dump.keywords)} columns.")
+                self.warnings.append(
+                    f"dump {dump.id}: the format has {len(conversions)} conversions for {len(dump.keywords)} columns."
+                )
             if dump.style == "local":
                 ints = [k + 1 for k, (c, _) in enumerate(conversions) if c in "diouxXc"]
                 if ints:
-                    self.warnings.append(f"dump {dump.id}: format column(s) {ints} use an integer "
-                                         "conversion, but dump local passes doubles: those columns are garbage.")
+                    self.warnings.append(
+                        f"dump {dump.id}: format column(s) {ints} use an integer "
+                        "conversion, but dump local passes doubles: those columns are garbage."
+                    )
         if dump.style != "local":
             return
         refs = [re.fullmatch(r"c_([^\[\]]+)(?:\[(\d+)\])?", k) for k in dump.keywords]
         used = {m.group(1) for m in refs if m and m.group(1) in layouts}
         if len(used) > 1:
-            raise self.error(ScriptError, f"dump {dump.id} mixes columns of computes {sorted(used)}.",
-                             where, "dump each granular local compute to its own file.")
+            raise self.error(
+                ScriptError,
+                f"dump {dump.id} mixes columns of computes {sorted(used)}.",
+                where,
+                "dump each granular local compute to its own file.",
+            )
         if not used:
             return
         dump.compute = used.pop()
@@ -999,13 +1249,21 @@ class _Reader:
                 names.append(keyword)
                 continue
             if m.group(2) is None:
-                raise self.error(ScriptError, f"dump {dump.id}: {keyword} is an array; dump local needs "
-                                 "one column per c_ID[k].", where, f"write {keyword}[1] {keyword}[2] ...")
+                raise self.error(
+                    ScriptError,
+                    f"dump {dump.id}: {keyword} is an array; dump local needs one column per c_ID[k].",
+                    where,
+                    f"write {keyword}[1] {keyword}[2] ...",
+                )
             k = int(m.group(2))
             if not 1 <= k <= len(full):
-                raise self.error(ScriptError, f"dump {dump.id}: {keyword} is out of range; compute "
-                                 f"{dump.compute} has {len(full)} columns ({' '.join(full)}).", where,
-                                 "correct the column index.")
+                raise self.error(
+                    ScriptError,
+                    f"dump {dump.id}: {keyword} is out of range; compute "
+                    f"{dump.compute} has {len(full)} columns ({' '.join(full)}).",
+                    where,
+                    "correct the column index.",
+                )
             names.append(full[k - 1])
         dump.layout = LocalLayout(layouts[dump.compute].kind, names)
 
@@ -1036,9 +1294,13 @@ class _Reader:
                 dumped_mesh_walls = list(range(first, len(walls)))
         for t, what, where in self.type_uses:
             if materials and t not in materials:
-                raise self.error(MaterialError, f"{what} uses type {t}, which has no material (materials "
-                                 f"are defined for types {sorted(materials)}).", where,
-                                 "give youngsModulus and poissonsRatio one value per type, this one included.")
+                raise self.error(
+                    MaterialError,
+                    f"{what} uses type {t}, which has no material (materials "
+                    f"are defined for types {sorted(materials)}).",
+                    where,
+                    "give youngsModulus and poissonsRatio one value per type, this one included.",
+                )
         layouts = self.local_layouts(self.pair, mesh_fix)
         for dump in self.dumps.values():
             self.finish_dump(dump, layouts)
@@ -1051,19 +1313,38 @@ class _Reader:
             except (Unevaluable, DemsplitError):
                 continue
         return LiggghtsScript(
-            path=self.root, scene=scene, periodic=self.periodic, dumps=list(self.dumps.values()),
-            gravity=self.gravity, coefficients=coefficients, ntypes=self.ntypes, timestep=self.timestep,
-            run_steps=self.run_steps, runs=self.runs, wall_runs=wall_runs, local_computes=layouts,
+            path=self.root,
+            scene=scene,
+            periodic=self.periodic,
+            dumps=list(self.dumps.values()),
+            gravity=self.gravity,
+            coefficients=coefficients,
+            ntypes=self.ntypes,
+            timestep=self.timestep,
+            run_steps=self.run_steps,
+            runs=self.runs,
+            wall_runs=wall_runs,
+            local_computes=layouts,
             dumped_mesh_walls=dumped_mesh_walls,
-            variables=variables, warnings=self.warnings, included=self.included, stored_force=stored_force,
-            moving_walls=moving_walls, pair_settings=dict(self.pair.settings) if self.pair else {},
-            wall_settings=wall_settings, run_timesteps=self.run_timesteps, restart_run=self.restart_run,
-            unmodelled_forces=self.unmodelled_forces + ([] if self.integrated or not self.runs
-                                                         else ["no fix nve/sphere"]),
-            local_histories={kind: history_columns(self.model(spec).contact_law, kind,
-                                                   elastic_potential=spec.on("computeElasticPotential"))
-                             for kind, spec in (("pair", self.pair), ("wall", mesh_fix[1] if mesh_fix else None))
-                             if spec is not None})
+            variables=variables,
+            warnings=self.warnings,
+            included=self.included,
+            stored_force=stored_force,
+            moving_walls=moving_walls,
+            pair_settings=dict(self.pair.settings) if self.pair else {},
+            wall_settings=wall_settings,
+            run_timesteps=self.run_timesteps,
+            restart_run=self.restart_run,
+            unmodelled_forces=self.unmodelled_forces
+            + ([] if self.integrated or not self.runs else ["no fix nve/sphere"]),
+            local_histories={
+                kind: history_columns(
+                    self.model(spec).contact_law, kind, elastic_potential=spec.on("computeElasticPotential")
+                )
+                for kind, spec in (("pair", self.pair), ("wall", mesh_fix[1] if mesh_fix else None))
+                if spec is not None
+            },
+        )
 
 
 def read_script(path: str | Path, variables: dict[str, str] | None = None) -> LiggghtsScript:

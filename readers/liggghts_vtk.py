@@ -29,8 +29,9 @@ LEGACY_MAGIC = b"# vtk DataFile"
 XML_MAGIC = b"<?xml"
 _FIELD = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*) (\d+) (\d+) (double|float|int|long|vtktypeint64)\s*$")
 _XML_ARRAY = re.compile(r'<DataArray type="([A-Za-z0-9]+)" Name="([^"]+)"(?: NumberOfComponents="(\d+)")?')
-_MISSING_FIX = ("run 'demsplit prepare SCRIPT': it adds the full-precision text dumps demsplit reads "
-                "(docs/liggghts-output.md)")
+_MISSING_FIX = (
+    "run 'demsplit prepare SCRIPT': it adds the full-precision text dumps demsplit reads (docs/liggghts-output.md)"
+)
 
 
 def is_liggghts_vtk(path: Path, head: bytes) -> bool:
@@ -44,7 +45,7 @@ def is_liggghts_vtk(path: Path, head: bytes) -> bool:
 def describe_vtk_dump(path: Path) -> str:
     """What ``demsplit info`` prints about a LIGGGHTS VTK dump (module docstring): its points, fields and
     their precision, and what demsplit would need that it lacks."""
-    legacy = path.read_bytes()[:len(LEGACY_MAGIC)] == LEGACY_MAGIC
+    legacy = path.read_bytes()[: len(LEGACY_MAGIC)] == LEGACY_MAGIC
     fields: list[tuple[str, str, int]] = []  # name, type, components
     points = None
     cells = ""
@@ -64,16 +65,28 @@ def describe_vtk_dump(path: Path) -> str:
     contacts = cells == "lines" or {"id1", "id2"} <= names
     kind = "contacts (dump local/gran/vtk)" if contacts else "particles (dump custom/vtk)"
     position_type = points[1] if points else next((t for n, t, _ in fields if n == "Points"), "?")
-    out = [f"{path}: VTK file {'(legacy, written by LIGGGHTS)' if legacy else '(XML)'}: {kind}, one step",
-           f"  positions: {position_type}" + (" (single precision: about 7 significant digits)"
-                                               if position_type.lower() in ("float", "float32") else ""),
-           "  fields:    " + (", ".join(f"{n} ({t}{'' if c == 1 else f' x{c}'})" for n, t, c in fields
-                                        if n not in ("Points", "connectivity", "offsets", "types")) or "none")]
+    out = [
+        f"{path}: VTK file {'(legacy, written by LIGGGHTS)' if legacy else '(XML)'}: {kind}, one step",
+        f"  positions: {position_type}"
+        + (" (single precision: about 7 significant digits)" if position_type.lower() in ("float", "float32") else ""),
+        "  fields:    "
+        + (
+            ", ".join(
+                f"{n} ({t}{'' if c == 1 else f' x{c}'})"
+                for n, t, c in fields
+                if n not in ("Points", "connectivity", "offsets", "types")
+            )
+            or "none"
+        ),
+    ]
     if contacts:
         lacking = [w for w in ("history", "contactPoint") if w not in names]
-        out.append("  not read by demsplit: LIGGGHTS writes no " + " and no ".join(lacking)
-                   + " to these files (the shear spring, rolling torque and plastic overlap a law's energy needs), "
-                   f"and one file per step; {_MISSING_FIX}")
+        out.append(
+            "  not read by demsplit: LIGGGHTS writes no "
+            + " and no ".join(lacking)
+            + " to these files (the shear spring, rolling torque and plastic overlap a law's energy needs), "
+            f"and one file per step; {_MISSING_FIX}"
+        )
     else:
         out.append(f"  not read by demsplit: positions in single precision give no overlap; {_MISSING_FIX}")
     return "\n".join(out)
@@ -86,6 +99,8 @@ def vtk_dump_note(dumps) -> str:
     if not vtk:
         return ""
     listed = ", ".join(f"dump {d.id} ({d.style})" for d in vtk)
-    return (f" The script's {listed} write VTK files, which demsplit does not compute from: their positions are "
-            "single precision and local/gran/vtk leaves out the contact history (demsplit info FILE says what "
-            "one holds).")
+    return (
+        f" The script's {listed} write VTK files, which demsplit does not compute from: their positions are "
+        "single precision and local/gran/vtk leaves out the contact history (demsplit info FILE says what "
+        "one holds)."
+    )

@@ -33,9 +33,18 @@ import numpy as np
 from ..frame import Box, ParticleIndex, Table
 from ..physics.bodies import FrameContacts, LawRows
 from ..physics.laws._liggghts import ROLLING_TORQUE, SHEAR, LiggghtsNormalModel
-from ..physics.laws._liggghts_force import (CAP_RTOL, applied_rolling_torque, applied_tangential_force,
-                                            closure_tolerance, contact_torque, contact_velocity,
-                                            half_step_velocities, magnitude, rolling_increment, tangential_spring)
+from ..physics.laws._liggghts_force import (
+    CAP_RTOL,
+    applied_rolling_torque,
+    applied_tangential_force,
+    closure_tolerance,
+    contact_torque,
+    contact_velocity,
+    half_step_velocities,
+    magnitude,
+    rolling_increment,
+    tangential_spring,
+)
 from ..physics.modes import HISTORY_LOST, NOT_COMPUTED_BITS
 from ..physics.moduli import effective_radius
 from ..scene import ContactModel, Scene
@@ -54,25 +63,25 @@ LIGGGHTS' own by the rounding of that distance: its force gets k_n times this ma
 
 REASONS = {
     "capped_at_setup": "u_t of a primitive-wall contact sliding at the Coulomb cap in a frame written at the setup of "
-                       "a run is NOT COMPUTED: LIGGGHTS does not rescale the spring there, so the stored force gives "
-                       "its direction, not its magnitude",
+    "a run is NOT COMPUTED: LIGGGHTS does not rescale the spring there, so the stored force gives "
+    "its direction, not its magnitude",
     "rolling_capped_at_setup": "u_r of a primitive-wall contact whose rolling torque sits at its cap in a frame "
-                               "written at the setup of a run is NOT COMPUTED: the history is not rescaled there",
+    "written at the setup of a run is NOT COMPUTED: the history is not rescaled there",
     "two_rolling": "u_r of the primitive-wall contacts of a particle touching two or more walls whose rolling "
-                   "torque is unknown is NOT COMPUTED: one torque balance cannot give several torques",
+    "torque is unknown is NOT COMPUTED: one torque balance cannot give several torques",
     "open_balance": "the history of the primitive-wall contacts of a particle whose dumped force or torque does not "
-                    "close against its contacts (within the printed precision) is NOT COMPUTED",
+    "close against its contacts (within the printed precision) is NOT COMPUTED",
     "unstored_wall": "the history of the primitive-wall contacts of a particle that also touches a primitive wall "
-                     "whose force the atom dump does not hold (no store_force yes, or no f_force column) is NOT "
-                     "COMPUTED: that wall's force is unknown, so the balance cannot be checked",
+    "whose force the atom dump does not hold (no store_force yes, or no f_force column) is NOT "
+    "COMPUTED: that wall's force is unknown, so the balance cannot be checked",
     "normal_off_model": "the history of a primitive-wall contact whose normal force the normal model does not give "
-                        "with the step's velocities is NOT COMPUTED",
+    "with the step's velocities is NOT COMPUTED",
     "spring_beyond_cap": "u_t of a primitive-wall contact whose spring, rebuilt from the force, exceeds the Coulomb "
-                         "cap is NOT COMPUTED",
+    "cap is NOT COMPUTED",
     "rolling_beyond_cap": "u_r of a primitive-wall contact whose rolling torque, from the torque balance, exceeds "
-                          "its cap is NOT COMPUTED",
+    "its cap is NOT COMPUTED",
     "frame_kind": "the history of a primitive-wall contact is NOT COMPUTED where the frame may have been written at "
-                  "the setup of a run or mid-run (a run after read_restart) and the two readings disagree",
+    "the setup of a run or mid-run (a run after read_restart) and the two readings disagree",
 }
 """Why a primitive-wall contact's history stays unknown: the notes of a frame name the reasons that occurred."""
 
@@ -90,8 +99,10 @@ class ForceSettings:
     limit_force: bool = False
 
 
-SUPPORTED = "hertz, hooke (ktToKnUser allowed) or hooke/hysteresis with tangential history, rolling_friction off or " \
-            "epsd2 and no cohesion; viscous, disableNormalWhenBonded and torsionTorque off"
+SUPPORTED = (
+    "hertz, hooke (ktToKnUser allowed) or hooke/hysteresis with tangential history, rolling_friction off or "
+    "epsd2 and no cohesion; viscous, disableNormalWhenBonded and torsionTorque off"
+)
 
 
 def settings_problem(model: ContactModel, settings: dict[str, str]) -> str | None:
@@ -116,12 +127,15 @@ def force_settings(model: ContactModel, settings: dict[str, str], coefficients: 
     missing = [name for name in need if np.ndim(coefficients.get(name)) != 2]
     if missing:
         return f"the script defines no per-type-pair {' and '.join(missing)}"
-    return ForceSettings(np.asarray(coefficients["coefficientRestitution"], dtype=np.float64),
-                         np.asarray(coefficients["coefficientFriction"], dtype=np.float64),
-                         np.asarray(coefficients["coefficientRollingFriction"], dtype=np.float64)
-                         if law.params["rolling"] == "epsd2" else None,
-                         tangential_damping=settings.get("tangential_damping", "on") != "off",
-                         limit_force=settings.get("limitForce", "off") == "on")
+    return ForceSettings(
+        np.asarray(coefficients["coefficientRestitution"], dtype=np.float64),
+        np.asarray(coefficients["coefficientFriction"], dtype=np.float64),
+        np.asarray(coefficients["coefficientRollingFriction"], dtype=np.float64)
+        if law.params["rolling"] == "epsd2"
+        else None,
+        tangential_damping=settings.get("tangential_damping", "on") != "off",
+        limit_force=settings.get("limitForce", "off") == "on",
+    )
 
 
 def stored_force_columns(fix: str) -> list[str]:
@@ -181,8 +195,18 @@ class WallForce:
 
     # -- one frame -----------------------------------------------------------------------------
 
-    def rebuild(self, particles: Table, pairs: Table, mesh: Table | None, primitive: Table, box: Box,
-                setup: bool | None, dt: float, print_rtol: float, mesh_delta_dumped: bool) -> Rebuilt:
+    def rebuild(
+        self,
+        particles: Table,
+        pairs: Table,
+        mesh: Table | None,
+        primitive: Table,
+        box: Box,
+        setup: bool | None,
+        dt: float,
+        print_rtol: float,
+        mesh_delta_dumped: bool,
+    ) -> Rebuilt:
         """The history of the touching rows of ``primitive`` (the join's primitive-wall contacts, one per particle
         and wall) from the stored forces, with the pair contacts ``pairs`` (their ``periodic`` flag included) and the
         mesh-wall contacts ``mesh`` (None: none dumped) of the frame. ``setup``: the frame was written at the setup
@@ -190,8 +214,10 @@ class WallForce:
         run's timestep (s); ``print_rtol`` the relative rounding of the printed values (0 at full precision)."""
         if setup is not None:
             return self._rebuild(particles, pairs, mesh, primitive, box, setup, dt, print_rtol, mesh_delta_dumped)[0]
-        readings = [self._rebuild(particles, pairs, mesh, primitive, box, kind, dt, print_rtol, mesh_delta_dumped)
-                    for kind in (False, True)]
+        readings = [
+            self._rebuild(particles, pairs, mesh, primitive, box, kind, dt, print_rtol, mesh_delta_dumped)
+            for kind in (False, True)
+        ]
         consistent = [r for r, sound in readings if sound]
         if len(consistent) == 1:
             return consistent[0]
@@ -200,16 +226,29 @@ class WallForce:
             return mid
         return _agreeing(mid, start)
 
-    def _rebuild(self, particles: Table, pairs: Table, mesh: Table | None, primitive: Table, box: Box, setup: bool,
-                 dt: float, print_rtol: float, mesh_delta_dumped: bool) -> tuple[Rebuilt, bool]:
+    def _rebuild(
+        self,
+        particles: Table,
+        pairs: Table,
+        mesh: Table | None,
+        primitive: Table,
+        box: Box,
+        setup: bool,
+        dt: float,
+        print_rtol: float,
+        mesh_delta_dumped: bool,
+    ) -> tuple[Rebuilt, bool]:
         """:meth:`rebuild` for one reading of the frame, and whether it is sound (every balance closes, every normal
         force is the model's)."""
         n_atoms = len(particles["id"])
         vec = _vectors(particles)
         mass = np.asarray(particles["mass"], dtype=np.float64)
         radius = np.asarray(particles["radius"], dtype=np.float64)
-        v, w = (vec["v"], vec["omega"]) if setup else half_step_velocities(
-            vec["v"], vec["omega"], vec["f"], vec["tq"], mass, radius, dt)
+        v, w = (
+            (vec["v"], vec["omega"])
+            if setup
+            else half_step_velocities(vec["v"], vec["omega"], vec["f"], vec["tq"], mass, radius, dt)
+        )
         weight = mass[:, None] * self.gravity
         res_f, res_t = vec["f"] - weight, vec["tq"].copy()
         scale_f, scale_t = magnitude(vec["f"]) + magnitude(weight), magnitude(vec["tq"])
@@ -234,14 +273,15 @@ class WallForce:
             add(i, listed)
             add(j[~ghost], _side2(listed, ~ghost))
             if ghost.any():
-                add(j[ghost], self._pair_terms(particles, pairs, j[ghost], i[ghost], ghost, -1.0, lengths, v, w,
-                                               setup, dt))
+                add(
+                    j[ghost],
+                    self._pair_terms(particles, pairs, j[ghost], i[ghost], ghost, -1.0, lengths, v, w, setup, dt),
+                )
         # the mesh walls, from their dumped history
         if mesh is not None and len(mesh.get("id1", ())):
             rows = index.rows(mesh["id1"])
             touching = np.asarray(mesh["delta"]) > 0
-            add(rows[touching], self._mesh_terms(particles, mesh, rows, touching, v, w, setup, dt,
-                                                 mesh_delta_dumped))
+            add(rows[touching], self._mesh_terms(particles, mesh, rows, touching, v, w, setup, dt, mesh_delta_dumped))
         # every stored force, whether or not a contact was found for it
         for fix in self.stored.values():
             force = np.stack([np.asarray(particles[c], dtype=np.float64) for c in stored_force_columns(fix)], -1)
@@ -266,8 +306,9 @@ class WallForce:
         force = np.zeros((n, 3))
         for k, fix in self.stored.items():
             at = wall == k
-            force[at] = np.stack([np.asarray(particles[c], dtype=np.float64)[ip[at]]
-                                  for c in stored_force_columns(fix)], -1)
+            force[at] = np.stack(
+                [np.asarray(particles[c], dtype=np.float64)[ip[at]] for c in stored_force_columns(fix)], -1
+            )
         fn = np.einsum("ij,ij->i", force, en)
         ft = force - fn[:, None] * en
         w_r = (lever / dist)[:, None] * w[ip]
@@ -312,8 +353,9 @@ class WallForce:
             for c, values in history.items():
                 table.setdefault(c, np.zeros(n))[at] = values
                 columns.setdefault(c, np.zeros(len(primitive["delta"])))[touch[at]] = values
-            model_force = contact_law.normal_force(LawRows(FrameContacts(table, self.scene, particles), at,
-                                                           contact_law.key))
+            model_force = contact_law.normal_force(
+                LawRows(FrameContacts(table, self.scene, particles), at, contact_law.key)
+            )
             off_model[at] = np.abs(model_force - elastic[at]) > tolerance[at]
 
         # the rolling torques: one unknown per particle from its torque balance
@@ -349,8 +391,11 @@ class WallForce:
             flag(single & (np.abs(m_mag - cap_r) <= CAP_RTOL * cap_r), "rolling_capped_at_setup", ("u_r",))
             rolling[single] -= rolling_increment(w_r[single], en[single], kr[single], dt)
         else:
-            flag(single & (m_mag > cap_r * (1.0 + CAP_RTOL) + closure_tolerance(scale_t[ip], print_rtol)),
-                 "rolling_beyond_cap", ("u_r",))
+            flag(
+                single & (m_mag > cap_r * (1.0 + CAP_RTOL) + closure_tolerance(scale_t[ip], print_rtol)),
+                "rolling_beyond_cap",
+                ("u_r",),
+            )
         flag(off_model, "normal_off_model", modes)
         flag(unstored[ip], "unstored_wall", modes)
         flag(~closes[ip], "open_balance", modes)
@@ -368,13 +413,29 @@ class WallForce:
             still &= ~np.where(known[m], NOT_COMPUTED_BITS[m], 0).astype(np.int8)
         unknown[touch] = still
         sound = bool(closes.all() and not (off_model & stored).any())
-        return Rebuilt(columns, unknown, {r: int(mask.sum()) for r, mask in reasons.items()},
-                       float(max(force_ratio.max(), torque_ratio.max()))), sound
+        return Rebuilt(
+            columns,
+            unknown,
+            {r: int(mask.sum()) for r, mask in reasons.items()},
+            float(max(force_ratio.max(), torque_ratio.max())),
+        ), sound
 
     # -- the contacts whose history is dumped --------------------------------------------------
 
-    def _pair_terms(self, particles: Table, pairs: Table, i: np.ndarray, j: np.ndarray, which, sign: float,
-                    lengths: np.ndarray, v: np.ndarray, w: np.ndarray, setup: bool, dt: float) -> _Terms:
+    def _pair_terms(
+        self,
+        particles: Table,
+        pairs: Table,
+        i: np.ndarray,
+        j: np.ndarray,
+        which,
+        sign: float,
+        lengths: np.ndarray,
+        v: np.ndarray,
+        w: np.ndarray,
+        setup: bool,
+        dt: float,
+    ) -> _Terms:
         """The pair contacts ``which`` of ``pairs`` evaluated from the side of atoms ``i`` (LIGGGHTS' arithmetic:
         j's periodic image nearest to i, x_j + k L; d = x_i - x_j, r = sqrt(d.d), e_n = d (1/r),
         delta = r_i + r_j - r), with that side's history (``sign`` -1: the unlisted side of a periodic pair,
@@ -391,8 +452,14 @@ class WallForce:
         delta = (radius[i] + radius[j]) - r
         ids = np.asarray(particles["id"])
         law = self.scene.model.contact_law
-        table = {"id1": ids[i], "id2": ids[j], "wall": np.full(len(i), -1, np.int64), "delta": delta,
-                 "r1": radius[i], "r2": radius[j]}
+        table = {
+            "id1": ids[i],
+            "id2": ids[j],
+            "wall": np.full(len(i), -1, np.int64),
+            "delta": delta,
+            "r1": radius[i],
+            "r2": radius[j],
+        }
         for c in law.history_columns():
             if c in pairs:
                 value = np.asarray(pairs[c], dtype=np.float64)[which]
@@ -402,11 +469,22 @@ class WallForce:
         vn, vtr = contact_velocity(v[i] - v[j], en, w_r, r)
         speed = magnitude(v[i]) + magnitude(v[j]) + c1 * magnitude(w[i]) + c2 * magnitude(w[j])
         ghost = GHOST_SPACINGS * np.spacing(lengths.max()) if sign < 0 else None
-        return self._applied(table, particles, self.pair_settings, en, vn, vtr, w[i] - w[j], c1, c2, setup, dt,
-                             speed, ghost=ghost)
+        return self._applied(
+            table, particles, self.pair_settings, en, vn, vtr, w[i] - w[j], c1, c2, setup, dt, speed, ghost=ghost
+        )
 
-    def _mesh_terms(self, particles: Table, mesh: Table, rows: np.ndarray, touching: np.ndarray, v: np.ndarray,
-                    w: np.ndarray, setup: bool, dt: float, delta_dumped: bool) -> _Terms:
+    def _mesh_terms(
+        self,
+        particles: Table,
+        mesh: Table,
+        rows: np.ndarray,
+        touching: np.ndarray,
+        v: np.ndarray,
+        w: np.ndarray,
+        setup: bool,
+        dt: float,
+        delta_dumped: bool,
+    ) -> _Terms:
         """The touching mesh-wall contacts as applied in the step, from their dumped history (wall at rest)."""
         table = {c: np.asarray(values)[touching] for c, values in mesh.items()}
         rows = rows[touching]
@@ -424,17 +502,50 @@ class WallForce:
         for k in np.unique(wall):
             at = np.flatnonzero(wall == k)
             part = {c: values[at] for c, values in table.items()}
-            terms = self._applied(part, particles, self.wall_settings[k], en[at], vn[at], vtr[at], w_r[at], lever[at],
-                                  np.zeros(len(at)), setup, dt, speed[at],
-                                  overlap_rounding=None if rounding is None else rounding[at])
-            for name in ("force", "torque1", "torque2", "force_scale", "torque_scale", "force_allowance",
-                         "torque_allowance"):
+            terms = self._applied(
+                part,
+                particles,
+                self.wall_settings[k],
+                en[at],
+                vn[at],
+                vtr[at],
+                w_r[at],
+                lever[at],
+                np.zeros(len(at)),
+                setup,
+                dt,
+                speed[at],
+                overlap_rounding=None if rounding is None else rounding[at],
+            )
+            for name in (
+                "force",
+                "torque1",
+                "torque2",
+                "force_scale",
+                "torque_scale",
+                "force_allowance",
+                "torque_allowance",
+            ):
                 getattr(out, name)[at] = getattr(terms, name)
         return out
 
-    def _applied(self, table: Table, particles: Table, settings: ForceSettings, en: np.ndarray, vn: np.ndarray,
-                 vtr: np.ndarray, w_roll: np.ndarray, c1: np.ndarray, c2: np.ndarray, setup: bool, dt: float,
-                 speed: np.ndarray, ghost: float | None = None, overlap_rounding: np.ndarray | None = None) -> _Terms:
+    def _applied(
+        self,
+        table: Table,
+        particles: Table,
+        settings: ForceSettings,
+        en: np.ndarray,
+        vn: np.ndarray,
+        vtr: np.ndarray,
+        w_roll: np.ndarray,
+        c1: np.ndarray,
+        c2: np.ndarray,
+        setup: bool,
+        dt: float,
+        speed: np.ndarray,
+        ghost: float | None = None,
+        overlap_rounding: np.ndarray | None = None,
+    ) -> _Terms:
         """What contacts of one law applied in the step from their history (:mod:`._liggghts_force`): the force on
         body 1, the torques on both bodies, and the scales of their rounding. ``w_roll``: the relative rotational
         velocity of the rolling model (omega_1 - omega_2; w_r on a wall); ``speed``: the sum of the bodies' speeds
@@ -459,13 +570,15 @@ class WallForce:
             kr = law.kr(rows)
             cap_r = rows.type_pair(settings.rolling_friction) * np.abs(fn) * effective_radius(rows.r1, rows.r2)
             history = np.stack([table[c] for c in ROLLING_TORQUE], -1)
-            rolling = applied_rolling_torque(history, rolling_increment(w_roll, en, kr, dt),
-                                             np.broadcast_to(cap_r, fn.shape), setup)
+            rolling = applied_rolling_torque(
+                history, rolling_increment(w_roll, en, kr, dt), np.broadcast_to(cap_r, fn.shape), setup
+            )
             torque1, torque2 = torque1 - rolling, torque2 + rolling
         apart = ~(rows.delta > 0)  # LIGGGHTS applies nothing between bodies that do not overlap
         if apart.any():
-            fn, ft, torque1, torque2, rolling = (np.where(apart if a.ndim == 1 else apart[:, None], 0.0, a)
-                                                 for a in (fn, ft, torque1, torque2, rolling))
+            fn, ft, torque1, torque2, rolling = (
+                np.where(apart if a.ndim == 1 else apart[:, None], 0.0, a) for a in (fn, ft, torque1, torque2, rolling)
+            )
         damping = (gamma_n + gamma_t) * speed
         ft_mag = magnitude(ft)
         force_allowance, rolling_allowance = np.zeros(len(fn)), np.zeros(len(fn))
@@ -478,9 +591,15 @@ class WallForce:
                 force_allowance = force_allowance + np.abs(law.normal_force(moved) - law.normal_force(rows))
         if overlap_rounding is not None:  # d(k_n delta)/d(delta) is at most 1.5 k_n (hertz)
             force_allowance = force_allowance + 2.0 * law.kn(rows) * overlap_rounding
-        return _Terms(fn[:, None] * en + ft, torque1, torque2, np.abs(fn) + ft_mag + damping,
-                      magnitude(torque1) + magnitude(torque2) + c1 * (ft_mag + damping), force_allowance,
-                      c1 * force_allowance + rolling_allowance)
+        return _Terms(
+            fn[:, None] * en + ft,
+            torque1,
+            torque2,
+            np.abs(fn) + ft_mag + damping,
+            magnitude(torque1) + magnitude(torque2) + c1 * (ft_mag + damping),
+            force_allowance,
+            c1 * force_allowance + rolling_allowance,
+        )
 
 
 def wall_force_of(script: LiggghtsScript, scene: Scene, dumped_mesh_walls: set[int]) -> tuple[WallForce | None, str]:
@@ -492,8 +611,11 @@ def wall_force_of(script: LiggghtsScript, scene: Scene, dumped_mesh_walls: set[i
     if not script.stored_force:
         return None, "no primitive 'fix wall/gran' has 'store_force yes'"
     if script.unmodelled_forces:
-        return None, f"{', '.join(script.unmodelled_forces)} changes the particles' forces or their integration " \
-                     "beyond the contacts, fix gravity and fix nve/sphere, so their balance cannot be checked"
+        return (
+            None,
+            f"{', '.join(script.unmodelled_forces)} changes the particles' forces or their integration "
+            "beyond the contacts, fix gravity and fix nve/sphere, so their balance cannot be checked",
+        )
     if script.moving_walls:
         moving = ", ".join(f"{scene.walls[k].name} ({word})" for k, word in script.moving_walls.items())
         return None, f"the walls {moving} move"
@@ -525,16 +647,29 @@ def wall_force_of(script: LiggghtsScript, scene: Scene, dumped_mesh_walls: set[i
 
 def _vectors(particles: Table) -> dict[str, np.ndarray]:
     """Velocity, angular velocity, force and torque of every particle, (n, 3)."""
+
     def stack(names: str) -> np.ndarray:
         return np.stack([np.asarray(particles[c], dtype=np.float64) for c in names.split()], -1)
-    return {"v": stack("vx vy vz"), "omega": stack("omegax omegay omegaz"), "f": stack("fx fy fz"),
-            "tq": stack("tqx tqy tqz")}
+
+    return {
+        "v": stack("vx vy vz"),
+        "omega": stack("omegax omegay omegaz"),
+        "f": stack("fx fy fz"),
+        "tq": stack("tqx tqy tqz"),
+    }
 
 
 def _side2(terms: _Terms, rows: np.ndarray) -> _Terms:
     """The other side of the contacts ``rows`` of ``terms``: the opposite force and body 2's torque."""
-    return _Terms(-terms.force[rows], terms.torque2[rows], terms.torque1[rows], terms.force_scale[rows],
-                  terms.torque_scale[rows], terms.force_allowance[rows], terms.torque_allowance[rows])
+    return _Terms(
+        -terms.force[rows],
+        terms.torque2[rows],
+        terms.torque1[rows],
+        terms.force_scale[rows],
+        terms.torque_scale[rows],
+        terms.force_allowance[rows],
+        terms.torque_allowance[rows],
+    )
 
 
 def _damping(law: LiggghtsNormalModel, rows: LawRows, settings: ForceSettings) -> tuple[np.ndarray, np.ndarray]:

@@ -46,9 +46,13 @@ def wall_distance(x: np.ndarray, wall: Wall) -> tuple[np.ndarray, np.ndarray]:
     raise ValueError(f"wall {wall.name!r} of kind {wall.kind!r} is not a primitive wall")
 
 
-def primitive_wall_contacts(particles: Table, walls: list[Wall], margin: np.ndarray | float = 0.0,
-                            reach: Sequence[np.ndarray | float] | None = None,
-                            present: Collection[int] | None = None) -> Table:
+def primitive_wall_contacts(
+    particles: Table,
+    walls: list[Wall],
+    margin: np.ndarray | float = 0.0,
+    reach: Sequence[np.ndarray | float] | None = None,
+    present: Collection[int] | None = None,
+) -> Table:
     """Contacts (canonical columns, see :mod:`demsplit.frame`) of the particles
     with every primitive wall (``plane``/``cylinder``) in ``walls`` that exists at this step (the indices
     ``present``; None: every one); a contact exists where delta = r - d > 0, as LIGGGHTS decides it.
@@ -71,13 +75,22 @@ def primitive_wall_contacts(particles: Table, walls: list[Wall], margin: np.ndar
         delta = r - d
         apart = np.maximum(margin, 0.0 if reach is None else reach[k])
         hit = np.flatnonzero((delta > 0) | (delta > -apart))
-        parts.append({
-            "id1": np.asarray(particles["id"], dtype=np.int64)[hit], "id2": np.full(len(hit), -1, np.int64),
-            "wall": np.full(len(hit), k, np.int64), "delta": delta[hit],
-            "nx": n[hit, 0], "ny": n[hit, 1], "nz": n[hit, 2],
-            "x1": x[hit, 0], "y1": x[hit, 1], "z1": x[hit, 2],
-            "r1": r[hit], "r2": np.full(len(hit), np.inf),
-        })
+        parts.append(
+            {
+                "id1": np.asarray(particles["id"], dtype=np.int64)[hit],
+                "id2": np.full(len(hit), -1, np.int64),
+                "wall": np.full(len(hit), k, np.int64),
+                "delta": delta[hit],
+                "nx": n[hit, 0],
+                "ny": n[hit, 1],
+                "nz": n[hit, 2],
+                "x1": x[hit, 0],
+                "y1": x[hit, 1],
+                "z1": x[hit, 2],
+                "r1": r[hit],
+                "r2": np.full(len(hit), np.inf),
+            }
+        )
     if not parts:
         return {}
     return {c: np.concatenate([p[c] for p in parts]) for c in parts[0]}

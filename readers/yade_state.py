@@ -68,7 +68,13 @@ from ..yade import FORMAT_VERSION
 from .base import MATERIALS, Option, Run
 from .lammps_input import excerpt
 from .yade_snapshot import (
-    LAW_MODELS, PLANE_AS_PLANE, WALL_KINDS, YadeSnapshotRun, frame_from_snapshot, material_list, raw_snapshot,
+    LAW_MODELS,
+    PLANE_AS_PLANE,
+    WALL_KINDS,
+    YadeSnapshotRun,
+    frame_from_snapshot,
+    material_list,
+    raw_snapshot,
     scene_from_snapshot,
 )
 
@@ -81,13 +87,15 @@ STATE_SUFFIXES = tuple(kind + packing for kind in (".yade", ".xml") for packing 
 directory or a glob, is a state to read or a bad one to refuse by name, never passed over."""
 DEFAULT_TIMEOUT = 900.0
 """Seconds YADE has to load and convert one state (``--yade-timeout``)."""
-FIX_BAD = ("leave it out of the states given, or skip it with --on-bad-frame skip; a state cut short (a full disk, "
-           "an interrupted copy) must be saved or copied again.")
+FIX_BAD = (
+    "leave it out of the states given, or skip it with --on-bad-frame skip; a state cut short (a full disk, "
+    "an interrupted copy) must be saved or copied again."
+)
 IDENTITY = ("shape_class", "material", "radius", "wall_axis")
 """What makes a body the same body in two states of one simulation (with its id): its shape, its material, its
 radius (spheres) and a Wall's axis; not its clump (a script may clump bodies, or release them, as it runs)."""
 
-CONVERTER = r'''
+CONVERTER = r"""
 import json, os, site, sys
 
 
@@ -115,7 +123,7 @@ for k, (src, dst) in enumerate(pairs):
     else:
         say("CONVERTED", k)
 os._exit(0)
-'''
+"""
 
 
 def positive_seconds(text: str) -> float:
@@ -126,12 +134,16 @@ def positive_seconds(text: str) -> float:
     return value
 
 
-YADE_TIMEOUT = Option("yade_timeout", ("--yade-timeout",), "seconds YADE may take to load and convert one saved "
-                      f"state before it is refused (default {DEFAULT_TIMEOUT:g})",
-                      {"type": positive_seconds, "metavar": "S"})
+YADE_TIMEOUT = Option(
+    "yade_timeout",
+    ("--yade-timeout",),
+    f"seconds YADE may take to load and convert one saved state before it is refused (default {DEFAULT_TIMEOUT:g})",
+    {"type": positive_seconds, "metavar": "S"},
+)
 
 
 # ------------------------------------------------------------------ which files are states
+
 
 def _opener(path: Path):
     name = path.name
@@ -183,19 +195,26 @@ def head_problem(path: Path) -> DemsplitError | None:
             head = f.read(256)
     except OSError as exc:
         if exc.errno is not None:
-            return InputFormatError(f"the file cannot be read ({exc.strerror}).", file=path,
-                                    fix="make it readable, or " + FIX_BAD)
+            return InputFormatError(
+                f"the file cannot be read ({exc.strerror}).", file=path, fix="make it readable, or " + FIX_BAD
+            )
         head = None
     except (EOFError, ValueError, zlib.error):
         head = None
     if head is None:
-        return InputFormatError(f"it is not a YADE saved state: its name says {packing}, but it is no {packing} "
-                                "stream.", file=path, fix=FIX_BAD)
+        return InputFormatError(
+            f"it is not a YADE saved state: its name says {packing}, but it is no {packing} stream.",
+            file=path,
+            fix=FIX_BAD,
+        )
     if not any(s in head for s in SIGNATURES):
         text = head.decode("latin-1")
         return InputFormatError(
             f"it is not a YADE saved state: its content{' once decompressed' if packing else ''} is not a boost "
-            f"archive, as O.save writes (it begins {excerpt(text, 40)}).", file=path, fix=FIX_BAD)
+            f"archive, as O.save writes (it begins {excerpt(text, 40)}).",
+            file=path,
+            fix=FIX_BAD,
+        )
     return None
 
 
@@ -211,15 +230,20 @@ def stream_problem(path: Path) -> DemsplitError | None:
                 pass
     except OSError as exc:
         if exc.errno is not None:
-            return InputFormatError(f"the file cannot be read ({exc.strerror}).", file=path,
-                                    fix="make it readable, or " + FIX_BAD)
+            return InputFormatError(
+                f"the file cannot be read ({exc.strerror}).", file=path, fix="make it readable, or " + FIX_BAD
+            )
         cause = exc
     except (EOFError, ValueError, zlib.error) as exc:
         cause = exc
     else:
         return None
-    return TruncatedFileError(f"its {packing} stream is cut short or damaged ({type(cause).__name__}: "
-                              f"{' '.join(str(cause).split())[:120]}), so YADE cannot load it.", file=path, fix=FIX_BAD)
+    return TruncatedFileError(
+        f"its {packing} stream is cut short or damaged ({type(cause).__name__}: "
+        f"{' '.join(str(cause).split())[:120]}), so YADE cannot load it.",
+        file=path,
+        fix=FIX_BAD,
+    )
 
 
 def default_cache() -> Path:
@@ -229,6 +253,7 @@ def default_cache() -> Path:
 
 # ------------------------------------------------------------------ the cache of converted states
 
+
 def cache_key(state: Path) -> str:
     """The cache's key of a state: its BLAKE3 digest (the provenance's fingerprint) and the snapshot format."""
     return f"{file_fingerprint(state)[DIGEST]}-v{FORMAT_VERSION}"
@@ -236,7 +261,7 @@ def cache_key(state: Path) -> str:
 
 def _content(converted: Path) -> str:
     """The BLAKE3 digest of a converted state that its name in the cache holds."""
-    return converted.name[:-len(".npys")].rsplit("-", 1)[-1]
+    return converted.name[: -len(".npys")].rsplit("-", 1)[-1]
 
 
 def _cached(cache: Path, key: str) -> Path | None:
@@ -263,19 +288,24 @@ def _keep(made: Path, cache: Path, key: str) -> Path:
         with atomic_path(target) as tmp:
             shutil.copyfile(made, tmp)
     except OSError as exc:  # named by the cache's file, not by the converter's temporary one
-        raise system_error(OSError(exc.errno, exc.strerror or str(exc)), target,
-                           doing="keeping a converted YADE state") from None
+        raise system_error(
+            OSError(exc.errno, exc.strerror or str(exc)), target, doing="keeping a converted YADE state"
+        ) from None
     return target
 
 
 def _check_cache(cache: Path) -> None:
     if cache.exists() and not cache.is_dir():
-        raise StoreError("the directory of converted YADE states is a file.", file=cache,
-                         fix="move the file away, or name another directory with --state-cache DIR.")
+        raise StoreError(
+            "the directory of converted YADE states is a file.",
+            file=cache,
+            fix="move the file away, or name another directory with --state-cache DIR.",
+        )
 
 
-def convert_states(states: list[Path], cache: Path, *, yade: str | None = None,
-                   timeout: float = DEFAULT_TIMEOUT) -> tuple[dict[Path, Path], dict[Path, DemsplitError]]:
+def convert_states(
+    states: list[Path], cache: Path, *, yade: str | None = None, timeout: float = DEFAULT_TIMEOUT
+) -> tuple[dict[Path, Path], dict[Path, DemsplitError]]:
     """The converted snapshot of each state in ``cache`` (converting those not there with YADE: ``yade`` the
     build, default the first that loads them; ``timeout`` seconds per state), and the states that could not
     be converted, with why."""
@@ -293,17 +323,22 @@ def convert_states(states: list[Path], cache: Path, *, yade: str | None = None,
 
 # ------------------------------------------------------------------ YADE converts
 
+
 def _builds(yade: str | None, first: Path) -> list[str]:
     builds = [yade] if yade else [b for b in BUILDS if shutil.which(b)]
     if not builds or not shutil.which(builds[0]):
-        raise InputFormatError(f"reading a YADE saved state needs YADE, and {yade or 'yade'} is not installed.",
-                               file=first, fix="install Debian's yade (apt-get install yade), or give the "
-                               "executable that saved the state with --yade.")
+        raise InputFormatError(
+            f"reading a YADE saved state needs YADE, and {yade or 'yade'} is not installed.",
+            file=first,
+            fix="install Debian's yade (apt-get install yade), or give the "
+            "executable that saved the state with --yade.",
+        )
     return builds
 
 
-def _convert(todo: list[Path], yade: str | None, timeout: float,
-             keep) -> tuple[dict[Path, Path], dict[Path, DemsplitError]]:
+def _convert(
+    todo: list[Path], yade: str | None, timeout: float, keep
+) -> tuple[dict[Path, Path], dict[Path, DemsplitError]]:
     """Convert the states with the first YADE build that loads each (``keep(state, file)`` stores a converted
     file). A state YADE fails on, crashes on or does not finish within ``timeout`` s is one refusal naming it;
     the others are converted by a new process. A YADE that stops or hangs before loading any state is an
@@ -334,29 +369,36 @@ def _convert(todo: list[Path], yade: str | None, timeout: float,
                     break
                 if current is None and not done:  # stopped or stuck before the first state
                     if n == 0:
-                        raise ScriptError(f"{build} {why} before it loaded a state.", file=queue[0],
-                                          fix="check that 'yade -n -j1' starts, give the YADE build with --yade, or "
-                                              "more time with --yade-timeout S.")
+                        raise ScriptError(
+                            f"{build} {why} before it loaded a state.",
+                            file=queue[0],
+                            fix="check that 'yade -n -j1' starts, give the YADE build with --yade, or "
+                            "more time with --yade-timeout S.",
+                        )
                     errors.update({s: errors[s] + [f"{build} {why}"] for s in queue})
                     retry += queue
                     break
                 if current is not None:
                     if why.startswith("timed out"):
                         final[queue[current]] = InputFormatError(
-                            f"{build} {why} while it loaded and converted this state.", file=queue[current],
+                            f"{build} {why} while it loaded and converted this state.",
+                            file=queue[current],
                             fix=f"give more time with --yade-timeout S (a large state), or check that YADE loads it "
-                                f"by hand (O.load); or {FIX_BAD}")
+                            f"by hand (O.load); or {FIX_BAD}",
+                        )
                     else:
                         errors[queue[current]].append(f"{build} {why} while it loaded this state")
                         retry.append(queue[current])
-                queue = queue[(current if current is not None else max(done)) + 1:]
+                queue = queue[(current if current is not None else max(done)) + 1 :]
             left = retry
     for state in left:
         if state not in made and state not in final:
             final[state] = InputFormatError(
-                f"YADE could not load the saved state ({'; '.join(errors[state])[:600]}).", file=state,
+                f"YADE could not load the saved state ({'; '.join(errors[state])[:600]}).",
+                file=state,
                 fix="check that the file is complete (a state cut short does not load) and give the YADE build that "
-                    "saved it with --yade (yade, yade-mpfr150 or yade-float128); or " + FIX_BAD)
+                "saved it with --yade (yade, yade-mpfr150 or yade-float128); or " + FIX_BAD,
+            )
     return made, {s: final[s] for s in todo if s in final}
 
 
@@ -369,8 +411,9 @@ def _stopped(returncode: int) -> str:
     return f"stopped (exit status {returncode})"
 
 
-def _run_converter(build: str, script: Path, pairs: list[tuple[str, str]],
-                   timeout: float) -> tuple[dict[int, str | None], int | None, str | None]:
+def _run_converter(
+    build: str, script: Path, pairs: list[tuple[str, str]], timeout: float
+) -> tuple[dict[int, str | None], int | None, str | None]:
     """Run one YADE process of ``build`` converting ``pairs`` (state, converted file); YADE has ``timeout`` s
     for each state (and for its start). Returns what became of each state it reached (index -> None: converted,
     else YADE's error), the index of the state it was converting when it stopped (None: none), and why it
@@ -383,8 +426,14 @@ def _run_converter(build: str, script: Path, pairs: list[tuple[str, str]],
     current: int | None = None
     tail: list[str] = []
     broken = None
-    proc = subprocess.Popen([build, "-n", "-j1", "-x", str(script)], cwd=script.parent, env=env,
-                            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    proc = subprocess.Popen(
+        [build, "-n", "-j1", "-x", str(script)],
+        cwd=script.parent,
+        env=env,
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+    )
     try:
         with selectors.DefaultSelector() as selector:
             selector.register(proc.stderr, selectors.EVENT_READ)
@@ -400,7 +449,7 @@ def _run_converter(build: str, script: Path, pairs: list[tuple[str, str]],
                 if not chunk:
                     break
                 *lines, rest = (rest + chunk).split(b"\n")
-                rest = rest[-(1 << 16):]
+                rest = rest[-(1 << 16) :]
                 for line in (raw.decode("utf-8", "replace") for raw in lines):
                     word, _, arg = line.partition(" ")
                     index, _, text = arg.partition(" ")
@@ -410,8 +459,9 @@ def _run_converter(build: str, script: Path, pairs: list[tuple[str, str]],
                     elif word == "DEMSPLIT-CONVERTED" and k is not None:
                         done[k], current = None, None
                         if show:
-                            sys.stderr.write(f"demsplit: {build} converted state {len(done)}/{len(pairs)}: "
-                                             f"{pairs[k][0]}\n")
+                            sys.stderr.write(
+                                f"demsplit: {build} converted state {len(done)}/{len(pairs)}: {pairs[k][0]}\n"
+                            )
                     elif word == "DEMSPLIT-FAILED" and k is not None:
                         done[k], current = " ".join(text.split())[:300], None
                     elif word == "DEMSPLIT-BROKEN":
@@ -433,6 +483,7 @@ def _run_converter(build: str, script: Path, pairs: list[tuple[str, str]],
 
 # ------------------------------------------------------------------ the states of a run
 
+
 @dataclass
 class StateSet:
     """The files given as YADE saved states: ``files`` (each once, in the order found), ``converted`` (state ->
@@ -444,27 +495,33 @@ class StateSet:
     cache: Path
 
 
-def find_states(paths: list[Path], cache: Path, *, yade: str | None = None,
-                timeout: float = DEFAULT_TIMEOUT) -> StateSet:
+def find_states(
+    paths: list[Path], cache: Path, *, yade: str | None = None, timeout: float = DEFAULT_TIMEOUT
+) -> StateSet:
     """The states that ``paths`` (files, directories, globs) name, converted into ``cache`` where they can be."""
     files: list[Path] = []
     for p in paths:
         found = state_files(Path(p))
         if not found:
-            raise InputFormatError("no YADE saved state here.", file=p,
-                                   fix="give files written by O.save, a directory or a glob of them.")
+            raise InputFormatError(
+                "no YADE saved state here.", file=p, fix="give files written by O.save, a directory or a glob of them."
+            )
         files += [f for f in found if f not in files]
     bad = {f: problem for f in files if (problem := head_problem(f)) is not None}
-    converted, failed = convert_states([f for f in files if f not in bad], cache, yade=yade, timeout=timeout) \
-        if len(bad) < len(files) else ({}, {})
+    converted, failed = (
+        convert_states([f for f in files if f not in bad], cache, yade=yade, timeout=timeout)
+        if len(bad) < len(files)
+        else ({}, {})
+    )
     bad.update(failed)
     return StateSet(files, converted, {f: bad[f] for f in files if f in bad}, cache)
 
 
 def named(exc: DemsplitError, state: Path, converted: Path) -> DemsplitError:
     """``exc`` of a converted state, naming the state the user gave instead of its copy in the cache."""
-    return type(exc)(exc.message.replace(str(converted), str(state)), file=state, step=exc.step, line=exc.line,
-                     fix=exc.fix)
+    return type(exc)(
+        exc.message.replace(str(converted), str(state)), file=state, step=exc.step, line=exc.line, fix=exc.fix
+    )
 
 
 def _body(bodies: dict[str, np.ndarray], row: int, materials: dict[int, str]) -> str:
@@ -480,6 +537,7 @@ def _body(bodies: dict[str, np.ndarray], row: int, materials: dict[int, str]) ->
 
 def _material(m: dict) -> str:
     """A YADE material of a snapshot's metadata in words: its class, label, young and poisson."""
+
     def number(key: str) -> str:
         value = m.get(key)
         return f"{value:g}" if isinstance(value, (int, float)) and not isinstance(value, bool) else "?"
@@ -508,24 +566,38 @@ class Simulation:
         """Add a state; an InputFormatError names it and the earlier state it differs from when it is not of
         the same simulation."""
         k = len(self.states)
-        fix = ("give the states of one simulation (one run of one script): bodies may be added and erased, but a "
-               "body keeps its id, shape, material and radius, and the law, the materials and the periodic "
-               "cell stay; the states of another simulation are analysed in a run of their own.")
+        fix = (
+            "give the states of one simulation (one run of one script): bodies may be added and erased, but a "
+            "body keeps its id, shape, material and radius, and the law, the materials and the periodic "
+            "cell stay; the states of another simulation are analysed in a run of their own."
+        )
         if self.states and model != self.model:
-            raise InputFormatError(f"its contact law ({model.law} {model.params}) is not that of {self.states[0]} "
-                                   f"({self.model.law} {self.model.params}): the states are of two simulations.",
-                                   file=state, step=int(meta["iter"]), fix=fix)
+            raise InputFormatError(
+                f"its contact law ({model.law} {model.params}) is not that of {self.states[0]} "
+                f"({self.model.law} {self.model.params}): the states are of two simulations.",
+                file=state,
+                step=int(meta["iter"]),
+                fix=fix,
+            )
         if self.states and bool(meta["periodic"]) != self.periodic:
-            raise InputFormatError(f"its cell is {'' if meta['periodic'] else 'not '}periodic, that of "
-                                   f"{self.states[0]} is {'' if self.periodic else 'not '}: the states are of two "
-                                   "simulations.", file=state, step=int(meta["iter"]), fix=fix)
+            raise InputFormatError(
+                f"its cell is {'' if meta['periodic'] else 'not '}periodic, that of "
+                f"{self.states[0]} is {'' if self.periodic else 'not '}: the states are of two "
+                "simulations.",
+                file=state,
+                step=int(meta["iter"]),
+                fix=fix,
+            )
         for m in meta["materials"]:
             t, canonical = int(m["id"]), json.dumps(m, sort_keys=True)
             if t in self.materials and json.dumps(self.materials[t], sort_keys=True) != canonical:
                 raise InputFormatError(
                     f"its material {t} is {_material(m)}, but material {t} of {self.states[self.material_from[t]]} "
-                    f"is {_material(self.materials[t])}: the states are of two simulations.", file=state,
-                    step=int(meta["iter"]), fix=fix)
+                    f"is {_material(self.materials[t])}: the states are of two simulations.",
+                    file=state,
+                    step=int(meta["iter"]),
+                    fix=fix,
+                )
             self.materials.setdefault(t, m)
             self.material_from.setdefault(t, k)
         names = {int(m["id"]): str(m.get("label") or m.get("class")) for m in meta["materials"]}
@@ -549,7 +621,10 @@ class Simulation:
                 raise InputFormatError(
                     f"body {int(ids[row])} is {_body(columns, row, names)} here, but "
                     f"{_body(self.bodies, old, before)} in {earlier}: the states are of two simulations.",
-                    file=state, step=int(meta["iter"]), fix=fix)
+                    file=state,
+                    step=int(meta["iter"]),
+                    fix=fix,
+                )
             new = ~shared
             if new.any():  # bodies added since the earlier states
                 merged = {c: np.concatenate([self.bodies[c], columns[c][new]]) for c in columns}
@@ -575,12 +650,22 @@ class YadeStateRun(Run):
     several_files = True
     cli_group = "YADE inputs"
     cli_options = (
-        PLANE_AS_PLANE, MATERIALS,
-        Option("yade", ("--yade",), "the YADE build that saved the states (yade, yade-mpfr150, yade-float128; "
-               "default: the first that loads them)", {"metavar": "EXE"}),
-        Option("state_cache", ("--state-cache",), "where converted YADE saved states are kept (default for run: "
-               "OUTPUT.states next to the output; for info and check: $XDG_CACHE_HOME/demsplit/yade-states)",
-               {"metavar": "DIR"}),
+        PLANE_AS_PLANE,
+        MATERIALS,
+        Option(
+            "yade",
+            ("--yade",),
+            "the YADE build that saved the states (yade, yade-mpfr150, yade-float128; "
+            "default: the first that loads them)",
+            {"metavar": "EXE"},
+        ),
+        Option(
+            "state_cache",
+            ("--state-cache",),
+            "where converted YADE saved states are kept (default for run: "
+            "OUTPUT.states next to the output; for info and check: $XDG_CACHE_HOME/demsplit/yade-states)",
+            {"metavar": "DIR"},
+        ),
         YADE_TIMEOUT,
     )
 
@@ -593,13 +678,21 @@ class YadeStateRun(Run):
         """Converted states are kept next to the output (``OUTPUT.states``), where a rerun finds them."""
         return {"state_cache": str(output.with_name(output.name + ".states"))}
 
-    def __init__(self, path: Path | list[Path], yade: str | None = None, state_cache: str | Path | None = None,
-                 yade_timeout: float | None = None, plane_as_plane: bool = False,
-                 materials: dict[int, Material] | None = None) -> None:
+    def __init__(
+        self,
+        path: Path | list[Path],
+        yade: str | None = None,
+        state_cache: str | Path | None = None,
+        yade_timeout: float | None = None,
+        plane_as_plane: bool = False,
+        materials: dict[int, Material] | None = None,
+    ) -> None:
         timeout = DEFAULT_TIMEOUT if yade_timeout is None else yade_timeout
         if not (isinstance(timeout, (int, float)) and math.isfinite(timeout) and timeout > 0):
-            raise InputFormatError(f"the time YADE has per state must be a number of seconds > 0, not {timeout!r}.",
-                                   fix="give --yade-timeout S with S > 0.")
+            raise InputFormatError(
+                f"the time YADE has per state must be a number of seconds > 0, not {timeout!r}.",
+                fix="give --yade-timeout S with S > 0.",
+            )
         cache = Path(state_cache) if state_cache is not None else default_cache()
         states = find_states(path if isinstance(path, list) else [path], cache, yade=yade, timeout=timeout)
         self._open(states, plane_as_plane=plane_as_plane, materials=materials)
@@ -611,8 +704,9 @@ class YadeStateRun(Run):
         run._open(states, **options)
         return run
 
-    def _open(self, states: StateSet, *, plane_as_plane: bool = False,
-              materials: dict[int, Material] | None = None) -> None:
+    def _open(
+        self, states: StateSet, *, plane_as_plane: bool = False, materials: dict[int, Material] | None = None
+    ) -> None:
         self.states = states
         self._plane_as_plane = plane_as_plane
         self._runs: list[YadeSnapshotRun] = []
@@ -627,9 +721,18 @@ class YadeStateRun(Run):
         good = [s for s in states.files if s in states.converted]
         if not good:
             first = next(iter(states.bad.values()))
-            raise type(first)(first.message + (f" (The {len(states.bad) - 1} other file(s) given are not read either.)"
-                                               if len(states.bad) > 1 else ""),
-                              file=first.file, step=first.step, line=first.line, fix=first.fix)
+            raise type(first)(
+                first.message
+                + (
+                    f" (The {len(states.bad) - 1} other file(s) given are not read either.)"
+                    if len(states.bad) > 1
+                    else ""
+                ),
+                file=first.file,
+                step=first.step,
+                line=first.line,
+                fix=first.fix,
+            )
         runs, steps = {}, {}
         for s in good:
             try:
@@ -638,8 +741,11 @@ class YadeStateRun(Run):
                 raise named(exc, s, states.converted[s]) from None
             self._runs.append(run)
             if len(run.steps) != 1:
-                raise InputFormatError("its converted copy holds no complete snapshot.", file=s,
-                                       fix=f"delete {states.converted[s]} and run again.")
+                raise InputFormatError(
+                    "its converted copy holds no complete snapshot.",
+                    file=s,
+                    fix=f"delete {states.converted[s]} and run again.",
+                )
             runs[s], steps[s] = run, int(run.steps[0])
         used, twins, notes = [], [], []
         simulation = Simulation()
@@ -647,8 +753,10 @@ class YadeStateRun(Run):
             twin = next((u for u in used if steps[u] == steps[s]), None)
             if twin is not None and _content(states.converted[twin]) == _content(states.converted[s]):
                 twins.append(s)
-                notes.append(f"{s} is the same state as {twin} (iteration {steps[s]}, the same content once "
-                             "converted): it is read once")
+                notes.append(
+                    f"{s} is the same state as {twin} (iteration {steps[s]}, the same content once "
+                    "converted): it is read once"
+                )
                 continue
             meta, tables = runs[s].read(0)
             try:
@@ -657,17 +765,23 @@ class YadeStateRun(Run):
                 raise named(exc, s, states.converted[s]) from None
             if twin is not None:
                 raise InputFormatError(
-                    f"iteration {steps[s]} is in two different states, {twin} and this one.", file=s,
-                    step=steps[s], fix="give one state per iteration: a state changed after it was saved, or a run "
-                    "restarted from an earlier state, is analysed in a run of its own.")
+                    f"iteration {steps[s]} is in two different states, {twin} and this one.",
+                    file=s,
+                    step=steps[s],
+                    fix="give one state per iteration: a state changed after it was saved, or a run "
+                    "restarted from an earlier state, is analysed in a run of its own.",
+                )
             used.append(s)
         first_meta = runs[used[0]].meta(0)
         merged = {**first_meta, "materials": [simulation.materials[t] for t in sorted(simulation.materials)]}
-        parts = scene_from_snapshot(merged, simulation.bodies, path=used[0], plane_as_plane=plane_as_plane,
-                                    materials=materials)
+        parts = scene_from_snapshot(
+            merged, simulation.bodies, path=used[0], plane_as_plane=plane_as_plane, materials=materials
+        )
         what = str(used[0]) if len(used) == 1 else f"{len(used)} YADE saved states, {used[0]} to {used[-1]}"
-        self.scene = replace(parts.scene, source=f"{what} (YADE {first_meta.get('yade_version', '?')}, "
-                                                 f"{first_meta.get('precision_name', '?')})")
+        self.scene = replace(
+            parts.scene,
+            source=f"{what} (YADE {first_meta.get('yade_version', '?')}, {first_meta.get('precision_name', '?')})",
+        )
         self._unusable = parts.unusable
         kinds = simulation.bodies["kind"].astype(str)
         wall_ids = simulation.bodies["id"][np.isin(kinds, list(WALL_KINDS))]
@@ -677,23 +791,35 @@ class YadeStateRun(Run):
         self._bad = list(states.bad.items())
         self.steps = np.array([steps[s] for s in used], dtype=np.int64)
         self.sources = used + twins
-        changing = [(w, [steps[s] for s, present in zip(used, simulation.walls) if b in present])
-                    for w, b in zip(self.scene.walls, wall_ids.tolist())]
+        changing = [
+            (w, [steps[s] for s, present in zip(used, simulation.walls) if b in present])
+            for w, b in zip(self.scene.walls, wall_ids.tolist())
+        ]
         changing = [f"{w.name} at iterations {describe_steps(at)}" for w, at in changing if len(at) < len(used)]
-        self.notes = [f"YADE saved states converted by YADE (kept in {states.cache}, by the content of each "
-                      "state): the interactions as saved, their overlaps from the forces and stiffnesses the law "
-                      "stored (YADE does not save them)",
-                      *notes, *parts.notes]
+        self.notes = [
+            f"YADE saved states converted by YADE (kept in {states.cache}, by the content of each "
+            "state): the interactions as saved, their overlaps from the forces and stiffnesses the law "
+            "stored (YADE does not save them)",
+            *notes,
+            *parts.notes,
+        ]
         if changing:
-            self.notes.append("walls added or erased between the states (each is in the frames of the states that "
-                              "have it): " + "; ".join(changing))
+            self.notes.append(
+                "walls added or erased between the states (each is in the frames of the states that "
+                "have it): " + "; ".join(changing)
+            )
 
     def _kept(self, exc: DemsplitError) -> DemsplitError:
         """``exc``, saying where the states converted for this run stay (a rerun reads them without YADE)."""
         if not self.states.converted:
             return exc
-        return type(exc)(exc.message, file=exc.file, step=exc.step, line=exc.line,
-                         fix=f"{exc.fix or ''} (Converted states are kept in {self.states.cache}.)".strip())
+        return type(exc)(
+            exc.message,
+            file=exc.file,
+            step=exc.step,
+            line=exc.line,
+            fix=f"{exc.fix or ''} (Converted states are kept in {self.states.cache}.)".strip(),
+        )
 
     def __len__(self) -> int:
         return len(self._used) + len(self._bad)
@@ -709,8 +835,15 @@ class YadeStateRun(Run):
             bodies = tables["bodies"]
             ids = bodies["id"][np.isin(bodies["kind"].astype(str), list(WALL_KINDS))]
             walls = {int(b): self._wall_index[int(b)] for b in ids}
-            frame = frame_from_snapshot(meta, tables, walls, path=state, law=self.scene.model.contact_law,
-                                        plane_as_plane=self._plane_as_plane, unusable=self._unusable)[0]
+            frame = frame_from_snapshot(
+                meta,
+                tables,
+                walls,
+                path=state,
+                law=self.scene.model.contact_law,
+                plane_as_plane=self._plane_as_plane,
+                unusable=self._unusable,
+            )[0]
         except DemsplitError as exc:
             raise self._kept(named(exc, state, run.path)) from None
         if len(walls) < len(self._wall_index):
@@ -728,9 +861,14 @@ class YadeStateRun(Run):
     def describe(self) -> dict:
         """The states read, their iterations, their converted copies (named by the digests of the state and of
         the copy) and YADE's own elastic energies saved with them (``O.energy``)."""
-        return {"kind": self.format_name, "states": [str(s) for s in self._used], "steps": self.steps.tolist(),
-                "converted": [self.states.converted[s].name for s in self._used], "cache": str(self.states.cache),
-                "yade_energies": [e for run in self._state_runs for e in run.yade_energies]}
+        return {
+            "kind": self.format_name,
+            "states": [str(s) for s in self._used],
+            "steps": self.steps.tolist(),
+            "converted": [self.states.converted[s].name for s in self._used],
+            "cache": str(self.states.cache),
+            "yade_energies": [e for run in self._state_runs for e in run.yade_energies],
+        }
 
     @classmethod
     def describe_file(cls, path: Path) -> str:
@@ -751,17 +889,23 @@ class YadeStateRun(Run):
                 meta, tables = raw[s]
                 kinds = tables["bodies"]["kind"].astype(str).tolist()
                 walls = {k: kinds.count(k) for k in WALL_KINDS if k in kinds}
-                lines.append(f"  {s.name}: iteration {meta['iter']}, t = {meta['time']:.6g} s, "
-                             f"bodies: {kinds.count('sphere')} spheres, walls "
-                             + (", ".join(f"{n} {k}" for k, n in sorted(walls.items())) or "none")
-                             + f"; interactions: {meta['n_interactions_real']} real")
+                lines.append(
+                    f"  {s.name}: iteration {meta['iter']}, t = {meta['time']:.6g} s, "
+                    f"bodies: {kinds.count('sphere')} spheres, walls "
+                    + (", ".join(f"{n} {k}" for k, n in sorted(walls.items())) or "none")
+                    + f"; interactions: {meta['n_interactions_real']} real"
+                )
             else:
                 lines.append(f"  {s.name}: NOT READ: {states.bad[s].message}")
         if raw:
             meta = max(raw.values(), key=lambda r: int(r[0]["iter"]))[0]
-            lines.append("  law (Law2): " + ", ".join(
-                f["class"] + ("" if f["class"] in LAW_MODELS else " (not one demsplit analyses)")
-                for f in meta["functors"]["law"]))
+            lines.append(
+                "  law (Law2): "
+                + ", ".join(
+                    f["class"] + ("" if f["class"] in LAW_MODELS else " (not one demsplit analyses)")
+                    for f in meta["functors"]["law"]
+                )
+            )
             lines.append("  YADE materials: " + "; ".join(f"{int(m['id'])}: {_material(m)}" for m in meta["materials"]))
             lines.append(f"  YADE:       {meta.get('yade_version', '?')} {meta.get('precision_name', '?')}")
         try:

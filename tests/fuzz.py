@@ -98,8 +98,19 @@ SAMPLES = REPO / "sample_dumps"
 PACKING = SAMPLES / "liggghts" / "packing"
 YADE = SAMPLES / "yade"
 
-FAMILIES = ("liggghts_text", "liggghts_binary", "compressed", "script", "yade_npys", "yade_h5", "output_path", "store",
-            "cache", "export", "prepare")
+FAMILIES = (
+    "liggghts_text",
+    "liggghts_binary",
+    "compressed",
+    "script",
+    "yade_npys",
+    "yade_h5",
+    "output_path",
+    "store",
+    "cache",
+    "export",
+    "prepare",
+)
 NAMED_FAMILIES = ("yade_states",)
 """Families run only when named (``--families``): each input of ``yade_states`` may start YADE."""
 TIME_LIMIT = 30.0
@@ -110,10 +121,16 @@ STATE_TIMEOUT s."""
 STATE_TIMEOUT = "20"
 """``--yade-timeout`` of the ``yade_states`` inputs: a YADE that hangs on a damaged state is killed well before
 the input's time limit."""
-STATE_KINDS = ("bytes", "bytes", "archive", "archive", "xml", "xml", "xml", "not_a_state", "other", "cache",
-               "options")
-FOREIGN = (b"", b"ITEM: TIMESTEP\n0\n", b"\x00" * 64, b"serialization::archive", b"<!DOCTYPE boost_serialization>",
-           b"<?xml version='1.0'?>\n<html/>\n", bytes(range(256)) * 8)
+STATE_KINDS = ("bytes", "bytes", "archive", "archive", "xml", "xml", "xml", "not_a_state", "other", "cache", "options")
+FOREIGN = (
+    b"",
+    b"ITEM: TIMESTEP\n0\n",
+    b"\x00" * 64,
+    b"serialization::archive",
+    b"<!DOCTYPE boost_serialization>",
+    b"<?xml version='1.0'?>\n<html/>\n",
+    bytes(range(256)) * 8,
+)
 MEMORY_LIMIT = 6 << 30
 """Address space of a worker child (RLIMIT_AS), bytes: the samples need well under 1 GB of memory, but the
 numba/LLVM runtime and the thread stacks reserve address space they never touch."""
@@ -122,46 +139,170 @@ BATCH = 400
 
 TARGETS = ("atoms_full.txt", "pairs.txt", "wall.txt", "in.packing")
 """The plain-text files of the ``liggghts_text`` family (and ``script``: in.packing)."""
-KINDS = ("flip", "truncate", "duplicate_line", "drop_line", "replace_token", "move_line", "crlf",
-         "duplicate_frame")
-TOKENS = (b"nan", b"inf", b"-inf", b"x", b"", b"1e400", b"-1", b"0", b"1.5", b"99999999", b"1.23457e+06",
-          b"ITEM:", b"  ", b"\t", b"\r", b"1e200", b"-1e200", b"1e-300", b"9223372036854775808",
-          b"-9223372036854775809", b"0x10", b"-0", b"NaN", b"Infinity", b"1,5", b"+", b"1_000", b"\xd9\xa3",
-          b"\x00", b"1" * 400, b"4.9e-324", b"2", b"1e5", b"-0.001")
-EXPRESSIONS = ("$(sqrt(-1))", "$(ln(0))", "$(10^400)", "$(0^(-1))", "$(" + "(" * 400 + "1" + ")" * 400 + ")",
-               "${nope}", "$(1/0)", "$(2^63)", "$(-1e308*10)", "nan", "inf", "1e400", "-0", "0", "-1",
-               "$(v_nparticles*1e300)", "${nparticles}${nparticles}", "$(exp(1000))", "$(asin(2))",
-               "$(9223372036854775807+1)", "1e-400", "$(ceil(1e300))", "v_", "$", "${", "$(", "\"", "&")
-SCRIPT_LINES = ("include /etc/passwd", "include /etc/hostname", "include in.packing", "include missing.in",
-                "include /dev/zero", "include /proc/self/status", "variable a equal sqrt(-1)",
-                "variable nsettle equal 1e400", "variable nparticles equal v_nparticles",
-                "variable a equal " + "(" * 600 + "1" + ")" * 600, "units lj", "boundary p p p", "boundary x",
-                "timestep 1e400", "timestep -1", "timestep 0", "run -5", "run 9223372036854775808",
-                "dump dx all custom 2000 atoms_full.txt id", "dump datoms17 all custom 0 atoms_full.txt id x",
-                "fix m all mesh/surface file /etc/passwd type 1", "fix m2 all mesh/surface file floor.stl type 99",
-                "pair_style gran model hertz tangential history cohesion sjkr", "pair_style gran model jkr",
-                "pair_style lj/cut 2.5", "atom_style sphere", "create_box 0 reg", "create_box 1000000000 reg",
-                "region reg block 1 0 1 0 1 0 units box", "\x00", "\u00e9\u00e9", "x" * 100000,
-                "jump SELF", "label a", "next a", "shell touch /tmp/demsplit-fuzz-shell",
-                "fix pp all property/global youngsModulus peratomtype nan nan",
-                "fix pp all property/global poissonsRatio peratomtype 0.5 0.5",
-                "fix pp all property/global coefficientFriction peratomtypepair 2 1e400 1 1 1",
-                "fix m all property/global characteristicVelocity scalar -1", "neigh_modify delay 0",
-                "dump_modify datoms17 format \"%d %d %g\"", "dump_modify dpair label ATOMS",
-                "compute cpgl all pair/gran/local id pos", "compute cpgl all pair/gran/local " + "pos " * 50,
-                "undump datoms17", "clear", "processors * * *", "read_restart missing.restart",
-                "write_restart restart.bin", "# comment \\", "variable a string \"unterminated", "&", "$(",
-                "variable x index " + " ".join(["1"] * 5000))
-SPECIAL_REALS = (np.nan, np.inf, -np.inf, 0.0, -0.0, -1.0, 1e300, -1e300, 1e-300, 5e-324, 1.0, 1e10, 2.0,
-                 1e200, 1e-12)
-SPECIAL_INTS = (-1, 0, 1, 2**31, 2**31 - 1, 2**62, -2**63, 2**63 - 1, 10**12, 7, 255)
+KINDS = ("flip", "truncate", "duplicate_line", "drop_line", "replace_token", "move_line", "crlf", "duplicate_frame")
+TOKENS = (
+    b"nan",
+    b"inf",
+    b"-inf",
+    b"x",
+    b"",
+    b"1e400",
+    b"-1",
+    b"0",
+    b"1.5",
+    b"99999999",
+    b"1.23457e+06",
+    b"ITEM:",
+    b"  ",
+    b"\t",
+    b"\r",
+    b"1e200",
+    b"-1e200",
+    b"1e-300",
+    b"9223372036854775808",
+    b"-9223372036854775809",
+    b"0x10",
+    b"-0",
+    b"NaN",
+    b"Infinity",
+    b"1,5",
+    b"+",
+    b"1_000",
+    b"\xd9\xa3",
+    b"\x00",
+    b"1" * 400,
+    b"4.9e-324",
+    b"2",
+    b"1e5",
+    b"-0.001",
+)
+EXPRESSIONS = (
+    "$(sqrt(-1))",
+    "$(ln(0))",
+    "$(10^400)",
+    "$(0^(-1))",
+    "$(" + "(" * 400 + "1" + ")" * 400 + ")",
+    "${nope}",
+    "$(1/0)",
+    "$(2^63)",
+    "$(-1e308*10)",
+    "nan",
+    "inf",
+    "1e400",
+    "-0",
+    "0",
+    "-1",
+    "$(v_nparticles*1e300)",
+    "${nparticles}${nparticles}",
+    "$(exp(1000))",
+    "$(asin(2))",
+    "$(9223372036854775807+1)",
+    "1e-400",
+    "$(ceil(1e300))",
+    "v_",
+    "$",
+    "${",
+    "$(",
+    '"',
+    "&",
+)
+SCRIPT_LINES = (
+    "include /etc/passwd",
+    "include /etc/hostname",
+    "include in.packing",
+    "include missing.in",
+    "include /dev/zero",
+    "include /proc/self/status",
+    "variable a equal sqrt(-1)",
+    "variable nsettle equal 1e400",
+    "variable nparticles equal v_nparticles",
+    "variable a equal " + "(" * 600 + "1" + ")" * 600,
+    "units lj",
+    "boundary p p p",
+    "boundary x",
+    "timestep 1e400",
+    "timestep -1",
+    "timestep 0",
+    "run -5",
+    "run 9223372036854775808",
+    "dump dx all custom 2000 atoms_full.txt id",
+    "dump datoms17 all custom 0 atoms_full.txt id x",
+    "fix m all mesh/surface file /etc/passwd type 1",
+    "fix m2 all mesh/surface file floor.stl type 99",
+    "pair_style gran model hertz tangential history cohesion sjkr",
+    "pair_style gran model jkr",
+    "pair_style lj/cut 2.5",
+    "atom_style sphere",
+    "create_box 0 reg",
+    "create_box 1000000000 reg",
+    "region reg block 1 0 1 0 1 0 units box",
+    "\x00",
+    "\u00e9\u00e9",
+    "x" * 100000,
+    "jump SELF",
+    "label a",
+    "next a",
+    "shell touch /tmp/demsplit-fuzz-shell",
+    "fix pp all property/global youngsModulus peratomtype nan nan",
+    "fix pp all property/global poissonsRatio peratomtype 0.5 0.5",
+    "fix pp all property/global coefficientFriction peratomtypepair 2 1e400 1 1 1",
+    "fix m all property/global characteristicVelocity scalar -1",
+    "neigh_modify delay 0",
+    'dump_modify datoms17 format "%d %d %g"',
+    "dump_modify dpair label ATOMS",
+    "compute cpgl all pair/gran/local id pos",
+    "compute cpgl all pair/gran/local " + "pos " * 50,
+    "undump datoms17",
+    "clear",
+    "processors * * *",
+    "read_restart missing.restart",
+    "write_restart restart.bin",
+    "# comment \\",
+    'variable a string "unterminated',
+    "&",
+    "$(",
+    "variable x index " + " ".join(["1"] * 5000),
+)
+SPECIAL_REALS = (np.nan, np.inf, -np.inf, 0.0, -0.0, -1.0, 1e300, -1e300, 1e-300, 5e-324, 1.0, 1e10, 2.0, 1e200, 1e-12)
+SPECIAL_INTS = (-1, 0, 1, 2**31, 2**31 - 1, 2**62, -(2**63), 2**63 - 1, 10**12, 7, 255)
 SPECIAL_BYTES = (b"sphere", b"wall", b"facet", b"box", b"clump", b"other", b"", b"\xff\xfe", b"xxxxxxxx")
-DTYPES = ("int8", "uint8", "int16", "int32", "uint64", "float16", "float32", "bool", "complex128", "S4",
-          "U8", "object", "datetime64[s]", "float64", "int64")
-JSON_VALUES = (None, -1, 0, 1e308, "x", [], {}, True, 2**64, -(2**63), 1.5, "", [1, 2], {"class": "x"},
-               float("nan"), float("inf"), "Law2_ScGeom_FrictPhys_CundallStrack")
-LAW_SAMPLES = ("cohfrict", "jcfpm", "adhesion", "capillary", "viscel", "viscofrict", "deresiewitz",
-               "hertz_linear")
+DTYPES = (
+    "int8",
+    "uint8",
+    "int16",
+    "int32",
+    "uint64",
+    "float16",
+    "float32",
+    "bool",
+    "complex128",
+    "S4",
+    "U8",
+    "object",
+    "datetime64[s]",
+    "float64",
+    "int64",
+)
+JSON_VALUES = (
+    None,
+    -1,
+    0,
+    1e308,
+    "x",
+    [],
+    {},
+    True,
+    2**64,
+    -(2**63),
+    1.5,
+    "",
+    [1, 2],
+    {"class": "x"},
+    float("nan"),
+    float("inf"),
+    "Law2_ScGeom_FrictPhys_CundallStrack",
+)
+LAW_SAMPLES = ("cohfrict", "jcfpm", "adhesion", "capillary", "viscel", "viscofrict", "deresiewitz", "hertz_linear")
 
 
 def log(*args) -> None:
@@ -169,6 +310,7 @@ def log(*args) -> None:
 
 
 # ------------------------------------------------------------------ bases: the runs the inputs are made from
+
 
 def make_run(directory: Path) -> Path:
     """The ``liggghts_text`` base: the packing sample in ``directory`` with plain-text dumps
@@ -232,8 +374,14 @@ def state_bases(base: Path) -> Path:
 
     d.mkdir(parents=True, exist_ok=True)
     env = {**os.environ, "DEMSPLIT_OUT": str(d), "DEMSPLIT_SITE": sysconfig.get_paths()["purelib"]}
-    subprocess.run(["yade", "-n", "-j1", "-x", str(YADE / "simulations.py")], cwd=d, env=env, capture_output=True,
-                   check=True, timeout=600)
+    subprocess.run(
+        ["yade", "-n", "-j1", "-x", str(YADE / "simulations.py")],
+        cwd=d,
+        env=env,
+        capture_output=True,
+        check=True,
+        timeout=600,
+    )
     converted, failed = convert_states(state_files(d), d / "cache")
     if failed or not converted:
         raise SystemExit(f"the saved states of simulations.py do not convert: {failed}")
@@ -246,6 +394,7 @@ def yade_bases(base: Path, suffix: str) -> list[Path]:
 
 
 # ------------------------------------------------------------------ byte and text mutations
+
 
 def mutate(data: bytes, kind: str, where: float, size: int, token: int) -> bytes:
     """One mutation of ``data`` (bytes of a text file). ``where`` in [0, 1) picks the position,
@@ -267,7 +416,7 @@ def mutate(data: bytes, kind: str, where: float, size: int, token: int) -> bytes
         end = data.find(b"ITEM: TIMESTEP", pos + 1)
         if start < 0:
             start = 0
-        return data + data[start: n if end < 0 else end]
+        return data + data[start : n if end < 0 else end]
     start = data.rfind(b"\n", 0, pos) + 1
     end = data.find(b"\n", pos)
     end = n if end == -1 else end + 1
@@ -335,6 +484,7 @@ def cut_bytes(rng: random.Random, data: bytes) -> tuple[bytes, str]:
 
 # ------------------------------------------------------------------ LAMMPS binary dumps
 
+
 def binary_fields(data: bytes) -> list[tuple[int, str, str]]:
     """``(offset, struct format, name)`` of every header field and of a sample of values, frame by frame,
     of a LAMMPS binary dump (the layout :class:`demsplit.readers.lammps_dump.BinaryDump` reads)."""
@@ -355,8 +505,10 @@ def binary_fields(data: bytes) -> list[tuple[int, str, str]]:
             (m,) = struct.unpack_from("=i", data, pos)
             fields.append((pos, "=i", "chunk size"))
             values = pos + 4
-            fields += [(values + 8 * k, "=d", f"value {k} (column {k % max(ncols, 1)})")
-                       for k in range(0, max(m, 0), max(1, m // 64))]
+            fields += [
+                (values + 8 * k, "=d", f"value {k} (column {k % max(ncols, 1)})")
+                for k in range(0, max(m, 0), max(1, m // 64))
+            ]
             pos = values + 8 * max(m, 0)
     return fields
 
@@ -384,8 +536,11 @@ def mutate_binary(rng: random.Random, data: bytes) -> tuple[bytes, str]:
 
 # ------------------------------------------------------------------ compressed dumps
 
-COMPRESSORS = {".gz": (gzip.decompress, lambda b: gzip.compress(b, 1)), ".bz2": (bz2.decompress, bz2.compress),
-               ".xz": (lzma.decompress, lzma.compress)}
+COMPRESSORS = {
+    ".gz": (gzip.decompress, lambda b: gzip.compress(b, 1)),
+    ".bz2": (bz2.decompress, bz2.compress),
+    ".xz": (lzma.decompress, lzma.compress),
+}
 
 
 def mutate_compressed(rng: random.Random, data: bytes, suffix: str) -> tuple[bytes, str]:
@@ -421,6 +576,7 @@ def mutate_compressed(rng: random.Random, data: bytes, suffix: str) -> tuple[byt
 
 # ------------------------------------------------------------------ YADE snapshots
 
+
 def npys_bytes(snapshots: list[tuple[dict, dict]], *, allow_pickle: bool = False) -> bytes:
     """A npy-stream snapshot file of ``snapshots`` (``(meta, tables)`` each), with valid record framing
     and checksums (as :func:`demsplit.yade.write_snapshot` writes, without its fsync per record)."""
@@ -444,7 +600,6 @@ def npys_bytes(snapshots: list[tuple[dict, dict]], *, allow_pickle: bool = False
 def h5_write(path: Path, snapshots: list[tuple[dict, dict]]) -> None:
     """An HDF5 snapshot file of ``snapshots`` (the layout :func:`demsplit.yade.write_snapshot` writes)."""
     import h5py
-
     from demsplit.yade import FORMAT_NAME, FORMAT_VERSION
 
     with h5py.File(path, "w") as f:
@@ -460,8 +615,12 @@ def h5_write(path: Path, snapshots: list[tuple[dict, dict]]) -> None:
                 for cname, col in table.items():
                     col = np.asanyarray(col)
                     if col.dtype.kind in "OMmc":  # h5py stores none of these as a plain column: bytes then
-                        tg.create_dataset(cname, data=np.frombuffer(col.tobytes() if col.dtype.kind != "O"
-                                                                    else b"\x80\x04object", dtype=np.uint8))
+                        tg.create_dataset(
+                            cname,
+                            data=np.frombuffer(
+                                col.tobytes() if col.dtype.kind != "O" else b"\x80\x04object", dtype=np.uint8
+                            ),
+                        )
                     elif col.dtype.kind == "U":
                         tg.create_dataset(cname, data=col.astype("S"))
                     else:
@@ -516,9 +675,29 @@ def mutate_snapshots(rng: random.Random, snaps: list[tuple[dict, dict]]) -> tupl
     tname = rng.choice(sorted(tables))
     table = tables[tname]
     cname = rng.choice(sorted(table)) if table else None
-    kind = rng.choice(("value", "value", "value", "value", "values", "dtype", "dtype", "drop_column", "extra_column",
-                       "shape", "rename", "duplicate_row", "drop_row", "empty_table", "meta", "meta", "meta_delete",
-                       "snapshots", "ids"))
+    kind = rng.choice(
+        (
+            "value",
+            "value",
+            "value",
+            "value",
+            "values",
+            "dtype",
+            "dtype",
+            "drop_column",
+            "extra_column",
+            "shape",
+            "rename",
+            "duplicate_row",
+            "drop_row",
+            "empty_table",
+            "meta",
+            "meta",
+            "meta_delete",
+            "snapshots",
+            "ids",
+        )
+    )
     where = f"snapshot {k} {tname}.{cname}"
     if kind in ("value", "values") and cname is not None:
         col = np.array(table[cname])
@@ -537,8 +716,9 @@ def mutate_snapshots(rng: random.Random, snaps: list[tuple[dict, dict]]) -> tupl
         col = np.asarray(table[cname])
         try:
             with np.errstate(all="ignore"):
-                table[cname] = col.astype(dtype) if dtype != "object" else np.array(list(col) + [None],
-                                                                                    dtype=object)[:-1]
+                table[cname] = (
+                    col.astype(dtype) if dtype != "object" else np.array(list(col) + [None], dtype=object)[:-1]
+                )
         except (ValueError, TypeError, OverflowError):
             table[cname] = np.array([str(v) for v in col], dtype=object)
             dtype = "object (str)"
@@ -553,9 +733,14 @@ def mutate_snapshots(rng: random.Random, snaps: list[tuple[dict, dict]]) -> tupl
     if kind == "shape" and cname is not None:
         col = np.asarray(table[cname])
         shape = rng.choice(("column", "row", "short", "long", "empty", "scalar"))
-        table[cname] = {"column": lambda: col.reshape(-1, 1), "row": lambda: col[None, :], "short": lambda: col[:-1],
-                        "long": lambda: np.concatenate([col, col[:3]]), "empty": lambda: col[:0],
-                        "scalar": lambda: np.asarray(col[0] if len(col) else 0)}[shape]()
+        table[cname] = {
+            "column": lambda: col.reshape(-1, 1),
+            "row": lambda: col[None, :],
+            "short": lambda: col[:-1],
+            "long": lambda: np.concatenate([col, col[:3]]),
+            "empty": lambda: col[:0],
+            "scalar": lambda: np.asarray(col[0] if len(col) else 0),
+        }[shape]()
         return snaps, f"{where} shape {shape} {table[cname].shape}", False
     if kind == "rename" and cname is not None and len(table) > 1:
         other = rng.choice([c for c in table if c != cname])
@@ -568,7 +753,7 @@ def mutate_snapshots(rng: random.Random, snaps: list[tuple[dict, dict]]) -> tupl
             for c, v in list(table.items()):
                 v = np.asarray(v)
                 if v.ndim == 1 and len(v) == n:
-                    table[c] = np.concatenate([v, v[row:row + 1]]) if kind == "duplicate_row" else np.delete(v, row)
+                    table[c] = np.concatenate([v, v[row : row + 1]]) if kind == "duplicate_row" else np.delete(v, row)
             how = "listed twice" if kind == "duplicate_row" else "gone"
             return snaps, f"snapshot {k} {tname}: row {row} {how}", False
     if kind == "empty_table" and table:
@@ -613,7 +798,7 @@ def mutate_snapshots(rng: random.Random, snaps: list[tuple[dict, dict]]) -> tupl
         elif how == "reverse":
             snaps.reverse()
         elif how == "one":
-            snaps = snaps[k:k + 1]
+            snaps = snaps[k : k + 1]
         else:
             snaps = []
         return snaps, f"snapshots: {how} ({k})", False
@@ -629,14 +814,23 @@ def mutate_npys_raw(rng: random.Random, data: bytes) -> tuple[bytes, str]:
     heads = [i for i in range(len(data)) if data.startswith(b"DSREC ", i)] or [0]
     at = rng.choice(heads)
     if kind == "length":
-        value = rng.choice((b"-000000000000100", b"9999999999999999", b"abcdefghijklmnop", b"0000000000000000",
-                            b"0000000000000001", b"-999999999999999", b" 00000000000010"))
-        return data[:at + 6] + value + data[at + 22:], f"record at byte {at}: length {value!r}"
+        value = rng.choice(
+            (
+                b"-000000000000100",
+                b"9999999999999999",
+                b"abcdefghijklmnop",
+                b"0000000000000000",
+                b"0000000000000001",
+                b"-999999999999999",
+                b" 00000000000010",
+            )
+        )
+        return data[: at + 6] + value + data[at + 22 :], f"record at byte {at}: length {value!r}"
     if kind == "tail":
         tails = [i for i in range(len(data)) if data.startswith(b"DSEND ", i)] or [len(data) - 15]
         t = rng.choice(tails)
-        return data[:t + 6] + b"deadbeef" + data[t + 14:], f"record end at byte {t}: crc deadbeef"
-    return data + data[at: at + rng.randrange(1, 3000)], f"part of the record at byte {at} appended"
+        return data[: t + 6] + b"deadbeef" + data[t + 14 :], f"record end at byte {t}: crc deadbeef"
+    return data + data[at : at + rng.randrange(1, 3000)], f"part of the record at byte {at} appended"
 
 
 FOREIGN_STORAGE = ("external", "link", "virtual", "soft", "hardlink")
@@ -668,8 +862,26 @@ def mutate_h5_file(rng: random.Random, path: Path) -> str:
     """An HDF5-level change of the snapshot file ``path``, in place."""
     import h5py
 
-    kind = rng.choice(("flip", "flip", "truncate", "external", "link", "virtual", "soft", "hardlink", "complete",
-                       "format", "meta_json", "scalar", "group", "filter", "attr_type", "snapshots_dataset"))
+    kind = rng.choice(
+        (
+            "flip",
+            "flip",
+            "truncate",
+            "external",
+            "link",
+            "virtual",
+            "soft",
+            "hardlink",
+            "complete",
+            "format",
+            "meta_json",
+            "scalar",
+            "group",
+            "filter",
+            "attr_type",
+            "snapshots_dataset",
+        )
+    )
     if kind in ("flip", "truncate"):
         data = path.read_bytes()
         data, what = flip_bytes(rng, data) if kind == "flip" else cut_bytes(rng, data)
@@ -699,7 +911,7 @@ def mutate_h5_file(rng: random.Random, path: Path) -> str:
         elif kind == "format":
             f.attrs["format"] = rng.choice(("x", b"demsplit-yade-snapshot", 7))
         elif kind == "meta_json":
-            g.attrs["meta_json"] = rng.choice(("{", "[]", "null", "{\"iter\": 1}", "\udcff" * 0 + "x", "1e999"))
+            g.attrs["meta_json"] = rng.choice(("{", "[]", "null", '{"iter": 1}', "\udcff" * 0 + "x", "1e999"))
         elif kind == "attr_type":
             g.attrs["meta_json"] = np.arange(3)
         elif kind == "snapshots_dataset":
@@ -716,6 +928,7 @@ def mutate_h5_file(rng: random.Random, path: Path) -> str:
 
 
 # ------------------------------------------------------------------ one generated input
+
 
 @dataclass
 class Case:
@@ -742,8 +955,9 @@ def family_of(seed: int, index: int, families: tuple[str, ...]) -> str:
     return families[index % len(families)]
 
 
-def build_case(base: Path, work: Path, seed: int, index: int, families: tuple[str, ...] = FAMILIES,
-               full_fs: Path | None = None) -> Case:
+def build_case(
+    base: Path, work: Path, seed: int, index: int, families: tuple[str, ...] = FAMILIES, full_fs: Path | None = None
+) -> Case:
     """Input ``index`` of ``seed``: its files written into ``work/case`` (emptied first)."""
     rng = case_rng(seed, index)
     family = family_of(seed, index, families)
@@ -778,8 +992,16 @@ def build_case(base: Path, work: Path, seed: int, index: int, families: tuple[st
         what = f"atoms.bin: {what}"
     elif family == "compressed":
         shutil.copytree(base / "packing_gz", d)
-        name = rng.choice(("atoms_full.txt.gz", "pairs_full.txt.gz", "wall_full.txt.gz", "wall_full.txt.gz",
-                           "wall_full.txt.bz2", "wall_full.txt.xz"))
+        name = rng.choice(
+            (
+                "atoms_full.txt.gz",
+                "pairs_full.txt.gz",
+                "wall_full.txt.gz",
+                "wall_full.txt.gz",
+                "wall_full.txt.bz2",
+                "wall_full.txt.xz",
+            )
+        )
         data, what = mutate_compressed(rng, (d / name).read_bytes(), Path(name).suffix)
         (d / name).write_bytes(data)
         argv = ["run", str(d / "in.packing")]
@@ -856,14 +1078,23 @@ def state_case(rng: random.Random, base: Path, d: Path, out: Path, index: int) -
         target = d / rng.choice(("facets-006000.xml", "facets-006000.xml.bz2"))
         target.write_bytes(bz2.compress(data) if target.name.endswith(".bz2") else data)
     elif kind == "not_a_state":
-        target = d / rng.choice(("facets-007000.yade.gz", "facets-007000.xml", "facets-007000.yade",
-                                 "facets-007000.xml.bz2"))
+        target = d / rng.choice(
+            ("facets-007000.yade.gz", "facets-007000.xml", "facets-007000.yade", "facets-007000.xml.bz2")
+        )
         data = rng.choice(FOREIGN + ((src / "again-006000.xml.bz2").read_bytes(),))
         target.write_bytes(gzip.compress(data) if target.name.endswith(".gz") and rng.random() < 0.5 else data)
         what = f"{len(data)} bytes beginning {data[:20]!r}"
     elif kind == "other":  # another simulation, a changed state, the same state again (named or recompressed)
-        other = rng.choice(("clumps-004500.yade.gz", "seed-003000.yade.gz", "changed-006000.yade.gz",
-                            "again-006000.xml.bz2", "viscelcap-000020.yade.gz", "recompressed"))
+        other = rng.choice(
+            (
+                "clumps-004500.yade.gz",
+                "seed-003000.yade.gz",
+                "changed-006000.yade.gz",
+                "again-006000.xml.bz2",
+                "viscelcap-000020.yade.gz",
+                "recompressed",
+            )
+        )
         if other == "recompressed":
             target = d / "facets-006000-copy.yade.gz"
             target.write_bytes(gzip.compress(gzip.decompress((src / "facets-006000.yade.gz").read_bytes()), 9))
@@ -892,16 +1123,22 @@ def state_case(rng: random.Random, base: Path, d: Path, out: Path, index: int) -
             victim.with_name(victim.name + ".tmp").write_bytes(victim.read_bytes()[:100])
         what = f"cache entry {victim.name[:16]}...: {damage}"
     else:
-        options, what = rng.choice((
-            (["--yade-timeout", "0.01"], "a time limit YADE cannot keep"), (["--yade", "false"], "--yade false"),
-            (["--yade", "nonexistent-yade"], "no such yade"), (["--yade", "yade-mpfr150"], "the wrong build"),
-            (["--material", "9:1e9:0.3"], "--material of no material"), (["--material", "1:1e9:0.3"], "--material"),
-            (["--plane-as-plane"], "--plane-as-plane"), (["--state-cache", str(target)], "--state-cache onto a state")))
+        options, what = rng.choice(
+            (
+                (["--yade-timeout", "0.01"], "a time limit YADE cannot keep"),
+                (["--yade", "false"], "--yade false"),
+                (["--yade", "nonexistent-yade"], "no such yade"),
+                (["--yade", "yade-mpfr150"], "the wrong build"),
+                (["--material", "9:1e9:0.3"], "--material of no material"),
+                (["--material", "1:1e9:0.3"], "--material"),
+                (["--plane-as-plane"], "--plane-as-plane"),
+                (["--state-cache", str(target)], "--state-cache onto a state"),
+            )
+        )
         if options[0] in ("--yade-timeout", "--yade"):
             cache = out.parent / "fresh"  # nothing converted: YADE runs
     form = rng.choice(("glob", "glob", "directory", "list"))
-    given = {"glob": [str(d / "facets*")], "directory": [str(d)],
-             "list": [str(p) for p in sorted(d.iterdir())]}[form]
+    given = {"glob": [str(d / "facets*")], "directory": [str(d)], "list": [str(p) for p in sorted(d.iterdir())]}[form]
     if rng.random() < 0.15:  # the default: next to the output
         cache = out.with_name(out.name + ".states")
     else:
@@ -911,8 +1148,16 @@ def state_case(rng: random.Random, base: Path, d: Path, out: Path, index: int) -
     if rng.random() < 0.25:
         options += ["--on-bad-frame", "skip"]
     argv = ["run", *given, *options]
-    return Case(index, "yade_states", f"{kind} {target.name}: {what} ({form}; {' '.join(options)})"[:300],
-                [*argv, "-o", str(out), "-q"], d, out, new_ok=[out], caches=[cache])
+    return Case(
+        index,
+        "yade_states",
+        f"{kind} {target.name}: {what} ({form}; {' '.join(options)})"[:300],
+        [*argv, "-o", str(out), "-q"],
+        d,
+        out,
+        new_ok=[out],
+        caches=[cache],
+    )
 
 
 def cache_state(cache: Path) -> dict[str, tuple[int, int]]:
@@ -947,8 +1192,13 @@ def mutate_script(rng: random.Random, data: bytes) -> tuple[bytes, str]:
         line = rng.choice(SCRIPT_LINES).encode("utf-8", "surrogateescape")
         lines.insert(at, line)
         return b"\n".join(lines), f"line {at + 1} inserted: {line[:60]!r}"
-    numbers = [(i, j) for i, line in enumerate(lines) if not line.lstrip().startswith(b"#")
-               for j, tok in enumerate(line.split(b" ")) if tok[:1].isdigit() or tok[:1] in (b"-", b"$")]
+    numbers = [
+        (i, j)
+        for i, line in enumerate(lines)
+        if not line.lstrip().startswith(b"#")
+        for j, tok in enumerate(line.split(b" "))
+        if tok[:1].isdigit() or tok[:1] in (b"-", b"$")
+    ]
     i, j = rng.choice(numbers)
     tokens = lines[i].split(b" ")
     expr = rng.choice(EXPRESSIONS).encode()
@@ -967,9 +1217,33 @@ def _remove(p: Path) -> None:
         p.rmdir()
 
 
-OUTPUT_KINDS = ("input", "input", "input", "symlink", "hardlink", "dotdot", "directory", "empty", "missing_dir",
-                "fifo", "socket", "device", "dangling", "parent_is_file", "proc", "long_name", "new", "existing",
-                "existing_store", "full_fs", "report", "export", "convert", "prepare", "yade_input")
+OUTPUT_KINDS = (
+    "input",
+    "input",
+    "input",
+    "symlink",
+    "hardlink",
+    "dotdot",
+    "directory",
+    "empty",
+    "missing_dir",
+    "fifo",
+    "socket",
+    "device",
+    "dangling",
+    "parent_is_file",
+    "proc",
+    "long_name",
+    "new",
+    "existing",
+    "existing_store",
+    "full_fs",
+    "report",
+    "export",
+    "convert",
+    "prepare",
+    "yade_input",
+)
 
 
 def output_case(rng: random.Random, base: Path, work: Path, d: Path, index: int, full_fs: Path | None) -> Case:
@@ -1087,20 +1361,59 @@ def output_case(rng: random.Random, base: Path, work: Path, d: Path, index: int,
                 changes_ok = []
         kind = f"{kind} {alias}"
     argv = [*command, *(["-o", out] if out is not None else []), "-q"]
-    return Case(index, "output_path", f"{kind}: -o {out!r}"[:300], argv, d, None if out is None else Path(out),
-                new_ok=new_ok, changes_ok=changes_ok, expect=expect)
+    return Case(
+        index,
+        "output_path",
+        f"{kind}: -o {out!r}"[:300],
+        argv,
+        d,
+        None if out is None else Path(out),
+        new_ok=new_ok,
+        changes_ok=changes_ok,
+        expect=expect,
+    )
 
 
 # ------------------------------------------------------------------ stores, ingest caches, exports, prepare
 
-H5_DTYPES = ("int8", "uint8", "int16", "int32", "uint64", "float16", "float32", "bool", "S4", "complex128", "float64",
-             "int64")
+H5_DTYPES = (
+    "int8",
+    "uint8",
+    "int16",
+    "int32",
+    "uint64",
+    "float16",
+    "float32",
+    "bool",
+    "S4",
+    "complex128",
+    "float64",
+    "int64",
+)
 """Dtypes a damaged HDF5 column is rewritten in."""
-ODD_ATTRIBUTES = (np.nan, -1, 2**63 - 1, 1.5, "x", "[", "null", "{}", '["x"]', "[1e308]", '{"a": 1}', np.arange(2),
-                  np.array([np.inf, 0.0, 0.0]), np.zeros(3), b"\xff", True)
+ODD_ATTRIBUTES = (
+    np.nan,
+    -1,
+    2**63 - 1,
+    1.5,
+    "x",
+    "[",
+    "null",
+    "{}",
+    '["x"]',
+    "[1e308]",
+    '{"a": 1}',
+    np.arange(2),
+    np.array([np.inf, 0.0, 0.0]),
+    np.zeros(3),
+    b"\xff",
+    True,
+)
 """Values a damaged HDF5 attribute is given."""
-EXPORT_NAME = re.compile(r"(particles|contacts|walls|frames|clumps)\.(csv|parquet)|units\.csv|provenance\.json|"
-                         r"(particles|contacts|walls)_\d{12}\.vtu|(particles|contacts|walls)\.pvd|demsplit-export\.json")
+EXPORT_NAME = re.compile(
+    r"(particles|contacts|walls|frames|clumps)\.(csv|parquet)|units\.csv|provenance\.json|"
+    r"(particles|contacts|walls)_\d{12}\.vtu|(particles|contacts|walls)\.pvd|demsplit-export\.json"
+)
 """The names of the files an export writes."""
 EXPORT_FORMATS = ("--csv", "--csv", "--vtk", "--parquet", "--dump", "--dump", "report")
 
@@ -1143,9 +1456,13 @@ def mutate_column(rng: random.Random, group, name: str) -> str:
         return f"{group.name}/{name} as {dtype}"
     if kind == "shape":
         shape = rng.choice(("column", "short", "long", "empty", "scalar"))
-        new = {"column": lambda: data.reshape(-1, 1), "short": lambda: data[:-1],
-               "long": lambda: np.concatenate([data, data[:3]]), "empty": lambda: data[:0],
-               "scalar": lambda: data[0] if len(data) else np.float64(0)}[shape]()
+        new = {
+            "column": lambda: data.reshape(-1, 1),
+            "short": lambda: data[:-1],
+            "long": lambda: np.concatenate([data, data[:3]]),
+            "empty": lambda: data[:0],
+            "scalar": lambda: data[0] if len(data) else np.float64(0),
+        }[shape]()
         _rewrite(group, name, new)
         return f"{group.name}/{name} shape {shape}"
     del group[name]
@@ -1181,8 +1498,26 @@ def mutate_store(rng: random.Random, path: Path) -> str:
     data outside the file, a declared length it does not hold, or a particle listed twice."""
     import h5py
 
-    kind = rng.choice(("flip", "truncate", "column", "column", "column", "column", "columns_attr", "index", "index",
-                       "provenance", "provenance", "walls_meta", "format", "foreign", "huge", "twice"))
+    kind = rng.choice(
+        (
+            "flip",
+            "truncate",
+            "column",
+            "column",
+            "column",
+            "column",
+            "columns_attr",
+            "index",
+            "index",
+            "provenance",
+            "provenance",
+            "walls_meta",
+            "format",
+            "foreign",
+            "huge",
+            "twice",
+        )
+    )
     if kind in ("flip", "truncate"):
         data, what = flip_bytes(rng, path.read_bytes()) if kind == "flip" else cut_bytes(rng, path.read_bytes())
         path.write_bytes(data)
@@ -1195,8 +1530,17 @@ def mutate_store(rng: random.Random, path: Path) -> str:
             return mutate_column(rng, group, rng.choice(sorted(group))) if len(group) else "an empty table"
         if kind == "columns_attr":
             cols = json.loads(f[table].attrs["columns"])
-            f[table].attrs["columns"] = rng.choice(("[", '"x"', json.dumps(cols + ["extra"]), json.dumps(cols[:-1]),
-                                                    json.dumps(cols[::-1]), "[1, 2]", json.dumps(cols + cols[:1])))
+            f[table].attrs["columns"] = rng.choice(
+                (
+                    "[",
+                    '"x"',
+                    json.dumps(cols + ["extra"]),
+                    json.dumps(cols[:-1]),
+                    json.dumps(cols[::-1]),
+                    "[1, 2]",
+                    json.dumps(cols + cols[:1]),
+                )
+            )
             return f"{table} columns = {f[table].attrs['columns'][:80]}"
         if kind == "index":
             name = rng.choice(("step", "step", table))
@@ -1241,8 +1585,24 @@ def mutate_cache(rng: random.Random, path: Path) -> str:
     a frame's or the cache's attributes, a stored error, a frame removed, data outside the file."""
     import h5py
 
-    kind = rng.choice(("flip", "truncate", "column", "column", "column", "twice", "twice", "frame_attr", "frame_attr",
-                       "root_attr", "error", "drop_frame", "order", "foreign"))
+    kind = rng.choice(
+        (
+            "flip",
+            "truncate",
+            "column",
+            "column",
+            "column",
+            "twice",
+            "twice",
+            "frame_attr",
+            "frame_attr",
+            "root_attr",
+            "error",
+            "drop_frame",
+            "order",
+            "foreign",
+        )
+    )
     if kind in ("flip", "truncate"):
         data, what = flip_bytes(rng, path.read_bytes()) if kind == "flip" else cut_bytes(rng, path.read_bytes())
         path.write_bytes(data)
@@ -1264,13 +1624,27 @@ def mutate_cache(rng: random.Random, path: Path) -> str:
                 return f"frame {name}: {table} has no rows"
             row = rng.randrange(n)
             for col in list(group):
-                _rewrite(group, col, np.concatenate([group[col][()], group[col][row:row + 1]]))
+                _rewrite(group, col, np.concatenate([group[col][()], group[col][row : row + 1]]))
             if table == "contacts" and "overlap_error" in g:
-                _rewrite(g, "overlap_error", np.concatenate([g["overlap_error"][()], g["overlap_error"][row:row + 1]]))
+                _rewrite(
+                    g, "overlap_error", np.concatenate([g["overlap_error"][()], g["overlap_error"][row : row + 1]])
+                )
             return f"frame {name}: {table} row {row} listed twice"
         if kind == "frame_attr":
-            attr = rng.choice(("step", "time", "box_lo", "box_hi", "box_periodic", "box_tilt", "source", "notes",
-                               "walls", "overlap_source"))
+            attr = rng.choice(
+                (
+                    "step",
+                    "time",
+                    "box_lo",
+                    "box_hi",
+                    "box_periodic",
+                    "box_tilt",
+                    "source",
+                    "notes",
+                    "walls",
+                    "overlap_source",
+                )
+            )
             if rng.random() < 0.2 and attr in g.attrs:
                 del g.attrs[attr]
                 return f"frame {name}: attribute {attr} removed"
@@ -1283,18 +1657,40 @@ def mutate_cache(rng: random.Random, path: Path) -> str:
             f.attrs[attr] = rng.choice(ODD_ATTRIBUTES + (np.array([-1, 5]), np.arange(len(names))[::-1] * 1000))
             return f"attribute {attr} = {f.attrs[attr]!r}"
         if kind == "error":
-            g.attrs["error"] = rng.choice(("{", "null", json.dumps({
-                "class": rng.choice(("os", "InputFormatError", "DemsplitError", "KeyError", "Path", 5, "StoreError")),
-                "message": rng.choice(("x", 5, None)), "file": rng.choice((None, 5, "f")),
-                "step": rng.choice((None, "x", 3)), "line": rng.choice((None, 1.5, 2)), "fix": None})))
+            g.attrs["error"] = rng.choice(
+                (
+                    "{",
+                    "null",
+                    json.dumps(
+                        {
+                            "class": rng.choice(
+                                ("os", "InputFormatError", "DemsplitError", "KeyError", "Path", 5, "StoreError")
+                            ),
+                            "message": rng.choice(("x", 5, None)),
+                            "file": rng.choice((None, 5, "f")),
+                            "step": rng.choice((None, "x", 3)),
+                            "line": rng.choice((None, 1.5, 2)),
+                            "fix": None,
+                        }
+                    ),
+                )
+            )
             return f"frame {name}: error = {g.attrs['error'][:100]}"
         if kind == "drop_frame":
             del f["frames"][name]
             return f"frame {name} removed"
         if kind == "order":
             order = json.loads(g[table].attrs["order"])
-            g[table].attrs["order"] = rng.choice(("[", "null", json.dumps(order + ["extra"]), json.dumps(order[:-1]),
-                                                  json.dumps(order + order[:1]), "[1]"))
+            g[table].attrs["order"] = rng.choice(
+                (
+                    "[",
+                    "null",
+                    json.dumps(order + ["extra"]),
+                    json.dumps(order[:-1]),
+                    json.dumps(order + order[:1]),
+                    "[1]",
+                )
+            )
             return f"frame {name}: {table} order = {g[table].attrs['order'][:80]}"
         group = g[table]
         col = rng.choice(sorted(group))
@@ -1304,8 +1700,17 @@ def mutate_cache(rng: random.Random, path: Path) -> str:
         return f"frame {name}: {table}/{col}: {how}"
 
 
-STORE_COMMANDS = (("info",), ("report",), ("report",), ("export", "--csv"), ("export", "--csv"), ("export", "--dump"),
-                  ("export", "--dump"), ("export", "--vtk"), ("export", "--parquet"))
+STORE_COMMANDS = (
+    ("info",),
+    ("report",),
+    ("report",),
+    ("export", "--csv"),
+    ("export", "--csv"),
+    ("export", "--dump"),
+    ("export", "--dump"),
+    ("export", "--vtk"),
+    ("export", "--parquet"),
+)
 """What is done with a damaged store (``report -o`` is left to the export family: a page takes seconds)."""
 
 
@@ -1318,8 +1723,9 @@ def store_case(rng: random.Random, base: Path, d: Path, out_dir: Path, index: in
     command = list(rng.choice(STORE_COMMANDS))
     target = out_dir / {"--csv": "csv", "--dump": "p.dump", "--vtk": "vtk", "--parquet": "pq"}.get(command[-1], "")
     argv = [command[0], str(store), *command[1:], *([str(target)] if command[0] == "export" else []), "-q"]
-    return Case(index, "store", f"{what}; {' '.join(command)}", argv, d, None,
-                new_ok=[target] if command[0] == "export" else [])
+    return Case(
+        index, "store", f"{what}; {' '.join(command)}", argv, d, None, new_ok=[target] if command[0] == "export" else []
+    )
 
 
 def cache_case(rng: random.Random, base: Path, d: Path, out_dir: Path, index: int) -> Case:
@@ -1356,11 +1762,35 @@ def export_case(rng: random.Random, base: Path, d: Path, out_dir: Path, index: i
     expect, changes_ok = None, []
     if fmt in ("--csv", "--vtk", "--parquet"):
         target = out_dir / "export"
-        kind = rng.choice(("new", "empty", "earlier_same", "earlier_same", "earlier_other", "foreign", "hardlink_input",
-                           "symlink_input", "manifest", "file", "run_dir", "named_like_ours", "missing_parent"))
+        kind = rng.choice(
+            (
+                "new",
+                "empty",
+                "earlier_same",
+                "earlier_same",
+                "earlier_other",
+                "foreign",
+                "hardlink_input",
+                "symlink_input",
+                "manifest",
+                "file",
+                "run_dir",
+                "named_like_ours",
+                "missing_parent",
+            )
+        )
         name = fmt[2:]
-        ours = rng.choice(("particles.csv", "particles.parquet", "particles.pvd", "provenance.json", "units.csv",
-                           "demsplit-export.json", f"particles_{2000:012d}.vtu"))
+        ours = rng.choice(
+            (
+                "particles.csv",
+                "particles.parquet",
+                "particles.pvd",
+                "provenance.json",
+                "units.csv",
+                "demsplit-export.json",
+                f"particles_{2000:012d}.vtu",
+            )
+        )
         if kind == "empty":
             target.mkdir()
         elif kind in ("earlier_same", "earlier_other"):
@@ -1381,8 +1811,9 @@ def export_case(rng: random.Random, base: Path, d: Path, out_dir: Path, index: i
                 (target / "sub").mkdir()
             if ours in listed:
                 os.link(victim, target / ours)
-            (target / "demsplit-export.json").write_text(json.dumps({"format": "demsplit-export", "kind": name,
-                                                                     "files": listed}))
+            (target / "demsplit-export.json").write_text(
+                json.dumps({"format": "demsplit-export", "kind": name, "files": listed})
+            )
             kind = f"manifest listing {listed}"
         elif kind == "file":
             target = victim
@@ -1401,14 +1832,18 @@ def export_case(rng: random.Random, base: Path, d: Path, out_dir: Path, index: i
             expect = "ok" if overwrite else "error"
         elif kind in ("file", "run_dir", "missing_parent") or (kind.endswith("_input") and not overwrite):
             expect = "error"
-        if target.is_dir() and target != d and (overwrite or kind in ("earlier_same", "empty")
-                                                or kind.startswith("manifest")):
+        if (
+            target.is_dir()
+            and target != d
+            and (overwrite or kind in ("earlier_same", "empty") or kind.startswith("manifest"))
+        ):
             changes_ok = [p for p in target.rglob("*") if EXPORT_NAME.fullmatch(p.name) or kind.startswith("manifest")]
         argv = ["export", str(store), fmt, str(target)]
         new_ok = [target] if target not in (d, victim) else []
     else:
-        kind = rng.choice(("new", "earlier", "foreign", "input", "input", "symlink_input", "hardlink_input",
-                           "directory", "store"))
+        kind = rng.choice(
+            ("new", "earlier", "foreign", "input", "input", "symlink_input", "hardlink_input", "directory", "store")
+        )
         target = out_dir / ("report.html" if fmt == "report" else "p.dump")
         if kind == "earlier" and fmt == "--dump":
             shutil.copy(base / "exports" / "p.dump", target)
@@ -1425,15 +1860,27 @@ def export_case(rng: random.Random, base: Path, d: Path, out_dir: Path, index: i
         if fmt == "report" and kind in ("new", "earlier", "foreign"):
             kind = "input"  # a report that is written takes seconds: only the refusals
             target = victim
-        expect = ("ok" if kind in ("new", "earlier") or (kind == "foreign" and overwrite) else "error")
+        expect = "ok" if kind in ("new", "earlier") or (kind == "foreign" and overwrite) else "error"
         if kind in ("earlier", "foreign") and expect == "ok":
             changes_ok = [target]
-        argv = ["report", str(store), "-o", str(target)] if fmt == "report" else ["export", str(store), "--dump",
-                                                                                  str(target)]
+        argv = (
+            ["report", str(store), "-o", str(target)]
+            if fmt == "report"
+            else ["export", str(store), "--dump", str(target)]
+        )
         new_ok = [target] if kind == "new" else []
     argv += ["--overwrite"] * overwrite + ["-q"]
-    return Case(index, "export", f"{fmt} {kind}{' --overwrite' if overwrite else ''}: {target}"[:300], argv, d, None,
-                new_ok=new_ok, changes_ok=changes_ok, expect=expect)
+    return Case(
+        index,
+        "export",
+        f"{fmt} {kind}{' --overwrite' if overwrite else ''}: {target}"[:300],
+        argv,
+        d,
+        None,
+        new_ok=new_ok,
+        changes_ok=changes_ok,
+        expect=expect,
+    )
 
 
 def _named_by(script: Path) -> list[Path]:
@@ -1470,8 +1917,22 @@ def prepare_case(rng: random.Random, base: Path, d: Path, index: int) -> Case:
         script.write_bytes(data)
         what.append(how)
     overwrite = rng.random() < 0.3
-    kind = rng.choice(("default", "new", "ours", "edited", "foreign", "input", "named", "named", "symlink_input",
-                       "hardlink_input", "directory", "missing_dir"))
+    kind = rng.choice(
+        (
+            "default",
+            "new",
+            "ours",
+            "edited",
+            "foreign",
+            "input",
+            "named",
+            "named",
+            "symlink_input",
+            "hardlink_input",
+            "directory",
+            "missing_dir",
+        )
+    )
     named = _named_by(script) or [d / "floor.stl"]
     target = d / "in.packing.demsplit" if kind == "default" else d / "prepared.in"
     expect, changes_ok = None, []
@@ -1500,12 +1961,21 @@ def prepare_case(rng: random.Random, base: Path, d: Path, index: int) -> Case:
     argv = ["prepare", str(script), *([] if kind == "default" else ["-o", str(target)])]
     argv += ["--overwrite"] * overwrite + ["-q"]
     parts = [target.with_name(f"{target.name}.part{k}") for k in range(2, 5)]
-    return Case(index, "prepare", f"{', '.join(what) or 'as it is'}; {kind}{' --overwrite' if overwrite else ''}",
-                argv, d, None, new_ok=[target, *parts] if kind in ("default", "new") else parts,
-                changes_ok=changes_ok, expect=expect)
+    return Case(
+        index,
+        "prepare",
+        f"{', '.join(what) or 'as it is'}; {kind}{' --overwrite' if overwrite else ''}",
+        argv,
+        d,
+        None,
+        new_ok=[target, *parts] if kind in ("default", "new") else parts,
+        changes_ok=changes_ok,
+        expect=expect,
+    )
 
 
 # ------------------------------------------------------------------ the promise
+
 
 def tree_state(directory: Path) -> dict[str, tuple]:
     """Every path below ``directory`` -> (kind, sha256 for files, target for links, rdev for devices)."""
@@ -1532,11 +2002,13 @@ def store_problems(path: Path) -> list[str]:
 
     problems = []
     with h5py.File(path, "r") as h5:
+
         def visit(name, obj):
             if isinstance(obj, h5py.Dataset) and obj.dtype.kind in "fc":
                 values = obj[()]
                 if not np.all(np.isfinite(values)):
                     problems.append(f"NONFINITE {name} ({int(np.count_nonzero(~np.isfinite(values)))} values)")
+
         h5.visititems(visit)
         for attr in ("provenance", "walls_meta"):
             try:
@@ -1570,10 +2042,13 @@ def check_case(case: Case) -> tuple[str, str]:
                 seen["class"] = type(exc).__name__
                 seen["traceback"] = traceback.format_exc()
                 raise
+
         return wrapper
 
-    patched = {name: getattr(cli, name) for name in ("cmd_run", "cmd_report", "cmd_export", "cmd_convert",
-                                                       "cmd_prepare", "cmd_info")}
+    patched = {
+        name: getattr(cli, name)
+        for name in ("cmd_run", "cmd_report", "cmd_export", "cmd_convert", "cmd_prepare", "cmd_info")
+    }
     out, err = io.StringIO(), io.StringIO()
     try:
         for name, func in patched.items():
@@ -1616,8 +2091,13 @@ def check_case(case: Case) -> tuple[str, str]:
             if rc == 2 and ".partial" in path and _resumable_work(path):
                 continue
             return "LEFTOVER", path
-    if case.output is not None and rc == 0 and case.output.is_file() and "report" not in case.argv[0] \
-            and case.argv[0] == "run":
+    if (
+        case.output is not None
+        and rc == 0
+        and case.output.is_file()
+        and "report" not in case.argv[0]
+        and case.argv[0] == "run"
+    ):
         problems = store_problems(case.output)
         if problems:
             return problems[0].split(" ")[0], "; ".join(problems)
@@ -1644,6 +2124,7 @@ def _resumable_work(path: str) -> bool:
 
 
 # ------------------------------------------------------------------ running many: a worker child per batch
+
 
 def _child(conn, base: Path, work: Path, seed: int, indices: list[int], families, full_fs) -> None:
     os.setpgid(0, 0)
@@ -1677,13 +2158,17 @@ def warm_up(base: Path, work: Path) -> None:
 
     work.mkdir(parents=True, exist_ok=True)
     with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
-        for argv in (["run", str(base / "packing_text" / "in.packing")],
-                     ["run", str(base / "packing_bin" / "in.packing"), "--atoms",
-                      str(base / "packing_bin" / "atoms.bin")],
-                     ["run", str(base / "packing_gz" / "in.packing")],
-                     *(["run", str(p)] for p in yade_bases(base, "")),
-                     *([["run", str(base / "yade_states" / "facets-*"), "--state-cache",
-                         str(base / "yade_states" / "cache")]] if (base / "yade_states" / "done").exists() else [])):
+        for argv in (
+            ["run", str(base / "packing_text" / "in.packing")],
+            ["run", str(base / "packing_bin" / "in.packing"), "--atoms", str(base / "packing_bin" / "atoms.bin")],
+            ["run", str(base / "packing_gz" / "in.packing")],
+            *(["run", str(p)] for p in yade_bases(base, "")),
+            *(
+                [["run", str(base / "yade_states" / "facets-*"), "--state-cache", str(base / "yade_states" / "cache")]]
+                if (base / "yade_states" / "done").exists()
+                else []
+            ),
+        ):
             out = work / "warm.h5"
             if out.exists():
                 out.unlink()
@@ -1717,8 +2202,12 @@ def full_file_system(root: Path, enabled: bool):
     if enabled and os.geteuid() == 0 and shutil.which("mount"):
         import subprocess
 
-        ok = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(mount)],
-                            capture_output=True).returncode == 0
+        ok = (
+            subprocess.run(
+                ["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(mount)], capture_output=True
+            ).returncode
+            == 0
+        )
     try:
         yield mount if ok else None
     finally:
@@ -1733,8 +2222,17 @@ def kept(outcome: str) -> bool:
     return outcome == "ok" or outcome.startswith("error ")
 
 
-def fuzz(seed: int, count: int | None, seconds: float | None, families=FAMILIES, root: Path | None = None,
-         mount: bool = True, batch: int = BATCH, time_limit: float = TIME_LIMIT, progress: bool = True) -> dict:
+def fuzz(
+    seed: int,
+    count: int | None,
+    seconds: float | None,
+    families=FAMILIES,
+    root: Path | None = None,
+    mount: bool = True,
+    batch: int = BATCH,
+    time_limit: float = TIME_LIMIT,
+    progress: bool = True,
+) -> dict:
     """Run inputs ``0 .. count-1`` of ``seed`` (or as many as fit in ``seconds``), a worker child per
     batch; return the summary (counts per family and outcome, every broken promise)."""
     import multiprocessing as mp
@@ -1771,8 +2269,9 @@ def fuzz(seed: int, count: int | None, seconds: float | None, families=FAMILIES,
         while not stop and (count is None or next_index < count):
             end = next_index + batch if count is None else min(next_index + batch, count)
             parent, child = ctx.Pipe()
-            proc = ctx.Process(target=_child, args=(child, base, work, seed, list(range(next_index, end)),
-                                                    families, full_fs))
+            proc = ctx.Process(
+                target=_child, args=(child, base, work, seed, list(range(next_index, end)), families, full_fs)
+            )
             proc.start()
             running[:] = [proc]
             child.close()
@@ -1785,8 +2284,11 @@ def fuzz(seed: int, count: int | None, seconds: float | None, families=FAMILIES,
                     except EOFError:
                         msg = ("died",)
                 if msg is None:
-                    limit = TIME_LIMITS.get(family_of(seed, current, families), time_limit) \
-                        if current is not None else time_limit
+                    limit = (
+                        TIME_LIMITS.get(family_of(seed, current, families), time_limit)
+                        if current is not None
+                        else time_limit
+                    )
                     if current is not None and time.monotonic() - started > limit:
                         record(current, family_of(seed, current, families), "HANG", f"more than {limit} s")
                         next_index = current + 1
@@ -1816,12 +2318,17 @@ def fuzz(seed: int, count: int | None, seconds: float | None, families=FAMILIES,
             _kill(proc)
             parent.close()
     total = sum(sum(c.values()) for c in counts.values())
-    return {"seed": seed, "inputs": total, "seconds": round(time.monotonic() - t_start, 1),
-            "counts": {f: dict(c.most_common()) for f, c in sorted(counts.items())},
-            "broken": broken, "median_seconds_per_input": float(np.median(durations)) if durations else None,
-            "max_seconds_per_input": float(np.max(durations)) if durations else None,
-            "peak_rss_mb_of_a_worker": round(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024, 1),
-            "examples": examples}
+    return {
+        "seed": seed,
+        "inputs": total,
+        "seconds": round(time.monotonic() - t_start, 1),
+        "counts": {f: dict(c.most_common()) for f, c in sorted(counts.items())},
+        "broken": broken,
+        "median_seconds_per_input": float(np.median(durations)) if durations else None,
+        "max_seconds_per_input": float(np.max(durations)) if durations else None,
+        "peak_rss_mb_of_a_worker": round(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024, 1),
+        "examples": examples,
+    }
 
 
 def _kill(proc) -> None:
@@ -1835,9 +2342,11 @@ def _kill(proc) -> None:
 
 def print_summary(summary: dict) -> None:
     median, longest = summary["median_seconds_per_input"] or 0, summary["max_seconds_per_input"] or 0
-    print(f"{summary['inputs']} inputs in {summary['seconds']:g} s (seed {summary['seed']}, median {median:.3f} s "
-          f"per input, longest {longest:.2f} s; peak resident memory of a worker {summary['peak_rss_mb_of_a_worker']} "
-          "MB)")
+    print(
+        f"{summary['inputs']} inputs in {summary['seconds']:g} s (seed {summary['seed']}, median {median:.3f} s "
+        f"per input, longest {longest:.2f} s; peak resident memory of a worker {summary['peak_rss_mb_of_a_worker']} "
+        "MB)"
+    )
     totals: collections.Counter = collections.Counter()
     for family, counts in summary["counts"].items():
         print(f"{family}: {sum(counts.values())}")
@@ -1858,9 +2367,15 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--count", type=int, help="how many inputs (0 .. COUNT-1 of the seed)")
     p.add_argument("--seconds", type=float, help="fuzz this long instead (default 60 without --count)")
     p.add_argument("--seed", type=int, default=1)
-    p.add_argument("--families", default=",".join(FAMILIES),
-                   help="comma-separated subset of " + ", ".join(FAMILIES + NAMED_FAMILIES) + " (default: all but "
-                   + ", ".join(NAMED_FAMILIES) + ")")
+    p.add_argument(
+        "--families",
+        default=",".join(FAMILIES),
+        help="comma-separated subset of "
+        + ", ".join(FAMILIES + NAMED_FAMILIES)
+        + " (default: all but "
+        + ", ".join(NAMED_FAMILIES)
+        + ")",
+    )
     p.add_argument("--only", type=int, help="run input ONLY of the seed in this process and show its traceback")
     p.add_argument("--json", help="write the summary here")
     p.add_argument("--no-mount", action="store_true", help="no full-file-system cases (they mount a tmpfs as root)")
@@ -1870,6 +2385,7 @@ def main(argv: list[str] | None = None) -> int:
     unknown = set(families) - set(FAMILIES + NAMED_FAMILIES)
     if unknown:
         p.error(f"unknown families {sorted(unknown)}")
+
     def stop(signum, frame):  # as Ctrl-C: the worker killed, the full file system unmounted, the work files removed
         raise KeyboardInterrupt
 
@@ -1890,8 +2406,14 @@ def main(argv: list[str] | None = None) -> int:
                 return 0 if kept(outcome) else 1
     seconds = None if args.count is not None else 60.0 if args.seconds is None else args.seconds
     try:
-        summary = fuzz(args.seed, args.count, seconds, families, None if args.root is None else Path(args.root),
-                       mount=not args.no_mount)
+        summary = fuzz(
+            args.seed,
+            args.count,
+            seconds,
+            families,
+            None if args.root is None else Path(args.root),
+            mount=not args.no_mount,
+        )
     except KeyboardInterrupt:
         print("interrupted: no summary", file=sys.stderr)
         return 130

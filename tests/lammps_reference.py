@@ -90,9 +90,15 @@ def read_dump(path: Path) -> list[Dump]:
         flags = lines[k + 4].split()[3:]
         box = np.array([[float(v) for v in lines[k + 5 + d].split()[:2]] for d in range(3)])
         names = lines[k + 8].split()[2:]
-        values = np.array(" ".join(lines[k + 9: k + 9 + n]).split(), dtype=float).reshape(n, len(names))
-        frames.append(Dump(int(lines[k + 1]), box, np.array([f == "pp" for f in flags]),
-                           {name: values[:, c] for c, name in enumerate(names)}))
+        values = np.array(" ".join(lines[k + 9 : k + 9 + n]).split(), dtype=float).reshape(n, len(names))
+        frames.append(
+            Dump(
+                int(lines[k + 1]),
+                box,
+                np.array([f == "pp" for f in flags]),
+                {name: values[:, c] for c, name in enumerate(names)},
+            )
+        )
         k += 9 + n
     return frames
 
@@ -102,12 +108,18 @@ def read_dump(path: Path) -> list[Dump]:
 
 def _alpha(e: float) -> float:
     """The tsuji damping coefficient of restitution e (pair_granular.cpp:986-993, fix_wall_gran.cpp:535-540)."""
-    return (1.2728 - 4.2783 * e + 11.087 * e**2 - 22.348 * e**3 + 27.467 * e**4 - 18.022 * e**5
-            + 4.8218 * e**6)
+    return 1.2728 - 4.2783 * e + 11.087 * e**2 - 22.348 * e**3 + 27.467 * e**4 - 18.022 * e**5 + 4.8218 * e**6
 
 
-_OPS = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul, ast.Div: operator.truediv,
-        ast.Pow: operator.pow, ast.USub: operator.neg, ast.UAdd: operator.pos}
+_OPS = {
+    ast.Add: operator.add,
+    ast.Sub: operator.sub,
+    ast.Mult: operator.mul,
+    ast.Div: operator.truediv,
+    ast.Pow: operator.pow,
+    ast.USub: operator.neg,
+    ast.UAdd: operator.pos,
+}
 
 
 # LAMMPS' log() is log10, ln() the natural log (variable.cpp:3394-3413)
@@ -117,6 +129,7 @@ _FUNCTIONS = {"sqrt": math.sqrt, "ln": math.log, "log": math.log10}
 def _arithmetic(formula: str) -> float:
     """An equal-style formula of numbers, + - * / ^, parentheses, PI, sqrt(), ln() and log() (what the samples and
     the official examples use)."""
+
     def ev(node: ast.AST) -> float:
         if isinstance(node, ast.Constant):
             return float(node.value)
@@ -129,6 +142,7 @@ def _arithmetic(formula: str) -> float:
         if isinstance(node, ast.Call) and getattr(node.func, "id", "") in _FUNCTIONS:
             return _FUNCTIONS[node.func.id](ev(node.args[0]))
         raise ValueError(f"the reference does not evaluate {formula!r}")
+
     return ev(ast.parse(formula.replace("^", "**"), mode="eval").body)
 
 
@@ -155,6 +169,7 @@ class Script:
         def value(match: re.Match) -> str:
             style, v = self.vars[match.group(1) or match.group(2)]
             return f"{_arithmetic(v):.15g}" if style == "equal" else v
+
         return re.sub(r"\$\{(\w+)\}|\$([A-Za-z])", value, line)
 
     def first(self, name: str) -> list[str]:
@@ -263,7 +278,7 @@ def parse_granular(words: list[str], wall: bool, ninit: int = 1) -> tuple[Model,
             m.xgt, m.mu, k = float(words[k + 3]), float(words[k + 4]), k + 5
         elif w in ("rolling", "twisting"):
             kind = words[k + 1]
-            values = tuple(float(v) for v in words[k + 2: k + 5]) if kind == "sds" else (0.0, 0.0, 0.0)
+            values = tuple(float(v) for v in words[k + 2 : k + 5]) if kind == "sds" else (0.0, 0.0, 0.0)
             if w == "rolling":
                 m.rolling, m.roll = kind, values
             else:
@@ -291,9 +306,19 @@ def parse_legacy(kind: str, args: list[str]) -> tuple[Model, list[str]]:
     if int(args[5]) == 0:
         gt = 0.0
     limit = len(args) > 6 and args[6] == "limit_damping"
-    return (Model(normal=f"legacy/{kind}", kn=kn, kt=kt, damp=gn, legacy_gt=gt, mu=float(args[4]),
-                  limit_damping=limit, tangential="none" if kind == "hooke" else "legacy"),
-            args[6 + limit:])
+    return (
+        Model(
+            normal=f"legacy/{kind}",
+            kn=kn,
+            kt=kt,
+            damp=gn,
+            legacy_gt=gt,
+            mu=float(args[4]),
+            limit_damping=limit,
+            tangential="none" if kind == "hooke" else "legacy",
+        ),
+        args[6 + limit :],
+    )
 
 
 def pair_models(script: Script, global_history: bool = True) -> dict[tuple[int, int], Model]:
@@ -315,8 +340,10 @@ def pair_models(script: Script, global_history: bool = True) -> dict[tuple[int, 
     # the global flag: a linear_nohistory pair beside a history model runs the history branch with k_t = 0
     history = any(m.tangential not in ("linear_nohistory", "none") for m in models.values())
     if history and global_history:
-        models = {k: replace(m, tangential="zero_spring") if m.tangential == "linear_nohistory" else m
-                  for k, m in models.items()}
+        models = {
+            k: replace(m, tangential="zero_spring") if m.tangential == "linear_nohistory" else m
+            for k, m in models.items()
+        }
     return models
 
 
@@ -396,8 +423,12 @@ def normal(m: Model, delta: np.ndarray, R: np.ndarray, meff: np.ndarray) -> Norm
         u_adh = -4 * math.pi * m.cohesion * R * delta if m.normal == "dmt" else zero
         if m.normal == "dmt":
             Fne = Fne - 4 * math.pi * m.cohesion * R
-    damp = {"velocity": np.ones_like(delta), "mass_velocity": meff, "viscoelastic": a * meff,
-            "tsuji": np.sqrt(meff * knfac)}[m.damping]
+    damp = {
+        "velocity": np.ones_like(delta),
+        "mass_velocity": meff,
+        "viscoelastic": a * meff,
+        "tsuji": np.sqrt(meff * knfac),
+    }[m.damping]
     return Normal(Fne, a, m.damp * damp, u_n, u_adh)
 
 
@@ -430,8 +461,9 @@ def tangential_damping(m: Model, nrm: Normal, meff: np.ndarray) -> np.ndarray:
     return nrm.a * meff * m.legacy_gt if m.legacy else m.xgt * nrm.eta_n
 
 
-def unsliding(p: np.ndarray, visc_s: np.ndarray, visc_h: np.ndarray, crit_s: np.ndarray, crit_h: np.ndarray,
-              history: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def unsliding(
+    p: np.ndarray, visc_s: np.ndarray, visc_h: np.ndarray, crit_s: np.ndarray, crit_h: np.ndarray, history: bool
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The spring F_el from single()'s force p = F_el + visc_s limited to crit_s (visc: the damping force), the
     step having applied F_el + visc_h limited to crit_h with the spring reset to the limit (pair_granular.cpp:510-536).
 
@@ -482,8 +514,20 @@ class Atoms:
         vec = lambda *names: np.stack([c[k] for k in names], -1)  # noqa: E731
         x, v, w = vec("x", "y", "z"), vec("vx", "vy", "vz"), vec("omegax", "omegay", "omegaz")
         f, tq, r, m = vec("fx", "fy", "fz"), vec("tqx", "tqy", "tqz"), c["radius"], c["mass"]
-        return cls(c["id"].astype(np.int64), c["type"].astype(int), x, v, w, f, tq, r, m,
-                   v - 0.5 * dt * f / m[:, None], w - 0.5 * dt * tq / (0.4 * m * r * r)[:, None], dump)
+        return cls(
+            c["id"].astype(np.int64),
+            c["type"].astype(int),
+            x,
+            v,
+            w,
+            f,
+            tq,
+            r,
+            m,
+            v - 0.5 * dt * f / m[:, None],
+            w - 0.5 * dt * tq / (0.4 * m * r * r)[:, None],
+            dump,
+        )
 
     def rows(self, ids: np.ndarray) -> np.ndarray:
         order = np.argsort(self.ids)
@@ -572,8 +616,10 @@ def rebuild_pairs(script: Script, atoms: Atoms, local: Dump, models: dict) -> Co
     rot_s, rot_h = atoms.w[i] - wj_s, atoms.w_half[i] - atoms.w_half[j]
 
     N = len(i)
-    out = {k: np.zeros(N) for k in ("Fne", "Fd", "Fn_s", "Fn_alt", "crit_s", "crit_h", "L", "u_n", "u_adh", "u_t",
-                                    "u_r", "u_tw")}
+    out = {
+        k: np.zeros(N)
+        for k in ("Fne", "Fd", "Fn_s", "Fn_alt", "crit_s", "crit_h", "L", "u_n", "u_adh", "u_t", "u_r", "u_tw")
+    }
     vecs = {k: np.zeros((N, 3)) for k in ("F_el", "Fr_el", "Ft_h", "Fr_h")}
     Fn_h = np.zeros(N)
     capped, twist = np.zeros(N, bool), np.zeros(N, bool)
@@ -603,8 +649,14 @@ def rebuild_pairs(script: Script, atoms: Atoms, local: Dump, models: dict) -> Co
             ft = np.minimum(crit_h, eta_t * vmag) / np.where(vmag > 0, vmag, 1)
             vecs["Ft_h"][s] = -ft[:, None] * vt_h
         else:
-            F_el, cap, bad, out["L"][s] = unsliding(pt[s], -eta_t[:, None] * vt_s, -eta_t[:, None] * vt_h, crit_s,
-                                                    crit_h, history=m.tangential != "zero_spring")
+            F_el, cap, bad, out["L"][s] = unsliding(
+                pt[s],
+                -eta_t[:, None] * vt_s,
+                -eta_t[:, None] * vt_h,
+                crit_s,
+                crit_h,
+                history=m.tangential != "zero_spring",
+            )
             if m.tangential == "zero_spring":  # k_t = 0: -η_t v_t, and 0 once above the limit (:530-535)
                 Ft = -eta_t[:, None] * vt_h
                 vecs["Ft_h"][s] = np.where((_norm(Ft) > crit_h)[:, None], 0.0, Ft)
@@ -617,8 +669,9 @@ def rebuild_pairs(script: Script, atoms: Atoms, local: Dump, models: dict) -> Co
         if m.rolling == "sds":
             kr, gr, mur = m.roll
             vr_s, vr_h = R[s, None] * np.cross(rot_s[s], nn), R[s, None] * np.cross(rot_h[s], nn)
-            Fr_el, cap_r, bad_r, _ = unsliding(pr[s], -gr * vr_s, -gr * vr_h, mur * crit_s / m.mu,
-                                            mur * crit_h / m.mu, history=True)
+            Fr_el, cap_r, bad_r, _ = unsliding(
+                pr[s], -gr * vr_s, -gr * vr_h, mur * crit_s / m.mu, mur * crit_h / m.mu, history=True
+            )
             vecs["Fr_el"][s], vecs["Fr_h"][s] = Fr_el, Fr_el - gr * vr_h
             capped[s] |= cap_r
             why[s[bad_r]] = "no_capped_step"
@@ -639,16 +692,49 @@ def rebuild_pairs(script: Script, atoms: Atoms, local: Dump, models: dict) -> Co
     nxft = np.cross(n, vecs["Ft_h"])
     nxfr = R[:, None] * np.cross(n, vecs["Fr_h"])
     energies = {k: out[k] for k in ("u_n", "u_t", "u_r", "u_tw", "u_adh")}
-    return Contacts("pairs", i, j, n, delta, R, out["Fne"], out["Fd"], out["Fn_s"], force, F_step,
-                    -arm_i[:, None] * nxft + nxfr, -arm_j[:, None] * nxft - nxfr, out["crit_h"], vecs["Ft_h"],
-                    vecs["F_el"], vecs["Fr_el"], energies, ghost=ghost, capped=capped, unknown=unknown,
-                    twist=twist, extra={"fvec": fvec, "pt": pt, "pr": pr, "p9": p.get(9), "crit_s": out["crit_s"],
-                                        "L": out["L"], "arm_i": arm_i, "arm_j": arm_j, "Fn_alt": out["Fn_alt"],
-                                        "dv_s": dv_s, "p": p, "why": why})
+    return Contacts(
+        "pairs",
+        i,
+        j,
+        n,
+        delta,
+        R,
+        out["Fne"],
+        out["Fd"],
+        out["Fn_s"],
+        force,
+        F_step,
+        -arm_i[:, None] * nxft + nxfr,
+        -arm_j[:, None] * nxft - nxfr,
+        out["crit_h"],
+        vecs["Ft_h"],
+        vecs["F_el"],
+        vecs["Fr_el"],
+        energies,
+        ghost=ghost,
+        capped=capped,
+        unknown=unknown,
+        twist=twist,
+        extra={
+            "fvec": fvec,
+            "pt": pt,
+            "pr": pr,
+            "p9": p.get(9),
+            "crit_s": out["crit_s"],
+            "L": out["L"],
+            "arm_i": arm_i,
+            "arm_j": arm_j,
+            "Fn_alt": out["Fn_alt"],
+            "dv_s": dv_s,
+            "p": p,
+            "why": why,
+        },
+    )
 
 
-def wall_geometry(script: Script, fix_id: str, x: np.ndarray, r: np.ndarray
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def wall_geometry(
+    script: Script, fix_id: str, x: np.ndarray, r: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """For every atom: d (from the wall point to the centre), its length as LAMMPS computes it, the wall's curvature
     radius r_w (0 flat), the wall's velocity at the contact and the number of the region's surfaces within r
     (fix_wall_gran.cpp:633-671; regions: a cylinder or a plane, static or rotated)."""
@@ -681,8 +767,8 @@ def wall_geometry(script: Script, fix_id: str, x: np.ndarray, r: np.ndarray
             d, dist, rw, nsurf = _region_cylinder(reg, x, r)
         if "rotate" in reg:
             k = reg.index("rotate")
-            point = np.array([float(v) for v in reg[k + 2: k + 5]])
-            axis = np.array([float(v) for v in reg[k + 5: k + 8]])
+            point = np.array([float(v) for v in reg[k + 2 : k + 5]])
+            axis = np.array([float(v) for v in reg[k + 5 : k + 8]])
             omega = region_angular_velocity(script, reg[k + 1][2:]) * axis / np.linalg.norm(axis)
             vwall = np.cross(omega, (x - d) - point)
         rest = []
@@ -767,12 +853,36 @@ def rebuild_wall(script: Script, atoms: Atoms, fix_id: str) -> Contacts:
     else:
         F_el = np.zeros_like(F_el)
     unknown_modes = np.nan if (m.rolling != "none" or m.twisting != "none") else 0.0
-    energies = {"u_n": nrm.u_n, "u_t": u_t, "u_r": np.full(len(i), unknown_modes if m.rolling != "none" else 0.0),
-                "u_tw": np.full(len(i), unknown_modes if m.twisting != "none" else 0.0), "u_adh": nrm.u_adh}
+    energies = {
+        "u_n": nrm.u_n,
+        "u_t": u_t,
+        "u_r": np.full(len(i), unknown_modes if m.rolling != "none" else 0.0),
+        "u_tw": np.full(len(i), unknown_modes if m.twisting != "none" else 0.0),
+        "u_adh": nrm.u_adh,
+    }
     tq = -ri[:, None] * np.cross(n, Ft)
-    return Contacts(f"wall:{fix_id}", i, -np.ones(len(i), int), n, delta, R, nrm.Fne, Fn - nrm.Fne, Fn,
-                    Fn_dumped, F, tq, np.zeros_like(tq), crit, Ft, F_el, np.zeros_like(F_el), energies,
-                    unknown=nsurf > 1, extra={"model": m, "nsurf": nsurf})
+    return Contacts(
+        f"wall:{fix_id}",
+        i,
+        -np.ones(len(i), int),
+        n,
+        delta,
+        R,
+        nrm.Fne,
+        Fn - nrm.Fne,
+        Fn,
+        Fn_dumped,
+        F,
+        tq,
+        np.zeros_like(tq),
+        crit,
+        Ft,
+        F_el,
+        np.zeros_like(F_el),
+        energies,
+        unknown=nsurf > 1,
+        extra={"model": m, "nsurf": nsurf},
+    )
 
 
 # ---------------------------------------------------------------------------------------------------- a run
@@ -893,8 +1003,9 @@ def solve_twisting(frame: Frame, sums: dict) -> dict:
     b = (at.tq - sums["T"])[keep].reshape(-1)
     tau = np.zeros(len(cols))
     if len(cols):
-        A = scipy.sparse.csr_matrix((np.concatenate(v), (np.concatenate(r), np.concatenate(c))),
-                                    shape=(len(b), len(cols)))
+        A = scipy.sparse.csr_matrix(
+            (np.concatenate(v), (np.concatenate(r), np.concatenate(c))), shape=(len(b), len(cols))
+        )
         tau = scipy.sparse.linalg.lsqr(A, b, atol=1e-16, btol=1e-16, iter_lim=20 * len(cols))[0]
         b = b - A @ tau
     scale = sums["T_scale"].copy()
@@ -922,8 +1033,8 @@ def resolve_intervals(frame: Frame, sums: dict, tol: float) -> list[dict]:
     w = p.extra["pt"][cand] / _norm(p.extra["pt"][cand])[:, None]
     A = np.zeros((3 * len(atoms), len(cand)))
     for col, c in enumerate(cand):
-        A[3 * row[p.i[c]]: 3 * row[p.i[c]] + 3, col] = w[col]
-        A[3 * row[p.j[c]]: 3 * row[p.j[c]] + 3, col] = -w[col]
+        A[3 * row[p.i[c]] : 3 * row[p.i[c]] + 3, col] = w[col]
+        A[3 * row[p.j[c]] : 3 * row[p.j[c]] + 3, col] = -w[col]
     dL = np.linalg.lstsq(A, res[atoms].reshape(-1), rcond=None)[0]
     out = []
     for col, c in enumerate(cand):
@@ -936,6 +1047,12 @@ def resolve_intervals(frame: Frame, sums: dict, tol: float) -> list[dict]:
         if abs(dL[col]) > tol * p.crit_h[c]:
             L = p.extra["L"][c] + dL[col]
             below = np.linalg.norm(p.Ft_step[c] + dF) <= p.crit_h[c] * (1 + 1e-9)
-            out.append({"row": int(c), "dL": float(dL[col]), "L": float(L),
-                        "ok": bool(p.extra["crit_s"][c] * (1 - 1e-9) <= L <= p.extra["L"][c] * (1 + 1e-9) and below)})
+            out.append(
+                {
+                    "row": int(c),
+                    "dL": float(dL[col]),
+                    "L": float(L),
+                    "ok": bool(p.extra["crit_s"][c] * (1 - 1e-9) <= L <= p.extra["L"][c] * (1 + 1e-9) and below),
+                }
+            )
     return out

@@ -8,8 +8,18 @@ import mpmath
 BRIDGE_MODELS = ("easo/capillary/viscous", "washino/capillary/viscous")
 
 
-def liggghts_capillary(model: str, ri: float, rj: float | None, ci: float, cj: float, theta_i: float, theta_j: float,
-                       gamma: float, max_ratio: float, cdf: float):
+def liggghts_capillary(
+    model: str,
+    ri: float,
+    rj: float | None,
+    ci: float,
+    cj: float,
+    theta_i: float,
+    theta_j: float,
+    gamma: float,
+    max_ratio: float,
+    cdf: float,
+):
     """LIGGGHTS 3.8.0's capillary force F(delta) (N) and rupture gap (m) in mpmath's working precision, transcribed from
     cohesion_model_{easo,washino}_capillary_viscous.h of the 3.8.0 release (rj None: a wall; angles in degrees)."""
     mp = mpmath
@@ -22,8 +32,9 @@ def liggghts_capillary(model: str, ri: float, rj: float | None, ci: float, cj: f
     vol_li = mp.mpf("1333.333333") * mp.pi * radi**3 * mp.mpf(ci)
     vol_lj = 0 if wall else mp.mpf("1333.333333") * mp.pi * radj**3 * mp.mpf(cj)
     if model == BRIDGE_MODELS[0]:
-        vol = 0.5 * vol_li * (1 - mp.sqrt(1 - radj**2 / radsum**2)) \
-            + 0.5 * vol_lj * (1 - mp.sqrt(1 - radi**2 / radsum**2))
+        vol = 0.5 * vol_li * (1 - mp.sqrt(1 - radj**2 / radsum**2)) + 0.5 * vol_lj * (
+            1 - mp.sqrt(1 - radi**2 / radsum**2)
+        )
     else:
         vol = (vol_li + vol_lj) * mp.mpf("0.05")
     dist_max = (1 + 0.5 * th) * mp.cbrt(vol) * mp.mpf("0.1")
@@ -35,8 +46,11 @@ def liggghts_capillary(model: str, ri: float, rj: float | None, ci: float, cj: f
             R2 = max(radi, radj)
             vs = vol / R2**3 * mp.mpf("0.001")
             A = -mp.mpf("1.1") * vs ** mp.mpf("-0.53")
-            B = (-mp.mpf("0.148") * mp.log(vs) - mp.mpf("0.96")) * th * th - mp.mpf("0.0082") * mp.log(vs) \
+            B = (
+                (-mp.mpf("0.148") * mp.log(vs) - mp.mpf("0.96")) * th * th
+                - mp.mpf("0.0082") * mp.log(vs)
                 + mp.mpf("0.48")
+            )
             C = mp.mpf("0.0018") * mp.log(vs) + mp.mpf("0.078")
             if dist < 0:
                 return -mp.pi * gamma * mp.sqrt(radi * radj) * (mp.exp(B) + C)

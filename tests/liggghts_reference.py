@@ -146,16 +146,24 @@ def _thornton_ning(c: Contacts, F: np.ndarray):
 
 
 NORMAL: dict[str, Normal] = {
-    "hertz": _hertz, "hertz/stiffness": _hertz_stiffness, "hooke": _hooke, "hooke/stiffness": _hooke_stiffness,
-    "hooke/hysteresis": _hooke_hysteresis, "luding": _luding, "edinburgh": _edinburgh,
-    "edinburgh/stiffness": _edinburgh_stiffness, "thornton_ning": _thornton_ning,
+    "hertz": _hertz,
+    "hertz/stiffness": _hertz_stiffness,
+    "hooke": _hooke,
+    "hooke/stiffness": _hooke_stiffness,
+    "hooke/hysteresis": _hooke_hysteresis,
+    "luding": _luding,
+    "edinburgh": _edinburgh,
+    "edinburgh/stiffness": _edinburgh_stiffness,
+    "thornton_ning": _thornton_ning,
 }
 
 # A tangential model: (contacts, kt of the normal model) -> u_t.
 TANGENTIAL: dict[str, Callable[[Contacts, np.ndarray], np.ndarray]] = {
     "history": lambda c, kt: np.einsum("ij,ij->i", c.x["ft"], c.x["ft"]) / (2 * kt),
-    "tan_luding": lambda c, kt: np.einsum("ij,ij->i", c.x["ft"], c.x["ft"])
-    / (2 * c.prop("coeffFrictionStiffness") * c.prop("LoadingStiffness")),
+    "tan_luding": lambda c, kt: (
+        np.einsum("ij,ij->i", c.x["ft"], c.x["ft"])
+        / (2 * c.prop("coeffFrictionStiffness") * c.prop("LoadingStiffness"))
+    ),
     "no_history": lambda c, kt: np.zeros(len(c.x["F"])),  # no spring (its force is viscous only)
 }
 
@@ -178,10 +186,12 @@ def _applied_torque(c: Contacts) -> np.ndarray:
 ROLLING: dict[str, Callable[[Contacts, np.ndarray, np.ndarray], np.ndarray] | None] = {
     "epsd": lambda c, kn, kt: _stored_torque(c) / (2 * 2.25 * kn * c.prop("coefficientRollingFriction") ** 2 * c.R**2),
     "epsd2": lambda c, kn, kt: _stored_torque(c) / (2 * kt * c.R**2),
-    "epsd3": lambda c, kn, kt: _stored_torque(c)
-    / (2 * c.props["rollingStiffness"] * kn * c.prop("coefficientRollingFriction") ** 2 * c.R**2),
-    "luding": lambda c, kn, kt: _applied_torque(c)
-    / (2 * c.prop("coeffRollingStiffness") * c.prop("LoadingStiffness") * c.R**2),
+    "epsd3": lambda c, kn, kt: (
+        _stored_torque(c) / (2 * c.props["rollingStiffness"] * kn * c.prop("coefficientRollingFriction") ** 2 * c.R**2)
+    ),
+    "luding": lambda c, kn, kt: (
+        _applied_torque(c) / (2 * c.prop("coeffRollingStiffness") * c.prop("LoadingStiffness") * c.R**2)
+    ),
     "cdt": None,  # a constant torque mu_r |F_n| R*: no spring, no energy (rolling_model_cdt.h)
 }
 
@@ -194,8 +204,10 @@ def _sjkr(c: Contacts) -> tuple[np.ndarray, np.ndarray]:
     d12 = np.where(wall, 0, r1 - r2) ** 2
     pair_int = np.pi / 4 * (L * d**2 - d**3 / 3 - d12 * d**2 / (L - d))
     pair_a = np.pi / 4 * d * (2 * r1 - d) * (2 * np.where(wall, 1, r2) - d) * (2 * L - d) / (L - d) ** 2
-    return (np.where(wall, np.pi * (r1 * d**2 - d**3 / 3), pair_int),
-            np.where(wall, np.pi * (2 * r1 * d - d**2), pair_a))
+    return (
+        np.where(wall, np.pi * (r1 * d**2 - d**3 / 3), pair_int),
+        np.where(wall, np.pi * (2 * r1 * d - d**2), pair_a),
+    )
 
 
 def _sjkr2(c: Contacts) -> tuple[np.ndarray, np.ndarray]:

@@ -323,8 +323,9 @@ def _pair_side(law: Law, frame: Frame, i, j, shear, rolling, delta_max, vh, wh, 
         if frame.setup:
             rolling = _capped(rolling + _rolling_increment(law, wh[i] - wh[j], en, kt * R * R), cap_r)
         elif capped_as is not None:
-            rolling = np.where(capped_as[1][:, None], rolling * (cap_r / np.maximum(_norm(rolling), 1e-300))[:, None],
-                               rolling)
+            rolling = np.where(
+                capped_as[1][:, None], rolling * (cap_r / np.maximum(_norm(rolling), 1e-300))[:, None], rolling
+            )
         rolling_capped = _norm(rolling) >= cap_r * (1 - CAP_RTOL)
         tq_i, tq_j = tq_i - rolling, tq_j + rolling
     # rounding: of the terms, and of the step's relative velocity from the atoms' velocities
@@ -333,11 +334,16 @@ def _pair_side(law: Law, frame: Frame, i, j, shear, rolling, delta_max, vh, wh, 
     spacing = 4.0 * np.spacing(frame.periodic.max())
     ghost_normal = law.hysteresis(kn, R)[0] * spacing if law.normal == "hooke/hysteresis" else 0.0 * kn
     ghost_rolling = 0.0 if rolling is None else GHOST_RTOL * _norm(rolling)
-    return {"force": fn[:, None] * en + ft, "tq_i": tq_i, "tq_j": tq_j, "force_scale": np.abs(fn) + _norm(ft) + damping,
-            "torque_scale": _norm(tq_i) + _norm(tq_j) + ci * (_norm(ft) + damping),
-            "ghost_force": GHOST_RTOL * _norm(ft) + ghost_normal,
-            "ghost_torque": ci * (GHOST_RTOL * _norm(ft) + ghost_normal) + ghost_rolling,
-            "capped": (capped, rolling_capped)}
+    return {
+        "force": fn[:, None] * en + ft,
+        "tq_i": tq_i,
+        "tq_j": tq_j,
+        "force_scale": np.abs(fn) + _norm(ft) + damping,
+        "torque_scale": _norm(tq_i) + _norm(tq_j) + ci * (_norm(ft) + damping),
+        "ghost_force": GHOST_RTOL * _norm(ft) + ghost_normal,
+        "ghost_torque": ci * (GHOST_RTOL * _norm(ft) + ghost_normal) + ghost_rolling,
+        "capped": (capped, rolling_capped),
+    }
 
 
 def pair_forces(law: Law, frame: Frame, row: dict[int, int], vh, wh) -> list[tuple[np.ndarray, dict]]:
@@ -353,17 +359,54 @@ def pair_forces(law: Law, frame: Frame, row: dict[int, int], vh, wh) -> list[tup
     dmax = p.get("delta_max")
     a = _pair_side(law, frame, i, j, shear, rolling, dmax, vh, wh)
     ghost = p["periodic"] == 1
-    b = _pair_side(law, frame, j[ghost], i[ghost], -shear[ghost], None if rolling is None else -rolling[ghost],
-                   None if dmax is None else dmax[ghost], vh, wh, capped_as=tuple(c[ghost] for c in a["capped"]))
+    b = _pair_side(
+        law,
+        frame,
+        j[ghost],
+        i[ghost],
+        -shear[ghost],
+        None if rolling is None else -rolling[ghost],
+        None if dmax is None else dmax[ghost],
+        vh,
+        wh,
+        capped_as=tuple(c[ghost] for c in a["capped"]),
+    )
     both, none = ~ghost, np.zeros(len(i))
-    return [(i, {"force": a["force"], "torque": a["tq_i"], "force_scale": a["force_scale"],
-                 "torque_scale": a["torque_scale"], "force_allowance": none, "torque_allowance": none}),
-            (j[both], {"force": -a["force"][both], "torque": a["tq_j"][both], "force_scale": a["force_scale"][both],
-                       "torque_scale": a["torque_scale"][both], "force_allowance": none[both],
-                       "torque_allowance": none[both]}),
-            (j[ghost], {"force": b["force"], "torque": b["tq_i"], "force_scale": b["force_scale"],
-                        "torque_scale": b["torque_scale"], "force_allowance": b["ghost_force"],
-                        "torque_allowance": b["ghost_torque"]})]
+    return [
+        (
+            i,
+            {
+                "force": a["force"],
+                "torque": a["tq_i"],
+                "force_scale": a["force_scale"],
+                "torque_scale": a["torque_scale"],
+                "force_allowance": none,
+                "torque_allowance": none,
+            },
+        ),
+        (
+            j[both],
+            {
+                "force": -a["force"][both],
+                "torque": a["tq_j"][both],
+                "force_scale": a["force_scale"][both],
+                "torque_scale": a["torque_scale"][both],
+                "force_allowance": none[both],
+                "torque_allowance": none[both],
+            },
+        ),
+        (
+            j[ghost],
+            {
+                "force": b["force"],
+                "torque": b["tq_i"],
+                "force_scale": b["force_scale"],
+                "torque_scale": b["torque_scale"],
+                "force_allowance": b["ghost_force"],
+                "torque_allowance": b["ghost_torque"],
+            },
+        ),
+    ]
 
 
 def reconstruct(law: Law, walls: list[Wall], frame: Frame, print_rtol: float = 0.0) -> tuple[WallContacts, Closure]:
@@ -409,8 +452,11 @@ def reconstruct(law: Law, walls: list[Wall], frame: Frame, print_rtol: float = 0
     t2 = np.array([walls[k].type for k in wk], dtype=np.int64)
     R, meff = r[ip], m[ip]
     kn, kt, gamman, gammat = law.stiffness(t1, t2, R, meff, delta_n)
-    force = np.stack([np.stack([a[f"f_force_{f}[{c}]"][i] for c in (1, 2, 3)]) for f, i in zip(fixes, ip)]) \
-        if len(ip) else np.zeros((0, 3))
+    force = (
+        np.stack([np.stack([a[f"f_force_{f}[{c}]"][i] for c in (1, 2, 3)]) for f, i in zip(fixes, ip)])
+        if len(ip)
+        else np.zeros((0, 3))
+    )
     fn = np.einsum("ij,ij->i", force, en)
     ft = force - fn[:, None] * en
     cr = r[ip] - 0.5 * delta_n
@@ -474,8 +520,13 @@ def reconstruct(law: Law, walls: list[Wall], frame: Frame, print_rtol: float = 0
     # the balance: the force always; the torque unless an unknown rolling torque took it up
     tq_res = _norm(res_t)
     rolling_res = np.where(torque_used, np.nan, tq_res)
-    closure = Closure(a["id"].astype(np.int64), _norm(res_f), tolerance(scale_f, print_rtol) + allow_f, rolling_res,
-                      tolerance(scale_t, print_rtol) + allow_t)
+    closure = Closure(
+        a["id"].astype(np.int64),
+        _norm(res_f),
+        tolerance(scale_f, print_rtol) + allow_f,
+        rolling_res,
+        tolerance(scale_t, print_rtol) + allow_t,
+    )
     if law.rolling == "epsd2":
         ok = np.isfinite(rolling[:, 0])
         if frame.setup:
@@ -495,8 +546,23 @@ def reconstruct(law: Law, walls: list[Wall], frame: Frame, print_rtol: float = 0
     u_n = np.where(reason_n == "", u_n, np.nan)
     u_t = np.where(reason_t == "", u_t, np.nan)
     u_r = np.where(reason_r == "", u_r, np.nan) if law.rolling else u_r
-    return WallContacts(wk.astype(np.int64), a["id"][ip].astype(np.int64), delta_n, fn, fn_model, kt, capped,
-                        u_n, u_t, u_r, reason_n, reason_t, reason_r, spring, rolling), closure
+    return WallContacts(
+        wk.astype(np.int64),
+        a["id"][ip].astype(np.int64),
+        delta_n,
+        fn,
+        fn_model,
+        kt,
+        capped,
+        u_n,
+        u_t,
+        u_r,
+        reason_n,
+        reason_t,
+        reason_r,
+        spring,
+        rolling,
+    ), closure
 
 
 def from_history(law: Law, atoms: dict, walls: dict, wall_type: int) -> dict[str, np.ndarray]:
@@ -512,8 +578,11 @@ def from_history(law: Law, atoms: dict, walls: dict, wall_type: int) -> dict[str
     dmax = walls.get("delta_max")
     f = law.elastic_normal(kn, r, delta, dmax)
     shear = _vec(walls, "shearx sheary shearz")
-    out = {"id": atoms["id"][ip].astype(np.int64), "u_n": law.normal_energy(kn, r, delta, f, dmax),
-           "u_t": 0.5 * kt * np.einsum("ij,ij->i", shear, shear)}
+    out = {
+        "id": atoms["id"][ip].astype(np.int64),
+        "u_n": law.normal_energy(kn, r, delta, f, dmax),
+        "u_t": 0.5 * kt * np.einsum("ij,ij->i", shear, shear),
+    }
     if law.rolling == "epsd2":
         mr = _vec(walls, "rolling_torquex rolling_torquey rolling_torquez")
         out["u_r"] = 0.5 * np.einsum("ij,ij->i", mr, mr) / (kt * r * r)

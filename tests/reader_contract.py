@@ -35,7 +35,13 @@ INT64 = {"id", "clump", "id1", "id2", "wall"}
 def assert_frames_equal(a: Frame, b: Frame) -> None:
     """Two frames hold the same step, time, box, tables (same columns, dtypes, bits), sources and notes."""
     assert (a.step, a.time, a.source, a.overlap_source, a.notes, a.walls) == (
-        b.step, b.time, b.source, b.overlap_source, b.notes, b.walls)
+        b.step,
+        b.time,
+        b.source,
+        b.overlap_source,
+        b.notes,
+        b.walls,
+    )
     for name in ("particles", "contacts"):
         ta, tb = getattr(a, name), getattr(b, name)
         assert list(ta) == list(tb), name

@@ -12,8 +12,16 @@ from __future__ import annotations
 import numpy as np
 
 
-def synthetic_frame(step: int, *, n_particles: int = 60, n_pairs: int = 150, n_wall_contacts: int = 10,
-                    n_walls: int = 2, seed: int = 0, simulator_point: bool = True) -> dict[str, dict[str, np.ndarray]]:
+def synthetic_frame(
+    step: int,
+    *,
+    n_particles: int = 60,
+    n_pairs: int = 150,
+    n_wall_contacts: int = 10,
+    n_walls: int = 2,
+    seed: int = 0,
+    simulator_point: bool = True,
+) -> dict[str, dict[str, np.ndarray]]:
     """One frame of tables as the pipeline hands them to ResultWriter.append."""
     rng = np.random.default_rng(seed * 1_000_003 + step)
     ids = np.arange(1, n_particles + 1, dtype=np.int64) * 10
@@ -37,9 +45,21 @@ def synthetic_frame(step: int, *, n_particles: int = 60, n_pairs: int = 150, n_w
     x1 = rng.uniform(0, 0.05, (len(i1), 3))
     cp = x1 + (r1 - depth1)[:, None] * n
     contacts = {
-        "step": np.full(len(i1), step, np.int64), "id1": ids[i1], "id2": np.where(is_wall, -1, ids[i2]),
-        "wall": wall, "delta": delta, "u_n": u_n, "u_t": u_t, "share_n1": share_n1, "share_t1": share_t1,
-        "u1": u1, "u2": u2, "depth1": depth1, "cpx": cp[:, 0], "cpy": cp[:, 1], "cpz": cp[:, 2],
+        "step": np.full(len(i1), step, np.int64),
+        "id1": ids[i1],
+        "id2": np.where(is_wall, -1, ids[i2]),
+        "wall": wall,
+        "delta": delta,
+        "u_n": u_n,
+        "u_t": u_t,
+        "share_n1": share_n1,
+        "share_t1": share_t1,
+        "u1": u1,
+        "u2": u2,
+        "depth1": depth1,
+        "cpx": cp[:, 0],
+        "cpy": cp[:, 1],
+        "cpz": cp[:, 2],
     }
     if simulator_point:
         cp_sim = x1 + (r1 - delta * r2 / (r1 + r2))[:, None] * n  # radius-weighted point
@@ -49,7 +69,11 @@ def synthetic_frame(step: int, *, n_particles: int = 60, n_pairs: int = 150, n_w
     share_r = r1 / (r1 + r2)  # radius split: body 1 takes r1/(r1 + r2)
     u = np.bincount(i1, u1, n_particles) + np.bincount(i2[pair], u2[pair], n_particles)
     particles = {
-        "step": np.full(n_particles, step, np.int64), "id": ids, "type": types, "radius": radius, "u": u,
+        "step": np.full(n_particles, step, np.int64),
+        "id": ids,
+        "type": types,
+        "radius": radius,
+        "u": u,
         "u_n": np.bincount(i1, share_n1 * u_n, n_particles)
         + np.bincount(i2[pair], ((1 - share_n1) * u_n)[pair], n_particles),
         "u_t": np.bincount(i1, share_t1 * u_t, n_particles)
@@ -61,23 +85,30 @@ def synthetic_frame(step: int, *, n_particles: int = 60, n_pairs: int = 150, n_w
     }
     w = wall[is_wall]
     walls = {
-        "step": np.full(n_walls, step, np.int64), "wall": np.arange(n_walls, dtype=np.int64),
+        "step": np.full(n_walls, step, np.int64),
+        "wall": np.arange(n_walls, dtype=np.int64),
         "u": np.bincount(w, u2[is_wall], n_walls),
         "u_n": np.bincount(w, ((1 - share_n1) * u_n)[is_wall], n_walls),
         "u_t": np.bincount(w, ((1 - share_t1) * u_t)[is_wall], n_walls),
         "n_contacts": np.bincount(w, minlength=n_walls).astype(np.int64),
     }
     frames = {
-        "step": np.array([step], np.int64), "time": np.array([step * 1e-6]),
-        "n_particles": np.array([n_particles], np.int64), "n_contacts": np.array([n_pairs + n_wall_contacts], np.int64),
+        "step": np.array([step], np.int64),
+        "time": np.array([step * 1e-6]),
+        "n_particles": np.array([n_particles], np.int64),
+        "n_contacts": np.array([n_pairs + n_wall_contacts], np.int64),
         "n_wall_contacts": np.array([n_wall_contacts], np.int64),
-        "u_n": np.array([u_n.sum()]), "u_t": np.array([u_t.sum()]), "overlap_max_rel_error": np.array([-1.0]),
+        "u_n": np.array([u_n.sum()]),
+        "u_t": np.array([u_t.sum()]),
+        "overlap_max_rel_error": np.array([-1.0]),
     }
     return {"particles": particles, "contacts": contacts, "walls": walls, "frames": frames}
 
 
-WALLS_META = [{"wall": 0, "name": "floor", "kind": "plane", "type": 3},
-              {"wall": 1, "name": "drum", "kind": "cylinder", "type": 3}]
+WALLS_META = [
+    {"wall": 0, "name": "floor", "kind": "plane", "type": 3},
+    {"wall": 1, "name": "drum", "kind": "cylinder", "type": 3},
+]
 
 PROVENANCE = {
     "inputs": [{"path": "/data/run.dump", "size": 123, "blake3": "ab" * 32}],

@@ -9,8 +9,8 @@ import pytest
 from conftest import SAMPLES
 from demsplit import analyze
 from demsplit.cli import main
-from demsplit.physics.accuracy import corrected_share, expected_share_error
 from demsplit.compute import Options
+from demsplit.physics.accuracy import corrected_share, expected_share_error
 
 PACKING = SAMPLES / "liggghts" / "packing" / "in.packing"
 
@@ -51,8 +51,9 @@ def test_particle_errors_add_up_to_the_wall_side(material):
 @pytest.mark.slow
 def test_corrected_split_moves_exactly_the_expected_error(material):
     corrected = analyze(PACKING, options=Options(split="corrected"))
-    np.testing.assert_allclose(corrected.particles["u"], material.particles["u"] + material.particles["u_n_error"],
-                               rtol=1e-12, atol=1e-24)
+    np.testing.assert_allclose(
+        corrected.particles["u"], material.particles["u"] + material.particles["u_n_error"], rtol=1e-12, atol=1e-24
+    )
     np.testing.assert_array_equal(corrected.contacts["u_n"], material.contacts["u_n"])  # energies unchanged
     assert corrected.provenance["options"]["split"] == "corrected"
     f = corrected.frames
@@ -76,8 +77,14 @@ def test_accuracy_line_counts_the_contacts_beyond_the_fit():
     import pandas as pd
     from demsplit.results.report import accuracy_line
 
-    contacts = pd.DataFrame({"u_n": [1.0, 2.0, 3.0], "share_n1_error": [0.001, -0.02, 0.03],
-                             "a_over_r1": [0.05, 0.2, 0.31], "a_over_r2": [0.05, 0.35, 0.0]})
+    contacts = pd.DataFrame(
+        {
+            "u_n": [1.0, 2.0, 3.0],
+            "share_n1_error": [0.001, -0.02, 0.03],
+            "a_over_r1": [0.05, 0.2, 0.31],
+            "a_over_r2": [0.05, 0.35, 0.0],
+        }
+    )
     line = accuracy_line(contacts, "material")
     assert "2 contact(s) beyond the Hertz range" in line and "2 beyond the model's fit a/R > 0.3" in line
     assert "83.3% of the normal energy in contacts beyond 1 % expected error" in line

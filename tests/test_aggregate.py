@@ -39,25 +39,59 @@ def frame(step: int, scale: float) -> dict:
     cp = np.zeros((4, 3))
     sim = np.array([[0.5e-6, 0, 0], [0, 0, 0], [0.6 * 0.3e-6, 0.8 * 0.3e-6, 0], [np.nan] * 3])
     return {
-        "particles": {"step": np.full(n, step), "id": np.arange(1, n + 1), "type": TYPE, "radius": RADIUS,
-                      "u": scale * U, "u_n": 0.8 * scale * U, "u_t": 0.2 * scale * U,
-                      "u_equal": scale * U_EQUAL, "u_radius": scale * U_RADIUS, "n_contacts": np.ones(n, int)},
-        "contacts": {"step": np.full(4, step), "id1": np.array([1, 2, 3, 4]), "id2": np.array([2, 3, 4, -1]),
-                     "wall": np.array([-1, -1, -1, 0]), "delta": d, "u_n": np.full(4, 6.0 * scale),
-                     "u_t": np.full(4, 1.0 * scale), "cpx": cp[:, 0], "cpy": cp[:, 1], "cpz": cp[:, 2],
-                     "cpx_sim": sim[:, 0], "cpy_sim": sim[:, 1], "cpz_sim": sim[:, 2]},
-        "walls": {"step": np.array([step]), "wall": np.array([0]), "u": np.array([8.0 * scale]),
-                  "u_n": np.array([7.0 * scale]), "u_t": np.array([1.0 * scale]), "n_contacts": np.array([1])},
-        "frames": {"step": np.array([step]), "time": np.array([step * 1e-5]), "n_particles": np.array([n]),
-                   "n_contacts": np.array([3]), "n_wall_contacts": np.array([1]), "u_n": np.array([24.0 * scale]),
-                   "u_t": np.array([4.0 * scale]), "overlap_max_rel_error": np.array([np.nan])},
+        "particles": {
+            "step": np.full(n, step),
+            "id": np.arange(1, n + 1),
+            "type": TYPE,
+            "radius": RADIUS,
+            "u": scale * U,
+            "u_n": 0.8 * scale * U,
+            "u_t": 0.2 * scale * U,
+            "u_equal": scale * U_EQUAL,
+            "u_radius": scale * U_RADIUS,
+            "n_contacts": np.ones(n, int),
+        },
+        "contacts": {
+            "step": np.full(4, step),
+            "id1": np.array([1, 2, 3, 4]),
+            "id2": np.array([2, 3, 4, -1]),
+            "wall": np.array([-1, -1, -1, 0]),
+            "delta": d,
+            "u_n": np.full(4, 6.0 * scale),
+            "u_t": np.full(4, 1.0 * scale),
+            "cpx": cp[:, 0],
+            "cpy": cp[:, 1],
+            "cpz": cp[:, 2],
+            "cpx_sim": sim[:, 0],
+            "cpy_sim": sim[:, 1],
+            "cpz_sim": sim[:, 2],
+        },
+        "walls": {
+            "step": np.array([step]),
+            "wall": np.array([0]),
+            "u": np.array([8.0 * scale]),
+            "u_n": np.array([7.0 * scale]),
+            "u_t": np.array([1.0 * scale]),
+            "n_contacts": np.array([1]),
+        },
+        "frames": {
+            "step": np.array([step]),
+            "time": np.array([step * 1e-5]),
+            "n_particles": np.array([n]),
+            "n_contacts": np.array([3]),
+            "n_wall_contacts": np.array([1]),
+            "u_n": np.array([24.0 * scale]),
+            "u_t": np.array([4.0 * scale]),
+            "overlap_max_rel_error": np.array([np.nan]),
+        },
     }
 
 
 @pytest.fixture
 def results() -> Results:
-    return Results.from_frames([frame(10, 1.0), frame(20, 2.0)],
-                               walls_meta=[{"wall": 0, "name": "floor", "kind": "plane", "type": 3}])
+    return Results.from_frames(
+        [frame(10, 1.0), frame(20, 2.0)], walls_meta=[{"wall": 0, "name": "floor", "kind": "plane", "type": 3}]
+    )
 
 
 def test_per_type_by_hand(results):
@@ -65,15 +99,15 @@ def test_per_type_by_hand(results):
     one = t.loc[(10, 1)]
     assert one["count"] == 4 and one["total"] == 10 and one["mean"] == 2.5
     assert one["std"] == pytest.approx(math.sqrt(1.25), rel=1e-15)
-    assert [one[q] for q in ("p05", "p25", "p50", "p75", "p95")] == pytest.approx([1.15, 1.75, 2.5, 3.25, 3.85],
-                                                                                  rel=1e-14)
+    assert [one[q] for q in ("p05", "p25", "p50", "p75", "p95")] == pytest.approx(
+        [1.15, 1.75, 2.5, 3.25, 3.85], rel=1e-14
+    )
     assert one["top1_share"] == one["top10_share"] == pytest.approx(0.4, rel=1e-15)
     assert one["gini"] == pytest.approx(0.25, rel=1e-15)
     assert one["share_of_total"] == pytest.approx(0.5, rel=1e-15)
     two = t.loc[(10, 2)]
     assert (two["total"], two["mean"], two["std"]) == (10, 5, 5)
-    assert [two[q] for q in ("p05", "p25", "p50", "p75", "p95")] == pytest.approx([0.5, 2.5, 5, 7.5, 9.5],
-                                                                                  rel=1e-14)
+    assert [two[q] for q in ("p05", "p25", "p50", "p75", "p95")] == pytest.approx([0.5, 2.5, 5, 7.5, 9.5], rel=1e-14)
     assert two["top1_share"] == 1 and two["gini"] == pytest.approx(0.5, rel=1e-15)
     assert t.loc[(20, 1), "total"] == 20 and t.loc[(20, 1), "gini"] == pytest.approx(0.25, rel=1e-15)
     pooled = results.per_type(by_frame=False).set_index("type")
@@ -136,8 +170,14 @@ def test_contact_point_shift_by_hand(results):
     assert pair["max"] == pytest.approx(0.5, rel=1e-12)
     wall = c.loc[(10, "wall")]
     assert wall["count"] == 0 and wall["n_missing"] == 1 and math.isnan(wall["median"])
-    no_sim = Results.from_frames([{k: ({c: v for c, v in t.items() if not c.endswith("_sim")}
-                                       if k == "contacts" else t) for k, t in frame(10, 1.0).items()}])
+    no_sim = Results.from_frames(
+        [
+            {
+                k: ({c: v for c, v in t.items() if not c.endswith("_sim")} if k == "contacts" else t)
+                for k, t in frame(10, 1.0).items()
+            }
+        ]
+    )
     with pytest.raises(DemsplitError, match="no simulator contact point"):
         no_sim.contact_point_shift()
 

@@ -52,6 +52,7 @@ def _repack(src, dst, **dataset_options) -> None:
                 b.create_dataset(name, data=obj[()].astype(obj.dtype.newbyteorder(order)), **dataset_options)
             else:
                 b.create_dataset(name, data=obj[()])
+
         a.visititems(copy)
 
 
@@ -144,9 +145,20 @@ def _rewrite(group, col: str, values) -> None:
     group.create_dataset(col, data=values)
 
 
-@pytest.mark.parametrize("how", ["a contact twice", "a short column", "a NaN position", "an unknown particle",
-                                 "a wall the scene lacks", "a particle twice", "a string column",
-                                 "a stored error of another class", "a frame group missing"])
+@pytest.mark.parametrize(
+    "how",
+    [
+        "a contact twice",
+        "a short column",
+        "a NaN position",
+        "an unknown particle",
+        "a wall the scene lacks",
+        "a particle twice",
+        "a string column",
+        "a stored error of another class",
+        "a frame group missing",
+    ],
+)
 def test_a_damaged_cache_is_one_refusal_naming_the_cache(samples, tmp_path, capsys, how):
     """A cache is an input: a pair contact listed twice (its energy was counted twice, exit 0), a column
     shorter than its table (exit 3), a NaN (blamed on the intact dump the frame came from), ... : exit 2,

@@ -17,8 +17,9 @@ PACKING = SAMPLES / "liggghts" / "packing"
 
 
 def demsplit_cli(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "demsplit.cli", *map(str, args)], capture_output=True, text=True,
-                          timeout=300)
+    return subprocess.run(
+        [sys.executable, "-m", "demsplit.cli", *map(str, args)], capture_output=True, text=True, timeout=300
+    )
 
 
 def damage_atom_row(run_dir: Path, frame: int) -> int:
@@ -81,20 +82,52 @@ def test_a_bug_is_an_internal_error_exit_3(monkeypatch, capsys):
     assert "Traceback" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("path, words", [
-    (PACKING / "atoms.txt", ["kind:     atoms (label ATOMS)", "frames:   3, steps 200000..204000, every 2000",
-                             "rows:     300 per frame", "x                    6", "id               exact"]),
-    (PACKING / "pairs_full.txt.gz", ["gzip-compressed", "kind:     local (label ENTRIES)", "rows:     555 per frame",
-                                     "c_cpgl[1]           17"]),
-    (PACKING / "pairs.txt", ["kind:     local (label CONTACTS)"]),
-    (PACKING / "atoms.bin", ["binary", "frames:   3", "col16"]),
-    (SAMPLES / "yade" / "mindlin_box.h5", ["snapshot file", "snapshots: 3", "yade:Law2_ScGeom_MindlinPhys_Mindlin",
-                                          "Law2_ScGeom_MindlinPhys_Mindlin", "24000"]),
-    (SAMPLES / "yade" / "cundall_periodic.npys",
-     ["snapshot file", "yade:Law2_ScGeom_FrictPhys_CundallStrack", "periodic True"]),
-    (PACKING / "in.packing", ["LIGGGHTS input script", "liggghts:hertz (tangential='history')", "1: E=1e+08 Pa nu=0.25",
-                              "wpost (cylinder, type 3)", "dpair17", "full precision"]),
-])
+@pytest.mark.parametrize(
+    "path, words",
+    [
+        (
+            PACKING / "atoms.txt",
+            [
+                "kind:     atoms (label ATOMS)",
+                "frames:   3, steps 200000..204000, every 2000",
+                "rows:     300 per frame",
+                "x                    6",
+                "id               exact",
+            ],
+        ),
+        (
+            PACKING / "pairs_full.txt.gz",
+            ["gzip-compressed", "kind:     local (label ENTRIES)", "rows:     555 per frame", "c_cpgl[1]           17"],
+        ),
+        (PACKING / "pairs.txt", ["kind:     local (label CONTACTS)"]),
+        (PACKING / "atoms.bin", ["binary", "frames:   3", "col16"]),
+        (
+            SAMPLES / "yade" / "mindlin_box.h5",
+            [
+                "snapshot file",
+                "snapshots: 3",
+                "yade:Law2_ScGeom_MindlinPhys_Mindlin",
+                "Law2_ScGeom_MindlinPhys_Mindlin",
+                "24000",
+            ],
+        ),
+        (
+            SAMPLES / "yade" / "cundall_periodic.npys",
+            ["snapshot file", "yade:Law2_ScGeom_FrictPhys_CundallStrack", "periodic True"],
+        ),
+        (
+            PACKING / "in.packing",
+            [
+                "LIGGGHTS input script",
+                "liggghts:hertz (tangential='history')",
+                "1: E=1e+08 Pa nu=0.25",
+                "wpost (cylinder, type 3)",
+                "dpair17",
+                "full precision",
+            ],
+        ),
+    ],
+)
 @pytest.mark.slow
 def test_info_on_each_kind_of_file(path, words):
     proc = demsplit_cli("info", path)

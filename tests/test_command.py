@@ -33,18 +33,20 @@ def _probe(name: str, **env: str) -> dict:
     import os
 
     environ = {k: v for k, v in os.environ.items() if k not in ("OPENBLAS_NUM_THREADS", "NUMPY_MADVISE_HUGEPAGE")} | env
-    proc = subprocess.run([sys.executable, "-c", PROBE, name], capture_output=True, text=True, check=True,
-                          env=environ)
+    proc = subprocess.run([sys.executable, "-c", PROBE, name], capture_output=True, text=True, check=True, env=environ)
     return json.loads(proc.stdout)
 
 
-@pytest.mark.parametrize(("argv0", "orig", "expected"), [
-    ("/usr/local/bin/demsplit", ["/usr/bin/python3", "/usr/local/bin/demsplit", "run"], True),
-    ("-m", ["/usr/bin/python3", "-X", "utf8", "-m", "demsplit.cli", "run"], True),
-    ("-c", ["/usr/bin/python3", "-c", "import demsplit"], False),
-    ("/home/u/analysis.py", ["/usr/bin/python3", "/home/u/analysis.py"], False),
-    ("-m", ["/usr/bin/python3", "-m", "pytest"], False),
-])
+@pytest.mark.parametrize(
+    ("argv0", "orig", "expected"),
+    [
+        ("/usr/local/bin/demsplit", ["/usr/bin/python3", "/usr/local/bin/demsplit", "run"], True),
+        ("-m", ["/usr/bin/python3", "-X", "utf8", "-m", "demsplit.cli", "run"], True),
+        ("-c", ["/usr/bin/python3", "-c", "import demsplit"], False),
+        ("/home/u/analysis.py", ["/usr/bin/python3", "/home/u/analysis.py"], False),
+        ("-m", ["/usr/bin/python3", "-m", "pytest"], False),
+    ],
+)
 def test_is_command_only_for_the_console_script_and_the_cli_module(monkeypatch, argv0, orig, expected):
     monkeypatch.setattr(sys, "argv", [argv0])
     monkeypatch.setattr(sys, "orig_argv", orig)
@@ -84,7 +86,6 @@ def test_a_guest_reports_free_memory_when_its_count_is_above_zero(tmp_path, monk
     assert command.guest_reports_free_memory() is expected
 
 
-
 EXIT = r"""
 import atexit, sys
 sys.argv = ["demsplit", "info", sys.argv[1]]
@@ -113,8 +114,7 @@ def test_the_command_ends_without_teardown_but_runs_atexit_and_flushes(tmp_path)
     assert "atexit ran" in proc.stdout and "torn down" not in proc.stdout
     assert "in.packing" in proc.stdout  # demsplit info's report, all of it before the atexit line
     assert proc.stdout.rstrip().endswith("atexit ran")
-    missing = subprocess.run([sys.executable, "-c", EXIT, str(tmp_path / "none.in")], capture_output=True,
-                             text=True)
+    missing = subprocess.run([sys.executable, "-c", EXIT, str(tmp_path / "none.in")], capture_output=True, text=True)
     assert missing.returncode == 2 and "demsplit: error:" in missing.stderr
 
 
@@ -138,9 +138,9 @@ def test_the_command_loads_numba_without_its_blas_probe_and_scipy_imports_after(
     """demsplit.runtime.jit.load_registries_without_blas_probe: in the command's process numba's registries load
     when demsplit.runtime.jit is imported, without importing scipy.linalg; scipy.linalg still imports and works
     afterwards; a program that imports demsplit keeps numba's own lazy loading and its BLAS probe."""
+
     def probe(name: str) -> dict:
-        proc = subprocess.run([sys.executable, "-c", NUMBA_START, name], capture_output=True, text=True,
-                              check=True)
+        proc = subprocess.run([sys.executable, "-c", NUMBA_START, name], capture_output=True, text=True, check=True)
         return json.loads(proc.stdout)
 
     as_command, as_library = probe("demsplit"), probe("analysis.py")

@@ -124,9 +124,14 @@ def test_a_mesh_wall_outside_the_last_mesh_fix_is_refused(packing, capsys):
     text = packing.read_text()
     wall = "fix wfloor all wall/gran model hertz tangential history mesh n_meshes 1 meshes floor"
     assert wall in text
-    packing.write_text(text.replace(wall, "fix floor2 all mesh/surface file floor.stl type 4 move 0 0 -0.01\n"
-                                    "fix wfloor2 all wall/gran model hertz tangential history mesh n_meshes 1 "
-                                    "meshes floor2\n" + wall))
+    packing.write_text(
+        text.replace(
+            wall,
+            "fix floor2 all mesh/surface file floor.stl type 4 move 0 0 -0.01\n"
+            "fix wfloor2 all wall/gran model hertz tangential history mesh n_meshes 1 "
+            "meshes floor2\n" + wall,
+        )
+    )
     assert main(["run", str(packing), "-o", str(packing.parent / "out.h5"), "-q"]) == 2
     err = capsys.readouterr().err
     assert "'floor2'" in err and "last mesh 'fix wall/gran'" in err and "--allow-missing floor2" in err
@@ -145,7 +150,7 @@ def test_the_summary_states_what_was_not_computed_first(packing, capsys):
     assert lines[1].startswith("  Against the material law")  # the headline, then what was not computed
     assert at < next(k for k, line in enumerate(lines) if line.startswith("Energy per particle type"))
     assert "wall 'floor'" in lines[at + 1]
-    assert any("primitive-wall contacts are NOT COMPUTED" in line for line in lines[at + 1:at + 4])
+    assert any("primitive-wall contacts are NOT COMPUTED" in line for line in lines[at + 1 : at + 4])
 
 
 @pytest.mark.slow
@@ -163,10 +168,29 @@ def test_not_computed_is_never_a_zero_in_an_export_or_the_report(packing, capsys
     d = packing.parent
     out = d / "out.h5"
     assert main(["run", str(packing), "-o", str(out), "-q", "--allow-missing", "floor"]) == 0
-    assert main(["export", str(out), "--csv", str(d / "csv"), "--parquet", str(d / "pq"), "--vtk", str(d / "vtk"),
-                 "--dump", str(d / "p.dump"), "-q"]) == 0
-    for table, unknown in (("walls", ["u", "u_t"]), ("particles", ["u", "u_t", "u_equal", "u_radius"]),
-                           ("contacts", ["u_t", "u1", "u2"])):
+    assert (
+        main(
+            [
+                "export",
+                str(out),
+                "--csv",
+                str(d / "csv"),
+                "--parquet",
+                str(d / "pq"),
+                "--vtk",
+                str(d / "vtk"),
+                "--dump",
+                str(d / "p.dump"),
+                "-q",
+            ]
+        )
+        == 0
+    )
+    for table, unknown in (
+        ("walls", ["u", "u_t"]),
+        ("particles", ["u", "u_t", "u_equal", "u_radius"]),
+        ("contacts", ["u_t", "u1", "u2"]),
+    ):
         for df in (pd.read_csv(d / "csv" / f"{table}.csv"), pd.read_parquet(d / "pq" / f"{table}.parquet")):
             flagged = (df["not_computed"] & U_T) != 0
             assert flagged.any() and (df.loc[flagged, unknown].isna().all().all())

@@ -35,10 +35,14 @@ def per_step(tmp_path):
     dump compressed), and a script naming them with '*'."""
     shutil.copy(PACKING / "floor.stl", tmp_path / "floor.stl")
     script = (PACKING / "in.packing").read_text()
-    for stem, source, compress in (("atoms_full", "atoms_full.txt.gz", False),
-                                   ("pairs_full", "pairs_full.txt.gz", True), ("wall_full", "wall_full.txt.gz", False)):
-        files = split_per_step(gzip.decompress((PACKING / source).read_bytes()).decode(), f"{stem}_", tmp_path,
-                               compress)
+    for stem, source, compress in (
+        ("atoms_full", "atoms_full.txt.gz", False),
+        ("pairs_full", "pairs_full.txt.gz", True),
+        ("wall_full", "wall_full.txt.gz", False),
+    ):
+        files = split_per_step(
+            gzip.decompress((PACKING / source).read_bytes()).decode(), f"{stem}_", tmp_path, compress
+        )
         assert len(files) > 1
         script = script.replace(f" {stem}.txt ", f" {stem}_*.txt ")
     (tmp_path / "in.packing").write_text(script)
@@ -88,9 +92,11 @@ def test_liggghts_per_step_dumps_equal_its_single_file_dumps(tmp_path):
         d.mkdir()
         shutil.copy(tmp_path / "floor.stl", d / "floor.stl")
     (single / "in.run").write_text(text)
-    (series / "in.run").write_text(text.replace(" atoms_full.txt ", " post/atoms*.txt ")
-                                   .replace(" pairs_full.txt ", " post/pairs*.txt ")
-                                   .replace(" wall_full.txt ", " post/wall*.txt "))
+    (series / "in.run").write_text(
+        text.replace(" atoms_full.txt ", " post/atoms*.txt ")
+        .replace(" pairs_full.txt ", " post/pairs*.txt ")
+        .replace(" wall_full.txt ", " post/wall*.txt ")
+    )
     (series / "post").mkdir()
     for d in (single, series):
         proc = subprocess.run([liggghts, "-in", "in.run"], cwd=d, capture_output=True, text=True, timeout=600)

@@ -19,7 +19,13 @@ from pathlib import Path
 import demsplit
 import pytest
 from demsplit import (
-    ContactError, DemsplitError, InputFormatError, MaterialError, PrecisionError, ScriptError, TruncatedFileError,
+    ContactError,
+    DemsplitError,
+    InputFormatError,
+    MaterialError,
+    PrecisionError,
+    ScriptError,
+    TruncatedFileError,
     UnsupportedModelError,
 )
 from demsplit.readers import open_run
@@ -42,10 +48,12 @@ def edit_lines(path: Path, change) -> None:
 
 def set_token(path: Path, line: int, column: int, value: bytes) -> None:
     """Replace the 0-based ``column`` token of 1-based ``line``."""
+
     def change(lines):
         tokens = lines[line - 1].split(b" ")
         tokens[column] = value
         lines[line - 1] = b" ".join(tokens)
+
     edit_lines(path, change)
 
 
@@ -74,6 +82,7 @@ def test_sample_copy_is_good(run_dir):
 
 
 # --- damaged dumps -----------------------------------------------------------------------
+
 
 def test_truncated_in_the_middle_of_a_row(run_dir):
     atoms = run_dir / "atoms_full.txt"
@@ -136,14 +145,19 @@ def test_wrong_number_of_entries(run_dir):
     assert "NUMBER OF CONTACTS" in str(err)
 
 
-@pytest.mark.parametrize("change, words", [
-    (lambda tokens: tokens[:-3] + tokens[-2:], "has 15 values, expected 16"),
-    (lambda tokens: tokens[:-1] + [b"7", b""], "has 17 values, expected 16"),
-])
+@pytest.mark.parametrize(
+    "change, words",
+    [
+        (lambda tokens: tokens[:-3] + tokens[-2:], "has 15 values, expected 16"),
+        (lambda tokens: tokens[:-1] + [b"7", b""], "has 17 values, expected 16"),
+    ],
+)
 def test_row_with_too_few_or_too_many_values(run_dir, change, words):
     line = atom_row_line(0, 2)
-    edit_lines(run_dir / "atoms_full.txt",
-               lambda lines: lines.__setitem__(line - 1, b" ".join(change(lines[line - 1].split(b" ")))))
+    edit_lines(
+        run_dir / "atoms_full.txt",
+        lambda lines: lines.__setitem__(line - 1, b" ".join(change(lines[line - 1].split(b" ")))),
+    )
     err = analyze_error(run_dir)
     assert isinstance(err, InputFormatError)
     assert_where(err, "atoms_full.txt", STEPS[0], line)
@@ -159,11 +173,14 @@ def test_non_numeric_token(run_dir):
     assert "'x'" in str(err) and "0.01x5" in str(err) and "expected a number" in str(err)
 
 
-@pytest.mark.parametrize("file, line, column, token, step", [
-    ("atoms_full.txt", atom_row_line(0, 4), 3, b"nan", STEPS[0]),
-    ("pairs.txt", 10 + 5, 37, b"inf", STEPS[0]),          # c_cpgl[38]: delta
-    ("pairs.txt", 10 + 6, 33, b"-inf", STEPS[0]),         # c_cpgl[34]: shearx
-])
+@pytest.mark.parametrize(
+    "file, line, column, token, step",
+    [
+        ("atoms_full.txt", atom_row_line(0, 4), 3, b"nan", STEPS[0]),
+        ("pairs.txt", 10 + 5, 37, b"inf", STEPS[0]),  # c_cpgl[38]: delta
+        ("pairs.txt", 10 + 6, 33, b"-inf", STEPS[0]),  # c_cpgl[34]: shearx
+    ],
+)
 def test_nan_and_inf(run_dir, file, line, column, token, step):
     """(NaN/inf in a column the computation does not read, e.g. a force, is not looked at.)"""
     set_token(run_dir / file, line, column, token)
@@ -208,6 +225,7 @@ def test_contact_listed_twice_in_reverse_order(run_dir):
         tokens = lines[10 - 1].split(b" ")
         tokens[12], tokens[13] = tokens[13], tokens[12]
         lines[40 - 1] = b" ".join(tokens)
+
     edit_lines(run_dir / "pairs.txt", swap)
     err = analyze_error(run_dir)
     assert isinstance(err, ContactError)
@@ -254,6 +272,7 @@ def test_binary_dump_with_a_wrong_header(run_dir):
 
 # --- damaged input scripts ---------------------------------------------------------------
 
+
 def script_error(run_dir: Path, old: str, new: str) -> tuple[DemsplitError, int]:
     script = run_dir / "in.packing"
     text = script.read_text()
@@ -265,11 +284,14 @@ def script_error(run_dir: Path, old: str, new: str) -> tuple[DemsplitError, int]
     return info.value, line
 
 
-@pytest.mark.parametrize("old, new, bad", [
-    ("poissonsRatio peratomtype 0.25", "poissonsRatio peratomtype 0.6", "0.6"),
-    ("youngsModulus peratomtype 1.0e8", "youngsModulus peratomtype -1.0e8", "-1"),
-    ("youngsModulus peratomtype 1.0e8", "youngsModulus peratomtype 0", "0"),
-])
+@pytest.mark.parametrize(
+    "old, new, bad",
+    [
+        ("poissonsRatio peratomtype 0.25", "poissonsRatio peratomtype 0.6", "0.6"),
+        ("youngsModulus peratomtype 1.0e8", "youngsModulus peratomtype -1.0e8", "-1"),
+        ("youngsModulus peratomtype 1.0e8", "youngsModulus peratomtype 0", "0"),
+    ],
+)
 def test_material_out_of_range_in_the_script(run_dir, old, new, bad):
     err, line = script_error(run_dir, old, new)
     assert isinstance(err, MaterialError)
@@ -304,12 +326,15 @@ def test_script_that_is_not_text(run_dir):
     assert_where(info.value, "in.packing", None, 2)
 
 
-@pytest.mark.parametrize("old, new, words", [
-    ("zcylinder 0.004 0.0 0.0", "zcylinder nan 0.0 0.0", "'nan' is not a finite number"),
-    ("xplane -0.02", "xplane -1e400", "'-1e400' is not a finite number"),
-    ("timestep        2.0e-6", "timestep        inf", "'inf' is not a finite number"),
-    ("timestep        2.0e-6", "timestep        -2.0e-6", "the timestep must be > 0"),
-])
+@pytest.mark.parametrize(
+    "old, new, words",
+    [
+        ("zcylinder 0.004 0.0 0.0", "zcylinder nan 0.0 0.0", "'nan' is not a finite number"),
+        ("xplane -0.02", "xplane -1e400", "'-1e400' is not a finite number"),
+        ("timestep        2.0e-6", "timestep        inf", "'inf' is not a finite number"),
+        ("timestep        2.0e-6", "timestep        -2.0e-6", "the timestep must be > 0"),
+    ],
+)
 def test_a_number_of_the_script_that_is_not_finite_is_refused(run_dir, old, new, words):
     """A wall of radius NaN found no contact (exit 0 with its energy missing); an infinite timestep stored
     infinite times."""
@@ -321,12 +346,16 @@ def test_a_number_of_the_script_that_is_not_finite_is_refused(run_dir, old, new,
 
 # --- the command: one message, no traceback, exit 2 ----------------------------------------
 
+
 @pytest.mark.slow
 def test_cli_prints_one_message_for_bad_input(run_dir, tmp_path):
     set_token(run_dir / "pairs.txt", 10 + 8, 13, b"9999")
     out = tmp_path / "out.h5"
-    proc = subprocess.run([sys.executable, "-m", "demsplit.cli", "run", str(run_dir / "in.packing"), "-o", str(out)],
-                          capture_output=True, text=True)
+    proc = subprocess.run(
+        [sys.executable, "-m", "demsplit.cli", "run", str(run_dir / "in.packing"), "-o", str(out)],
+        capture_output=True,
+        text=True,
+    )
     assert proc.returncode == 2
     assert "Traceback" not in proc.stderr
     assert proc.stderr.count("\n") == 1 and proc.stderr.startswith("demsplit: error: ")
@@ -371,19 +400,23 @@ def test_every_frame_bad_under_skip_is_one_failure_with_or_without_quiet(run_dir
 def test_a_damaged_column_name_in_the_wall_dump_header_is_refused(run_dir):
     """The wall dump's header with the history column c_cwgl[34] (shearx) damaged to 'nan': its rows lacked
     a column the pair rows have (KeyError 'shearx', exit 3; found by the fuzzer)."""
-    edit_lines(run_dir / "wall.txt",
-               lambda lines: lines.__setitem__(9 - 1, lines[9 - 1].replace(b"c_cwgl[34]", b"nan")))
+    edit_lines(
+        run_dir / "wall.txt", lambda lines: lines.__setitem__(9 - 1, lines[9 - 1].replace(b"c_cwgl[34]", b"nan"))
+    )
     err = analyze_error(run_dir)
     assert isinstance(err, InputFormatError)
     assert_where(err, "wall.txt", STEPS[0], 9)
     assert "no column for shearx" in str(err)
 
 
-@pytest.mark.parametrize("change, message", [
-    (lambda line: line + b"\r", "ends with a carriage return (CR LF"),
-    (lambda line: b" " + line, "starts with a space"),
-    (lambda line: line.replace(b" ", b"  ", 1), "two spaces in a row before value 2"),
-])
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (lambda line: line + b"\r", "ends with a carriage return (CR LF"),
+        (lambda line: b" " + line, "starts with a space"),
+        (lambda line: line.replace(b" ", b"  ", 1), "two spaces in a row before value 2"),
+    ],
+)
 @pytest.mark.slow
 def test_row_shape_faults_are_named_as_what_they_are(run_dir, change, message):
     """They were 'row 1 has 17 values, expected 16' (CR LF) and '41 values, expected 41' (a leading space)."""

@@ -11,8 +11,8 @@ import pandas as pd
 import pytest
 from demsplit.errors import StoreError
 from demsplit.results import Results
-from demsplit.results.schema import TABLES
 from demsplit.results.exports.tables import export_tables
+from demsplit.results.schema import TABLES
 from result_frames import PROVENANCE, WALLS_META, synthetic_frame
 
 

@@ -52,8 +52,10 @@ class ToySpring(LiggghtsNormalModel):
 
     key = "liggghts:toy_spring"
     summary = "a toy LIGGGHTS spring, u_n = k delta^2/2, kt = k"
-    parameters = {**LiggghtsNormalModel.parameters,
-                  "toy_stiffness": (ContactLaw.REQUIRED, "toySpringStiffness k (N/m)")}
+    parameters = {
+        **LiggghtsNormalModel.parameters,
+        "toy_stiffness": (ContactLaw.REQUIRED, "toySpringStiffness k (N/m)"),
+    }
     simulator_parameters = {**LiggghtsNormalModel.simulator_parameters, "toySpringStiffness": "toy_stiffness"}
     example_params = {"toy_stiffness": 3e4}
 
@@ -86,8 +88,14 @@ def toy_file(path: Path, stiffness: float = 2e4) -> Path:
     """Two frames of three spheres in a row, the middle one pressed into both others."""
     lines = ["TOY 1", f"law toy:linear stiffness={stiffness!r}", "material 1 7e10 0.22", "material 2 3e9 0.35"]
     for step, squeeze in ((100, 1e-5), (200, 3e-5)):
-        lines += [f"step {step}", "p 1 1 0.0 0.0 0.0 0.001", f"p 2 2 {0.0025 - squeeze!r} 0.0 0.0 0.0015",
-                  f"p 3 1 {0.005 - 2 * squeeze!r} 0.0 0.0 0.001", "c 1 2", "c 2 3"]
+        lines += [
+            f"step {step}",
+            "p 1 1 0.0 0.0 0.0 0.001",
+            f"p 2 2 {0.0025 - squeeze!r} 0.0 0.0 0.0015",
+            f"p 3 1 {0.005 - 2 * squeeze!r} 0.0 0.0 0.001",
+            "c 1 2",
+            "c 2 3",
+        ]
     path.write_text("\n".join(lines) + "\n")
     return path
 
@@ -95,11 +103,16 @@ def toy_file(path: Path, stiffness: float = 2e4) -> Path:
 @pytest.mark.parametrize("key", ["toy:linear", "liggghts:toy_spring"])
 def test_a_law_defined_here_keeps_the_registry_wide_properties(key):
     assert key in laws.supported()
-    for check in (test_laws.test_declarations, test_laws.test_model_round_trips_through_the_scene_dict,
-                  test_laws.test_energy_is_finite_and_not_negative, test_laws.test_no_energy_without_overlap,
-                  test_laws.test_normal_force_is_the_derivative_of_the_normal_energy,
-                  test_laws.test_swapping_the_bodies_swaps_the_shares, test_laws.test_conservation_per_mode,
-                  test_laws.test_a_mode_the_law_lacks_is_zero_and_said):
+    for check in (
+        test_laws.test_declarations,
+        test_laws.test_model_round_trips_through_the_scene_dict,
+        test_laws.test_energy_is_finite_and_not_negative,
+        test_laws.test_no_energy_without_overlap,
+        test_laws.test_normal_force_is_the_derivative_of_the_normal_energy,
+        test_laws.test_swapping_the_bodies_swaps_the_shares,
+        test_laws.test_conservation_per_mode,
+        test_laws.test_a_mode_the_law_lacks_is_zero_and_said,
+    ):
         check(key)
 
 
@@ -147,9 +160,13 @@ def test_a_liggghts_law_is_found_by_its_word_and_reads_its_script_property(tmp_p
     script = run / "in.packing"
     text = script.read_text()
     assert "pair_style      gran model hertz tangential history" in text
-    script.write_text(text.replace("pair_style      gran model hertz tangential history",
-                                   "fix toy all property/global toySpringStiffness scalar 1500.0\n"
-                                   "pair_style      gran model toy_spring tangential history"))
+    script.write_text(
+        text.replace(
+            "pair_style      gran model hertz tangential history",
+            "fix toy all property/global toySpringStiffness scalar 1500.0\n"
+            "pair_style      gran model toy_spring tangential history",
+        )
+    )
     res = analyze(script)
     assert res.provenance["model"]["law"] == "liggghts:toy_spring"
     assert res.provenance["model"]["params"]["toy_stiffness"] == 1500.0

@@ -39,8 +39,10 @@ def kernel_real(token: str) -> tuple[int, float | None, bool]:
     written or None, listed as a slow token). Read twice, alone on its line (the last bytes of a block,
     read byte by byte) and followed by a long second column (read 8 bytes at a time); both must agree."""
     results = [_kernel_real(token, pad) for pad in ("", " " + "7" * 40)]
-    assert results[0] == results[1] or (results[0][1] is not None and bits(results[0][1]) == bits(results[1][1])), \
-        (token, results)
+    assert results[0] == results[1] or (results[0][1] is not None and bits(results[0][1]) == bits(results[1][1])), (
+        token,
+        results,
+    )
     return results[1]
 
 
@@ -49,8 +51,20 @@ def _kernel_real(token: str, pad: str) -> tuple[int, float | None, bool]:
     ncols = 2 if pad else 1
     reals = np.full((1, 1), 12345.0)
     slow = np.empty((4, 4), dtype=np.int64)
-    status, _, rows, n_slow = fp.parse_rows(a, 0, a.size, ncols, False, np.array([1, 0][:ncols]),
-                                            np.array([0, 0][:ncols]), reals, np.empty((0, 1), np.int64), 0, 1, slow)
+    status, _, rows, n_slow = fp.parse_rows(
+        a,
+        0,
+        a.size,
+        ncols,
+        False,
+        np.array([1, 0][:ncols]),
+        np.array([0, 0][:ncols]),
+        reals,
+        np.empty((0, 1), np.int64),
+        0,
+        1,
+        slow,
+    )
     assert rows == 1
     if n_slow:
         assert slow[0].tolist() == [0, 0, 0, len(token)]  # slot, row, the token's byte range
@@ -60,9 +74,26 @@ def _kernel_real(token: str, pad: str) -> tuple[int, float | None, bool]:
 
 # --------------------------------------------------------------------------- the kernel alone
 
-doubles = st.floats(allow_nan=False, allow_infinity=False) | st.floats(min_value=-1e-300, max_value=1e-300) \
-    | st.sampled_from([0.0, -0.0, 5e-324, 2.2250738585072014e-308, 1.7976931348623157e308, 2.0 ** 53,
-                       2.0 ** 53 + 2, 9007199254740993.0, 1e22, 1e23, 1e-22, 1e-23])
+doubles = (
+    st.floats(allow_nan=False, allow_infinity=False)
+    | st.floats(min_value=-1e-300, max_value=1e-300)
+    | st.sampled_from(
+        [
+            0.0,
+            -0.0,
+            5e-324,
+            2.2250738585072014e-308,
+            1.7976931348623157e308,
+            2.0**53,
+            2.0**53 + 2,
+            9007199254740993.0,
+            1e22,
+            1e23,
+            1e-22,
+            1e-23,
+        ]
+    )
+)
 
 
 @pytest.mark.slow
@@ -79,24 +110,29 @@ def test_kernel_real_is_pythons_float_or_not_converted(x, f):
         mantissa, _, exp = token.lower().partition("e")
         digits = mantissa.lstrip("-+").replace(".", "").lstrip("0")
         frac = len(mantissa.partition(".")[2])
-        assert len(digits) > 15 or abs(int(exp or 0) - frac) > 22 or int(digits) > 2 ** 53, token
+        assert len(digits) > 15 or abs(int(exp or 0) - frac) > 22 or int(digits) > 2**53, token
 
 
 @settings(max_examples=300, deadline=None)
-@given(m=st.integers(0, 2 ** 53 + 64) | st.integers(0, 10 ** 19), e=st.integers(-26, 26),
-       point=st.integers(0, 20), neg=st.booleans(), e_char=st.sampled_from("eE"))
+@given(
+    m=st.integers(0, 2**53 + 64) | st.integers(0, 10**19),
+    e=st.integers(-26, 26),
+    point=st.integers(0, 20),
+    neg=st.booleans(),
+    e_char=st.sampled_from("eE"),
+)
 @pytest.mark.slow
 def test_kernel_real_near_the_fast_path_bounds(m, e, point, neg, e_char):
     """Mantissas around 2**53 and exponents around +-22, with the decimal point
     anywhere: converted exactly as float() does, or listed as slow."""
     s = str(m)
     point = min(point, len(s))
-    mantissa = s[: len(s) - point] + ("." + s[len(s) - point:] if point else "")
+    mantissa = s[: len(s) - point] + ("." + s[len(s) - point :] if point else "")
     token = ("-" if neg else "") + (mantissa if mantissa[0] != "." else "0" + mantissa) + f"{e_char}{e:+d}"
     status, value, slow = kernel_real(token)
     if value is None:
         assert slow
-        assert m > 2 ** 53 or abs(e - point) > 22
+        assert m > 2**53 or abs(e - point) > 22
     else:
         assert bits(value) == bits(float(token)), token
 
@@ -112,9 +148,22 @@ def test_kernel_fast_path_covers_g_format():
 
 
 @settings(max_examples=1500, deadline=None)
-@given(token=st.text("0123456789.eE+-", min_size=1, max_size=30) | doubles.map(lambda x: "%.17g" % x)
-       | st.sampled_from(["12345678", "1234567.", "0.1234567890123456789", "00000000012345", "9007199254740993",
-                          "0.000000000000000000001234", "123456789012345678901234", "1." + "0" * 18]))
+@given(
+    token=st.text("0123456789.eE+-", min_size=1, max_size=30)
+    | doubles.map(lambda x: "%.17g" % x)
+    | st.sampled_from(
+        [
+            "12345678",
+            "1234567.",
+            "0.1234567890123456789",
+            "00000000012345",
+            "9007199254740993",
+            "0.000000000000000000001234",
+            "123456789012345678901234",
+            "1." + "0" * 18,
+        ]
+    )
+)
 @pytest.mark.slow
 def test_word_wise_real_equals_byte_wise(token):
     """The word-at-a-time reader of a real returns what the byte-by-byte one does, bit for bit (where the
@@ -127,47 +176,73 @@ def test_word_wise_real_equals_byte_wise(token):
         assert words[2] == byte[2] and bits(words[1]) == bits(byte[1]), token
 
 
-@pytest.mark.parametrize("token", ["nan", "-nan", "inf", "-inf", "abc", "1.5x", "1e", "-", ".", "1e+", "0x10",
-                                   "1_0"])
+@pytest.mark.parametrize("token", ["nan", "-nan", "inf", "-inf", "abc", "1.5x", "1e", "-", ".", "1e+", "0x10", "1_0"])
 def test_kernel_leaves_non_decimals_to_the_fallback(token):
     status, value, slow = kernel_real(token)
     assert status == fp.FALLBACK and value is None and not slow
 
 
 @settings(max_examples=200, deadline=None)
-@given(v=st.integers(-2 ** 63, 2 ** 63 - 1))
+@given(v=st.integers(-(2**63), 2**63 - 1))
 @pytest.mark.parametrize("pad", ["", " " + "7" * 40])
 def test_kernel_integers_exact_or_fallback(v, pad):
     a = np.frombuffer(f"{v}{pad}\n".encode(), dtype=np.uint8)
     ints = np.zeros((1, 1), np.int64)
     ncols = 2 if pad else 1
-    status, *_ = fp.parse_rows(a, 0, a.size, ncols, False, np.array([2, 0][:ncols]), np.array([0, 0][:ncols]),
-                               np.empty((0, 1)), ints, 0, 1, np.empty((1, 4), np.int64))
+    status, *_ = fp.parse_rows(
+        a,
+        0,
+        a.size,
+        ncols,
+        False,
+        np.array([2, 0][:ncols]),
+        np.array([0, 0][:ncols]),
+        np.empty((0, 1)),
+        ints,
+        0,
+        1,
+        np.empty((1, 4), np.int64),
+    )
     if len(str(abs(v))) <= 18:
         assert status == fp.OK and int(ints[0, 0]) == v
     else:
         assert status == fp.FALLBACK
 
 
-@pytest.mark.parametrize("text, trailing, row", [
-    ("1 2 3\n4 5 6\n", False, None),
-    ("1 2 3 \n4 5 6 \n", True, None),
-    ("1 2 3\n4 5\n", False, 1),          # short row
-    ("1 2 3\n4 5 6 7\n", False, 1),      # long row
-    ("1 2 3\n4  5 6\n", False, 1),       # empty field (double space)
-    ("1 2 3\n 4 5 6\n", False, 1),       # leading space
-    ("1 2 3\n4\t5 6\n", False, 1),       # tab
-    ("1 2 3\r\n4 5 6\n", False, 0),      # CR
-    ("1 2 3 \n4 5 6\n", True, 1),        # trailing space missing
-    ("1 2 3\n4 5 6 \n", False, 1),       # unexpected trailing space
-    ("1 2 3\n\n", False, 1),             # empty line
-    ("1 2 3\n4 5 6", False, 1),          # no final newline
-])
+@pytest.mark.parametrize(
+    "text, trailing, row",
+    [
+        ("1 2 3\n4 5 6\n", False, None),
+        ("1 2 3 \n4 5 6 \n", True, None),
+        ("1 2 3\n4 5\n", False, 1),  # short row
+        ("1 2 3\n4 5 6 7\n", False, 1),  # long row
+        ("1 2 3\n4  5 6\n", False, 1),  # empty field (double space)
+        ("1 2 3\n 4 5 6\n", False, 1),  # leading space
+        ("1 2 3\n4\t5 6\n", False, 1),  # tab
+        ("1 2 3\r\n4 5 6\n", False, 0),  # CR
+        ("1 2 3 \n4 5 6\n", True, 1),  # trailing space missing
+        ("1 2 3\n4 5 6 \n", False, 1),  # unexpected trailing space
+        ("1 2 3\n\n", False, 1),  # empty line
+        ("1 2 3\n4 5 6", False, 1),  # no final newline
+    ],
+)
 def test_kernel_shape_check(text, trailing, row):
     a = np.frombuffer(text.encode(), dtype=np.uint8)
     reals = np.zeros((3, 2))
-    status, where, _, _ = fp.parse_rows(a, 0, a.size, 3, trailing, np.array([1, 0, 1]), np.array([0, 0, 1]),
-                                        reals, np.empty((0, 2), np.int64), 0, 2, np.empty((1, 4), np.int64))
+    status, where, _, _ = fp.parse_rows(
+        a,
+        0,
+        a.size,
+        3,
+        trailing,
+        np.array([1, 0, 1]),
+        np.array([0, 0, 1]),
+        reals,
+        np.empty((0, 2), np.int64),
+        0,
+        2,
+        np.empty((1, 4), np.int64),
+    )
     if row is None:
         assert status == fp.OK and reals[:2].tolist() == [[1, 4], [3, 6]]
     else:
@@ -215,8 +290,20 @@ def test_kernel_shape_check_equals_the_rule(data, ncols, trailing):
     slot = np.zeros(ncols, dtype=np.int64)
     a = np.frombuffer(text, dtype=np.uint8)
     rows = len(lines)
-    status, where, n, _ = fp.parse_rows(a, 0, a.size, ncols, trailing, kind, slot, np.zeros((1, rows)),
-                                        np.zeros((1, rows), np.int64), 0, rows, np.empty((4, 4), np.int64))
+    status, where, n, _ = fp.parse_rows(
+        a,
+        0,
+        a.size,
+        ncols,
+        trailing,
+        kind,
+        slot,
+        np.zeros((1, rows)),
+        np.zeros((1, rows), np.int64),
+        0,
+        rows,
+        np.empty((4, 4), np.int64),
+    )
     ok, expected = reference_shape(text, ncols, trailing, rows)
     if ok:
         assert status in (fp.OK, fp.FALLBACK) and n == expected, text
@@ -232,19 +319,32 @@ def test_long_runs_of_unread_columns_are_checked_everywhere(damage):
     fields = [str(10 ** (k % 9) + k).encode() for k in range(40)]
     good = b" ".join(fields) + b"\n"
     kind, slot = np.zeros(40, np.int64), np.zeros(40, np.int64)
-    kind[0] = kind[-1] = slot[-1] = 1       # the first and last read: the run between starts after a space
+    kind[0] = kind[-1] = slot[-1] = 1  # the first and last read: the run between starts after a space
     for k in range(39):
-        bad = b" ".join(fields[: k + 1]) + damage + b" ".join(fields[k + 1:]) + b"\n"
+        bad = b" ".join(fields[: k + 1]) + damage + b" ".join(fields[k + 1 :]) + b"\n"
         if damage == b"  ":  # an empty field in place of a value: the row still has 40 fields
-            bad = b" ".join(fields[: k + 1]) + damage + b" ".join(fields[k + 2:]) + b"\n"
+            bad = b" ".join(fields[: k + 1]) + damage + b" ".join(fields[k + 2 :]) + b"\n"
         a = np.frombuffer(good + bad + good, dtype=np.uint8)
-        status, where, _, _ = fp.parse_rows(a, 0, a.size, 40, False, kind, slot, np.zeros((2, 3)),
-                                            np.zeros((1, 3), np.int64), 0, 3, np.empty((1, 4), np.int64))
+        status, where, _, _ = fp.parse_rows(
+            a,
+            0,
+            a.size,
+            40,
+            False,
+            kind,
+            slot,
+            np.zeros((2, 3)),
+            np.zeros((1, 3), np.int64),
+            0,
+            3,
+            np.empty((1, 4), np.int64),
+        )
         assert (status, where) == (fp.SHAPE, 1), (k, damage)
     a = np.frombuffer(good * 3, dtype=np.uint8)
     reals = np.zeros((2, 3))
-    status, _, rows, _ = fp.parse_rows(a, 0, a.size, 40, False, kind, slot, reals, np.zeros((1, 3), np.int64), 0,
-                                       3, np.empty((1, 4), np.int64))
+    status, _, rows, _ = fp.parse_rows(
+        a, 0, a.size, 40, False, kind, slot, reals, np.zeros((1, 3), np.int64), 0, 3, np.empty((1, 4), np.int64)
+    )
     assert (status, rows, reals.tolist()) == (fp.OK, 3, [[float(fields[0])] * 3, [float(fields[-1])] * 3])
 
 
@@ -256,8 +356,9 @@ def test_fields_longer_than_a_step():
     a = np.frombuffer(text, dtype=np.uint8)
     for kind in ([1, 0, 1], [1, 1, 1]):
         reals, slow = np.zeros((3, 2)), np.zeros((4, 4), np.int64)
-        status, _, rows, n_slow = fp.parse_rows(a, 0, a.size, 3, False, np.array(kind), np.array([0, 1, 2]), reals,
-                                                np.zeros((3, 2), np.int64), 0, 2, slow)
+        status, _, rows, n_slow = fp.parse_rows(
+            a, 0, a.size, 3, False, np.array(kind), np.array([0, 1, 2]), reals, np.zeros((3, 2), np.int64), 0, 2, slow
+        )
         assert (status, rows) == (fp.OK, 2)
         assert reals[0].tolist() == [7, 9] and reals[2].tolist() == [8, 10]
         assert slow[:n_slow].tolist() == ([[1, 0, 2, 72], [1, 1, 77, 147]] if kind[1] else [])
@@ -274,7 +375,7 @@ def test_bytes_below_flags_each_byte():
     a = np.concatenate([np.arange(256, dtype=np.uint8), np.random.default_rng(5).integers(0, 256, 300, np.uint8)])
     for i in (0, 1, 63, 200, a.size - 64):
         for bound in (0, 1, 32, 33, 128, 255):
-            bits = (a[i: i + 64] < bound).astype(np.uint64) << np.arange(64, dtype=np.uint64)
+            bits = (a[i : i + 64] < bound).astype(np.uint64) << np.arange(64, dtype=np.uint64)
             assert int(below(a, i, bound)) == int(np.bitwise_or.reduce(bits)), (i, bound)
 
 
@@ -303,8 +404,9 @@ def test_index_scan_is_the_same_for_any_window(tmp_path, monkeypatch, compressed
     """Windows of any size (headers cut between windows, a window smaller than a
     header, markers right at a limit) give the index of one window holding it all,
     for the memory-mapped plain file and for the buffered compressed stream."""
-    frames = [local_dump([f"{k} {k * 0.5:g}" for k in range(n)], 2, step=s)
-              for s, n in ((0, 3), (10, 0), (20, 11), (30, 1))]
+    frames = [
+        local_dump([f"{k} {k * 0.5:g}" for k in range(n)], 2, step=s) for s, n in ((0, 3), (10, 0), (20, 11), (30, 1))
+    ]
     text = ("".join(frames) + "ITEM: TIMESTEP\n40\nITEM: NUMB").encode()  # a cut header at the end
     path = tmp_path / ("d.txt.gz" if compressed else "d.txt")
     path.write_bytes(gzip.compress(text) if compressed else text)
@@ -312,7 +414,7 @@ def test_index_scan_is_the_same_for_any_window(tmp_path, monkeypatch, compressed
     whole = index_of(path)
     assert whole[0] == markers and whole[3:6] == (len(text), text.count(b"\n"), text[-1:])
     assert whole[2] == [text[:m].count(b"\n") for m in markers]
-    assert whole[1] == [text[m: n] for m, n in zip(markers, markers[1:] + [len(text)])]
+    assert whole[1] == [text[m:n] for m, n in zip(markers, markers[1:] + [len(text)])]
     monkeypatch.setattr(ld, "CHUNK", chunk)
     monkeypatch.setattr(ld, "CHECKPOINT", max(1, chunk // 3))
     monkeypatch.setattr(ld, "HEADER_MAX", 200)  # holds each header (at most 155 bytes here)
@@ -326,15 +428,17 @@ def test_index_scan_is_the_same_for_any_window(tmp_path, monkeypatch, compressed
 
 # --------------------------------------------------------------------------- the reader
 
+
 def local_dump(rows: list[str], ncols: int, step: int = 1) -> str:
     names = " ".join(f"c{k}" for k in range(1, ncols + 1))
-    return (f"ITEM: TIMESTEP\n{step}\nITEM: NUMBER OF ENTRIES\n{len(rows)}\nITEM: BOX BOUNDS ff ff ff\n"
-            f"0 1\n0 1\n0 1\nITEM: ENTRIES {names} \n" + "".join(r + " \n" for r in rows))
+    return (
+        f"ITEM: TIMESTEP\n{step}\nITEM: NUMBER OF ENTRIES\n{len(rows)}\nITEM: BOX BOUNDS ff ff ff\n"
+        f"0 1\n0 1\n0 1\nITEM: ENTRIES {names} \n" + "".join(r + " \n" for r in rows)
+    )
 
 
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(xs=st.lists(doubles, min_size=1, max_size=60), f=st.sampled_from(FORMATS),
-       first=st.integers(0, 10 ** 6))
+@given(xs=st.lists(doubles, min_size=1, max_size=60), f=st.sampled_from(FORMATS), first=st.integers(0, 10**6))
 @pytest.mark.slow
 def test_reader_equals_pythons_float_per_token(xs, f, first):
     """Fast path + float() for slow tokens + polars fallback: always float(token)."""
@@ -369,6 +473,7 @@ def force_polars(monkeypatch):
     def slow_slice(*args):
         status, *rest = fast_slice(*args)
         return (ld.SLICE_FALLBACK if status == ld.SLICE_OK else status, *rest)
+
     monkeypatch.setattr(ld, "_parse_fast", slow_path)
     monkeypatch.setattr(ld, "_parse_slice", slow_slice)
 
@@ -390,8 +495,21 @@ def assert_same_frames(a: list, b: list) -> None:
 @pytest.fixture(scope="module")
 def generated(tmp_path_factory) -> Path:
     d = tmp_path_factory.mktemp("gen")
-    subprocess.run([sys.executable, str(REPO / "benchmarks" / "generate.py"), str(d), "--particles", "2000",
-                    "--contacts", "4000", "--frames", "2"], check=True, capture_output=True)
+    subprocess.run(
+        [
+            sys.executable,
+            str(REPO / "benchmarks" / "generate.py"),
+            str(d),
+            "--particles",
+            "2000",
+            "--contacts",
+            "4000",
+            "--frames",
+            "2",
+        ],
+        check=True,
+        capture_output=True,
+    )
     return d
 
 
@@ -415,7 +533,7 @@ def test_fast_path_equals_polars_path_on_samples(path, monkeypatch):
 @pytest.mark.parametrize("name", ["atoms.txt", "pairs.txt"])
 def test_fast_path_equals_polars_path_on_generated_run(generated, name, monkeypatch):
     fast, d = read_all(generated / name)
-    assert d.fast_blocks >= 2 and d.fallback_blocks == 0   # a slice or more per frame
+    assert d.fast_blocks >= 2 and d.fallback_blocks == 0  # a slice or more per frame
     force_polars(monkeypatch)
     slow, _ = read_all(generated / name)
     assert_same_frames(fast, slow)
@@ -469,12 +587,16 @@ def ld_write(tmp_path: Path, text: str, name: str = "d.txt") -> Path:
 
 # --------------------------------------------------------------------------- errors, blocks, threads
 
-@pytest.mark.parametrize("bad, expect", [
-    ("7 0.5", "row 8 has 2 values, expected 3"),
-    ("7 0.5 0.25 1", "row 8 has 4 values, expected 3"),
-    ("7 0.5  0.25", "row 8 has two spaces in a row before value 3"),  # an empty field
-    ("7 0.5 abc", "column 3 ('c3') of row 8 is 'abc'; expected a number"),
-])
+
+@pytest.mark.parametrize(
+    "bad, expect",
+    [
+        ("7 0.5", "row 8 has 2 values, expected 3"),
+        ("7 0.5 0.25 1", "row 8 has 4 values, expected 3"),
+        ("7 0.5  0.25", "row 8 has two spaces in a row before value 3"),  # an empty field
+        ("7 0.5 abc", "column 3 ('c3') of row 8 is 'abc'; expected a number"),
+    ],
+)
 @pytest.mark.parametrize("block", [None, 64])
 def test_errors_name_the_line(tmp_path, monkeypatch, bad, expect, block):
     if block:  # the bad row in a later block (slice) than the first
@@ -509,7 +631,7 @@ def test_integer_column_turning_real_in_a_later_block(tmp_path, monkeypatch):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("block", [60, 1000, 1 << 24])   # rows longer than a block, several blocks, one
+@pytest.mark.parametrize("block", [60, 1000, 1 << 24])  # rows longer than a block, several blocks, one
 def test_threaded_parse_equals_serial(generated, monkeypatch, block):
     path = generated / "pairs.txt"
     monkeypatch.setattr(ld, "BLOCK", block)
@@ -541,8 +663,9 @@ def test_slices_equal_blocks(generated, monkeypatch, margin):
     monkeypatch.setattr(threads, "THREADS", 3)
     block_reads = []
     by_blocks = ld.TextDump._parse_blocks
-    monkeypatch.setattr(ld.TextDump, "_parse_blocks", lambda self, e, *a: block_reads.append(self.path)
-                        or by_blocks(self, e, *a))
+    monkeypatch.setattr(
+        ld.TextDump, "_parse_blocks", lambda self, e, *a: block_reads.append(self.path) or by_blocks(self, e, *a)
+    )
     sliced, _ = read_all(plain)
     blocks, _ = read_all(packed)
     assert_same_frames(sliced, blocks)
@@ -566,16 +689,18 @@ def test_compressed_dump_uses_the_fast_path(tmp_path):
 def test_kernels_load_from_the_cache():
     """A fresh process loads the compiled kernels instead of compiling them
     (the first one may have had to compile them)."""
-    code = ("import numpy as np\n"
-            "from demsplit.readers import fastparse as fp\n"
-            "a = np.frombuffer(b'1 2.5\\n', dtype=np.uint8)\n"
-            "fp.parse_rows(a, 0, a.size, 2, False, np.array([2, 1]), np.array([0, 0]), np.zeros((1, 1)),\n"
-            "              np.zeros((1, 1), np.int64), 0, 1, np.empty((1, 4), np.int64))\n"
-            "fp.scan_chunk(a, a.size, np.empty(2, np.int64), np.empty(2, np.int64))\n"
-            "fp.count_newlines(a, 0, a.size); fp.next_newline(a, 0)\n"
-            "k = (fp.parse_rows, fp.scan_chunk, fp.count_newlines, fp.next_newline)\n"
-            "print(sum(sum(f.stats.cache_misses.values()) for f in k), "
-            "sum(sum(f.stats.cache_hits.values()) for f in k))\n")
+    code = (
+        "import numpy as np\n"
+        "from demsplit.readers import fastparse as fp\n"
+        "a = np.frombuffer(b'1 2.5\\n', dtype=np.uint8)\n"
+        "fp.parse_rows(a, 0, a.size, 2, False, np.array([2, 1]), np.array([0, 0]), np.zeros((1, 1)),\n"
+        "              np.zeros((1, 1), np.int64), 0, 1, np.empty((1, 4), np.int64))\n"
+        "fp.scan_chunk(a, a.size, np.empty(2, np.int64), np.empty(2, np.int64))\n"
+        "fp.count_newlines(a, 0, a.size); fp.next_newline(a, 0)\n"
+        "k = (fp.parse_rows, fp.scan_chunk, fp.count_newlines, fp.next_newline)\n"
+        "print(sum(sum(f.stats.cache_misses.values()) for f in k), "
+        "sum(sum(f.stats.cache_hits.values()) for f in k))\n"
+    )
     env = dict(os.environ)
     env.pop("NUMBA_DISABLE_JIT", None)
     for _ in range(2):
@@ -589,10 +714,11 @@ def test_forked_process_parses_with_its_own_threads(monkeypatch):
     """The parse threads of a process that forks are not in the child: it starts its own."""
     monkeypatch.setattr(ld, "_SLICE_MIN", 1)
     path = SAMPLES / "packing" / "pairs.txt"
-    parent = open_dump(path).frame(0).columns["c_cpgl[38]"].copy()   # the parent's pool now exists
+    parent = open_dump(path).frame(0).columns["c_cpgl[38]"].copy()  # the parent's pool now exists
     pid = os.fork()
     if pid == 0:  # child: exit 0 when it reads the same, within 20 s
         import signal
+
         signal.alarm(20)
         os._exit(0 if np.array_equal(open_dump(path).frame(0).columns["c_cpgl[38]"], parent) else 1)
     _, status = os.waitpid(pid, 0)

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 from conftest import SAMPLES, require_program
 from demsplit import fingerprint
-from demsplit.runtime import hashing
 from demsplit.errors import StoreError
+from demsplit.runtime import hashing
 
 
 def b3sum(path) -> str:
@@ -23,8 +23,7 @@ def b3sum(path) -> str:
     return out.stdout.split()[0]
 
 
-@pytest.mark.parametrize("size", [0, 3, 1024, 1025, hashing._BLOCK - 1, hashing._BLOCK,
-                                  3 * hashing._BLOCK + 17])
+@pytest.mark.parametrize("size", [0, 3, 1024, 1025, hashing._BLOCK - 1, hashing._BLOCK, 3 * hashing._BLOCK + 17])
 def test_the_digest_is_what_b3sum_prints(tmp_path, size):
     """Sizes around BLAKE3's 1 KiB chunk and the 1 MiB blocks the file is read in."""
     path = tmp_path / "f.bin"
@@ -96,8 +95,7 @@ def test_a_waiter_takes_the_hashing_over_from_the_last_published_block(tmp_path,
     path.write_bytes(np.random.default_rng(published).integers(0, 256, 3 * 1024 + 100, dtype=np.uint8).tobytes())
     job = hashing._Digest(path)
     with monkeypatch.context() as m:
-        m.setattr(hashing, "open", lambda p, mode, buffering: _Stalled(p, mode, buffering, published),
-                  raising=False)
+        m.setattr(hashing, "open", lambda p, mode, buffering: _Stalled(p, mode, buffering, published), raising=False)
         job.hash_in_background()
     assert job._offset == published * 1024 and job.digest is None
     assert job.take_over() == b3sum(path) == job.digest

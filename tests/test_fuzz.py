@@ -44,8 +44,12 @@ def test_an_input_is_the_same_for_its_seed_and_index(bases, tmp_path):
         assert first.argv == [a.replace(str(tmp_path / "b"), str(tmp_path / "a")) for a in again.argv]
 
 
-@settings(max_examples=140, deadline=None, derandomize=True,
-          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@settings(
+    max_examples=140,
+    deadline=None,
+    derandomize=True,
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+)
 @pytest.mark.slow
 @given(family=st.sampled_from(fuzz.FAMILIES), seed=st.integers(0, 2**31), index=st.integers(0, 2**31))
 def test_generated_inputs_keep_the_promise(bases, family, seed, index):
@@ -71,8 +75,7 @@ def test_a_hang_a_crash_and_too_much_memory_are_reported_with_their_input(bases,
         return "ok", ""
 
     monkeypatch.setattr(fuzz, "check_case", check)  # the children are forked: they run this one
-    summary = fuzz.fuzz(1, 7, None, ("yade_npys",), root=root, mount=False, batch=10, time_limit=2,
-                        progress=False)
+    summary = fuzz.fuzz(1, 7, None, ("yade_npys",), root=root, mount=False, batch=10, time_limit=2, progress=False)
     assert summary["inputs"] == 7
     assert summary["counts"]["yade_npys"] == {"ok": 4, "HANG": 1, "CRASH exit -9": 1, "CHECK MemoryError": 1}
     assert [b["index"] for b in summary["broken"]] == [1, 3, 4]

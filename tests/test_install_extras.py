@@ -28,12 +28,18 @@ def block(monkeypatch, module: str) -> None:
     monkeypatch.setattr(builtins, "__import__", blocked)
 
 
-@pytest.mark.parametrize("module, argv, extra", [
-    ("pyarrow", ["export", "{store}", "--parquet", "{tmp}/pq"], "parquet"),
-    ("meshio", ["export", "{store}", "--vtk", "{tmp}/vtk"], "vtk"),
-    ("distributed", ["run", str(SAMPLES / "yade" / "mindlin_box.h5"), "-o", "{tmp}/d.h5", "--dask", "local:1"],
-     "dask"),
-])
+@pytest.mark.parametrize(
+    "module, argv, extra",
+    [
+        ("pyarrow", ["export", "{store}", "--parquet", "{tmp}/pq"], "parquet"),
+        ("meshio", ["export", "{store}", "--vtk", "{tmp}/vtk"], "vtk"),
+        (
+            "distributed",
+            ["run", str(SAMPLES / "yade" / "mindlin_box.h5"), "-o", "{tmp}/d.h5", "--dask", "local:1"],
+            "dask",
+        ),
+    ],
+)
 @pytest.mark.slow
 def test_a_missing_extra_is_named(store, tmp_path, monkeypatch, capsys, module, argv, extra):
     capsys.readouterr()

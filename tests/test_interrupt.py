@@ -56,8 +56,12 @@ def long_run(tmp_path_factory) -> Path:
 
 
 def demsplit_run(script: Path, out: Path, *extra: str) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "demsplit.cli", "run", str(script), "-o", str(out), "-q", *extra],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    return subprocess.Popen(
+        [sys.executable, "-m", "demsplit.cli", "run", str(script), "-o", str(out), "-q", *extra],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
 
 
 @pytest.fixture(scope="module")
@@ -105,11 +109,14 @@ def assert_same_results(a: demsplit.Results, b: demsplit.Results) -> None:
         pd.testing.assert_frame_equal(getattr(a, name), getattr(b, name), check_exact=True)
 
 
-@pytest.mark.parametrize("sig, code, words", [
-    (signal.SIGKILL, -signal.SIGKILL, None),
-    (signal.SIGTERM, 143, "terminated (SIGTERM); run again with --resume"),
-    (signal.SIGINT, 130, "interrupted; run again with --resume"),
-])
+@pytest.mark.parametrize(
+    "sig, code, words",
+    [
+        (signal.SIGKILL, -signal.SIGKILL, None),
+        (signal.SIGTERM, 143, "terminated (SIGTERM); run again with --resume"),
+        (signal.SIGINT, 130, "interrupted; run again with --resume"),
+    ],
+)
 @pytest.mark.slow
 def test_interrupted_run_resumes_to_the_same_results(long_run, reference, tmp_path, sig, code, words):
     out = tmp_path / "out.h5"
@@ -131,8 +138,12 @@ def test_interrupted_run_resumes_to_the_same_results(long_run, reference, tmp_pa
     assert again.returncode == 2 and "--resume" in err
     assert done_steps(out) == done
 
-    resumed = subprocess.run([sys.executable, "-m", "demsplit.cli", "run", str(long_run), "-o", str(out),
-                              "--resume"], capture_output=True, text=True, timeout=300)
+    resumed = subprocess.run(
+        [sys.executable, "-m", "demsplit.cli", "run", str(long_run), "-o", str(out), "--resume"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert resumed.returncode == 0, resumed.stderr
     assert f"{len(done)} resumed" in resumed.stdout
     assert not work_of(out).exists()
@@ -162,13 +173,29 @@ def test_sigkill_of_a_parallel_run_leaves_no_process_behind(tmp_path):
         return found
 
     repo = Path(__file__).resolve().parents[1]
-    subprocess.run([sys.executable, str(repo / "benchmarks" / "generate.py"), str(tmp_path / "run"), "--particles",
-                    "20000", "--contacts", "40000", "--frames", "6"], check=True, capture_output=True)
+    subprocess.run(
+        [
+            sys.executable,
+            str(repo / "benchmarks" / "generate.py"),
+            str(tmp_path / "run"),
+            "--particles",
+            "20000",
+            "--contacts",
+            "40000",
+            "--frames",
+            "6",
+        ],
+        check=True,
+        capture_output=True,
+    )
     script = tmp_path / "run" / "in.bench"  # a run long enough to be killed while its workers compute
     # DEMSPLIT_THREADS: as on 4 cores, where -j 2 starts two workers (on fewer it runs serially)
     env = dict(os.environ, DEMSPLIT_TEST_MARK=mark.split(b"=")[1].decode(), DEMSPLIT_THREADS="4")
-    proc = subprocess.Popen([sys.executable, "-m", "demsplit.cli", "run", str(script), "-o", str(tmp_path / "o.h5"),
-                             "-j", "2", "-q"], env=env, stderr=subprocess.DEVNULL)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "demsplit.cli", "run", str(script), "-o", str(tmp_path / "o.h5"), "-j", "2", "-q"],
+        env=env,
+        stderr=subprocess.DEVNULL,
+    )
     deadline = time.monotonic() + 30
     while len(marked()) < 4 and time.monotonic() < deadline:  # the run, the fork server, two workers
         time.sleep(0.05)
@@ -184,8 +211,12 @@ def test_sigkill_of_a_parallel_run_leaves_no_process_behind(tmp_path):
     assert left == []
     out = tmp_path / "o.h5"
     resume = ["--resume"] if done_steps(out) else []
-    again = subprocess.run([sys.executable, "-m", "demsplit.cli", "run", str(script), "-o", str(out), "-j", "2", "-q",
-                            *resume], capture_output=True, text=True, timeout=600)
+    again = subprocess.run(
+        [sys.executable, "-m", "demsplit.cli", "run", str(script), "-o", str(out), "-j", "2", "-q", *resume],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert again.returncode == 0, again.stderr
     assert len(demsplit.load_results(out).frames) == 6 and not work_of(out).exists()
 
@@ -272,8 +303,12 @@ def test_sigkill_at_every_stage_of_close_leaves_a_resumable_run_or_a_complete_st
     from result_frames import PROVENANCE, WALLS_META, synthetic_frame
 
     tests = Path(__file__).resolve().parent
-    proc = subprocess.run([sys.executable, "-c", CLOSE_KILLER, str(tests), str(tmp_path), ",".join(map(str, steps)),
-                           "6"], capture_output=True, text=True, timeout=600)
+    proc = subprocess.run(
+        [sys.executable, "-c", CLOSE_KILLER, str(tests), str(tmp_path), ",".join(map(str, steps)), "6"],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert proc.returncode == 0, proc.stderr
     kills = [json.loads(line) for line in proc.stdout.splitlines()]
     stages = [k for k in kills if k["at"] != "random"]

@@ -14,12 +14,12 @@ from pathlib import Path
 import demsplit as ds
 import numpy as np
 import pytest
+from demsplit.compute import Options, frame_tables
 from demsplit.frame import ParticleIndex
 from demsplit.physics import elastic, formulas, moduli
 from demsplit.physics.bodies import FrameContacts
 from demsplit.physics.partition import body_tables, law_energies, particle_energy, split_energies
 from demsplit.physics.shares import contact_point, normal_share, radius_share, tangential_share
-from demsplit.compute import Options, frame_tables
 from demsplit.readers import open_run
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -31,6 +31,7 @@ GPa = 1e9
 
 
 # --- the numpy reference ---------------------------------------------------------------------
+
 
 def reference_rows(particles, ids):
     order = np.argsort(particles["id"], kind="stable")
@@ -71,8 +72,12 @@ def reference_split(contacts, s_n, s_t, u_n, u_t):
     delta = np.asarray(contacts["delta"], dtype=np.float64)
     x1 = np.stack([contacts[c] for c in ("x1", "y1", "z1")], axis=-1)
     normal = np.stack([contacts[c] for c in ("nx", "ny", "nz")], axis=-1)
-    return {"u1": s_n * u_n + s_t * u_t, "u2": (1.0 - s_n) * u_n + (1.0 - s_t) * u_t, "depth1": s_n * delta,
-            "cp": contact_point(x1, normal, contacts["r1"], delta, s_n)}
+    return {
+        "u1": s_n * u_n + s_t * u_t,
+        "u2": (1.0 - s_n) * u_n + (1.0 - s_t) * u_t,
+        "depth1": s_n * delta,
+        "cp": contact_point(x1, normal, contacts["r1"], delta, s_n),
+    }
 
 
 def reference_sums(contacts, particles, s_n, s_t, u_n, u_t, n_walls):
@@ -87,11 +92,18 @@ def reference_sums(contacts, particles, s_n, s_t, u_n, u_t, n_walls):
         return np.bincount(rows1, weights=w1, minlength=n) + np.bincount(rows2, weights=w2[pair], minlength=n)
 
     w = contacts["wall"][~pair]
-    return ({"u_n": body_sum(un1, un2), "u_t": body_sum(ut1, ut2),
-             "n_contacts": np.bincount(rows1, minlength=n) + np.bincount(rows2, minlength=n)},
-            {"u_n": np.bincount(w, weights=un2[~pair], minlength=n_walls),
-             "u_t": np.bincount(w, weights=ut2[~pair], minlength=n_walls),
-             "n_contacts": np.bincount(w, minlength=n_walls)})
+    return (
+        {
+            "u_n": body_sum(un1, un2),
+            "u_t": body_sum(ut1, ut2),
+            "n_contacts": np.bincount(rows1, minlength=n) + np.bincount(rows2, minlength=n),
+        },
+        {
+            "u_n": np.bincount(w, weights=un2[~pair], minlength=n_walls),
+            "u_t": np.bincount(w, weights=ut2[~pair], minlength=n_walls),
+            "n_contacts": np.bincount(w, minlength=n_walls),
+        },
+    )
 
 
 def same(a, b, rtol=0.0):
@@ -143,27 +155,40 @@ def check_against_reference(contacts, scene, particles, n_walls=0):
         rows1 = reference_rows(particles, contacts["id1"])
         rows2 = reference_rows(particles, contacts["id2"][pair])
         n = len(particles["id"])
-        expected = (np.bincount(rows1, weights=u1, minlength=n)
-                    + np.bincount(rows2, weights=(u_n + u_t - u1)[pair], minlength=n))
+        expected = np.bincount(rows1, weights=u1, minlength=n) + np.bincount(
+            rows2, weights=(u_n + u_t - u1)[pair], minlength=n
+        )
         same(particle_energy(frame, energies, split), expected)
     return e
 
 
 # --- random frames ---------------------------------------------------------------------------
 
+
 def random_frame(rng, n_particles, n_contacts, n_walls, n_types, dense_ids=True, hard=False):
-    ids = rng.permutation(np.arange(1, n_particles + 1)) if dense_ids else \
-        rng.choice(10**12, size=n_particles, replace=False)
-    particles = {"id": ids.astype(np.int64), "type": rng.integers(1, n_types + 1, n_particles).astype(np.int32),
-                 "x": rng.uniform(0, 1, n_particles), "y": rng.uniform(0, 1, n_particles),
-                 "z": rng.uniform(0, 1, n_particles), "radius": rng.uniform(1e-3, 3e-3, n_particles),
-                 "mass": rng.uniform(1e-6, 1e-5, n_particles)}
+    ids = (
+        rng.permutation(np.arange(1, n_particles + 1))
+        if dense_ids
+        else rng.choice(10**12, size=n_particles, replace=False)
+    )
+    particles = {
+        "id": ids.astype(np.int64),
+        "type": rng.integers(1, n_types + 1, n_particles).astype(np.int32),
+        "x": rng.uniform(0, 1, n_particles),
+        "y": rng.uniform(0, 1, n_particles),
+        "z": rng.uniform(0, 1, n_particles),
+        "radius": rng.uniform(1e-3, 3e-3, n_particles),
+        "mass": rng.uniform(1e-6, 1e-5, n_particles),
+    }
     if n_particles < 2:
         n_contacts = 0
     i = rng.integers(0, max(n_particles, 1), n_contacts)
     j = (i + rng.integers(1, max(n_particles, 2), n_contacts)) % max(n_particles, 1)
-    wall = np.where(rng.random(n_contacts) < 0.3, rng.integers(0, max(n_walls, 1), n_contacts), -1) \
-        if n_walls else np.full(n_contacts, -1)
+    wall = (
+        np.where(rng.random(n_contacts) < 0.3, rng.integers(0, max(n_walls, 1), n_contacts), -1)
+        if n_walls
+        else np.full(n_contacts, -1)
+    )
     normal = rng.normal(size=(n_contacts, 3))
     normal /= np.linalg.norm(normal, axis=1)[:, None]
     delta = rng.uniform(-1e-6, 1e-5, n_contacts)
@@ -172,21 +197,30 @@ def random_frame(rng, n_particles, n_contacts, n_walls, n_types, dense_ids=True,
         delta[k] = rng.choice([-1e-3, 0.0, -0.0, 1e-300, 5e-324, 1e-12, 2e-3], len(k))
     r1 = particles["radius"][i] if n_particles else np.zeros(0)
     r2 = np.where(wall >= 0, np.inf, particles["radius"][j] if n_particles else np.zeros(0))
-    contacts = {"id1": ids[i] if n_particles else np.zeros(0, np.int64),
-                "id2": np.where(wall >= 0, -1, ids[j] if n_particles else 0).astype(np.int64),
-                "wall": wall.astype(np.int64), "delta": delta,
-                "nx": normal[:, 0], "ny": normal[:, 1], "nz": normal[:, 2],
-                "x1": particles["x"][i] if n_particles else np.zeros(0),
-                "y1": particles["y"][i] if n_particles else np.zeros(0),
-                "z1": particles["z"][i] if n_particles else np.zeros(0), "r1": r1, "r2": r2}
+    contacts = {
+        "id1": ids[i] if n_particles else np.zeros(0, np.int64),
+        "id2": np.where(wall >= 0, -1, ids[j] if n_particles else 0).astype(np.int64),
+        "wall": wall.astype(np.int64),
+        "delta": delta,
+        "nx": normal[:, 0],
+        "ny": normal[:, 1],
+        "nz": normal[:, 2],
+        "x1": particles["x"][i] if n_particles else np.zeros(0),
+        "y1": particles["y"][i] if n_particles else np.zeros(0),
+        "z1": particles["z"][i] if n_particles else np.zeros(0),
+        "r1": r1,
+        "r2": r2,
+    }
     for c in ("shearx", "sheary", "shearz"):
         contacts[c] = rng.normal(scale=1e-6, size=n_contacts)
     return contacts, particles
 
 
 def random_scene(rng, n_types, n_walls, normal, rigid_walls):
-    materials = {t: ds.Material(float(rng.choice([1e6, 7e7, 2e11])), float(rng.choice([-0.5, 0.0, 0.25, 0.49])))
-                 for t in range(1, n_types + 1)}
+    materials = {
+        t: ds.Material(float(rng.choice([1e6, 7e7, 2e11])), float(rng.choice([-0.5, 0.0, 0.25, 0.49])))
+        for t in range(1, n_types + 1)
+    }
     wall_type = n_types + 1
     materials[wall_type] = ds.Material(np.inf if rigid_walls else 2e11, 0.3)
     params = {"characteristic_velocity": 1.0} if normal == "hooke" else {}
@@ -214,9 +248,16 @@ def test_a_ranges_constants_from_the_contacts_own_types_and_once_the_frames_arra
 
 
 @settings(max_examples=60, deadline=None)
-@given(seed=st.integers(0, 2**32 - 1), n_particles=st.integers(0, 40), n_contacts=st.integers(0, 120),
-       n_walls=st.integers(0, 3), n_types=st.integers(1, 3), normal=st.sampled_from(["hertz", "hooke"]),
-       dense_ids=st.booleans(), rigid_walls=st.booleans())
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    n_particles=st.integers(0, 40),
+    n_contacts=st.integers(0, 120),
+    n_walls=st.integers(0, 3),
+    n_types=st.integers(1, 3),
+    normal=st.sampled_from(["hertz", "hooke"]),
+    dense_ids=st.booleans(),
+    rigid_walls=st.booleans(),
+)
 @pytest.mark.slow
 def test_random_frames_match_numpy(seed, n_particles, n_contacts, n_walls, n_types, normal, dense_ids, rigid_walls):
     rng = np.random.default_rng(seed)
@@ -259,8 +300,9 @@ def test_single_material_and_float32_columns():
     assert np.all(e.share_n1 == 0.5) and np.all(e.share_t1 == 0.5)
     as32 = {k: (v.astype(np.float32) if v.dtype == np.float64 else v) for k, v in contacts.items()}
     e32 = ds.partition(as32, scene, particles)
-    ref = ds.partition({k: v.astype(np.float64) if v.dtype == np.float32 else v for k, v in as32.items()},
-                       scene, particles)
+    ref = ds.partition(
+        {k: v.astype(np.float64) if v.dtype == np.float32 else v for k, v in as32.items()}, scene, particles
+    )
     for k in ("u_n", "u_t", "u1", "u2", "depth1", "cp"):
         same(getattr(e32, k), getattr(ref, k))
 
@@ -313,21 +355,40 @@ def test_compiled_formulas_equal_numpy_bit_for_bit():
     """The scalars the loops compute are the arrays' values: same IEEE operations."""
     d, r1, E = grid(HARD, POSITIVE, POSITIVE)
     with np.errstate(all="ignore"):
-        loop_u_n, loop_u_t, _ = kernels.hertz_history_energies(d, r1, np.full(len(r1), np.inf), E, E,
-                                                               kernels.NO_CODE, d, r1, E, True)
+        loop_u_n, loop_u_t, _ = kernels.hertz_history_energies(
+            d, r1, np.full(len(r1), np.inf), E, E, kernels.NO_CODE, d, r1, E, True
+        )
         R = formulas.inverse_curvature_sum(r1, np.inf)  # a particle on a plane: R* = 1/(1/r1)
         same(loop_u_n, elastic.hertz_energy_from_moduli(d, R, E))
         kt = formulas.hertz_kt_formula(elastic.overlap(d), R, E)
         same(loop_u_t, np.where(d > 0, elastic.shear_spring_energy(np.stack([d, r1, E], -1), kt), 0.0))
         r1, r2 = grid(POSITIVE, POSITIVE)
-        same(np.array([kernels._inverse_curvature_sum(a, b) for a, b in zip(r1, r2)]),
-             formulas.inverse_curvature_sum(r1, r2))
+        same(
+            np.array([kernels._inverse_curvature_sum(a, b) for a, b in zip(r1, r2)]),
+            formulas.inverse_curvature_sum(r1, r2),
+        )
         same(np.array([kernels._clamped_overlap(x) for x in HARD]), formulas.clamped_overlap(HARD))
         s_n, u_n, x1, n = grid(np.array([0.0, 0.3, 0.5, 1.0]), HARD, HARD[::2], HARD[1::2])
-        loop = kernels.split_contacts(np.stack([s_n, s_n[::-1]]), kernels.NO_CODE, np.stack([u_n, u_n[::-1]]),
-                                      u_n, x1, x1, x1, n, n, n, np.abs(x1))
-        ref = reference_split({"delta": u_n, "x1": x1, "y1": x1, "z1": x1, "nx": n, "ny": n, "nz": n,
-                               "r1": np.abs(x1)}, s_n, s_n[::-1], u_n, u_n[::-1])
+        loop = kernels.split_contacts(
+            np.stack([s_n, s_n[::-1]]),
+            kernels.NO_CODE,
+            np.stack([u_n, u_n[::-1]]),
+            u_n,
+            x1,
+            x1,
+            x1,
+            n,
+            n,
+            n,
+            np.abs(x1),
+        )
+        ref = reference_split(
+            {"delta": u_n, "x1": x1, "y1": x1, "z1": x1, "nx": n, "ny": n, "nz": n, "r1": np.abs(x1)},
+            s_n,
+            s_n[::-1],
+            u_n,
+            u_n[::-1],
+        )
         same(loop[0], np.stack([s_n, s_n[::-1]]))
         for got, k in zip(loop[1:4], ("u1", "u2", "depth1")):
             same(got, ref[k])
@@ -339,8 +400,12 @@ def test_hertz_from_codes_equals_per_contact_values():
     n = 500
     code = rng.integers(0, 4, n).astype(np.int8)
     table = np.array([1e6, 2e9, np.inf, 3e11])
-    d, r1, r2, sx, sy, sz = (rng.uniform(-1e-5, 1e-4, n), rng.uniform(1e-3, 1e-2, n), np.full(n, np.inf),
-                             *rng.normal(size=(3, n)))
+    d, r1, r2, sx, sy, sz = (
+        rng.uniform(-1e-5, 1e-4, n),
+        rng.uniform(1e-3, 1e-2, n),
+        np.full(n, np.inf),
+        *rng.normal(size=(3, n)),
+    )
     with np.errstate(all="ignore"):
         coded = kernels.hertz_history_energies(d, r1, r2, table, table, code, sx, sy, sz, True)
         flat = kernels.hertz_history_energies(d, r1, r2, table[code], table[code], kernels.NO_CODE, sx, sy, sz, True)
@@ -367,11 +432,14 @@ def test_the_first_bad_contact_is_found_in_any_piece(pieces, monkeypatch):
     r1[[21, 28]] = -1e-3
     E = np.array([1e9])  # one value for all
     assert kernels.hertz_history_energies(d, r1, r2, E, E, kernels.NO_CODE, d, d, d, True)[2] == 21
-    assert kernels.hertz_history_energies(d, r1, r2, np.full(n, 1e9), np.full(n, 1e9), kernels.NO_CODE,
-                                          d, d, d, True)[2] == 21
+    assert (
+        kernels.hertz_history_energies(d, r1, r2, np.full(n, 1e9), np.full(n, 1e9), kernels.NO_CODE, d, d, d, True)[2]
+        == 21
+    )
 
 
 # --- sample runs -----------------------------------------------------------------------------
+
 
 @pytest.mark.parametrize("name", ["packing", "periodic", "analytic"])
 def test_sample_runs_match_numpy(name):
@@ -391,6 +459,7 @@ def test_sample_runs_match_numpy(name):
 
 
 # --- the LIGGGHTS join -----------------------------------------------------------------------
+
 
 def reference_repeated_pair(id1, id2):
     """The numpy check the compiled one replaced: one lexsort of the (min, max) pairs."""
@@ -435,8 +504,12 @@ def test_pair_geometry_matches_numpy(periodic, pieces, monkeypatch):
     rows1, rows2 = rng.integers(0, n_particles, n), rng.integers(0, n_particles, n)
     rows2[:5] = rows1[:5]  # dist = 0: the normal is d itself
     xyzr = np.stack([x, y, z, radius], -1)
-    got = dict(zip(("nx", "ny", "nz", "x1", "y1", "z1", "r1", "r2", "gap", "hmax", "cp"),
-                   kernels.pair_geometry(rows1, rows2, xyzr, h, box.lengths, box.tilt, box.periodic, True)))
+    got = dict(
+        zip(
+            ("nx", "ny", "nz", "x1", "y1", "z1", "r1", "r2", "gap", "hmax", "cp"),
+            kernels.pair_geometry(rows1, rows2, xyzr, h, box.lengths, box.tilt, box.periodic, True),
+        )
+    )
     xyz = np.stack([x, y, z], -1)
     d = xyz[rows2] - xyz[rows1]
     if box.any_periodic:
@@ -446,8 +519,14 @@ def test_pair_geometry_matches_numpy(periodic, pieces, monkeypatch):
     r1, r2 = radius[rows1], radius[rows2]
     for k, v in (("nx", normal[:, 0]), ("ny", normal[:, 1]), ("nz", normal[:, 2]), ("gap", r1 + r2 - dist)):
         same(got[k], v, rtol=1e-12)  # |d|^2 summed in order; einsum's order may differ by one ulp
-    for k, v in (("x1", x[rows1]), ("y1", y[rows1]), ("z1", z[rows1]), ("r1", r1), ("r2", r2),
-                 ("hmax", np.maximum(h[rows1], h[rows2]))):
+    for k, v in (
+        ("x1", x[rows1]),
+        ("y1", y[rows1]),
+        ("z1", z[rows1]),
+        ("r1", r1),
+        ("r2", r2),
+        ("hmax", np.maximum(h[rows1], h[rows2])),
+    ):
         same(got[k], v)
     same(got["cp"].T, xyz[rows1] + (r1 / (r1 + r2))[:, None] * d)
     no_h_no_cp = kernels.pair_geometry(rows1, rows2, xyzr, h[:0], box.lengths, box.tilt, box.periodic, False)
@@ -470,8 +549,11 @@ def test_walls_with_their_own_model():
     contacts, particles = random_frame(rng, 40, 200, 2, 2)
     scene = random_scene(rng, 2, 2, "hertz", False)
     hooke = ds.ContactModel("liggghts:hooke", {"tangential": "history", "characteristic_velocity": 1.0})
-    scene = ds.Scene(scene.materials, model=scene.model,
-                     walls=[ds.Wall(w.name, w.kind, type=w.type, model=hooke) for w in scene.walls])
+    scene = ds.Scene(
+        scene.materials,
+        model=scene.model,
+        walls=[ds.Wall(w.name, w.kind, type=w.type, model=hooke) for w in scene.walls],
+    )
     e = check_against_reference(contacts, scene, particles, n_walls=2)
     wall = contacts["wall"] >= 0
     assert wall.sum() > 10

@@ -17,17 +17,27 @@ from demsplit.readers.lammps_dump import open_dump
 ATOM_NAMES = ["id", "type", "x", "y", "z", "radius"]
 
 
-def atom_frame(step: int, rows: list[str], bounds: str = "pp pp ff", box: str = "0 1\n0 1\n0 2\n",
-               count: int | None = None, names: list[str] = ATOM_NAMES) -> str:
+def atom_frame(
+    step: int,
+    rows: list[str],
+    bounds: str = "pp pp ff",
+    box: str = "0 1\n0 1\n0 2\n",
+    count: int | None = None,
+    names: list[str] = ATOM_NAMES,
+) -> str:
     n = len(rows) if count is None else count
-    return (f"ITEM: TIMESTEP\n{step}\nITEM: NUMBER OF ATOMS\n{n}\nITEM: BOX BOUNDS {bounds}\n{box}"
-            f"ITEM: ATOMS {' '.join(names)} \n" + "".join(r + " \n" for r in rows))
+    return (
+        f"ITEM: TIMESTEP\n{step}\nITEM: NUMBER OF ATOMS\n{n}\nITEM: BOX BOUNDS {bounds}\n{box}"
+        f"ITEM: ATOMS {' '.join(names)} \n" + "".join(r + " \n" for r in rows)
+    )
 
 
 def local_frame(step: int, rows: list[str], ncols: int, label: str = "ENTRIES") -> str:
     names = " ".join(f"c_cpgl[{k}]" for k in range(1, ncols + 1))
-    return (f"ITEM: TIMESTEP\n{step}\nITEM: NUMBER OF {label}\n{len(rows)}\nITEM: BOX BOUNDS ff ff ff\n"
-            f"0 1\n0 1\n0 1\nITEM: {label} {names} \n" + "".join(r + " \n" for r in rows))
+    return (
+        f"ITEM: TIMESTEP\n{step}\nITEM: NUMBER OF {label}\n{len(rows)}\nITEM: BOX BOUNDS ff ff ff\n"
+        f"0 1\n0 1\n0 1\nITEM: {label} {names} \n" + "".join(r + " \n" for r in rows)
+    )
 
 
 FRAME_A = ["3 1 0.5 0.25 0.125 0.001", "1 2 0.1 0.2 0.3 0.0015", "2 1 0.7 0.8 0.9 0.001"]
@@ -49,6 +59,7 @@ def line_no(text: str, needle: str, occurrence: int = 1) -> int:
 
 # --------------------------------------------------------------------------- text basics
 
+
 def test_index_and_frames(tmp_path):
     d = open_dump(write(tmp_path, TEXT))
     assert (d.kind, d.label, d.columns) == ("atoms", "ATOMS", ATOM_NAMES)
@@ -68,9 +79,11 @@ def test_index_and_frames(tmp_path):
 
 
 def test_box_flags_and_triclinic(tmp_path):
-    text = (atom_frame(1, FRAME_A, bounds="ff ff ff") + atom_frame(2, FRAME_A, bounds="pp pp ff")
-            + atom_frame(3, FRAME_A, bounds="xy xz yz pp pp pp",
-                         box="0 0.013 0.002\n0 0.0105 0.0005\n0 0.01 0.001\n"))
+    text = (
+        atom_frame(1, FRAME_A, bounds="ff ff ff")
+        + atom_frame(2, FRAME_A, bounds="pp pp ff")
+        + atom_frame(3, FRAME_A, bounds="xy xz yz pp pp pp", box="0 0.013 0.002\n0 0.0105 0.0005\n0 0.01 0.001\n")
+    )
     d = open_dump(write(tmp_path, text))
     assert d.frame(0).box.periodic == (False, False, False)
     b = d.frame(1).box
@@ -139,14 +152,15 @@ def test_rows_without_trailing_space(tmp_path):
 
 # --------------------------------------------------------------------------- precision
 
+
 def test_digits_g_and_17g(tmp_path):
     g = ["1 1 0.00198546 0.00397918 0.0059708 0.001", "2 1 0.0123457 0.1 0.2 0.001"]
     full = ["1 1 0.001985459339780061 0.5 0.25 0.001", "2 1 0.0039791841667424433 0.1 0.2 0.001"]
     d = open_dump(write(tmp_path, atom_frame(1, g) + atom_frame(2, full)))
     f = d.frame(0)
     assert f.digits["x"] == 6
-    assert f.digits["radius"] == 6          # round value: gets the frame's precision
-    assert f.digits["id"] is None           # integer text is exact
+    assert f.digits["radius"] == 6  # round value: gets the frame's precision
+    assert f.digits["id"] is None  # integer text is exact
     assert d.frame(1).digits["x"] == 17 and d.frame(1).digits["radius"] == 17
 
 
@@ -178,6 +192,7 @@ def test_int_column_rejects_fractions(tmp_path):
 
 def test_integer_column_turning_real_after_sample(tmp_path, monkeypatch):
     import demsplit.readers.lammps_dump as ld
+
     monkeypatch.setattr(ld, "DIGITS_SAMPLE", 64)  # sample sees only integer ids
     rows = [f"0.{k + 1} {k + 1}" for k in range(20)] + ["0.5 1.23457e+06"]
     f = open_dump(write(tmp_path, local_frame(1, rows, 2))).frame(0)
@@ -188,6 +203,7 @@ def test_integer_column_turning_real_after_sample(tmp_path, monkeypatch):
 
 
 # --------------------------------------------------------------------------- errors
+
 
 def test_empty_file(tmp_path):
     with pytest.raises(InputFormatError, match="empty") as err:
@@ -201,7 +217,7 @@ def test_not_a_dump(tmp_path):
 
 
 def test_truncated_mid_row(tmp_path):
-    text = TEXT[: TEXT.rindex("0.7 0.8")] + "0.7 0."    # last frame, third row cut
+    text = TEXT[: TEXT.rindex("0.7 0.8")] + "0.7 0."  # last frame, third row cut
     d = open_dump(write(tmp_path, text))
     frames = []
     with pytest.raises(TruncatedFileError, match="middle of a row") as err:
@@ -245,8 +261,10 @@ def test_count_disagrees_too_many_rows(tmp_path):
     assert err.value.line == line_no(text, "2 1 0.7")
 
 
-@pytest.mark.parametrize("bad_row, expect", [("2 1 0.7 0.8 0.001", "has 5 values, expected 6"),
-                                             ("2 1 0.7 0.8 0.9 0.001 7", "has 7 values, expected 6")])
+@pytest.mark.parametrize(
+    "bad_row, expect",
+    [("2 1 0.7 0.8 0.001", "has 5 values, expected 6"), ("2 1 0.7 0.8 0.9 0.001 7", "has 7 values, expected 6")],
+)
 def test_row_with_wrong_number_of_values(tmp_path, bad_row, expect):
     text = atom_frame(9, FRAME_A[:2] + [bad_row]) + atom_frame(10, FRAME_B)
     with pytest.raises(InputFormatError, match=expect) as err:
@@ -279,6 +297,7 @@ def test_damaged_header(tmp_path):
 
 
 # --------------------------------------------------------------------------- binary
+
 
 def binary_frame(step: int, rows: np.ndarray, tri: int = 0, bounds=(0, 1, 0, 1, 0, 2), chunks: int = 1) -> bytes:
     out = struct.pack("=qqi6i", step, rows.shape[0], tri, 0, 0, 0, 0, 1, 1)
@@ -371,8 +390,13 @@ NAMES = ["id", "type", "x", "y", "z", "vx", "vy", "vz", "radius", "mass"]
 @pytest.fixture
 def liggghts_run(liggghts, tmp_path):
     (tmp_path / "in.test").write_text(LIGGGHTS_SCRIPT)
-    p = subprocess.run(["stdbuf", "-o0", "-e0", liggghts, "-in", "in.test", "-log", "none"], cwd=tmp_path,
-                       capture_output=True, text=True, timeout=120)
+    p = subprocess.run(
+        ["stdbuf", "-o0", "-e0", liggghts, "-in", "in.test", "-log", "none"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert p.returncode == 0, p.stdout[-2000:] + p.stderr[-2000:]
     return tmp_path
 

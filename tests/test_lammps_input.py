@@ -13,8 +13,16 @@ from pathlib import Path
 
 import pytest
 from demsplit.errors import ScriptError
-from demsplit.readers.lammps_input import (FUNCTIONS, Unevaluable, Variables, Where, excerpt, logical_lines,
-                                           split_words, substitute)
+from demsplit.readers.lammps_input import (
+    FUNCTIONS,
+    Unevaluable,
+    Variables,
+    Where,
+    excerpt,
+    logical_lines,
+    split_words,
+    substitute,
+)
 from demsplit.readers.liggghts_script import read_script
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -43,16 +51,33 @@ def fault(formula: str, **defined: str) -> ScriptError:
 # ---------------------------------------------------------------- faults of formulas, one test per class
 
 
-@pytest.mark.parametrize("formula", ["sqrt(-1)", "ln(0)", "ln(-2)", "log(0)", "asin(1.5)", "acos(-2)",
-                                     "(-8)^(1/3)", "(-1)^0.5", "sqrt(1-2*v_x)"])
+@pytest.mark.parametrize(
+    "formula",
+    ["sqrt(-1)", "ln(0)", "ln(-2)", "log(0)", "asin(1.5)", "acos(-2)", "(-8)^(1/3)", "(-1)^0.5", "sqrt(1-2*v_x)"],
+)
 def test_a_domain_error_is_a_script_error(formula):
     assert "outside the" in fault(formula, x="1").message  # the function's domain, or the domain of ^
 
 
-@pytest.mark.parametrize("formula", ["10^400", "exp(1000)", "1e999", "10^300*10^300", "-(10^300)*10^300",
-                                     "1/(10^300*10^300)", "atan(10^300*10^300)", "exp(-(10^300*10^300))",
-                                     "floor(10^300*10^300)", "1e308+1e308", "-1e308-1e308", "1/1e-310",
-                                     "v_big*10", "2^2^2^2^2^2^2^2^2^2^2"])
+@pytest.mark.parametrize(
+    "formula",
+    [
+        "10^400",
+        "exp(1000)",
+        "1e999",
+        "10^300*10^300",
+        "-(10^300)*10^300",
+        "1/(10^300*10^300)",
+        "atan(10^300*10^300)",
+        "exp(-(10^300*10^300))",
+        "floor(10^300*10^300)",
+        "1e308+1e308",
+        "-1e308-1e308",
+        "1/1e-310",
+        "v_big*10",
+        "2^2^2^2^2^2^2^2^2^2^2",
+    ],
+)
 def test_an_overflow_anywhere_in_the_formula_is_a_script_error(formula):
     # LIGGGHTS carries an inf on (1/inf is 0); demsplit refuses the formula where the value overflows
     assert "overflows" in fault(formula, big="1e308").message
@@ -75,8 +100,16 @@ def test_a_variable_that_is_not_a_finite_number_is_a_script_error(value):
     assert "not a finite number" in err.message or "not a number" in err.message
 
 
-@pytest.mark.parametrize("formula", ["(" * 5000 + "1" + ")" * 5000, "-" * 20000 + "1", "+" * 20000 + "1",
-                                     "sqrt(" * 3000 + "4" + ")" * 3000, "1+(" * 3000 + "1" + ")" * 3000])
+@pytest.mark.parametrize(
+    "formula",
+    [
+        "(" * 5000 + "1" + ")" * 5000,
+        "-" * 20000 + "1",
+        "+" * 20000 + "1",
+        "sqrt(" * 3000 + "4" + ")" * 3000,
+        "1+(" * 3000 + "1" + ")" * 3000,
+    ],
+)
 def test_a_formula_nested_too_deeply_is_a_script_error(formula):
     assert "nested too deeply" in fault(formula).message
 
@@ -92,7 +125,8 @@ def _compose(inner):
     return st.one_of(
         st.tuples(inner, st.sampled_from("+-*/^"), inner).map(lambda t: f"({t[0]}){t[1]}({t[2]})"),
         st.tuples(st.sampled_from(sorted(FUNCTIONS)), inner).map(lambda t: f"{t[0]}({t[1]})"),
-        inner.map(lambda t: f"-({t})"))
+        inner.map(lambda t: f"-({t})"),
+    )
 
 
 @pytest.mark.slow
@@ -110,11 +144,24 @@ def test_every_formula_gives_a_finite_number_or_a_script_error(formula):
 # ---------------------------------------------------------------- what LIGGGHTS 3.8 computes
 
 
-@pytest.mark.parametrize("formula, value", [
-    ("-2^2", 4), ("2^-1", 0.5), ("2^3^2", 64), ("4^0.5^2", 4), ("2^-1^2", 0.25), ("-2^-2^-1", 4),
-    ("2*-3^2", 18), ("round(2.5)", 3), ("round(-2.5)", -2), ("round(-2.6)", -3), ("floor(-0.5)", -1),
-    ("log(1000)", 3), ("v_third*3-1", float("0.333333333333333") * 3 - 1),
-])
+@pytest.mark.parametrize(
+    "formula, value",
+    [
+        ("-2^2", 4),
+        ("2^-1", 0.5),
+        ("2^3^2", 64),
+        ("4^0.5^2", 4),
+        ("2^-1^2", 0.25),
+        ("-2^-2^-1", 4),
+        ("2*-3^2", 18),
+        ("round(2.5)", 3),
+        ("round(-2.5)", -2),
+        ("round(-2.6)", -3),
+        ("floor(-0.5)", -1),
+        ("log(1000)", 3),
+        ("v_third*3-1", float("0.333333333333333") * 3 - 1),
+    ],
+)
 def test_formulas_evaluate_as_liggghts_does(formula, value):
     # measured on Debian's LIGGGHTS 3.8.0 (test_formulas_match_the_real_program): ^ left to right, unary minus
     # before ^, round() rounds halves up, v_name of an equal-style variable passes through %.15g
@@ -129,9 +176,24 @@ def test_what_only_the_run_knows_is_unevaluable():
             variables.evaluate(formula, WHERE)
 
 
-_SIM_FORMULAS = ["-2^2", "2^3^2", "4^0.5^2", "2^-1^2", "-2^-2^-1", "2*-3^2", "round(2.5)", "round(-2.5)",
-                 "7-PI", "v_third*3-1", "sqrt(2)*exp(1)/ln(10)", "atan(1)*4-PI", "floor(-0.5)+ceil(-0.5)",
-                 "1e-300*1e-300", "abs(-3)/4^2/2", "asin(0.5)+acos(0.5)"]
+_SIM_FORMULAS = [
+    "-2^2",
+    "2^3^2",
+    "4^0.5^2",
+    "2^-1^2",
+    "-2^-2^-1",
+    "2*-3^2",
+    "round(2.5)",
+    "round(-2.5)",
+    "7-PI",
+    "v_third*3-1",
+    "sqrt(2)*exp(1)/ln(10)",
+    "atan(1)*4-PI",
+    "floor(-0.5)+ceil(-0.5)",
+    "1e-300*1e-300",
+    "abs(-3)/4^2/2",
+    "asin(0.5)+acos(0.5)",
+]
 
 
 @pytest.mark.simulator
@@ -141,16 +203,22 @@ def test_formulas_match_the_real_program(liggghts, tmp_path):
         lines += [f"variable f{k} equal {formula.replace(' ', '')}", f'print "F{k} ${{f{k}}}"']
     path = tmp_path / "in.formulas"
     path.write_text("\n".join(lines) + "\n")
-    proc = subprocess.run(["stdbuf", "-o0", "-e0", liggghts, "-in", path.name, "-log", "none"],
-                          cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    proc = subprocess.run(
+        ["stdbuf", "-o0", "-e0", liggghts, "-in", path.name, "-log", "none"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert proc.returncode == 0 and "ERROR" not in proc.stdout, proc.stdout[-2000:]
     printed = dict(re.findall(r"^F(\d+) (\S+)$", proc.stdout, re.M))
     variables = Variables({})
     for line in lines:
         if line.startswith("variable"):
             variables.define(line.split()[1:], WHERE)
-    assert {int(k): v for k, v in printed.items()} == \
-        {k: variables.retrieve(f"f{k}", WHERE) for k in range(len(_SIM_FORMULAS))}
+    assert {int(k): v for k, v in printed.items()} == {
+        k: variables.retrieve(f"f{k}", WHERE) for k in range(len(_SIM_FORMULAS))
+    }
 
 
 # ---------------------------------------------------------------- lines, words, substitution
@@ -168,8 +236,17 @@ def test_continued_lines_keep_the_first_line_number(tmp_path):
     assert list(logical_lines(script_path)) == [(1, "a   b"), (3, "c\x0cd"), (4, ""), (5, "e ")]
 
 
-@pytest.mark.parametrize("line", ["x 'abc" + "y" * 5000, "x ${" + "z" * 5000, "x ${" + "z" * 5000 + "}",
-                                  "x $(" + "1+" * 5000, "x 'a'b", "variable " + "n" * 5000 + "- equal 1"])
+@pytest.mark.parametrize(
+    "line",
+    [
+        "x 'abc" + "y" * 5000,
+        "x ${" + "z" * 5000,
+        "x ${" + "z" * 5000 + "}",
+        "x $(" + "1+" * 5000,
+        "x 'a'b",
+        "variable " + "n" * 5000 + "- equal 1",
+    ],
+)
 def test_a_faulty_line_is_quoted_as_a_bounded_excerpt(line):
     variables = Variables({})
     with pytest.raises(ScriptError) as err:
@@ -190,15 +267,18 @@ def test_an_excerpt_is_bounded_and_printable():
 _SECRET = "SECRET-0123456789"
 
 
-@pytest.mark.parametrize("content", [
-    b"\x00\x01\x02\xff\xfe binary " + _SECRET.encode(),                     # not UTF-8
-    b"\x7fELF\x02\x01\x01\x00" + b"\x00" * 8 + _SECRET.encode(),              # an executable
-    ("root:x:0:0:" + _SECRET + "\n").encode() + b"\x00\n",                   # UTF-8 with a NUL byte
-    b"\x1b[2J\x1b[31m" + _SECRET.encode() + b"\n",                            # terminal escapes
-    ("root:$6$" + _SECRET + "$hash:19000:0:99999:7:::\n").encode(),          # /etc/shadow
-    ("print '" + "A" * 100 + _SECRET + "\n").encode(),                      # a long line, unbalanced
-    ("fix " + "A" * 100 + _SECRET + "\n").encode(),                        # a command too short
-])
+@pytest.mark.parametrize(
+    "content",
+    [
+        b"\x00\x01\x02\xff\xfe binary " + _SECRET.encode(),  # not UTF-8
+        b"\x7fELF\x02\x01\x01\x00" + b"\x00" * 8 + _SECRET.encode(),  # an executable
+        ("root:x:0:0:" + _SECRET + "\n").encode() + b"\x00\n",  # UTF-8 with a NUL byte
+        b"\x1b[2J\x1b[31m" + _SECRET.encode() + b"\n",  # terminal escapes
+        ("root:$6$" + _SECRET + "$hash:19000:0:99999:7:::\n").encode(),  # /etc/shadow
+        ("print '" + "A" * 100 + _SECRET + "\n").encode(),  # a long line, unbalanced
+        ("fix " + "A" * 100 + _SECRET + "\n").encode(),  # a command too short
+    ],
+)
 def test_a_file_that_is_not_a_text_script_is_named_not_quoted(tmp_path, content):
     foreign = tmp_path / "foreign"
     foreign.write_bytes(content)
@@ -229,11 +309,12 @@ def test_undefined_variable(tmp_path):
 
 def test_continuation_line_number_and_unbalanced_quote(tmp_path):
     with pytest.raises(ScriptError, match="unbalanced quotes") as err:
-        script(tmp_path, "dump d all custom 10 a.txt id &\n   x y\ndump_modify d format \"%d %g %g\n")
+        script(tmp_path, 'dump d all custom 10 a.txt id &\n   x y\ndump_modify d format "%d %g %g\n')
     assert err.value.line == HEADER.count("\n") + 3
 
 
 # --- the interpreter's work is bounded: one refusal naming the file and the line ----------------------------
+
 
 def _refusal(tmp_path: Path, lines: list[str], seconds: float = 10.0) -> ScriptError:
     import time
@@ -262,9 +343,12 @@ def test_formulas_that_refer_to_each_other_are_evaluated_once_each_and_bounded(t
     from demsplit.readers.lammps_input import MAX_OPERATIONS
 
     path = tmp_path / "in.chain"
-    path.write_text(HEADER + "variable v0 equal 1\n"
-                    + "".join(f"variable v{i} equal v_v{i - 1}+v_v{i - 1}\n" for i in range(1, 41))
-                    + "timestep $(v_v40*1e-20)\n")
+    path.write_text(
+        HEADER
+        + "variable v0 equal 1\n"
+        + "".join(f"variable v{i} equal v_v{i - 1}+v_v{i - 1}\n" for i in range(1, 41))
+        + "timestep $(v_v40*1e-20)\n"
+    )
     assert read_script(path).timestep == pytest.approx(2.0**40 * 1e-20)
     long = "variable big equal " + "+".join(["1"] * (MAX_OPERATIONS // 6))
     err = _refusal(tmp_path, [long] + [f"variable t{k} equal $(v_big)" for k in range(4)])
@@ -298,7 +382,9 @@ def test_the_value_of_an_environment_variable_is_never_quoted(tmp_path, monkeypa
     err = _refusal(tmp_path, ["variable s getenv DEMSPLIT_TEST_SECRET", "units ${s}"])
     assert "hunter2" not in str(err) and "${s}" in str(err) and err.line == 2
     path = tmp_path / "in.warn"
-    path.write_text(HEADER + "variable s getenv DEMSPLIT_TEST_SECRET\n"
-                    "dump d all custom 100 atoms.txt id type x y z radius\ndump_modify d ${s} yes\n")
+    path.write_text(
+        HEADER + "variable s getenv DEMSPLIT_TEST_SECRET\n"
+        "dump d all custom 100 atoms.txt id type x y z radius\ndump_modify d ${s} yes\n"
+    )
     warnings = "\n".join(read_script(path).warnings)
     assert "hunter2" not in warnings

@@ -39,15 +39,35 @@ CASES = {
     "hertz_mindlin": ("hertz_mindlin", "in.hertz_mindlin", "", {}, ("u_tw", "u_r")),
     "dmt": ("dmt", "in.dmt", "", {}, ("u_t", "u_r")),
     "jkr": ("jkr", "in.jkr", "", {}, ("u_tw", "u_t", "u_r", "u_n", "u_adh")),
-    "hooke_region": ("hooke_region", "in.hooke_region", "", {"materials": MATERIALS,
-                                                             "wall_materials": {"shell": WALL}}, ("u_t",)),
+    "hooke_region": (
+        "hooke_region",
+        "in.hooke_region",
+        "",
+        {"materials": MATERIALS, "wall_materials": {"shell": WALL}},
+        ("u_t",),
+    ),
     "periodic": ("periodic", "in.periodic", "", {"materials": {2: MATERIALS[2]}}, ()),
-    "gran_hooke_history": ("legacy", "in.hooke_history", "hooke_history_",
-                           {"materials": MATERIALS, "wall_materials": {"floor": WALL}}, ()),
-    "gran_hertz_history": ("legacy", "in.hertz_history", "hertz_history_",
-                           {"materials": MATERIALS, "wall_materials": {"floor": WALL, "cyl": WALL}}, ()),
-    "gran_hooke": ("legacy", "in.hooke", "hooke_",
-                   {"materials": MATERIALS, "wall_materials": {"floor": WALL, "sides": WALL}}, ()),
+    "gran_hooke_history": (
+        "legacy",
+        "in.hooke_history",
+        "hooke_history_",
+        {"materials": MATERIALS, "wall_materials": {"floor": WALL}},
+        (),
+    ),
+    "gran_hertz_history": (
+        "legacy",
+        "in.hertz_history",
+        "hertz_history_",
+        {"materials": MATERIALS, "wall_materials": {"floor": WALL, "cyl": WALL}},
+        (),
+    ),
+    "gran_hooke": (
+        "legacy",
+        "in.hooke",
+        "hooke_",
+        {"materials": MATERIALS, "wall_materials": {"floor": WALL, "sides": WALL}},
+        (),
+    ),
 }
 
 
@@ -120,8 +140,9 @@ def test_rebuilt_normal_force_is_the_dumped_one(case):
         r, c = a.rebuilt, a.contacts
         written = ~c["neck"] & ~c["extra_contact"]
         compared = written & np.isfinite(r.fn_rebuilt)
-        assert compared.sum() == len(frame.pairs.i) + sum(len(w.i) for w in frame.walls) \
-            - int((frame.pairs.extra["why"] == "jkr_zeroed").sum())
+        assert compared.sum() == len(frame.pairs.i) + sum(len(w.i) for w in frame.walls) - int(
+            (frame.pairs.extra["why"] == "jkr_zeroed").sum()
+        )
         err = _rel(r.fn_rebuilt[compared], c["fn_dumped"][compared], r.fn_scale[compared])
         assert err.max() < TOL, (a.step, err.max())
 
@@ -368,15 +389,21 @@ def test_a_wall_column_missing_is_refused(tmp_path):
 
 
 def test_a_cross_pair_left_to_mixing_is_refused_where_it_touches(tmp_path):
-    old = ("pair_coeff      1 2 dmt 3892944.0389294405 4.0e6 0.0 0.06 &\n"
-           "                tangential mindlin_rescale 2987861.811391223 1.0 0.55 rolling sds 15.0 0.002 0.12\n")
+    old = (
+        "pair_coeff      1 2 dmt 3892944.0389294405 4.0e6 0.0 0.06 &\n"
+        "                tangential mindlin_rescale 2987861.811391223 1.0 0.55 rolling sds 15.0 0.002 0.12\n"
+    )
     err = _refused("dmt", tmp_path, old, "")
     assert "pair_coeff 1 2" in err and "mix" in err
 
 
 def test_a_jkr_wall_is_refused(tmp_path):
-    err = _refused("jkr", tmp_path, "fix             floor all wall/gran granular hertz/material 5.0e7 4.0e6 0.3",
-                   "fix             floor all wall/gran granular jkr 5.0e7 4.0e6 0.3 0.02")
+    err = _refused(
+        "jkr",
+        tmp_path,
+        "fix             floor all wall/gran granular hertz/material 5.0e7 4.0e6 0.3",
+        "fix             floor all wall/gran granular jkr 5.0e7 4.0e6 0.3 0.02",
+    )
     assert "jkr wall" in err and "in.jkr:" in err
 
 
@@ -387,8 +414,17 @@ def test_types_without_e_and_nu_are_refused_naming_the_option(tmp_path, capsys):
 
 
 def test_a_wall_model_without_e_and_nu_is_refused_naming_the_option(tmp_path, capsys):
-    args = ["run", str(script_of("hooke_region")), "-o", str(tmp_path / "out.h5"), "-q", "--material", "1:1e7:0.25",
-            "--material", "2:2e6:0.4"]
+    args = [
+        "run",
+        str(script_of("hooke_region")),
+        "-o",
+        str(tmp_path / "out.h5"),
+        "-q",
+        "--material",
+        "1:1e7:0.25",
+        "--material",
+        "2:2e6:0.4",
+    ]
     assert main(args) == 2
     assert "--wall-material shell:E:NU" in capsys.readouterr().err
 
@@ -442,15 +478,22 @@ def test_a_prepared_script_run_by_lmp_is_read_and_checked(tmp_path):
     import subprocess
 
     head, run_line, tail = _without_demsplit_lines("hertz_mindlin").rpartition("run             ")
-    user = (head + "dump t all custom 500 t.txt id x y z vx vy vz omegax omegay omegaz fx fy fz\n"
-            "dump_modify t format float %.17g sort id\n" + run_line + tail)
+    user = (
+        head + "dump t all custom 500 t.txt id x y z vx vy vz omegax omegay omegaz fx fy fz\n"
+        "dump_modify t format float %.17g sort id\n" + run_line + tail
+    )
     (tmp_path / "plain").mkdir()
     (tmp_path / "plain" / "in.user").write_text(user)
     (tmp_path / "in.user").write_text(user)
     assert main(["prepare", str(tmp_path / "in.user"), "-o", str(tmp_path / "in.ds"), "-q"]) == 0
     for where, script in ((tmp_path / "plain", "in.user"), (tmp_path, "in.ds")):
-        subprocess.run([lmp, "-in", script, "-var", "npour", "60", "-log", "none", "-echo", "none"], cwd=where,
-                       check=True, capture_output=True, timeout=300)
+        subprocess.run(
+            [lmp, "-in", script, "-var", "npour", "60", "-log", "none", "-echo", "none"],
+            cwd=where,
+            check=True,
+            capture_output=True,
+            timeout=300,
+        )
     assert (tmp_path / "t.txt").read_bytes() == (tmp_path / "plain" / "t.txt").read_bytes()
     run = open_run(tmp_path / "in.ds", variables={"npour": "60"})
     frames = 0
@@ -463,8 +506,25 @@ def test_a_prepared_script_run_by_lmp_is_read_and_checked(tmp_path):
         frames += 1
     assert frames >= 10
     out = tmp_path / "out.h5"
-    assert main(["run", str(tmp_path / "in.ds"), "--var", "npour", "60", "-o", str(out), "-q",
-                 "--allow-missing", "u_tw", "--allow-missing", "u_r"]) == 0
+    assert (
+        main(
+            [
+                "run",
+                str(tmp_path / "in.ds"),
+                "--var",
+                "npour",
+                "60",
+                "-o",
+                str(out),
+                "-q",
+                "--allow-missing",
+                "u_tw",
+                "--allow-missing",
+                "u_r",
+            ]
+        )
+        == 0
+    )
 
 
 OFFICIAL = Path("/usr/share/lammps/examples")
@@ -472,10 +532,13 @@ OFFICIAL = Path("/usr/share/lammps/examples")
 
 @pytest.mark.simulator
 @pytest.mark.slow
-@pytest.mark.parametrize("example, options", [
-    ("pour/in.pour", ["--material", "1:1e5:0.3", "--wall-material", "zlower:1e5:0.3"]),
-    ("granular/in.pour.drum", ["--allow-missing", "all"]),
-])
+@pytest.mark.parametrize(
+    "example, options",
+    [
+        ("pour/in.pour", ["--material", "1:1e5:0.3", "--wall-material", "zlower:1e5:0.3"]),
+        ("granular/in.pour.drum", ["--allow-missing", "all"]),
+    ],
+)
 def test_official_examples_prepared_and_run_unedited(example, options, tmp_path):
     """LAMMPS' own examples (Debian's copies), prepared and run by lmp as they are: demsplit reads every frame
     (each dumped normal force checked, the capped springs checked against the atoms' balance; in.pour changes its
@@ -492,8 +555,13 @@ def test_official_examples_prepared_and_run_unedited(example, options, tmp_path)
     shutil.copy(source, tmp_path / source.name)
     # every 1000 steps: the drum's own output (thermo 100) would give 51 frames to check, which takes minutes
     assert main(["prepare", str(tmp_path / source.name), "-o", str(tmp_path / "in.ds"), "-q", "--every", "1000"]) == 0
-    subprocess.run([lmp, "-in", "in.ds", "-log", "none", "-echo", "none"], cwd=tmp_path, check=True,
-                   capture_output=True, timeout=600)
+    subprocess.run(
+        [lmp, "-in", "in.ds", "-log", "none", "-echo", "none"],
+        cwd=tmp_path,
+        check=True,
+        capture_output=True,
+        timeout=600,
+    )
     assert main(["run", str(tmp_path / "in.ds"), "-o", str(tmp_path / "out.h5"), "-q", *options]) == 0
     frames = load_results(tmp_path / "out.h5").frames
     assert len(frames) == (51 if source.name == "in.pour" else 4) and (frames["n_contacts"] > 0).sum() >= 3
@@ -512,9 +580,29 @@ def test_a_run_on_two_processes_is_read_and_checked(tmp_path):
 
     text = script_of("hertz_mindlin").read_text().replace("boundary        f f f", "boundary f f f\nprocessors 2 1 1")
     (tmp_path / "in.mpi").write_text(text)
-    subprocess.run([mpirun, "--allow-run-as-root", "--oversubscribe", "-np", "2", lmp, "-in", "in.mpi", "-var",
-                    "npour", "60", "-log", "none", "-echo", "none"], cwd=tmp_path, check=True, capture_output=True,
-                   timeout=300)
+    subprocess.run(
+        [
+            mpirun,
+            "--allow-run-as-root",
+            "--oversubscribe",
+            "-np",
+            "2",
+            lmp,
+            "-in",
+            "in.mpi",
+            "-var",
+            "npour",
+            "60",
+            "-log",
+            "none",
+            "-echo",
+            "none",
+        ],
+        cwd=tmp_path,
+        check=True,
+        capture_output=True,
+        timeout=300,
+    )
     run = open_run(tmp_path / "in.mpi", variables={"npour": "60"})
     found = 0
     for k in range(len(run)):
@@ -531,15 +619,23 @@ def test_pair_coeff_ranges_and_the_global_history_flag(tmp_path):
     from demsplit.readers.lammps_script import read_lammps_script
 
     path = tmp_path / "in.ranges"
-    path.write_text("units si\natom_style sphere\nregion b block 0 1 0 1 0 1\ncreate_box 3 b\npair_style granular\n"
-                    "pair_coeff * * hooke 1e5 0.5 tangential linear_nohistory 1.0 0.5\n"
-                    "pair_coeff 1 * hertz/material 1e7 0.5 0.25 tangential mindlin NULL 1.0 0.5\n"
-                    "pair_coeff 3 3 dmt 2e6 0.5 0.4 0.05 tangential linear_history 1e4 1.0 0.5\n"
-                    "pair_coeff 2 3 hooke 2e5 0.5 tangential linear_nohistory 1.0 0.5\nrun 10\n")
+    path.write_text(
+        "units si\natom_style sphere\nregion b block 0 1 0 1 0 1\ncreate_box 3 b\npair_style granular\n"
+        "pair_coeff * * hooke 1e5 0.5 tangential linear_nohistory 1.0 0.5\n"
+        "pair_coeff 1 * hertz/material 1e7 0.5 0.25 tangential mindlin NULL 1.0 0.5\n"
+        "pair_coeff 3 3 dmt 2e6 0.5 0.4 0.05 tangential linear_history 1e4 1.0 0.5\n"
+        "pair_coeff 2 3 hooke 2e5 0.5 tangential linear_nohistory 1.0 0.5\nrun 10\n"
+    )
     script = read_lammps_script(path)
     laws = {pair: m.law for pair, m in script.pair_models.items()}
-    assert laws == {(1, 1): "lammps:hertz/material", (1, 2): "lammps:hertz/material", (1, 3): "lammps:hertz/material",
-                    (2, 2): "lammps:hooke", (2, 3): "lammps:hooke", (3, 3): "lammps:dmt"}
+    assert laws == {
+        (1, 1): "lammps:hertz/material",
+        (1, 2): "lammps:hertz/material",
+        (1, 3): "lammps:hertz/material",
+        (2, 2): "lammps:hooke",
+        (2, 3): "lammps:hooke",
+        (3, 3): "lammps:dmt",
+    }
     assert script.pair_models[(2, 3)].params["kn"] == 2e5
     assert script.pair_models[(2, 2)].contact_law.history_branch
     assert set(script.line_materials) == {1, 3} and script.line_materials[3] == Material(2e6, 0.4)

@@ -20,8 +20,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import require_program
-from lammps_reference import (Frame, Run, atom_sums, jkr_necks, normal, pair_models, parse_granular,
-                              resolve_intervals, solve_twisting, torque_unknown_atoms)
+from lammps_reference import (
+    Frame,
+    Run,
+    atom_sums,
+    jkr_necks,
+    normal,
+    pair_models,
+    parse_granular,
+    resolve_intervals,
+    solve_twisting,
+    torque_unknown_atoms,
+)
 
 SAMPLES = Path(__file__).resolve().parent.parent / "sample_dumps" / "lammps"
 TOL = 1e-9  # relative; every figure measured on these samples is below 1e-11 (see sample_dumps/lammps/README.md)
@@ -237,11 +247,19 @@ UNKNOWN_COUNTS = {
 def unknown_counts(c: Checked) -> tuple[int, ...]:
     p, why = c.frame.pairs, c.frame.pairs.extra["why"]
     region = sum(int(w.unknown.sum()) for w in c.frame.walls)
-    rolling_walls = sum(len(w.i) for w in c.frame.walls
-                        if w.extra["model"].rolling != "none" or w.extra["model"].twisting != "none")
+    rolling_walls = sum(
+        len(w.i) for w in c.frame.walls if w.extra["model"].rolling != "none" or w.extra["model"].twisting != "none"
+    )
     dmt = int(np.isin(why, ["dmt_first_row", "dmt_capped"]).sum())
-    return (int((why == "jkr_zeroed").sum()), len(np.unique(c.necks)), region, dmt,
-            len(c.resolved), int(p.twist.sum()), rolling_walls)
+    return (
+        int((why == "jkr_zeroed").sum()),
+        len(np.unique(c.necks)),
+        region,
+        dmt,
+        len(c.resolved),
+        int(p.twist.sum()),
+        rolling_walls,
+    )
 
 
 @pytest.mark.parametrize("case", CASES)
@@ -319,8 +337,13 @@ def test_rerun_with_lmp(tmp_path):
     """A fresh, smaller run of the hertz_mindlin scene (60 + 60 particles) by Debian's lmp passes the same checks."""
     lmp = require_program("lmp", package="lammps")
     shutil.copy(SAMPLES / "hertz_mindlin" / "in.hertz_mindlin", tmp_path)
-    subprocess.run([lmp, "-in", "in.hertz_mindlin", "-var", "npour", "60", "-log", "none", "-echo", "none"],
-                   cwd=tmp_path, check=True, capture_output=True, timeout=120)
+    subprocess.run(
+        [lmp, "-in", "in.hertz_mindlin", "-var", "npour", "60", "-log", "none", "-echo", "none"],
+        cwd=tmp_path,
+        check=True,
+        capture_output=True,
+        timeout=120,
+    )
     run = Run(tmp_path, "in.hertz_mindlin", npour="60")
     checked = check_run(run)
     assert len(checked) == 3 and sum(len(c.frame.pairs.i) for c in checked) > 50

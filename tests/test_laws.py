@@ -29,17 +29,26 @@ N = 400
 
 def scene_of(key: str) -> ds.Scene:
     model = ds.ContactModel(key, laws.law_class(key).example_params)
-    return ds.Scene({1: ds.Material(7e10, 0.22), 2: ds.Material(3e9, 0.35), 3: ds.Material(2e11, 0.3)},
-                    model=model, walls=[ds.Wall("floor", "plane", 3)])
+    return ds.Scene(
+        {1: ds.Material(7e10, 0.22), 2: ds.Material(3e9, 0.35), 3: ds.Material(2e11, 0.3)},
+        model=model,
+        walls=[ds.Wall("floor", "plane", 3)],
+    )
 
 
 def frame_of(key: str, seed: int = 0, delta: np.ndarray | None = None) -> tuple[dict, dict]:
     """Particles and contacts (30 % on the wall) with every column the law reads."""
     rng = np.random.default_rng(seed)
     n_p = 60
-    particles = {"id": np.arange(1, n_p + 1, dtype=np.int64), "type": rng.integers(1, 3, n_p).astype(np.int32),
-                 "x": rng.uniform(0, 1, n_p), "y": rng.uniform(0, 1, n_p), "z": rng.uniform(0, 1, n_p),
-                 "radius": rng.uniform(1e-3, 3e-3, n_p), "mass": rng.uniform(1e-5, 1e-4, n_p)}
+    particles = {
+        "id": np.arange(1, n_p + 1, dtype=np.int64),
+        "type": rng.integers(1, 3, n_p).astype(np.int32),
+        "x": rng.uniform(0, 1, n_p),
+        "y": rng.uniform(0, 1, n_p),
+        "z": rng.uniform(0, 1, n_p),
+        "radius": rng.uniform(1e-3, 3e-3, n_p),
+        "mass": rng.uniform(1e-5, 1e-4, n_p),
+    }
     i = rng.integers(0, n_p, N)
     j = (i + rng.integers(1, n_p, N)) % n_p
     wall = np.where(rng.random(N) < 0.3, 0, -1)
@@ -49,10 +58,20 @@ def frame_of(key: str, seed: int = 0, delta: np.ndarray | None = None) -> tuple[
     normal /= np.linalg.norm(normal, axis=1)[:, None]
     if delta is None:
         delta = rng.uniform(0, 0.1, N) * np.minimum(r1, r2)
-    contacts = {"id1": particles["id"][i], "id2": np.where(wall >= 0, -1, particles["id"][j]).astype(np.int64),
-                "wall": wall.astype(np.int64), "delta": delta, "nx": normal[:, 0], "ny": normal[:, 1],
-                "nz": normal[:, 2], "x1": particles["x"][i], "y1": particles["y"][i], "z1": particles["z"][i],
-                "r1": r1, "r2": r2}
+    contacts = {
+        "id1": particles["id"][i],
+        "id2": np.where(wall >= 0, -1, particles["id"][j]).astype(np.int64),
+        "wall": wall.astype(np.int64),
+        "delta": delta,
+        "nx": normal[:, 0],
+        "ny": normal[:, 1],
+        "nz": normal[:, 2],
+        "x1": particles["x"][i],
+        "y1": particles["y"][i],
+        "z1": particles["z"][i],
+        "r1": r1,
+        "r2": r2,
+    }
     for column in laws.make(key, laws.law_class(key).example_params).needs():
         if column.startswith("k"):  # stiffnesses (N/m, N/m^1.5) are positive
             contacts[column] = rng.uniform(1e5, 1e7, N)
@@ -75,8 +94,11 @@ def law_rows(key: str, particles: dict, contacts: dict) -> tuple[laws.ContactLaw
 
 
 def test_registry_lists_every_law_file():
-    files = {p.stem for p in (REPO / "plugin" / "physics" / "laws").glob("*.py")
-             if not p.stem.startswith("_") and p.stem != "base"}
+    files = {
+        p.stem
+        for p in (REPO / "plugin" / "physics" / "laws").glob("*.py")
+        if not p.stem.startswith("_") and p.stem != "base"
+    }
     modules = {laws.law_class(k).__module__.rsplit(".", 1)[1] for k in KEYS}
     assert modules == files
     assert all(":" in k for k in KEYS)  # simulator:name
@@ -164,8 +186,19 @@ def swapped(particles: dict, contacts: dict) -> dict:
     c = {k: v[pair] for k, v in contacts.items()}
     index = ParticleIndex(particles["id"])
     rows2 = index.rows(c["id2"])
-    out = dict(c, id1=c["id2"], id2=c["id1"], r1=c["r2"], r2=c["r1"], nx=-c["nx"], ny=-c["ny"], nz=-c["nz"],
-               x1=particles["x"][rows2], y1=particles["y"][rows2], z1=particles["z"][rows2])
+    out = dict(
+        c,
+        id1=c["id2"],
+        id2=c["id1"],
+        r1=c["r2"],
+        r2=c["r1"],
+        nx=-c["nx"],
+        ny=-c["ny"],
+        nz=-c["nz"],
+        x1=particles["x"][rows2],
+        y1=particles["y"][rows2],
+        z1=particles["z"][rows2],
+    )
     for k in ("ftx", "fty", "ftz", "shearx", "sheary", "shearz"):
         if k in out:
             out[k] = -c[k]  # a vector quantity seen from the other body

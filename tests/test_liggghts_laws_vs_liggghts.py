@@ -36,17 +36,17 @@ import importlib.util
 from pathlib import Path
 
 import demsplit
+import liggghts_reference
 import mpmath
 import numpy as np
 import pytest
 from conftest import SAMPLES
-from scipy.integrate import quad
-from liggghts_bridges import BRIDGE_MODELS, liggghts_capillary
-import liggghts_reference
-from liggghts_reference import has_reference, submodels
 from demsplit.physics.bodies import FrameContacts, LawRows
 from demsplit.readers import open_run
 from demsplit.readers.lammps_dump import open_dump
+from liggghts_bridges import BRIDGE_MODELS, liggghts_capillary
+from liggghts_reference import has_reference, submodels
+from scipy.integrate import quad
 
 _spec = importlib.util.spec_from_file_location("make_run", SAMPLES / "liggghts" / "models" / "make_run.py")
 make_run = importlib.util.module_from_spec(_spec)
@@ -70,8 +70,9 @@ def liggghts_run(name: str, tmp_path_factory) -> tuple[str, Path]:
     return name, _RUNS[name]
 
 
-ROLLING_SPRINGS = sorted(name for name, (words, _, _) in make_run.MODELS.items()
-                         if submodels(words).get("rolling_friction", "cdt") != "cdt")
+ROLLING_SPRINGS = sorted(
+    name for name, (words, _, _) in make_run.MODELS.items() if submodels(words).get("rolling_friction", "cdt") != "cdt"
+)
 """The models with a rolling spring (``rolling_friction`` but ``cdt``, which has none)."""
 
 
@@ -164,7 +165,7 @@ def test_rolling_energy_and_history_layout(model_run):
     # of pos vel id force force_normal force_tangential torque torque_normal torque_tangential
     layout = run.script.local_computes["cpgl"].columns
     assert len(layout) == make_run.MODELS[name][2]
-    assert layout[33:33 + len(law.history_columns())] == law.history_columns()
+    assert layout[33 : 33 + len(law.history_columns())] == law.history_columns()
     assert layout[33 + len(law.history_columns())] == "area"
 
 
@@ -185,7 +186,6 @@ def test_totals_are_conserved_per_mode(model_run):
             assert frame["u_r"].sum() > 0
         if "u_adh" in modes:
             assert frame["u_adh"].sum() < 0  # the bonds hold the bodies together
-
 
 
 def aligned(run, k: int, names: list[str]) -> tuple[dict, LawRows, np.ndarray, np.ndarray]:
@@ -257,8 +257,11 @@ def test_rolling_torque_is_liggghts_own(rolling_run):
             w = np.where(wall[:, None], w1 * ((r1 - delta / 2) / (r1 - delta))[:, None], w1 - w2)
             w_t = w - np.einsum("ij,ij->i", w, n)[:, None] * n
             mine = mine + (kr * run.script.timestep)[:, None] * w_t
-            cap = per_row(rows.type_pair(law.params["rolling_friction"]), c, known) \
-                * np.linalg.norm(theirs[:, 6:], axis=1) / (1 / r1 + 1 / r2)
+            cap = (
+                per_row(rows.type_pair(law.params["rolling_friction"]), c, known)
+                * np.linalg.norm(theirs[:, 6:], axis=1)
+                / (1 / r1 + 1 / r2)
+            )
             mine *= np.minimum(1.0, cap / np.linalg.norm(mine, axis=1))[:, None]
         np.testing.assert_allclose(mine, applied, rtol=1e-9, atol=1e-12 * np.abs(applied).max(), err_msg=name)
 
@@ -289,8 +292,20 @@ def raw_contacts(run, k: int) -> dict[str, np.ndarray]:
             m2 = np.full(len(i1), np.inf)
         n = towards - np.stack([part[f"{x}1"] for x in "xyz"], -1)
         n /= np.linalg.norm(n, axis=1)[:, None]
-        part.update(F=-np.einsum("ij,ij->i", vec["fn"], n), ft=vec["ft"], tq=vec["tq"], n=n, r1=radius[i1], r2=r2,
-                    m1=mass[i1], m2=m2, t1=types[i1], t2=t2, c1=liquid[i1], c2=c2)
+        part.update(
+            F=-np.einsum("ij,ij->i", vec["fn"], n),
+            ft=vec["ft"],
+            tq=vec["tq"],
+            n=n,
+            r1=radius[i1],
+            r2=r2,
+            m1=mass[i1],
+            m2=m2,
+            t1=types[i1],
+            t2=t2,
+            c1=liquid[i1],
+            c2=c2,
+        )
         parts.append(part)
     return {key: np.concatenate([p[key] for p in parts]) for key in parts[0] if key in parts[1]}
 
@@ -314,15 +329,26 @@ def bridge_reference(name: str, run, k: int, x: dict) -> tuple[np.ndarray, np.nd
         mpmath.mp.dps = 20
         force, work = np.zeros(len(x["delta"])), np.zeros(len(x["delta"]))
         for i, d in enumerate(x["delta"]):
-            f, rupture = liggghts_capillary(model, x["r1"][i], None if np.isinf(x["r2"][i]) else x["r2"][i],
-                                            x["c1"][i], x["c2"][i], angle[x["t1"][i] - 1], angle[x["t2"][i] - 1],
-                                            props["surfaceTension"], ratio, ratio * 1.1)
+            f, rupture = liggghts_capillary(
+                model,
+                x["r1"][i],
+                None if np.isinf(x["r2"][i]) else x["r2"][i],
+                x["c1"][i],
+                x["c2"][i],
+                angle[x["t1"][i] - 1],
+                angle[x["t2"][i] - 1],
+                props["surfaceTension"],
+                ratio,
+                ratio * 1.1,
+            )
             if not (d > 0 or (x["liquid_bridge"][i] == 1 if model == BRIDGE_MODELS[0] else -d < rupture)):
                 continue
             force[i] = f(d)
             bounds = [float(-rupture), *([0.0] if d > 0 else []), float(d)]
-            work[i] = sum(quad(lambda s, f=f: float(f(s)), a, b, epsabs=0, epsrel=1e-13, limit=200)[0]
-                          for a, b in zip(bounds, bounds[1:]))
+            work[i] = sum(
+                quad(lambda s, f=f: float(f(s)), a, b, epsabs=0, epsrel=1e-13, limit=200)[0]
+                for a, b in zip(bounds, bounds[1:])
+            )
         _BRIDGES[key] = force, work
     return _BRIDGES[key]
 
@@ -343,13 +369,19 @@ def reference_energies(name: str, run, k: int, x: dict) -> dict[str, np.ndarray]
         f_cap, u_adh = bridge_reference(name, run, k, x)
         touching = d > 0
         kt = 8 * G * np.sqrt(R * np.maximum(d, 0))
-        return {"u_n": np.where(touching, 0.4 * (F - f_cap) * d, 0.0),
-                "u_t": np.where(touching, ft2 / (2 * np.where(touching, kt, 1.0)), 0.0), "u_adh": u_adh}
+        return {
+            "u_n": np.where(touching, 0.4 * (F - f_cap) * d, 0.0),
+            "u_t": np.where(touching, ft2 / (2 * np.where(touching, kt, 1.0)), 0.0),
+            "u_adh": u_adh,
+        }
     return liggghts_reference.reference_energies(make_run.MODELS[name][0], run, x)
 
 
-REFERENCED = sorted(name for name, (words, _, _) in make_run.MODELS.items()
-                    if has_reference(words) or submodels(words).get("cohesion") in BRIDGE_MODELS)
+REFERENCED = sorted(
+    name
+    for name, (words, _, _) in make_run.MODELS.items()
+    if has_reference(words) or submodels(words).get("cohesion") in BRIDGE_MODELS
+)
 """The models with an independent reference: liggghts_reference.py's, and the liquid bridges' here (every model:
 :func:`test_every_model_has_an_independent_reference`)."""
 
@@ -376,8 +408,9 @@ def test_totals_equal_an_independent_recomputation(referenced_run):
             assert ours[mode].sum() == pytest.approx(u.sum(), rel=1e-12, abs=0), (name, step, mode)
 
 
-BRIDGES = sorted(name for name, (words, _, _) in make_run.MODELS.items()
-                 if submodels(words).get("cohesion") in BRIDGE_MODELS)
+BRIDGES = sorted(
+    name for name, (words, _, _) in make_run.MODELS.items() if submodels(words).get("cohesion") in BRIDGE_MODELS
+)
 """The models with a liquid bridge."""
 
 

@@ -33,11 +33,12 @@ def hooke_run(tmp_path_factory, request):
     script = (work / "in.analytic").read_text()
     assert script.count("model hertz") == 2
     script = script.replace("model hertz", "model hooke").replace(
-        "pair_style      gran",
-        f"fix mV all property/global characteristicVelocity scalar {V}\npair_style      gran", 1)
+        "pair_style      gran", f"fix mV all property/global characteristicVelocity scalar {V}\npair_style      gran", 1
+    )
     (work / "in.hooke").write_text(script)
-    proc = subprocess.run(["stdbuf", "-o0", "-e0", liggghts, "-in", "in.hooke"], cwd=work, capture_output=True,
-                          text=True, timeout=600)
+    proc = subprocess.run(
+        ["stdbuf", "-o0", "-e0", liggghts, "-in", "in.hooke"], cwd=work, capture_output=True, text=True, timeout=600
+    )
     assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
     return work / "in.hooke"
 

@@ -34,9 +34,9 @@ import demsplit
 import numpy as np
 import pytest
 from demsplit.cli import main as cli_main
+from demsplit.compute import frame_tables
 from demsplit.errors import InputFormatError, MaterialError, PrecisionError, TruncatedFileError
 from demsplit.frame import Frame, ParticleIndex
-from demsplit.compute import frame_tables
 from demsplit.pipeline import run_to_store
 from demsplit.readers import open_run
 from demsplit.readers.lammps_dump import open_dump
@@ -56,9 +56,13 @@ class TestPackingSample(ReaderContract):
 class TestPeriodicSampleWithFullPrecisionDumps(ReaderContract):
     reader = LiggghtsRun
     path = SAMPLES / "periodic" / "in.periodic"
-    options = {"atoms": SAMPLES / "periodic" / "atoms_full.txt.gz",
-               "contacts": SAMPLES / "periodic" / "pairs_full.txt.gz",
-               "walls": SAMPLES / "periodic" / "wall_full.txt.gz"}
+    options = {
+        "atoms": SAMPLES / "periodic" / "atoms_full.txt.gz",
+        "contacts": SAMPLES / "periodic" / "pairs_full.txt.gz",
+        "walls": SAMPLES / "periodic" / "wall_full.txt.gz",
+    }
+
+
 PRIMITIVE = ("plane", "cylinder")
 
 # Force balance of a particle without primitive-wall contacts, relative to the sum of
@@ -89,6 +93,7 @@ def setup_frame():
 
 
 # --------------------------------------------------------------------------- 1. completeness
+
 
 def contact_keys(id1: np.ndarray, other: np.ndarray, width: int) -> np.ndarray:
     """One int64 per contact: (id1, other) for ``other`` in [0, width)."""
@@ -144,8 +149,12 @@ def force_balance(run: LiggghtsRun, frame: Frame) -> Balance:
     np.testing.assert_array_equal(ours, np.sort(unordered_keys(p1, p2, width)))
 
     total = f - weight - per_particle(p1, fp) + per_particle(p2, fp)
-    scale = (np.linalg.norm(f, axis=1) + np.linalg.norm(weight, axis=1)
-             + per_particle(p1, np.abs(fp)).sum(1) + per_particle(p2, np.abs(fp)).sum(1))
+    scale = (
+        np.linalg.norm(f, axis=1)
+        + np.linalg.norm(weight, axis=1)
+        + per_particle(p1, np.abs(fp)).sum(1)
+        + per_particle(p2, np.abs(fp)).sum(1)
+    )
 
     kinds = np.array([w.kind for w in run.scene.walls] + ["pair"])
     mesh = kinds[contacts["wall"]] == "mesh"
@@ -156,8 +165,10 @@ def force_balance(run: LiggghtsRun, frame: Frame) -> Balance:
         wall = np.asarray(run.script.dumped_mesh_walls)[wf.int_column(wnames["mesh_index"])]
         fw = np.stack([wf.columns[wnames[c]] for c in ("fx", "fy", "fz")], -1)
         nw = len(run.scene.walls)
-        np.testing.assert_array_equal(np.sort(contact_keys(contacts["id1"][mesh], contacts["wall"][mesh], nw)),
-                                      np.sort(contact_keys(wid, wall, nw)))
+        np.testing.assert_array_equal(
+            np.sort(contact_keys(contacts["id1"][mesh], contacts["wall"][mesh], nw)),
+            np.sort(contact_keys(wid, wall, nw)),
+        )
         total -= per_particle(wid, fw)
         scale += per_particle(wid, np.abs(fw)).sum(1)
     else:
@@ -165,8 +176,9 @@ def force_balance(run: LiggghtsRun, frame: Frame) -> Balance:
     return Balance(total, scale, v, mass)
 
 
-def liggghts_wall_normal_force(run: LiggghtsRun, frame: Frame, v: np.ndarray, mass: np.ndarray,
-                               picked: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def liggghts_wall_normal_force(
+    run: LiggghtsRun, frame: Frame, v: np.ndarray, mass: np.ndarray, picked: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """LIGGGHTS' Hertz normal force Fn (N, along e_n = -n, onto the particle) and the
     friction coefficient of the primitive-wall contacts ``picked`` (``normal_model_hertz.h``):
 
@@ -184,7 +196,7 @@ def liggghts_wall_normal_force(run: LiggghtsRun, frame: Frame, v: np.ndarray, ma
     kn = 4.0 / 3.0 * y_star * np.sqrt(r_star * delta)
     sn = 2.0 * y_star * np.sqrt(r_star * delta)
     log_e = np.log(run.script.coefficients["coefficientRestitution"][t1, t2])
-    beta = log_e / np.sqrt(log_e ** 2 + np.pi ** 2)
+    beta = log_e / np.sqrt(log_e**2 + np.pi**2)
     gamma_n = -2.0 * np.sqrt(5.0 / 6.0) * beta * np.sqrt(sn * mass[rows])
     e_n = -np.stack([c["nx"], c["ny"], c["nz"]], -1)
     v_n = np.einsum("ij,ij->i", v[rows], e_n)
@@ -233,8 +245,9 @@ def test_primitive_wall_residual_is_liggghts_hertz_force(setup_frame):
     many = ~single
     if many.any():
         nrow = len(b.mass)
-        normal = np.stack([np.bincount(rows[many], weights=(fn[:, None] * e_n)[many, k], minlength=nrow)
-                           for k in range(3)], -1)
+        normal = np.stack(
+            [np.bincount(rows[many], weights=(fn[:, None] * e_n)[many, k], minlength=nrow) for k in range(3)], -1
+        )
         limit = np.bincount(rows[many], weights=(mu * fn)[many], minlength=nrow)
         picked = np.unique(rows[many])
         rest = np.linalg.norm(b.residual[picked] - normal[picked], axis=1)
@@ -273,8 +286,9 @@ def packing_g(tmp_path_factory) -> dict[str, dict[str, Path]]:
     the pair dump's ``delta`` column (c_cpgl[38]) removed."""
     folder = SAMPLES / "packing"
     base = {"atoms": folder / "atoms.txt", "contacts": folder / "pairs.txt", "walls": folder / "wall.txt"}
-    no_delta = dump_without_column(folder / "pairs.txt", tmp_path_factory.mktemp("g") / "pairs_no_delta.txt",
-                                   "c_cpgl[38]")
+    no_delta = dump_without_column(
+        folder / "pairs.txt", tmp_path_factory.mktemp("g") / "pairs_no_delta.txt", "c_cpgl[38]"
+    )
     return {"dumped delta": base, "no delta": {**base, "contacts": no_delta}}
 
 
@@ -292,8 +306,14 @@ def test_overlaps_from_g_positions_are_refused(packing_g):
     err = refused(packing_g["no delta"])
     text = str(err)
     assert err.file.endswith("atoms.txt") and err.step == 200000
-    for words in ("pairs: positions, printed precision (6 digits)", "6 significant digits",
-                  "tolerance 0.001", "'delta' keyword", "%.17g", "--force-positions"):
+    for words in (
+        "pairs: positions, printed precision (6 digits)",
+        "6 significant digits",
+        "tolerance 0.001",
+        "'delta' keyword",
+        "%.17g",
+        "--force-positions",
+    ):
         assert words in text
     # the pair overlaps are among the refused ones: more than with the dumped delta, where
     # only the primitive walls (always rebuilt from positions) exceed the tolerance
@@ -324,8 +344,9 @@ def test_forced_g_positions_report_their_bound_in_frame_and_store(packing_g, tmp
 
 def assert_within(error: np.ndarray, bound: np.ndarray) -> None:
     bad = np.flatnonzero(~(error <= bound))
-    assert bad.size == 0, f"{bad.size} of {error.size} above the bound, e.g. row {bad[:1]}: " \
-                          f"{error[bad[:1]]} > {bound[bad[:1]]}"
+    assert bad.size == 0, (
+        f"{bad.size} of {error.size} above the bound, e.g. row {bad[:1]}: {error[bad[:1]]} > {bound[bad[:1]]}"
+    )
 
 
 def contact_key(c: dict, width: int, n_walls: int) -> np.ndarray:
@@ -363,9 +384,11 @@ def test_g_energies_match_full_precision_within_the_reported_bound(packing_g, ca
         assert np.all(ff.contacts["delta"][i_f][hidden] <= np.sqrt(3) * h)
 
         b = np.where(hidden, 0.0, b)
-        tol = (cg["u_n"][ig] * ((1 + b) ** 2.5 - 1)
-               + cg["u_t"][ig] * ((1 + b) ** 0.5 * (1 + ROUNDING_G) ** 2 - 1)
-               + 1e-12 * u_f)
+        tol = (
+            cg["u_n"][ig] * ((1 + b) ** 2.5 - 1)
+            + cg["u_t"][ig] * ((1 + b) ** 0.5 * (1 + ROUNDING_G) ** 2 - 1)
+            + 1e-12 * u_f
+        )
         tol = np.where(hidden, u_f, tol)
         assert_within(np.abs(cg["u_n"][ig] - cf["u_n"][i_f]), tol)
         assert_within(np.abs(cg["u_t"][ig] - cf["u_t"][i_f]), tol)
@@ -376,8 +399,9 @@ def test_g_energies_match_full_precision_within_the_reported_bound(packing_g, ca
         index = ParticleIndex(ff.particles["id"])
         n = len(ff.particles["id"])
         pair = cf["id2"][i_f] >= 0
-        ptol = (np.bincount(index.rows(cf["id1"][i_f]), weights=tol, minlength=n)
-                + np.bincount(index.rows(cf["id2"][i_f][pair]), weights=tol[pair], minlength=n))
+        ptol = np.bincount(index.rows(cf["id1"][i_f]), weights=tol, minlength=n) + np.bincount(
+            index.rows(cf["id2"][i_f][pair]), weights=tol[pair], minlength=n
+        )
         pf, pg = tf["particles"], tg["particles"]
         np.testing.assert_array_equal(pf["id"], pg["id"])
         assert_within(np.abs(pg["u"] - pf["u"]), ptol[index.rows(pf["id"])])
@@ -423,7 +447,7 @@ def check_closed_form(folder: Path) -> None:
             r1, r2 = p["radius"][row[id1]], p["radius"][row[id2]]
             t2, r_star = int(p["type"][row[id2]]), r1 * r2 / (r1 + r2)
             nz = 1.0 if upper == id2 else -1.0
-        force = g * sum(mass[i] for i in stack[stack.index(upper):])
+        force = g * sum(mass[i] for i in stack[stack.index(upper) :])
         c1, c2 = compliance(int(p["type"][row[id1]])), compliance(t2)
         delta = (3 * force * (c1 + c2) / (4 * np.sqrt(r_star))) ** (2 / 3)
         u = 0.4 * force * delta
@@ -452,8 +476,13 @@ def test_analytic_stacks_through_liggghts(liggghts, tmp_path):
     """Run LIGGGHTS on the analytic scene (about 3 s) and check the fresh dumps."""
     for name in ("in.analytic", "floor.stl"):
         shutil.copy(SAMPLES / "analytic" / name, tmp_path / name)
-    done = subprocess.run([liggghts, "-in", "in.analytic", "-echo", "none", "-log", "none"], cwd=tmp_path,
-                          capture_output=True, text=True, timeout=120)
+    done = subprocess.run(
+        [liggghts, "-in", "in.analytic", "-echo", "none", "-log", "none"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
     for name in ("atoms_full.txt", "pairs_full.txt", "wall_full.txt"):
         assert (tmp_path / name).is_file()
@@ -461,6 +490,7 @@ def test_analytic_stacks_through_liggghts(liggghts, tmp_path):
 
 
 # --------------------------------------------------------------------------- 4. periodic
+
 
 def test_periodic_contacts_use_the_minimum_image(setup_frame):
     run, frame = setup_frame("periodic")
@@ -505,6 +535,7 @@ def test_periodic_contacts_use_the_minimum_image(setup_frame):
 
 # --------------------------------------------------------------------------- 5. bad inputs
 
+
 @pytest.fixture(scope="module")
 def packing_copy(tmp_path_factory) -> Path:
     """packing/ with full-precision atoms (so overlaps are not refused) and the %g pair
@@ -528,7 +559,7 @@ def frame_starts(text: str) -> list[int]:
 
 def row_line(text: str, frame: int, row: int) -> int:
     """1-based line number of data row ``row`` (0-based) of frame ``frame``."""
-    return text[:frame_starts(text)[frame]].count("\n") + 1 + 9 + row
+    return text[: frame_starts(text)[frame]].count("\n") + 1 + 9 + row
 
 
 def with_token(text: str, line: int, column: int, token: str) -> str:
@@ -577,10 +608,11 @@ def test_pair_dump_cut_between_frames(packing_copy):
     err = analyze_error(packing_copy, InputFormatError, contacts=("cut_frames.txt", text[:last]))
     assert_located(err, "cut_frames.txt", 204000, None, "no frame at timestep 204000")
     # cut inside the last frame's header: its own line is named
-    cut = text[:last + len("ITEM: TIMESTEP\n204000\nITEM: NUM")]
+    cut = text[: last + len("ITEM: TIMESTEP\n204000\nITEM: NUM")]
     err = analyze_error(packing_copy, InputFormatError, contacts=("cut_header.txt", cut))
-    assert_located(err, "cut_header.txt", 204000, None, "damaged header",
-                   f"cut_header.txt:{cut.count(chr(10)) + 1}", "expected 9")
+    assert_located(
+        err, "cut_header.txt", 204000, None, "damaged header", f"cut_header.txt:{cut.count(chr(10)) + 1}", "expected 9"
+    )
 
 
 def test_header_count_disagrees_with_rows(packing_copy):
@@ -591,9 +623,14 @@ def test_header_count_disagrees_with_rows(packing_copy):
     assert_located(err, "count.txt", 202000, row_line(text, 2, 0) - 9, "says 556 rows but only 555")
 
 
-@pytest.mark.parametrize("column, token, words", [(37, "abc", "'abc'; expected a number"),
-                                                  (33, "1.2.3", "'1.2.3'; expected a number"),
-                                                  (37, "nan", "expected a finite number")])
+@pytest.mark.parametrize(
+    "column, token, words",
+    [
+        (37, "abc", "'abc'; expected a number"),
+        (33, "1.2.3", "'1.2.3'; expected a number"),
+        (37, "nan", "expected a finite number"),
+    ],
+)
 def test_non_numeric_token(packing_copy, column, token, words):
     text = (packing_copy / "pairs.txt").read_text()
     line = row_line(text, 1, 2)
@@ -601,10 +638,13 @@ def test_non_numeric_token(packing_copy, column, token, words):
     assert_located(err, "token.txt", 202000, line, f"column {column + 1} ('c_cpgl[{column + 1}]')", words)
 
 
-@pytest.mark.parametrize("old, new, words", [
-    ("c_cpgl[41]", "c_cpgl[42]", "c_cpgl[42] is beyond the 41 columns compute cpgl writes"),
-    ("c_cpgl[1] ", "c_nope[1] ", "reads compute 'nope', which the script does not define"),
-])
+@pytest.mark.parametrize(
+    "old, new, words",
+    [
+        ("c_cpgl[41]", "c_cpgl[42]", "c_cpgl[42] is beyond the 41 columns compute cpgl writes"),
+        ("c_cpgl[1] ", "c_nope[1] ", "reads compute 'nope', which the script does not define"),
+    ],
+)
 def test_local_dump_columns_the_script_does_not_write(packing_copy, old, new, words):
     text = (packing_copy / "pairs.txt").read_text()
     err = analyze_error(packing_copy, InputFormatError, contacts=("columns.txt", text.replace(old, new)))
@@ -617,7 +657,7 @@ def test_wall_type_without_material(packing_copy):
     (packing_copy / "in.bad").write_text(bad)
     with pytest.raises(MaterialError) as info:
         open_run(packing_copy / "in.bad")
-    line = bad[:bad.index("type 5 xplane")].count("\n") + 1
+    line = bad[: bad.index("type 5 xplane")].count("\n") + 1
     assert_located(info.value, "in.bad", None, line, "uses type 5, which has no material", "youngsModulus")
 
 
@@ -639,6 +679,7 @@ def test_g_printed_id_above_999999(packing_copy):
 
 # --------------------------------------------------------------------------- 6. the command
 
+
 def test_cli_run_writes_the_store(setup_frame, tmp_path):
     out = tmp_path / "packing.h5"
     assert cli_main(["run", str(script("packing")), "-o", str(out), "--quiet"]) == 0
@@ -656,8 +697,17 @@ def test_cli_run_reports_a_bad_input_in_one_line(packing_copy, tmp_path, capsys)
     text = (packing_copy / "pairs.txt").read_text()
     (packing_copy / "cli_cut.txt").write_text(text[:-100])
     out = tmp_path / "bad.h5"
-    code = cli_main(["run", str(packing_copy / "in.packing"), "--contacts", str(packing_copy / "cli_cut.txt"),
-                     "-o", str(out), "--quiet"])
+    code = cli_main(
+        [
+            "run",
+            str(packing_copy / "in.packing"),
+            "--contacts",
+            str(packing_copy / "cli_cut.txt"),
+            "-o",
+            str(out),
+            "--quiet",
+        ]
+    )
     err = capsys.readouterr().err
     assert code == 2
     assert err.startswith("demsplit: error:") and "cli_cut.txt:" in err and "timestep 204000" in err

@@ -104,8 +104,9 @@ def read_binary_dump(path: Path) -> list[dict]:
         ncols, nchunks = take(np.int32, 2)
         chunks = [take(np.float64, int(take(np.int32, 1)[0])) for _ in range(nchunks)]
         data = np.concatenate(chunks).reshape(-1, ncols)
-        frames.append(dict(step=int(step), natoms=int(natoms), triclinic=triclinic,
-                           boundary=boundary, box=box, data=data))
+        frames.append(
+            dict(step=int(step), natoms=int(natoms), triclinic=triclinic, boundary=boundary, box=box, data=data)
+        )
     return frames
 
 
@@ -231,13 +232,19 @@ def force_balance(scene: str, precision: str):
         iw = row_index(ids, w.data[:, ID2 + 1])
         total = m[:, None] * GRAVITY
         for k in range(3):
-            total[:, k] += (np.bincount(i1, p.data[:, FORCE][:, k], n)
-                            - np.bincount(i2, p.data[:, FORCE][:, k], n)
-                            + np.bincount(iw, w.data[:, FORCE][:, k], n))
+            total[:, k] += (
+                np.bincount(i1, p.data[:, FORCE][:, k], n)
+                - np.bincount(i2, p.data[:, FORCE][:, k], n)
+                + np.bincount(iw, w.data[:, FORCE][:, k], n)
+            )
         pair_mag = np.linalg.norm(p.data[:, FORCE], axis=1)
-        scale = (m * 9.81 + np.linalg.norm(f, axis=1) + np.bincount(i1, pair_mag, n)
-                 + np.bincount(i2, pair_mag, n)
-                 + np.bincount(iw, np.linalg.norm(w.data[:, FORCE], axis=1), n))
+        scale = (
+            m * 9.81
+            + np.linalg.norm(f, axis=1)
+            + np.bincount(i1, pair_mag, n)
+            + np.bincount(i2, pair_mag, n)
+            + np.bincount(iw, np.linalg.norm(w.data[:, FORCE], axis=1), n)
+        )
         yield a.step, f, total, scale, touches_primitive_wall(x, r, scene)
 
 
@@ -266,7 +273,7 @@ def test_contact_forces_add_up_to_atom_force(scene, precision):
 
 
 def test_analytic_forces_balance_exactly():
-    (_, f, total, scale, _), = force_balance("analytic", "full")
+    ((_, f, total, scale, _),) = force_balance("analytic", "full")
     assert np.abs(f).max() < 1e-15  # at rest the net force vanishes (to rounding)
     assert (np.abs(total - f).max(axis=1) / scale).max() < 1e-13
 
@@ -308,8 +315,7 @@ def test_pair_columns_follow_the_documented_layout(scene):
         np.testing.assert_allclose(d[:, FORCE], d[:, FORCE_N] + d[:, FORCE_T], rtol=0, atol=1e-18)
         fn = np.einsum("ij,ij->i", d[:, FORCE_N], e_n)
         assert np.all(fn > 0)
-        np.testing.assert_allclose(d[:, FORCE_N], fn[:, None] * e_n, rtol=0,
-                                   atol=1e-12 * np.abs(d[:, FORCE_N]).max())
+        np.testing.assert_allclose(d[:, FORCE_N], fn[:, None] * e_n, rtol=0, atol=1e-12 * np.abs(d[:, FORCE_N]).max())
         # torque on id1 = −(r1 − δ/2) e_n × F_t, not divided by a radius
         torque = -(r[i1] - d[:, DELTA] / 2)[:, None] * np.cross(e_n, d[:, FORCE_T])
         np.testing.assert_allclose(d[:, TORQUE], torque, rtol=0, atol=1e-12 * max(np.abs(torque).max(), 1e-300))
@@ -318,8 +324,12 @@ def test_pair_columns_follow_the_documented_layout(scene):
         shear = d[:, HISTORY]
         assert np.abs(np.einsum("ij,ij->i", shear, e_n)).max() <= 1e-12 * max(np.abs(shear).max(), 1e-300)
         # contactArea = lens area πa² (≈ 2π R* δ, twice the Hertz area πR*δ)
-        lens = -np.pi / 4 * ((dist - r[i1] - r[i2]) * (dist + r[i1] - r[i2])
-                             * (dist - r[i1] + r[i2]) * (dist + r[i1] + r[i2])) / dist**2
+        lens = (
+            -np.pi
+            / 4
+            * ((dist - r[i1] - r[i2]) * (dist + r[i1] - r[i2]) * (dist - r[i1] + r[i2]) * (dist + r[i1] + r[i2]))
+            / dist**2
+        )
         np.testing.assert_allclose(d[:, AREA], lens, rtol=1e-9)
 
 
@@ -442,9 +452,28 @@ def test_tiny_packing_writes_the_expected_dumps(liggghts, tmp_path):
     for name in ("in.packing", "floor.stl"):
         shutil.copy(SAMPLES / "packing" / name, tmp_path / name)
     result = subprocess.run(
-        ["stdbuf", "-o0", "-e0", liggghts, "-in", "in.packing", "-echo", "none", "-log", "none",
-         "-var", "nparticles", "60", "-var", "nsettle", "40000"],
-        cwd=tmp_path, capture_output=True, text=True, timeout=120,
+        [
+            "stdbuf",
+            "-o0",
+            "-e0",
+            liggghts,
+            "-in",
+            "in.packing",
+            "-echo",
+            "none",
+            "-log",
+            "none",
+            "-var",
+            "nparticles",
+            "60",
+            "-var",
+            "nsettle",
+            "40000",
+        ],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=120,
     )
     assert result.returncode == 0, result.stdout[-2000:]
     steps = [42000, 44000]  # every 2000 after a settle of 40000 steps (40000 is written too)

@@ -15,8 +15,7 @@ import numpy as np
 import pytest
 from demsplit.physics.bodies import FrameContacts, LawRows
 from demsplit.physics.laws import law_class, make, supported
-from demsplit.physics.laws._liggghts import (rolling_spring_energy, sjkr2_area_integral, sjkr_area,
-                                              sjkr_area_integral)
+from demsplit.physics.laws._liggghts import rolling_spring_energy, sjkr2_area_integral, sjkr_area, sjkr_area_integral
 from demsplit.physics.modes import HISTORY_LOST
 from demsplit.physics.partition import contact_energies, partition, per_particle
 from demsplit.scene import ContactModel, Material, Scene, Wall
@@ -60,8 +59,9 @@ def test_sjkr_work_is_the_integral_of_liggghts_area(rj):
 def test_sjkr2_work():
     ri, rj, d = np.array([1e-3, 1e-3]), np.array([3e-3, np.inf]), np.array([2e-5, 2e-5])
     R = 1e-3 * 3e-3 / 4e-3
-    np.testing.assert_allclose(sjkr2_area_integral(d, ri, rj), [2 * np.pi * R * d[0] ** 2, np.pi * 1e-3 * d[1] ** 2],
-                               rtol=1e-15)
+    np.testing.assert_allclose(
+        sjkr2_area_integral(d, ri, rj), [2 * np.pi * R * d[0] ** 2, np.pi * 1e-3 * d[1] ** 2], rtol=1e-15
+    )
     assert np.all(sjkr2_area_integral(-d, ri, rj) == 0)
 
 
@@ -71,14 +71,23 @@ def test_rolling_spring_energy_without_stiffness_is_zero():
 
 
 def scene(**params) -> Scene:
-    return Scene(materials={1: Material(5e6, 0.45), 2: Material(7e7, 0.3)},
-                 model=ContactModel("liggghts:hertz", params), walls=[Wall("floor", "plane", 2)])
+    return Scene(
+        materials={1: Material(5e6, 0.45), 2: Material(7e7, 0.3)},
+        model=ContactModel("liggghts:hertz", params),
+        walls=[Wall("floor", "plane", 2)],
+    )
 
 
 def frame(n: int = 40, seed: int = 3):
     rng = np.random.default_rng(seed)
-    particles = {"id": np.arange(1, 21), "type": rng.integers(1, 3, 20), "radius": rng.uniform(1e-3, 2e-3, 20),
-                 "x": rng.uniform(0, 1e-2, 20), "y": rng.uniform(0, 1e-2, 20), "z": rng.uniform(0, 1e-2, 20)}
+    particles = {
+        "id": np.arange(1, 21),
+        "type": rng.integers(1, 3, 20),
+        "radius": rng.uniform(1e-3, 2e-3, 20),
+        "x": rng.uniform(0, 1e-2, 20),
+        "y": rng.uniform(0, 1e-2, 20),
+        "z": rng.uniform(0, 1e-2, 20),
+    }
     id1 = rng.integers(1, 21, n)
     id2 = np.where(np.arange(n) % 5 == 0, -1, (id1 % 20) + 1)
     wall = np.where(id2 < 0, 0, -1)
@@ -86,11 +95,22 @@ def frame(n: int = 40, seed: int = 3):
     r2 = np.where(id2 > 0, particles["radius"][np.maximum(id2, 1) - 1], np.inf)
     nvec = rng.normal(size=(n, 3))
     nvec /= np.linalg.norm(nvec, axis=1)[:, None]
-    contacts = {"id1": id1, "id2": id2, "wall": wall, "delta": rng.uniform(-1e-6, 5e-5, n), "r1": r1, "r2": r2,
-                "nx": nvec[:, 0], "ny": nvec[:, 1], "nz": nvec[:, 2], "x1": particles["x"][id1 - 1],
-                "y1": particles["y"][id1 - 1], "z1": particles["z"][id1 - 1],
-                **{f"shear{c}": rng.normal(0, 1e-6, n) for c in "xyz"},
-                **{f"rolling_torque{c}": rng.normal(0, 1e-7, n) for c in "xyz"}}
+    contacts = {
+        "id1": id1,
+        "id2": id2,
+        "wall": wall,
+        "delta": rng.uniform(-1e-6, 5e-5, n),
+        "r1": r1,
+        "r2": r2,
+        "nx": nvec[:, 0],
+        "ny": nvec[:, 1],
+        "nz": nvec[:, 2],
+        "x1": particles["x"][id1 - 1],
+        "y1": particles["y"][id1 - 1],
+        "z1": particles["z"][id1 - 1],
+        **{f"shear{c}": rng.normal(0, 1e-6, n) for c in "xyz"},
+        **{f"rolling_torque{c}": rng.normal(0, 1e-7, n) for c in "xyz"},
+    }
     return particles, contacts
 
 
@@ -185,23 +205,49 @@ def test_rolling_luding_stiffness_and_history():
     kr = np.asarray(ratio)[t1 - 1, t2 - 1] * kt * R**2
     m2 = sum(contacts[f"rolling_torque{c}"] ** 2 for c in "xyz")
     np.testing.assert_allclose(e.u_r, np.where(kr > 0, m2 / (2 * np.where(kr > 0, kr, 1)), 0), rtol=1e-12)
-    assert sc.model.contact_law.history_columns()[3:] == ["rolling_torquex", "rolling_torquey", "rolling_torquez",
-                                                          "torsion_torquex", "torsion_torquey", "torsion_torquez"]
+    assert sc.model.contact_law.history_columns()[3:] == [
+        "rolling_torquex",
+        "rolling_torquey",
+        "rolling_torquez",
+        "torsion_torquex",
+        "torsion_torquey",
+        "torsion_torquez",
+    ]
     with pytest.raises(Exception, match="torsion on"):
         make("liggghts:hertz", {"rolling": "luding", "rolling_stiffness_ratio": 0.5, "torsion": "on"})
 
 
 def thornton_ning(delta: np.ndarray, delta_h: np.ndarray, f_h: np.ndarray, **params) -> tuple[np.ndarray, ...]:
     """u_n and the normal force of liggghts:thornton_ning for pair contacts of radii 1 mm and 2 mm, types 1 and 2."""
-    particles = {"id": np.array([1, 2]), "type": np.array([1, 2]), "radius": np.array([1e-3, 2e-3]),
-                 "x": np.zeros(2), "y": np.zeros(2), "z": np.array([0.0, 3e-3])}
+    particles = {
+        "id": np.array([1, 2]),
+        "type": np.array([1, 2]),
+        "radius": np.array([1e-3, 2e-3]),
+        "x": np.zeros(2),
+        "y": np.zeros(2),
+        "z": np.array([0.0, 3e-3]),
+    }
     n = len(delta)
-    contacts = {"id1": np.ones(n, dtype=np.int64), "id2": np.full(n, 2), "wall": np.full(n, -1), "delta": delta,
-                "r1": np.full(n, 1e-3), "r2": np.full(n, 2e-3), "nx": np.zeros(n), "ny": np.zeros(n),
-                "nz": np.ones(n), "x1": np.zeros(n), "y1": np.zeros(n), "z1": np.zeros(n),
-                "tn_delta_old": delta_h, "tn_force_old": f_h, **{f"shear{c}": np.zeros(n) for c in "xyz"}}
-    sc = Scene(materials={1: Material(5e6, 0.45), 2: Material(7e7, 0.3)},
-               model=ContactModel("liggghts:thornton_ning", params))
+    contacts = {
+        "id1": np.ones(n, dtype=np.int64),
+        "id2": np.full(n, 2),
+        "wall": np.full(n, -1),
+        "delta": delta,
+        "r1": np.full(n, 1e-3),
+        "r2": np.full(n, 2e-3),
+        "nx": np.zeros(n),
+        "ny": np.zeros(n),
+        "nz": np.ones(n),
+        "x1": np.zeros(n),
+        "y1": np.zeros(n),
+        "z1": np.zeros(n),
+        "tn_delta_old": delta_h,
+        "tn_force_old": f_h,
+        **{f"shear{c}": np.zeros(n) for c in "xyz"},
+    }
+    sc = Scene(
+        materials={1: Material(5e6, 0.45), 2: Material(7e7, 0.3)}, model=ContactModel("liggghts:thornton_ning", params)
+    )
     e = contact_energies(contacts, sc, particles)
     rows = LawRows(FrameContacts(contacts, sc, particles), slice(None), sc.model.law)
     return e.u_n, sc.model.contact_law.normal_force(rows)
@@ -246,14 +292,25 @@ def test_thornton_ning_refuses_what_it_cannot_rebuild():
 def test_edinburgh_stiffness_uses_the_given_stiffness():
     """edinburgh/stiffness: k1 = LoadingStiffness, k2 = k1 UnloadingStiffness, kt = k1
     (normal_model_edinburgh_stiffness.h)."""
-    law = make("liggghts:edinburgh/stiffness", {"overlap_exponent": 1.0, "unloading_stiffness": 4.0,
-                                                "loading_stiffness": 3e3})
-    assert law.history_columns() == ["delta_p_max", "edinburgh_old_delta", "edinburgh_kc", "edinburgh_fo", "shearx",
-                                     "sheary", "shearz"]
+    law = make(
+        "liggghts:edinburgh/stiffness", {"overlap_exponent": 1.0, "unloading_stiffness": 4.0, "loading_stiffness": 3e3}
+    )
+    assert law.history_columns() == [
+        "delta_p_max",
+        "edinburgh_old_delta",
+        "edinburgh_kc",
+        "edinburgh_fo",
+        "shearx",
+        "sheary",
+        "shearz",
+    ]
     particles, contacts = frame()
     contacts["delta_p_max"] = np.maximum(contacts["delta"], 0) * 0.4
-    sc = Scene(materials={1: Material(5e6, 0.45), 2: Material(7e7, 0.3)},
-               model=ContactModel(law.key, law.params), walls=[Wall("floor", "plane", 2)])
+    sc = Scene(
+        materials={1: Material(5e6, 0.45), 2: Material(7e7, 0.3)},
+        model=ContactModel(law.key, law.params),
+        walls=[Wall("floor", "plane", 2)],
+    )
     e = contact_energies(contacts, sc, particles)
     d = np.maximum(contacts["delta"], 0)
     np.testing.assert_allclose(e.u_n, 0.5 * 4 * 3e3 * (d - 0.4 * d) ** 2, rtol=1e-12, atol=1e-30)
@@ -263,9 +320,11 @@ def test_edinburgh_stiffness_uses_the_given_stiffness():
 
 # ------------------------------------------------------------------ liquid bridges (easo, washino)
 
+
 @pytest.mark.parametrize("model", BRIDGE_MODELS)
-@pytest.mark.parametrize("rj, ci, cj", [(1.6e-3, 0.01, 0.004), (0.7e-3, 2e-5, 0.03), (None, 0.01, 0.0),
-                                         (None, 3e-6, 0.0)])
+@pytest.mark.parametrize(
+    "rj, ci, cj", [(1.6e-3, 0.01, 0.004), (0.7e-3, 2e-5, 0.03), (None, 0.01, 0.0), (None, 3e-6, 0.0)]
+)
 @pytest.mark.slow
 def test_bridge_work_is_the_integral_of_liggghts_capillary_force(model, rj, ci, cj):
     """u_adh(delta) = int_{-s_rup}^delta F of LIGGGHTS' own force, by 40-digit quadrature of its transcription,
@@ -276,12 +335,34 @@ def test_bridge_work_is_the_integral_of_liggghts_capillary_force(model, rj, ci, 
     mpmath.mp.dps = 40
     force, rupture = liggghts_capillary(model, ri, rj, ci, cj, *angles, gamma, max_ratio, cdf)
     s_rup = float(rupture)
-    delta = np.array([3e-5, 1e-6, 1e-9, 0.0, -1e-9 * s_rup, -0.1 * s_rup, -0.5 * s_rup, -0.9 * s_rup, -0.999 * s_rup,
-                      -1.0001 * s_rup, -1.5 * s_rup])
+    delta = np.array(
+        [
+            3e-5,
+            1e-6,
+            1e-9,
+            0.0,
+            -1e-9 * s_rup,
+            -0.1 * s_rup,
+            -0.5 * s_rup,
+            -0.9 * s_rup,
+            -0.999 * s_rup,
+            -1.0001 * s_rup,
+            -1.5 * s_rup,
+        ]
+    )
     n = len(delta)
     theta = 0.5 * np.radians(angles[0]) * np.radians(angles[1])
-    b = LiquidBridges(model, np.full(n, ri), np.full(n, np.inf if rj is None else rj), np.full(n, ci), np.full(n, cj),
-                      theta, gamma, max_ratio, cdf)
+    b = LiquidBridges(
+        model,
+        np.full(n, ri),
+        np.full(n, np.inf if rj is None else rj),
+        np.full(n, ci),
+        np.full(n, cj),
+        theta,
+        gamma,
+        max_ratio,
+        cdf,
+    )
     assert b.rupture[0] == pytest.approx(s_rup, rel=1e-14)
     # at delta = 0 exactly washino's apart branch is 0/0 in LIGGGHTS (NaN); demsplit gives its limit
     exact_force = [float(force(d if d != 0 else -1e-40)) for d in delta]
@@ -300,25 +381,55 @@ def test_bridge_work_is_the_integral_of_liggghts_capillary_force(model, rj, ci, 
 
 
 def bridge_scene(model: str = BRIDGE_MODELS[0], **extra) -> Scene:
-    params = {**dict(cohesion=model, surface_tension=0.072, contact_angle=(20.0, 35.0), max_separation_ratio=1.1,
-                     min_separation_ratio=1.01, fluid_viscosity=0.0, liquid_content_initial=0.01), **extra}
-    return Scene(materials={1: Material(5e6, 0.45), 2: Material(7e7, 0.3)},
-                 model=ContactModel("liggghts:hertz", params), walls=[Wall("floor", "plane", 2)])
+    params = {
+        **dict(
+            cohesion=model,
+            surface_tension=0.072,
+            contact_angle=(20.0, 35.0),
+            max_separation_ratio=1.1,
+            min_separation_ratio=1.01,
+            fluid_viscosity=0.0,
+            liquid_content_initial=0.01,
+        ),
+        **extra,
+    }
+    return Scene(
+        materials={1: Material(5e6, 0.45), 2: Material(7e7, 0.3)},
+        model=ContactModel("liggghts:hertz", params),
+        walls=[Wall("floor", "plane", 2)],
+    )
 
 
 def bridge_contacts(delta: list[float], id2: list[int], flag: list[float], lost: list[int]) -> tuple[dict, dict]:
     """Particles 1 (r 1 mm, type 1) and 2 (r 1.5 mm, type 2) with their liquid; contacts of 1 with 2 or the wall."""
-    particles = {"id": np.array([1, 2]), "type": np.array([1, 2]), "radius": np.array([1e-3, 1.5e-3]),
-                 "x": np.zeros(2), "y": np.zeros(2), "z": np.array([0.0, 3e-3]),
-                 "f_surfaceLiquidContent": np.array([0.01, 0.02])}
+    particles = {
+        "id": np.array([1, 2]),
+        "type": np.array([1, 2]),
+        "radius": np.array([1e-3, 1.5e-3]),
+        "x": np.zeros(2),
+        "y": np.zeros(2),
+        "z": np.array([0.0, 3e-3]),
+        "f_surfaceLiquidContent": np.array([0.01, 0.02]),
+    }
     n = len(delta)
     id2 = np.array(id2)
-    contacts = {"id1": np.ones(n, dtype=np.int64), "id2": id2, "wall": np.where(id2 < 0, 0, -1),
-                "delta": np.array(delta), "r1": np.full(n, 1e-3), "r2": np.where(id2 < 0, np.inf, 1.5e-3),
-                "nx": np.zeros(n), "ny": np.zeros(n), "nz": np.ones(n), "x1": np.zeros(n), "y1": np.zeros(n),
-                "z1": np.zeros(n), "liquid_bridge": np.array(flag, dtype=float),
-                "history_unknown": np.array(lost, dtype=np.int8) * np.int8(HISTORY_LOST),
-                **{f"shear{c}": np.full(n, 1e-6) for c in "xyz"}}
+    contacts = {
+        "id1": np.ones(n, dtype=np.int64),
+        "id2": id2,
+        "wall": np.where(id2 < 0, 0, -1),
+        "delta": np.array(delta),
+        "r1": np.full(n, 1e-3),
+        "r2": np.where(id2 < 0, np.inf, 1.5e-3),
+        "nx": np.zeros(n),
+        "ny": np.zeros(n),
+        "nz": np.ones(n),
+        "x1": np.zeros(n),
+        "y1": np.zeros(n),
+        "z1": np.zeros(n),
+        "liquid_bridge": np.array(flag, dtype=float),
+        "history_unknown": np.array(lost, dtype=np.int8) * np.int8(HISTORY_LOST),
+        **{f"shear{c}": np.full(n, 1e-6) for c in "xyz"},
+    }
     return particles, contacts
 
 
@@ -332,8 +443,9 @@ def test_bridge_law_apart_holds_only_its_bridge():
     law = sc.model.contact_law
     assert law.history_columns() == ["liquid_bridge", "shearx", "sheary", "shearz"]
     assert law.particle_columns == ("f_surfaceLiquidContent",) and law.mode_columns["u_adh"] == ("liquid_bridge",)
-    particles, contacts = bridge_contacts([2e-5, -3e-5, -3e-5, 2e-5, -2e-5, -5e-4], [2, 2, 2, -1, -1, -1],
-                                          [1, 1, 0, 0, 0, 0], [0, 0, 0, 1, 1, 1])
+    particles, contacts = bridge_contacts(
+        [2e-5, -3e-5, -3e-5, 2e-5, -2e-5, -5e-4], [2, 2, 2, -1, -1, -1], [1, 1, 0, 0, 0, 0], [0, 0, 0, 1, 1, 1]
+    )
     e = contact_energies(contacts, sc, particles)
     assert e.u_n[0] > 0 and e.u_t[0] > 0 and np.all(e.u_n[[1, 2, 4, 5]] == 0) and np.all(e.u_t[[1, 2, 4, 5]] == 0)
     assert e.u_adh[0] < e.u_adh[1] < 0 and e.u_adh[2] == 0 and e.u_adh[3] < 0
@@ -344,8 +456,11 @@ def test_bridge_law_apart_holds_only_its_bridge():
     with pytest.raises(ContactError, match="beyond its rupture distance"):
         contact_energies(contacts, sc, particles)
     # LIGGGHTS writes a pair apart while its bridge may act, a wall contact within (cdf - 1) r1
-    np.testing.assert_allclose(law.separation_limit(np.array([1e-3, 1e-3]), np.array([1.5e-3, np.inf])),
-                               [0.1 * 2.5e-3, (1.21 - 1) * 1e-3], rtol=1e-12)
+    np.testing.assert_allclose(
+        law.separation_limit(np.array([1e-3, 1e-3]), np.array([1.5e-3, np.inf])),
+        [0.1 * 2.5e-3, (1.21 - 1) * 1e-3],
+        rtol=1e-12,
+    )
     assert make("liggghts:hertz").separation_limit(1e-3, np.inf) == 0.0
 
 
@@ -363,18 +478,28 @@ def test_a_washino_bridge_forms_across_a_gap_without_history():
 def test_bridge_law_parameters():
     law = bridge_scene(BRIDGE_MODELS[1], bridge_volume_fraction=0.1, contact_distance_factor=1.5).model.contact_law
     assert law.contact_distance_factor() == 1.5  # the larger of neigh_modify's and 1.1 maxSeparationDistanceRatio
-    assert law.dump_setup() == ["fix liquidtransfer all transportequation/scalar equation_id liquidtransfer quantity "
-                                "surfaceLiquidContent default_value 1.000000e-02 flux_quantity liquidFlux "
-                                "source_quantity liquidSource capacity_quantity none"]
+    assert law.dump_setup() == [
+        "fix liquidtransfer all transportequation/scalar equation_id liquidtransfer quantity "
+        "surfaceLiquidContent default_value 1.000000e-02 flux_quantity liquidFlux "
+        "source_quantity liquidSource capacity_quantity none"
+    ]
     assert "liquid content f_surfaceLiquidContent" in law.describe()
     with pytest.raises(Exception, match="limitLiquidContent"):
         bridge_scene(BRIDGE_MODELS[1], limit_liquid_content="on")
     with pytest.raises(Exception, match="contactAngle"):
         bridge_scene(contact_angle=(20.0, 190.0))
     with pytest.raises(Exception, match="fluid_viscosity"):
-        make("liggghts:hertz", {"cohesion": BRIDGE_MODELS[0], "surface_tension": 0.07, "contact_angle": 30.0,
-                                "max_separation_ratio": 1.1, "min_separation_ratio": 1.01,
-                                "liquid_content_initial": 0.01})
+        make(
+            "liggghts:hertz",
+            {
+                "cohesion": BRIDGE_MODELS[0],
+                "surface_tension": 0.07,
+                "contact_angle": 30.0,
+                "max_separation_ratio": 1.1,
+                "min_separation_ratio": 1.01,
+                "liquid_content_initial": 0.01,
+            },
+        )
     particles, contacts = bridge_contacts([2e-5], [2], [1], [0])
     particles["f_surfaceLiquidContent"][1] = -0.01
     with pytest.raises(Exception, match="must be >= 0"):
@@ -389,11 +514,21 @@ def test_every_liggghts_normal_model_takes_a_bridge(key, model):
     survives the scene's dict (its contact angles as a list)."""
     from demsplit.scene import scene_from_dict, scene_to_dict
 
-    params = {**law_class(key).example_params, "cohesion": model, "surface_tension": 0.072,
-              "contact_angle": (20.0, 35.0), "max_separation_ratio": 1.1, "min_separation_ratio": 1.01,
-              "fluid_viscosity": 0.0, "liquid_content_initial": 0.01}
-    sc = Scene(materials={1: Material(5e6, 0.45), 2: Material(7e7, 0.3)}, model=ContactModel(key, params),
-               walls=[Wall("floor", "plane", 2)])
+    params = {
+        **law_class(key).example_params,
+        "cohesion": model,
+        "surface_tension": 0.072,
+        "contact_angle": (20.0, 35.0),
+        "max_separation_ratio": 1.1,
+        "min_separation_ratio": 1.01,
+        "fluid_viscosity": 0.0,
+        "liquid_content_initial": 0.01,
+    }
+    sc = Scene(
+        materials={1: Material(5e6, 0.45), 2: Material(7e7, 0.3)},
+        model=ContactModel(key, params),
+        walls=[Wall("floor", "plane", 2)],
+    )
     assert scene_from_dict(scene_to_dict(sc)).model == sc.model
     particles, contacts = bridge_contacts([2e-5, -3e-5, -2e-5], [2, 2, -1], [1, 1, 1], [0, 0, 0])
     particles["mass"] = np.array([1e-5, 2e-5])

@@ -21,9 +21,12 @@ def test_vtk_dumps_are_described_and_a_vtk_only_run_is_refused_with_the_fix(tmp_
     lines = (ANALYTIC / "in.analytic").read_text().split("\n")
     kept = [line for line in lines if not line.startswith(("dump", "compute cwgl"))]
     text = "\n".join(kept).replace("run             300000", "run 1000")
-    text = text.replace("run             0", "dump dv all custom/vtk 1000 atoms*.vtk id type x y z radius\n"
-                        "dump dx all custom/vtk 1000 atoms*.vtu id type x y z radius\n"
-                        "dump dl all local/gran/vtk 1000 pairs*.vtk cpgl\nrun 1000")
+    text = text.replace(
+        "run             0",
+        "dump dv all custom/vtk 1000 atoms*.vtk id type x y z radius\n"
+        "dump dx all custom/vtk 1000 atoms*.vtu id type x y z radius\n"
+        "dump dl all local/gran/vtk 1000 pairs*.vtk cpgl\nrun 1000",
+    )
     script = tmp_path / "in.vtk"
     script.write_text(text)
     proc = subprocess.run([liggghts, "-in", script.name], cwd=tmp_path, capture_output=True, text=True, timeout=600)

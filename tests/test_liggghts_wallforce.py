@@ -40,8 +40,10 @@ from test_liggghts_wallforce_facts import MODELS, WALLS, law, rebuilt
 AGREEMENT = 1e-9
 """Relative agreement of two reconstructions; a value below 1e-15 of the largest of its frame (a fully unloaded
 hysteretic contact: 0 from the force, 1e-41 J from the history) agrees to 1e-15 of that largest."""
-REFERENCE_RULES = {"capped at a setup step": "capped_at_setup",
-                   "rolling torque capped at a setup step": "rolling_capped_at_setup"}
+REFERENCE_RULES = {
+    "capped at a setup step": "capped_at_setup",
+    "rolling torque capped at a setup step": "rolling_capped_at_setup",
+}
 """The reference's reasons (their start) and demsplit's rule for them."""
 
 
@@ -58,8 +60,10 @@ def agree(mine: np.ndarray, theirs: np.ndarray, largest: float) -> np.ndarray:
 def analysed(script: Path) -> list[tuple]:
     """Every frame of a run as demsplit reads it, with its contacts' energies."""
     run = open_run(script)
-    return [(frame, contact_energies(frame.contacts, run.scene, frame.particles))
-            for frame in (run.frame(k) for k in range(len(run)))]
+    return [
+        (frame, contact_energies(frame.contacts, run.scene, frame.particles))
+        for frame in (run.frame(k) for k in range(len(run)))
+    ]
 
 
 def floor_rows(frame, ids) -> np.ndarray:
@@ -136,8 +140,11 @@ def test_mesh_run_from_its_history_and_from_its_wall_force_agree(model, tmp_path
             assert np.array_equal(is_known, np.isfinite(getattr(reference, mode))), (mode, k)
             assert np.all(agree(mine[is_known], theirs[is_known], np.abs(theirs).max())), (mode, k)
             compared[mode] += int(is_known.sum())
-        assert all(n in (REASONS["capped_at_setup"], REASONS["rolling_capped_at_setup"])
-                   for n in ff.notes if n in REASONS.values())
+        assert all(
+            n in (REASONS["capped_at_setup"], REASONS["rolling_capped_at_setup"])
+            for n in ff.notes
+            if n in REASONS.values()
+        )
     assert all(n >= 60 for n in compared.values()), compared
 
 
@@ -165,8 +172,9 @@ def test_an_unmodelled_force_leaves_the_history_unknown_and_says_why(tmp_path):
     """A fix that adds a force the balance does not model (a drag) turns the rebuilding off: every primitive-floor
     contact's u_t is not computed, as without store_force, and the note names the fix."""
     script = primitive_copy("hertz_mesh", tmp_path / "drag")
-    script.write_text(script.read_text().replace("fix integr all nve/sphere",
-                                                 "fix integr all nve/sphere\nfix drag all viscous 0.001"))
+    script.write_text(
+        script.read_text().replace("fix integr all nve/sphere", "fix integr all nve/sphere\nfix drag all viscous 0.001")
+    )
     run = open_run(script)
     assert any("fix drag viscous" in note for note in run.join.primitive_note.split("; "))
     frame = run.frame(2)
@@ -193,8 +201,10 @@ def test_which_frames_a_dump_writes_at_the_setup_of_a_run(tmp_path):
     """A dump writes at a run's setup only a step it has not written: its first frame when defined between runs,
     the first step of its first run; the step where one run ends and the next starts was written mid-run."""
     script = tmp_path / "in.kinds"
-    script.write_text("units si\ntimestep 1e-6\nrun 1000\ndump a all custom 100 a.txt id type x y z radius\n"
-                      "run 1000\ntimestep 2e-6\nrun 500\nreset_timestep 0\nrun 300\n")
+    script.write_text(
+        "units si\ntimestep 1e-6\nrun 1000\ndump a all custom 100 a.txt id type x y z radius\n"
+        "run 1000\ntimestep 2e-6\nrun 500\nreset_timestep 0\nrun 300\n"
+    )
     s = read_script(script)
     dump = s.dumps[0]
     assert liggghts_reader.frame_kind(s, dump, 1000) == (True, 1e-6)
@@ -215,8 +225,10 @@ def test_hysteresis_totals_hold_only_what_is_known_in_every_export(tmp_path, cap
     meshio = pytest.importorskip("meshio")
     out, d = tmp_path / "r.h5", tmp_path
     assert main(["run", str(WALLS / "hysteresis_prim" / "in.hysteresis_prim"), "-o", str(out), "-q"]) == 0
-    assert main(["export", str(out), "--csv", str(d / "csv"), "--parquet", str(d / "pq"), "--vtk", str(d / "vtk"),
-                 "-q"]) == 0
+    assert (
+        main(["export", str(out), "--csv", str(d / "csv"), "--parquet", str(d / "pq"), "--vtk", str(d / "vtk"), "-q"])
+        == 0
+    )
     res = demsplit.load_results(out)
     c, p, w = res.contacts, res.particles, res.walls
     unknown = c["u_t"].isna()
@@ -258,10 +270,12 @@ def test_prepare_adds_store_force_and_its_columns(tmp_path):
 
     text = (WALLS / "hertz_prim" / "in.hertz_prim").read_text()
     text = re.sub(r"^(dump|dump_modify) .*\n", "", text, flags=re.M).replace(" store_force yes", "")
-    text = text.replace("fix wfloor all wall/gran model hertz tangential history primitive type 3 zplane 0.0",
-                        "fix wfloor all wall/gran model hertz tangential history &\n    primitive type 3 zplane 0.0 "
-                        "# the floor\nfix wside all wall/gran model hertz tangential history primitive type 3 "
-                        "xplane -0.01\nunfix wside")
+    text = text.replace(
+        "fix wfloor all wall/gran model hertz tangential history primitive type 3 zplane 0.0",
+        "fix wfloor all wall/gran model hertz tangential history &\n    primitive type 3 zplane 0.0 "
+        "# the floor\nfix wside all wall/gran model hertz tangential history primitive type 3 "
+        "xplane -0.01\nunfix wside",
+    )
     text += "fix wtop all wall/gran model hertz tangential history primitive type 3 zplane 0.03\nrun 100\n"
     script = tmp_path / "in.user"
     script.write_text(text)
@@ -290,8 +304,13 @@ def test_packing_prepared_and_rerun_has_its_primitive_walls_complete(liggghts, t
     for name in ("in.packing", "floor.stl"):
         shutil.copy(packing / name, tmp_path / name)
     assert main(["prepare", str(tmp_path / "in.packing"), "-q"]) == 0
-    proc = subprocess.run(["stdbuf", "-o0", "-e0", liggghts, "-in", "in.packing.demsplit", "-echo", "none", "-log",
-                           "none"], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    proc = subprocess.run(
+        ["stdbuf", "-o0", "-e0", liggghts, "-in", "in.packing.demsplit", "-echo", "none", "-log", "none"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert proc.returncode == 0, proc.stdout[-2000:]
     import gzip
 
@@ -315,8 +334,11 @@ def test_a_wall_without_stored_force_leaves_its_particles_unverified(tmp_path):
     floor = "fix wfloor all wall/gran model hertz tangential history primitive type 3 zplane 0.0 store_force yes"
     text = (WALLS / "hertz_prim" / "in.hertz_prim").read_text()
     assert floor in text
-    script.write_text(text.replace(floor, floor + "\nfix wcut all wall/gran model hertz tangential history "
-                                   "primitive type 3 xplane 0.0"))
+    script.write_text(
+        text.replace(
+            floor, floor + "\nfix wcut all wall/gran model hertz tangential history primitive type 3 xplane 0.0"
+        )
+    )
     plain = analysed(WALLS / "hertz_prim" / "in.hertz_prim")
     assert "wcut" in open_run(script).join.primitive_note
     cut = both = 0

@@ -51,13 +51,20 @@ def law(model: str) -> Law:
     words = make_scenes.MODELS[model][0].split()
     magnitude, direction = make_scenes.GRAVITY
     direction = np.asarray(direction, dtype=np.float64)
-    return Law(normal=words[1], rolling=words[words.index("rolling_friction") + 1] if "rolling_friction" in words
-               else None, young=make_scenes.YOUNG, poisson=make_scenes.POISSON, restitution=make_scenes.RESTITUTION,
-               friction=make_scenes.FRICTION, timestep=make_scenes.TIMESTEP,
-               gravity=magnitude * (direction / np.sqrt(direction @ direction)),
-               rolling_friction=make_scenes.ROLLING_FRICTION,
-               characteristic_velocity=make_scenes.CHARACTERISTIC_VELOCITY,
-               max_elastic_stiffness=make_scenes.MAX_ELASTIC_STIFFNESS, plasticity_depth=make_scenes.PLASTICITY_DEPTH)
+    return Law(
+        normal=words[1],
+        rolling=words[words.index("rolling_friction") + 1] if "rolling_friction" in words else None,
+        young=make_scenes.YOUNG,
+        poisson=make_scenes.POISSON,
+        restitution=make_scenes.RESTITUTION,
+        friction=make_scenes.FRICTION,
+        timestep=make_scenes.TIMESTEP,
+        gravity=magnitude * (direction / np.sqrt(direction @ direction)),
+        rolling_friction=make_scenes.ROLLING_FRICTION,
+        characteristic_velocity=make_scenes.CHARACTERISTIC_VELOCITY,
+        max_elastic_stiffness=make_scenes.MAX_ELASTIC_STIFFNESS,
+        plasticity_depth=make_scenes.PLASTICITY_DEPTH,
+    )
 
 
 def _dump(directory: Path, name: str, columns: list[str] | None) -> list[tuple[int, dict, np.ndarray]]:
@@ -78,12 +85,20 @@ def frames(scene: str, directory: Path = WALLS) -> list[tuple[Frame, dict | None
     model, wall = scene.rsplit("_", 1)
     atoms = _dump(directory / scene, "ds_atoms.txt", None)
     pairs = _dump(directory / scene, "ds_pairs.txt", make_scenes.local_columns(model))
-    walls = _dump(directory / scene, "ds_walls.txt", make_scenes.local_columns(model, wall=True)) \
-        if wall == "mesh" else [None] * len(atoms)
-    assert [s for s, _, _ in atoms] == [s for s, _, _ in pairs] == list(range(
-        make_scenes.SETTLE, make_scenes.SETTLE + make_scenes.OUTPUT_STEPS + 1, make_scenes.OUTPUT_EVERY))
-    return [(Frame(atoms=a, pairs=p, setup=step == make_scenes.SETTLE, periodic=periodic), w and w[1])
-            for (step, a, periodic), (_, p, _), w in zip(atoms, pairs, walls)]
+    walls = (
+        _dump(directory / scene, "ds_walls.txt", make_scenes.local_columns(model, wall=True))
+        if wall == "mesh"
+        else [None] * len(atoms)
+    )
+    assert (
+        [s for s, _, _ in atoms]
+        == [s for s, _, _ in pairs]
+        == list(range(make_scenes.SETTLE, make_scenes.SETTLE + make_scenes.OUTPUT_STEPS + 1, make_scenes.OUTPUT_EVERY))
+    )
+    return [
+        (Frame(atoms=a, pairs=p, setup=step == make_scenes.SETTLE, periodic=periodic), w and w[1])
+        for (step, a, periodic), (_, p, _), w in zip(atoms, pairs, walls)
+    ]
 
 
 @cache
@@ -228,8 +243,10 @@ def test_rerun_reproduces_the_scene_and_a_late_dump_reads_a_zeroed_stored_force(
     scene = "epsd2_mesh"
     path = make_scenes.write_scene(scene, tmp_path / scene)
     text = path.read_text().rsplit("run ", 1)
-    late = f"dump late all custom {make_scenes.OUTPUT_EVERY} late.txt id f_force_wfloor[1] f_force_wfloor[2] " \
-           f"f_force_wfloor[3]\ndump_modify late sort id\n"
+    late = (
+        f"dump late all custom {make_scenes.OUTPUT_EVERY} late.txt id f_force_wfloor[1] f_force_wfloor[2] "
+        f"f_force_wfloor[3]\ndump_modify late sort id\n"
+    )
     path.write_text(text[0] + late + "run " + text[1])
     make_scenes.run(path, liggghts)
     for name in ("ds_atoms.txt", "ds_pairs.txt", "ds_walls.txt"):
@@ -239,8 +256,10 @@ def test_rerun_reproduces_the_scene_and_a_late_dump_reads_a_zeroed_stored_force(
     for frame, _ in fresh:
         _, closure = reconstruct(law("epsd2"), FLOOR, frame)
         assert closure.closes.all()
-    stored = np.concatenate([[a[f"f_force_wfloor[{c}]"] for c in (1, 2, 3)] for _, a, _ in
-                             _dump(tmp_path / scene, "ds_atoms.txt", None)])
-    zeroed = np.concatenate([[a[f"f_force_wfloor[{c}]"] for c in (1, 2, 3)] for _, a, _ in
-                             _dump(tmp_path / scene, "late.txt", None)])
+    stored = np.concatenate(
+        [[a[f"f_force_wfloor[{c}]"] for c in (1, 2, 3)] for _, a, _ in _dump(tmp_path / scene, "ds_atoms.txt", None)]
+    )
+    zeroed = np.concatenate(
+        [[a[f"f_force_wfloor[{c}]"] for c in (1, 2, 3)] for _, a, _ in _dump(tmp_path / scene, "late.txt", None)]
+    )
     assert np.count_nonzero(stored) > 100 and not zeroed.any()

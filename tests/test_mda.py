@@ -39,7 +39,7 @@ def plain_parse(path, step):
     lines = open(path).read().splitlines()
     k = next(i for i, line in enumerate(lines) if line == "ITEM: TIMESTEP" and int(lines[i + 1]) == step)
     n = int(lines[k + 3])
-    rows = np.loadtxt(lines[k + 9:k + 9 + n])
+    rows = np.loadtxt(lines[k + 9 : k + 9 + n])
     return rows[:, 0].astype(np.int64), rows[:, 2:5]
 
 
@@ -48,14 +48,32 @@ def results_for(frames):
     for step, fr in frames.items():
         n = len(fr["id"])
         u = (fr["id"] * 1e-7) * (1 + fr["type"])  # distinct, id-dependent energies
-        tables.append({
-            "particles": {"step": np.full(n, step), "id": fr["id"], "type": fr["type"], "radius": fr["radius"],
-                          "u": u, "u_n": 0.8 * u, "u_t": 0.2 * u, "u_equal": 1.1 * u, "u_radius": 0.9 * u,
-                          "n_contacts": fr["id"] % 5},
-            "frames": {"step": np.array([step]), "time": np.array([np.nan]), "n_particles": np.array([n]),
-                       "n_contacts": np.array([0]), "n_wall_contacts": np.array([0]), "u_n": np.array([0.0]),
-                       "u_t": np.array([0.0]), "overlap_max_rel_error": np.array([np.nan])},
-        })
+        tables.append(
+            {
+                "particles": {
+                    "step": np.full(n, step),
+                    "id": fr["id"],
+                    "type": fr["type"],
+                    "radius": fr["radius"],
+                    "u": u,
+                    "u_n": 0.8 * u,
+                    "u_t": 0.2 * u,
+                    "u_equal": 1.1 * u,
+                    "u_radius": 0.9 * u,
+                    "n_contacts": fr["id"] % 5,
+                },
+                "frames": {
+                    "step": np.array([step]),
+                    "time": np.array([np.nan]),
+                    "n_particles": np.array([n]),
+                    "n_contacts": np.array([0]),
+                    "n_wall_contacts": np.array([0]),
+                    "u_n": np.array([0.0]),
+                    "u_t": np.array([0.0]),
+                    "overlap_max_rel_error": np.array([np.nan]),
+                },
+            }
+        )
     return Results.from_frames(tables)
 
 
@@ -136,8 +154,12 @@ def test_the_compressed_sample_dump_that_run_reads(samples):
     frames = {}
     for k in range(dump.n_frames):
         f = dump.frame(k, columns=["id", "type", "x", "y", "z", "radius"])
-        frames[f.step] = {"id": f.int_column("id"), "type": f.int_column("type"), "radius": f.columns["radius"],
-                          "x": np.stack([f.columns[c] for c in "xyz"], axis=-1)}
+        frames[f.step] = {
+            "id": f.int_column("id"),
+            "type": f.int_column("type"),
+            "radius": f.columns["radius"],
+            "x": np.stack([f.columns[c] for c in "xyz"], axis=-1),
+        }
     step = max(frames)
     u = universe_with_energies(path, results_for(frames), step)
     fr = frames[step]

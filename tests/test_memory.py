@@ -35,9 +35,21 @@ print(json.dumps({"rc": rc, "peak": int(hwm.split()[1]) * 1024}))
 
 
 def _generate(directory: Path, frames: int) -> Path:
-    subprocess.run([sys.executable, str(REPO / "benchmarks" / "generate.py"), str(directory),
-                    "--particles", str(PARTICLES), "--contacts", str(CONTACTS), "--frames", str(frames)],
-                   check=True, capture_output=True)
+    subprocess.run(
+        [
+            sys.executable,
+            str(REPO / "benchmarks" / "generate.py"),
+            str(directory),
+            "--particles",
+            str(PARTICLES),
+            "--contacts",
+            str(CONTACTS),
+            "--frames",
+            str(frames),
+        ],
+        check=True,
+        capture_output=True,
+    )
     return directory / "in.bench"
 
 
@@ -51,8 +63,9 @@ def _frame_bytes(script: Path) -> int:
 
 def _peak(script: Path, out: Path) -> dict:
     """``demsplit run`` of ``script`` in a fresh process that does nothing else: its exit code, its peak RSS."""
-    proc = subprocess.run([sys.executable, "-c", CHILD, str(script), str(out)], check=True,
-                          capture_output=True, text=True)
+    proc = subprocess.run(
+        [sys.executable, "-c", CHILD, str(script), str(out)], check=True, capture_output=True, text=True
+    )
     return json.loads(proc.stdout.strip().splitlines()[-1])
 
 
@@ -66,4 +79,5 @@ def test_peak_memory_does_not_grow_with_frames(tmp_path):
     assert frame > 5e6  # the frames are large enough for the comparison to mean something
     assert long["peak"] - short["peak"] < frame, (
         f"peak RSS {long['peak'] / 2**20:.0f} MiB for 4 frames vs {short['peak'] / 2**20:.0f} MiB for 2 "
-        f"(one frame's arrays: {frame / 2**20:.0f} MiB)")
+        f"(one frame's arrays: {frame / 2**20:.0f} MiB)"
+    )

@@ -9,7 +9,6 @@ import shutil
 from pathlib import Path
 
 import pytest
-
 from demsplit.cli import main
 
 SAMPLES = Path(__file__).resolve().parent.parent / "sample_dumps"
@@ -29,8 +28,12 @@ def aliases(tmp_path: Path, target: Path) -> dict[str, Path]:
     """Other names of ``target``: a symbolic link, a hard link and a path through '..'."""
     (tmp_path / "link.h5").symlink_to(target)
     os.link(target, tmp_path / "hard.h5")
-    return {"itself": target, "symlink": tmp_path / "link.h5", "hard link": tmp_path / "hard.h5",
-            "dot-dot": target.parent / ".." / target.parent.name / target.name}
+    return {
+        "itself": target,
+        "symlink": tmp_path / "link.h5",
+        "hard link": tmp_path / "hard.h5",
+        "dot-dot": target.parent / ".." / target.parent.name / target.name,
+    }
 
 
 INPUTS = ["in.packing", "atoms_full.txt.gz", "pairs_full.txt.gz", "wall_full.txt.gz"]
@@ -55,8 +58,15 @@ def test_run_never_writes_over_an_input(packing, tmp_path, capsys, which, alias)
 
 
 @pytest.mark.parametrize("command", ["run", "convert"])
-@pytest.mark.parametrize("out, message", [("", "empty"), ("/dev/null", "not a regular file"),
-                                          ("{dir}", "a directory"), ("{dir}/no/such/dir/x.h5", "does not exist")])
+@pytest.mark.parametrize(
+    "out, message",
+    [
+        ("", "empty"),
+        ("/dev/null", "not a regular file"),
+        ("{dir}", "a directory"),
+        ("{dir}/no/such/dir/x.h5", "does not exist"),
+    ],
+)
 def test_outputs_that_are_not_new_or_regular_files_are_refused(packing, tmp_path, capsys, command, out, message):
     out = out.format(dir=tmp_path)
     assert main([command, str(packing / "in.packing"), "-o", out, "-q"]) == 2
@@ -128,16 +138,19 @@ def test_run_and_convert_never_write_over_a_file_the_script_names_but_does_not_r
 
 # --- a full disk ---------------------------------------------------------------------------------------------
 
-H5_NO_SPACE = ("Can't synchronously write data (file write failed: time = Thu Nov 26 04:21:00 2026, filename = "
-               "'store.h5', file descriptor = 7, errno = 28, error message = 'No space left on device', buf = "
-               "0x55d0, total write size = 8192, bytes this sub-write = 8192, bytes actually written = "
-               "18446744073709551615, offset = 0)")
+H5_NO_SPACE = (
+    "Can't synchronously write data (file write failed: time = Thu Nov 26 04:21:00 2026, filename = "
+    "'store.h5', file descriptor = 7, errno = 28, error message = 'No space left on device', buf = "
+    "0x55d0, total write size = 8192, bytes this sub-write = 8192, bytes actually written = "
+    "18446744073709551615, offset = 0)"
+)
 """What h5py raises when the disk fills under HDF5: an OSError without errno, the cause inside its text."""
 
 
 @pytest.mark.parametrize("failing_commit", [1, 2])
-def test_a_full_disk_is_one_message_with_the_path_and_a_rerun_works(packing, tmp_path, capsys, monkeypatch,
-                                                                   failing_commit):
+def test_a_full_disk_is_one_message_with_the_path_and_a_rerun_works(
+    packing, tmp_path, capsys, monkeypatch, failing_commit
+):
     """ENOSPC inside HDF5 at the first frame's commit: exit 2 naming the output and the cause, nothing left
     behind, and a plain rerun works (it was refused as 'interrupted'). At a later commit: the committed frames
     are kept for --resume, said so, and --resume completes."""
@@ -174,12 +187,16 @@ def _mount_tmpfs(where: Path, size: str, remount: bool = False) -> bool:
     import subprocess
 
     options = f"remount,size={size}" if remount else f"size={size}"
-    return subprocess.run(["mount", "-t", "tmpfs", "-o", options, "tmpfs", str(where)],
-                          capture_output=True).returncode == 0
+    return (
+        subprocess.run(["mount", "-t", "tmpfs", "-o", options, "tmpfs", str(where)], capture_output=True).returncode
+        == 0
+    )
 
 
-@pytest.mark.skipif(not hasattr(os, "geteuid") or os.geteuid() != 0 or not shutil.which("mount"),
-                    reason="mounts a small tmpfs (root only)")
+@pytest.mark.skipif(
+    not hasattr(os, "geteuid") or os.geteuid() != 0 or not shutil.which("mount"),
+    reason="mounts a small tmpfs (root only)",
+)
 @pytest.mark.parametrize("size", ["200k", "400k"])
 def test_a_real_full_file_system(packing, tmp_path, capsys, size):
     """The output on a tmpfs too small for the store: exit 2 naming the output and the cause; nothing left
@@ -209,8 +226,10 @@ def test_a_real_full_file_system(packing, tmp_path, capsys, size):
         subprocess.run(["umount", str(full)], capture_output=True)
 
 
-@pytest.mark.skipif(not hasattr(os, "geteuid") or os.geteuid() != 0 or not shutil.which("mount"),
-                    reason="mounts a read-only tmpfs and makes a device node (root only)")
+@pytest.mark.skipif(
+    not hasattr(os, "geteuid") or os.geteuid() != 0 or not shutil.which("mount"),
+    reason="mounts a read-only tmpfs and makes a device node (root only)",
+)
 def test_a_read_only_file_system_and_a_device_node_are_one_message(packing, tmp_path, capsys):
     """-o on a read-only file system: exit 2 naming the output and the cause (an OSError of the system, not
     an internal error); -o onto a device node with /dev/null's numbers in a temporary directory: refused, the
@@ -256,14 +275,23 @@ def tree(directory: Path) -> dict[str, str]:
     return {str(p.relative_to(directory)): digest(p) for p in sorted(directory.rglob("*")) if p.is_file()}
 
 
-@pytest.mark.parametrize("argv", [["report", "{store}", "-o", "{run}/in.packing"],
-                                  ["report", "{store}", "-o", "{run}/atoms.txt"],
-                                  ["export", "{store}", "--dump", "{run}/atoms.txt"],
-                                  ["export", "{store}", "--dump", "{run}/in.packing"],
-                                  ["export", "{store}", "--dump", "{run}/floor.stl"]],
-                         ids=["report over the script", "report over a dump the script names",
-                              "export --dump over that dump", "export --dump over the script",
-                              "export --dump over the mesh"])
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["report", "{store}", "-o", "{run}/in.packing"],
+        ["report", "{store}", "-o", "{run}/atoms.txt"],
+        ["export", "{store}", "--dump", "{run}/atoms.txt"],
+        ["export", "{store}", "--dump", "{run}/in.packing"],
+        ["export", "{store}", "--dump", "{run}/floor.stl"],
+    ],
+    ids=[
+        "report over the script",
+        "report over a dump the script names",
+        "export --dump over that dump",
+        "export --dump over the script",
+        "export --dump over the mesh",
+    ],
+)
 @pytest.mark.parametrize("overwrite", [[], ["--overwrite"]], ids=["", "--overwrite"])
 def test_report_and_export_never_write_over_a_file_of_the_run(analysed, capsys, argv, overwrite):
     """The run's inputs and every file its script names, as the store's provenance lists them, are never
@@ -320,8 +348,12 @@ def test_an_existing_file_that_is_not_of_the_commands_kind_is_refused(analysed, 
     run, store = analysed
     original = tmp_path / "in.original"
     original.write_text("# the user's original script\n")
-    argv = {"run": ["run", str(run / "in.packing"), "-o"], "convert": ["convert", str(run / "in.packing"), "-o"],
-            "report": ["report", str(store), "-o"], "export --dump": ["export", str(store), "--dump"]}[command]
+    argv = {
+        "run": ["run", str(run / "in.packing"), "-o"],
+        "convert": ["convert", str(run / "in.packing"), "-o"],
+        "report": ["report", str(store), "-o"],
+        "export --dump": ["export", str(store), "--dump"],
+    }[command]
     assert main([*argv, str(original), "-q"]) == 2
     err = capsys.readouterr().err
     assert str(original) in err and "exists and is not a" in err and "--overwrite" in err and err.count("\n") == 1
@@ -374,8 +406,9 @@ def _csv_of(store: Path, folder: Path) -> bytes:
 
 
 @pytest.mark.parametrize("fmt, failing", [("--csv", 3), ("--vtk", 2)])
-def test_an_export_on_a_full_disk_leaves_the_folder_as_it_was_and_names_the_file(analysed, tmp_path, capsys,
-                                                                                  monkeypatch, fmt, failing):
+def test_an_export_on_a_full_disk_leaves_the_folder_as_it_was_and_names_the_file(
+    analysed, tmp_path, capsys, monkeypatch, fmt, failing
+):
     """ENOSPC while the export writes its files: exit 2 naming the file it was writing; nothing of the new
     export is left (half the tables were, and the message named no file), an earlier export is kept whole."""
     import errno
@@ -411,8 +444,19 @@ def test_a_refused_run_leaves_nothing_and_the_rerun_it_suggests_works(packing, t
     frames in a hidden work directory, and the rerun with the option the message suggests was refused as the
     resumption of an 'interrupted run', naming resume=True."""
     out = tmp_path / "out.h5"
-    argv = ["run", str(packing / "in.packing"), "--atoms", str(packing / "atoms.txt"), "--contacts",
-            str(packing / "pairs.txt"), "--walls", str(packing / "wall.txt"), "-o", str(out), "-q"]
+    argv = [
+        "run",
+        str(packing / "in.packing"),
+        "--atoms",
+        str(packing / "atoms.txt"),
+        "--contacts",
+        str(packing / "pairs.txt"),
+        "--walls",
+        str(packing / "wall.txt"),
+        "-o",
+        str(out),
+        "-q",
+    ]
     assert main(argv) == 2
     assert "--force-positions" in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["packing"]

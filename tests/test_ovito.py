@@ -7,7 +7,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from demsplit.cli import main
 from demsplit.results import load_results
 from demsplit.results.tables import with_not_computed_as_nan
@@ -36,7 +35,7 @@ def test_ovito_colours_the_particles_by_their_energy(run, tmp_path):
         # %.17g text round-trips exactly in Python; OVITO's own number parser lands within an ulp or two
         np.testing.assert_allclose(np.asarray(p["Position"]), frame[["x", "y", "z"]].to_numpy(), rtol=1e-15)
         np.testing.assert_allclose(np.asarray(p["u"]), frame["u"].to_numpy(), rtol=1e-15)
-        np.testing.assert_allclose(np.asarray(p["Radius"]), frame["radius"].to_numpy(), rtol=2 ** -23)  # float32
+        np.testing.assert_allclose(np.asarray(p["Radius"]), frame["radius"].to_numpy(), rtol=2**-23)  # float32
         colors = np.asarray(p["Color"])
         assert colors.shape == (len(frame), 3)
         u = frame["u"].to_numpy()

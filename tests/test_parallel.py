@@ -50,8 +50,8 @@ def four_cores(monkeypatch):
 
 
 def test_worker_processes_need_two_cores_each(monkeypatch):
-    from demsplit.runtime import threads
     from demsplit.pipeline import worker_processes
+    from demsplit.runtime import threads
 
     for cores, jobs, used in ((2, 2, 1), (2, 8, 1), (3, 2, 1), (4, 2, 2), (4, 8, 2), (16, 4, 4), (16, 1, 1)):
         monkeypatch.setattr(threads, "THREADS", cores)

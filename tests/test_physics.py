@@ -101,8 +101,9 @@ GLASS = (70 * GPa, 0.22)
 
 def mp_hertz_energy(delta, R1, R2, E1, nu1, E2, nu2):
     mpmath.mp.dps = 50
-    d, R1, R2, E1, nu1, E2, nu2 = (mpmath.mpf(x) if np.isfinite(x) else mpmath.inf
-                                   for x in (delta, R1, R2, E1, nu1, E2, nu2))
+    d, R1, R2, E1, nu1, E2, nu2 = (
+        mpmath.mpf(x) if np.isfinite(x) else mpmath.inf for x in (delta, R1, R2, E1, nu1, E2, nu2)
+    )
     E = 1 / ((1 - nu1**2) / E1 + (1 - nu2**2) / E2)
     R = 1 / (1 / R1 + 1 / R2)
     return mpmath.mpf(8) / 15 * E * mpmath.sqrt(R) * d ** mpmath.mpf(2.5)
@@ -117,8 +118,12 @@ def test_zero_overlap():
 
 def test_negative_overlap_is_zero_energy_and_flagged():
     d = np.array([-1e-6, -0.0, 1e-6])
-    for u in (ds.hertz_energy(d, 1e-3, 2e-3, *STEEL, *GLASS), ds.hertz_force(d, 1e-3, 2e-3, *STEEL, *GLASS),
-              ds.hooke_energy(d, 1e5), ds.power_law_energy(d, 1e5, 1.3)):
+    for u in (
+        ds.hertz_energy(d, 1e-3, 2e-3, *STEEL, *GLASS),
+        ds.hertz_force(d, 1e-3, 2e-3, *STEEL, *GLASS),
+        ds.hooke_energy(d, 1e5),
+        ds.power_law_energy(d, 1e5, 1.3),
+    ):
         assert np.all(np.isfinite(u)) and u[0] == 0 and u[1] == 0 and u[2] > 0
     contacts, particles = two_sphere_frame(delta=d, r1=1e-3, r2=2e-3)
     scene = ds.Scene({1: ds.Material(*STEEL), 2: ds.Material(*GLASS)})
@@ -239,8 +244,9 @@ def test_other_laws():
     E = ds.effective_modulus(*STEEL, *GLASS)
     R = ds.effective_radius(1e-3, 2e-3)
     k = 4 / 3 * E * np.sqrt(R)
-    assert ds.power_law_energy(1e-6, k, 1.5) == pytest.approx(ds.hertz_energy(1e-6, 1e-3, 2e-3, *STEEL, *GLASS),
-                                                              rel=1e-13)
+    assert ds.power_law_energy(1e-6, k, 1.5) == pytest.approx(
+        ds.hertz_energy(1e-6, 1e-3, 2e-3, *STEEL, *GLASS), rel=1e-13
+    )
     ft = np.array([[3.0, 4.0, 0.0]])
     assert ds.tangential_spring_energy(ft, 10.0)[0] == pytest.approx(25 / 20, rel=1e-15)
     assert ds.tangential_spring_energy(ft, 0.0)[0] == 0.0  # separated YADE contact: ks = 0
@@ -272,25 +278,46 @@ def test_ten_million_contacts_memory():
 
 # --- partition on a frame --------------------------------------------------------------------
 
+
 def two_sphere_frame(delta, r1, r2, n=None):
     """Particle 1 (type 1) at the origin, particle 2 (type 2) along +x at r1 + r2 - delta."""
     delta = np.atleast_1d(np.asarray(delta, dtype=float))
     k = len(delta)
-    particles = {"id": np.array([1, 2]), "type": np.array([1, 2], dtype=np.int32),
-                 "x": np.array([0.0, r1 + r2 - delta[-1]]), "y": np.zeros(2), "z": np.zeros(2),
-                 "radius": np.array([r1, r2])}
-    contacts = {"id1": np.ones(k, np.int64), "id2": np.full(k, 2, np.int64), "wall": np.full(k, -1, np.int64),
-                "delta": delta, "nx": np.ones(k), "ny": np.zeros(k), "nz": np.zeros(k),
-                "x1": np.zeros(k), "y1": np.zeros(k), "z1": np.zeros(k),
-                "r1": np.full(k, r1), "r2": np.full(k, r2)}
+    particles = {
+        "id": np.array([1, 2]),
+        "type": np.array([1, 2], dtype=np.int32),
+        "x": np.array([0.0, r1 + r2 - delta[-1]]),
+        "y": np.zeros(2),
+        "z": np.zeros(2),
+        "radius": np.array([r1, r2]),
+    }
+    contacts = {
+        "id1": np.ones(k, np.int64),
+        "id2": np.full(k, 2, np.int64),
+        "wall": np.full(k, -1, np.int64),
+        "delta": delta,
+        "nx": np.ones(k),
+        "ny": np.zeros(k),
+        "nz": np.zeros(k),
+        "x1": np.zeros(k),
+        "y1": np.zeros(k),
+        "z1": np.zeros(k),
+        "r1": np.full(k, r1),
+        "r2": np.full(k, r2),
+    }
     return contacts, particles
 
 
 def random_frame(rng, n_particles=50, n_contacts=200, n_walls=2, with_shear=True):
     ids = rng.permutation(np.arange(1, n_particles + 1))
-    particles = {"id": ids, "type": rng.integers(1, 3, n_particles).astype(np.int32),
-                 "x": rng.uniform(0, 1, n_particles), "y": rng.uniform(0, 1, n_particles),
-                 "z": rng.uniform(0, 1, n_particles), "radius": rng.uniform(1e-3, 3e-3, n_particles)}
+    particles = {
+        "id": ids,
+        "type": rng.integers(1, 3, n_particles).astype(np.int32),
+        "x": rng.uniform(0, 1, n_particles),
+        "y": rng.uniform(0, 1, n_particles),
+        "z": rng.uniform(0, 1, n_particles),
+        "radius": rng.uniform(1e-3, 3e-3, n_particles),
+    }
     i = rng.integers(0, n_particles, n_contacts)
     j = (i + rng.integers(1, n_particles, n_contacts)) % n_particles
     wall = np.where(rng.random(n_contacts) < 0.2, rng.integers(0, n_walls, n_contacts), -1)
@@ -298,10 +325,20 @@ def random_frame(rng, n_particles=50, n_contacts=200, n_walls=2, with_shear=True
     normal /= np.linalg.norm(normal, axis=1)[:, None]
     r1 = particles["radius"][i]
     r2 = np.where(wall >= 0, np.inf, particles["radius"][j])
-    contacts = {"id1": ids[i], "id2": np.where(wall >= 0, -1, ids[j]), "wall": wall,
-                "delta": rng.uniform(-1e-6, 1e-5, n_contacts),
-                "nx": normal[:, 0], "ny": normal[:, 1], "nz": normal[:, 2],
-                "x1": particles["x"][i], "y1": particles["y"][i], "z1": particles["z"][i], "r1": r1, "r2": r2}
+    contacts = {
+        "id1": ids[i],
+        "id2": np.where(wall >= 0, -1, ids[j]),
+        "wall": wall,
+        "delta": rng.uniform(-1e-6, 1e-5, n_contacts),
+        "nx": normal[:, 0],
+        "ny": normal[:, 1],
+        "nz": normal[:, 2],
+        "x1": particles["x"][i],
+        "y1": particles["y"][i],
+        "z1": particles["z"][i],
+        "r1": r1,
+        "r2": r2,
+    }
     if with_shear:
         for c in ("shearx", "sheary", "shearz"):
             contacts[c] = rng.normal(scale=1e-6, size=n_contacts)
@@ -347,8 +384,7 @@ def test_single_material_skips_lookup_and_matches():
     assert scene.single_material
     fast = ds.partition(contacts, scene, particles)
     n = len(contacts["delta"])
-    looked_up = ContactBodies(None, None, np.full(n, m.E), np.full(n, m.nu), np.full(n, m.E), np.full(n, m.nu),
-                              False)
+    looked_up = ContactBodies(None, None, np.full(n, m.E), np.full(n, m.nu), np.full(n, m.E), np.full(n, m.nu), False)
     frame = FrameContacts(contacts, scene, particles)
     frame.bodies = looked_up
     slow = split_energies(frame, law_energies(frame))

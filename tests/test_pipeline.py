@@ -5,8 +5,8 @@ from __future__ import annotations
 import demsplit as ds
 import numpy as np
 import pytest
-from demsplit.frame import Box, Frame
 from demsplit.compute import Options, frame_tables
+from demsplit.frame import Box, Frame
 from demsplit.results import Results
 
 GPa = 1e9
@@ -18,16 +18,34 @@ def chain_frame(clump):
     delta = np.array([1e-6, 2e-6])
     x = np.array([0.0, r[0] + r[1] - delta[0], 0.0])
     x[2] = x[1] + r[1] + r[2] - delta[1]
-    particles = {"id": np.array([10, 20, 30]), "type": np.array([1, 2, 1], np.int32), "x": x,
-                 "y": np.zeros(3), "z": np.full(3, 5e-3), "radius": r, "clump": np.asarray(clump)}
-    contacts = {"id1": np.array([10, 20, 10]), "id2": np.array([20, 30, -1]), "wall": np.array([-1, -1, 0]),
-                "delta": np.array([1e-6, 2e-6, 3e-6]), "nx": np.array([1.0, 1.0, 0.0]),
-                "ny": np.zeros(3), "nz": np.array([0.0, 0.0, -1.0]),
-                "x1": x[[0, 1, 0]], "y1": np.zeros(3), "z1": np.full(3, 5e-3),
-                "r1": r[[0, 1, 0]], "r2": np.array([r[1], r[2], np.inf])}
-    scene = ds.Scene({1: ds.Material(70 * GPa, 0.22), 2: ds.Material(3 * GPa, 0.35), 3: ds.Material(200 * GPa, 0.3)},
-                     model=ds.ContactModel("liggghts:hertz", {"tangential": "no_history"}),
-                     walls=[ds.Wall("floor", "plane", 3)])
+    particles = {
+        "id": np.array([10, 20, 30]),
+        "type": np.array([1, 2, 1], np.int32),
+        "x": x,
+        "y": np.zeros(3),
+        "z": np.full(3, 5e-3),
+        "radius": r,
+        "clump": np.asarray(clump),
+    }
+    contacts = {
+        "id1": np.array([10, 20, 10]),
+        "id2": np.array([20, 30, -1]),
+        "wall": np.array([-1, -1, 0]),
+        "delta": np.array([1e-6, 2e-6, 3e-6]),
+        "nx": np.array([1.0, 1.0, 0.0]),
+        "ny": np.zeros(3),
+        "nz": np.array([0.0, 0.0, -1.0]),
+        "x1": x[[0, 1, 0]],
+        "y1": np.zeros(3),
+        "z1": np.full(3, 5e-3),
+        "r1": r[[0, 1, 0]],
+        "r2": np.array([r[1], r[2], np.inf]),
+    }
+    scene = ds.Scene(
+        {1: ds.Material(70 * GPa, 0.22), 2: ds.Material(3 * GPa, 0.35), 3: ds.Material(200 * GPa, 0.3)},
+        model=ds.ContactModel("liggghts:hertz", {"tangential": "no_history"}),
+        walls=[ds.Wall("floor", "plane", 3)],
+    )
     return Frame(step=7, particles=particles, contacts=contacts, box=Box([-1, -1, -1], [1, 1, 1])), scene
 
 

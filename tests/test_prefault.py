@@ -10,10 +10,10 @@ from pathlib import Path
 
 import demsplit.runtime.prefault as prefault
 import pytest
-from demsplit.runtime import command
 from demsplit.readers import open_run
-from demsplit.readers.liggghts import LiggghtsRun
 from demsplit.readers.lammps_dump import TextDump
+from demsplit.readers.liggghts import LiggghtsRun
+from demsplit.runtime import command
 
 
 def resident_bytes() -> int:

@@ -42,8 +42,9 @@ def prepared_run(script: Path) -> Path:
     assert main(["prepare", str(script), "-q"]) == 0
     assert script.read_bytes() == original  # the input is never touched
     out = script.with_name(script.name + ".demsplit")
-    proc = subprocess.run(["stdbuf", "-o0", "-e0", liggghts, "-in", out.name], cwd=out.parent, capture_output=True,
-                          text=True, timeout=600)
+    proc = subprocess.run(
+        ["stdbuf", "-o0", "-e0", liggghts, "-in", out.name], cwd=out.parent, capture_output=True, text=True, timeout=600
+    )
     assert proc.returncode == 0, [line for line in proc.stdout.splitlines() if "ERROR" in line]
     return out
 
@@ -62,8 +63,11 @@ def test_a_mesh_wall_script(tmp_path):
 def test_primitive_walls_only(tmp_path):
     def primitive(s: str) -> str:
         s = s.replace("fix floor all mesh/surface file floor.stl type 4\n", "")
-        return s.replace("fix wfloor all wall/gran model hertz tangential history mesh n_meshes 1 meshes floor",
-                         "fix wfloor all wall/gran model hertz tangential history primitive type 4 zplane 0.0")
+        return s.replace(
+            "fix wfloor all wall/gran model hertz tangential history mesh n_meshes 1 meshes floor",
+            "fix wfloor all wall/gran model hertz tangential history primitive type 4 zplane 0.0",
+        )
+
     script = user_script(tmp_path, primitive)
     out = prepared_run(script)
     text = out.read_text()
@@ -77,14 +81,18 @@ def test_primitive_walls_only(tmp_path):
 
 
 @pytest.mark.simulator
-@pytest.mark.parametrize("words, prop, mode", [
-    ("rolling_friction epsd2", "coefficientRollingFriction peratomtypepair 4 " + " ".join(["0.1"] * 16), "u_r"),
-    ("cohesion sjkr2", "cohesionEnergyDensity peratomtypepair 4 " + " ".join(["1e3"] * 16), "u_adh"),
-])
+@pytest.mark.parametrize(
+    "words, prop, mode",
+    [
+        ("rolling_friction epsd2", "coefficientRollingFriction peratomtypepair 4 " + " ".join(["0.1"] * 16), "u_r"),
+        ("cohesion sjkr2", "cohesionEnergyDensity peratomtypepair 4 " + " ".join(["1e3"] * 16), "u_adh"),
+    ],
+)
 def test_rolling_and_cohesion(tmp_path, words, prop, mode):
     def extend(s: str) -> str:
         s = s.replace("tangential history", f"tangential history {words}")
         return s.replace("pair_style      gran", f"fix extra all property/global {prop}\npair_style      gran", 1)
+
     out = prepared_run(user_script(tmp_path, extend))
     assert main(["run", str(out), "-o", str(tmp_path / "r.h5"), "-q"]) == 0
     res = demsplit.load_results(tmp_path / "r.h5")
@@ -99,13 +107,18 @@ def test_compute_elastic_potential_widens_the_dumped_history(tmp_path):
     (with rolling friction: 32 + 6 + 10 = 48 and 32 + 6 + 14 = 52 columns): the prepared dumps hold them
     all, LIGGGHTS writes them and the run is analysed with no further edit (prepare cut the list at the
     law's own history before)."""
+
     def extend(s: str) -> str:
         s = s.replace("tangential history", "tangential history rolling_friction epsd2")
         s = s.replace("meshes floor", "meshes floor computeElasticPotential on")
         prop = "coefficientRollingFriction peratomtypepair 4 " + " ".join(["0.1"] * 16)
-        return s.replace("pair_style      gran model hertz tangential history rolling_friction epsd2",
-                         f"fix extra all property/global {prop}\npair_style      gran model hertz tangential "
-                         "history rolling_friction epsd2 computeElasticPotential on", 1)
+        return s.replace(
+            "pair_style      gran model hertz tangential history rolling_friction epsd2",
+            f"fix extra all property/global {prop}\npair_style      gran model hertz tangential "
+            "history rolling_friction epsd2 computeElasticPotential on",
+            1,
+        )
+
     script = user_script(tmp_path, extend)
     assert script.read_text().count("computeElasticPotential on") == 2
     out = prepared_run(script)
@@ -118,8 +131,10 @@ def test_compute_elastic_potential_widens_the_dumped_history(tmp_path):
 
 
 WALL = "fix wfloor all wall/gran model hertz tangential history mesh n_meshes 1 meshes floor\n"
-USER_DUMP = ('dump mine all custom 500 mine.txt id type x y z vx vy vz fx fy fz omegax omegay omegaz\n'
-             'dump_modify mine format "%d %d' + " %.17g" * 12 + '" sort id\n')
+USER_DUMP = (
+    "dump mine all custom 500 mine.txt id type x y z vx vy vz fx fy fz omegax omegay omegaz\n"
+    'dump_modify mine format "%d %d' + " %.17g" * 12 + '" sort id\n'
+)
 
 
 def late_wall(s: str) -> str:
@@ -204,7 +219,6 @@ def test_a_moving_mesh_wall_created_after_a_run_is_refused_then_prepared(tmp_pat
     run, the contact dumps a user copies (atoms, pairs) but no wall compute (LIGGGHTS refuses it there).
     demsplit run refuses the run naming the wall and prepare; check says so; the prepared split is analysed."""
     from conftest import require_program
-
     from demsplit.prepare import prepare_script
 
     liggghts = require_program("liggghts")
@@ -213,9 +227,13 @@ def test_a_moving_mesh_wall_created_after_a_run_is_refused_then_prepared(tmp_pat
         return late_wall(s).replace(WALL, "fix move all move/mesh mesh floor linear 0. 0. 0.01\n" + WALL)
 
     script = user_script(tmp_path, moving)
-    copied = [line for line in prepare_script(script).added if line.startswith(("dump dsAtoms", "dump_modify dsAtoms",
-                                                                                "compute dsPair", "dump ddsPair",
-                                                                                "dump_modify ddsPair"))]
+    copied = [
+        line
+        for line in prepare_script(script).added
+        if line.startswith(
+            ("dump dsAtoms", "dump_modify dsAtoms", "compute dsPair", "dump ddsPair", "dump_modify ddsPair")
+        )
+    ]
     assert len(copied) == 5
     script.write_text(script.read_text().replace("run 3000", "\n".join(copied) + "\nrun 3000", 1))
     proc = subprocess.run([liggghts, "-in", script.name], cwd=tmp_path, capture_output=True, text=True, timeout=600)
@@ -235,10 +253,20 @@ def test_a_moving_mesh_wall_created_after_a_run_is_refused_then_prepared(tmp_pat
     assert (res.contacts["wall"] == 0).any() and not res.walls["not_computed"].any()
 
 
-BRIDGE_PROPERTIES = "".join(f"fix b{k} all property/global {p}\n" for k, p in enumerate((
-    "surfaceLiquidContentInitial scalar 0.02", "surfaceTension scalar 0.072", "contactAngle peratomtype 20 35 10 25",
-    "minSeparationDistanceRatio scalar 1.01", "maxSeparationDistanceRatio scalar 1.1", "fluidViscosity scalar 0.001"),
-    1))
+BRIDGE_PROPERTIES = "".join(
+    f"fix b{k} all property/global {p}\n"
+    for k, p in enumerate(
+        (
+            "surfaceLiquidContentInitial scalar 0.02",
+            "surfaceTension scalar 0.072",
+            "contactAngle peratomtype 20 35 10 25",
+            "minSeparationDistanceRatio scalar 1.01",
+            "maxSeparationDistanceRatio scalar 1.1",
+            "fluidViscosity scalar 0.001",
+        ),
+        1,
+    )
+)
 
 
 @pytest.mark.slow

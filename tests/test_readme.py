@@ -48,8 +48,12 @@ def command_lines(block: str) -> list[str]:
 
 def demsplit_commands() -> list[str]:
     """Every ``demsplit ...`` or ``.venv/bin/demsplit ...`` command line of the sh blocks."""
-    return [line for block in blocks("sh") for line in command_lines(block)
-            if line.split()[0] in ("demsplit", ".venv/bin/demsplit")]
+    return [
+        line
+        for block in blocks("sh")
+        for line in command_lines(block)
+        if line.split()[0] in ("demsplit", ".venv/bin/demsplit")
+    ]
 
 
 def demsplit_exe() -> list[str]:
@@ -114,8 +118,9 @@ def test_every_readme_command_runs_on_the_samples(scratch):
 @pytest.mark.slow
 def test_the_readme_python_block_runs(scratch):
     (python,) = blocks("python")
-    assert run(".venv/bin/demsplit run sample_dumps/liggghts/packing/in.packing -o packing.h5 -q",
-               scratch).returncode == 0
+    assert (
+        run(".venv/bin/demsplit run sample_dumps/liggghts/packing/in.packing -o packing.h5 -q", scratch).returncode == 0
+    )
     code = python.replace('"sample_dumps/', f'"{REPO}/sample_dumps/')
     proc = subprocess.run([sys.executable, "-c", code], cwd=scratch, capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stderr[-2000:]
@@ -149,8 +154,9 @@ def test_readme_commands_that_need_a_simulator(scratch):
             ran += 1
     for line in command_lines(simulator[0]):  # in order: prepare, liggghts, run
         if line.startswith("liggghts "):
-            proc = subprocess.run([liggghts, *shlex.split(line)[1:]], cwd=scratch, capture_output=True, text=True,
-                                  timeout=600)
+            proc = subprocess.run(
+                [liggghts, *shlex.split(line)[1:]], cwd=scratch, capture_output=True, text=True, timeout=600
+            )
             assert proc.returncode == 0, proc.stdout[-2000:]
         else:
             proc = run(line, scratch)
@@ -180,6 +186,8 @@ def test_docs_link_only_inside_the_repository():
             path = (doc.parent / target).resolve()
             if not path.exists() or REPO not in path.parents:
                 bad.append(f"{doc.relative_to(REPO)}: {target}")
-        bad += [f"{doc.relative_to(REPO)}: {p}" for p in re.findall(r"(?:/root|/home|/work|/Users|\.pyenv)/[^\s`)\"']*",
-                                                                 text)]
+        bad += [
+            f"{doc.relative_to(REPO)}: {p}"
+            for p in re.findall(r"(?:/root|/home|/work|/Users|\.pyenv)/[^\s`)\"']*", text)
+        ]
     assert not bad, bad

@@ -35,8 +35,9 @@ def frame(step: int, simulator_point: bool = True, extra_modes: bool = False) ->
 
 
 def results(simulator_point: bool = True, extra_modes: bool = False, provenance: dict | None = None) -> Results:
-    return Results.from_frames([frame(s, simulator_point, extra_modes) for s in (0, 100, 200)],
-                               provenance or PROVENANCE, WALLS_META)
+    return Results.from_frames(
+        [frame(s, simulator_point, extra_modes) for s in (0, 100, 200)], provenance or PROVENANCE, WALLS_META
+    )
 
 
 def test_text_summary_shows_the_last_frame_per_type():
@@ -44,7 +45,7 @@ def test_text_summary_shows_the_last_frame_per_type():
     text = text_summary(res)
     assert "frame at timestep 200" in text and "contact law: liggghts:hertz (tangential='history')" in text
     per_type = res.per_type().query("step == 200").set_index("type")
-    table = text[text.index("Energy per particle type"):].splitlines()
+    table = text[text.index("Energy per particle type") :].splitlines()
     for t, row in per_type.iterrows():
         line = next(l for l in table if re.match(rf"\s*{t}\s+{int(row['count'])}\s", l))
         assert f"{row['total']:.4g}" in line and f"{row['gini']:.4g}" in line
@@ -66,11 +67,25 @@ def test_html_has_every_figure_and_is_self_contained(tmp_path, simulator_point, 
     assert len(figures) == n_figures
     assert len(re.findall(r"<img", page)) == n_figures
     assert not re.search(r'(src|href)="(?!data:)', page)  # nothing fetched from outside the page
-    for heading in ("Energy per mode", "Energy per particle type", "Distribution", "Where the energy sits",
-                    "Energy per size class", "Frames", "Split comparison", "Walls", "Materials"):
+    for heading in (
+        "Energy per mode",
+        "Energy per particle type",
+        "Distribution",
+        "Where the energy sits",
+        "Energy per size class",
+        "Frames",
+        "Split comparison",
+        "Walls",
+        "Materials",
+    ):
         assert f"<h2>{heading}</h2>" in page, heading
-    for alt in ("Normalised distribution and CCDF", "Energy against height", "Slice and projection",
-                "Per-particle misattribution", "Energy per size class"):
+    for alt in (
+        "Normalised distribution and CCDF",
+        "Energy against height",
+        "Slice and projection",
+        "Per-particle misattribution",
+        "Energy per size class",
+    ):
         assert f'alt="{alt}"' in page, alt
     assert [p.name for p in tmp_path.iterdir()] == ["report.html"]
 
@@ -78,8 +93,9 @@ def test_html_has_every_figure_and_is_self_contained(tmp_path, simulator_point, 
 @pytest.mark.slow
 def test_html_provenance_is_folded_and_nothing_missing_is_said(tmp_path):
     page = write_html(results(), tmp_path / "r.html").read_text()
-    folded = re.search(r"<details id='provenance'><summary>Provenance[^<]*</summary><pre>(.*?)</pre></details>",
-                       page, re.S)
+    folded = re.search(
+        r"<details id='provenance'><summary>Provenance[^<]*</summary><pre>(.*?)</pre></details>", page, re.S
+    )
     assert folded and "/data/run.dump" in folded.group(1)
     assert "/data/run.dump" not in page.replace(folded.group(0), "")
     assert "Not computed: nothing" in page and "class='missing'" not in page
@@ -87,10 +103,13 @@ def test_html_provenance_is_folded_and_nothing_missing_is_said(tmp_path):
 
 @pytest.mark.slow
 def test_not_computed_is_stated_at_the_top(tmp_path):
-    prov = {**PROVENANCE, "not_computed": {"u_tw": "the law has no twisting spring", "floor": {"missing": True}},
-            "skipped": {"u_r": "hertz without rolling friction"},
-            "notes": ["wall 'drum' NOT COMPUTED: its contacts were not dumped", "an ordinary note"],
-            "scene": {**PROVENANCE["scene"], "walls": [{"name": "lid", "missing": "no wall dump"}]}}
+    prov = {
+        **PROVENANCE,
+        "not_computed": {"u_tw": "the law has no twisting spring", "floor": {"missing": True}},
+        "skipped": {"u_r": "hertz without rolling friction"},
+        "notes": ["wall 'drum' NOT COMPUTED: its contacts were not dumped", "an ordinary note"],
+        "scene": {**PROVENANCE["scene"], "walls": [{"name": "lid", "missing": "no wall dump"}]},
+    }
     res = results(provenance=prov)
     page = write_html(res, tmp_path / "r.html").read_text()
     box = re.search(r"<div class='missing' id='not-computed'>(.*?)</div>", page, re.S)
@@ -114,27 +133,29 @@ def test_every_energy_column_is_shown(tmp_path):
     mode table and the per-frame table without being named in the report's code."""
     res = results(extra_modes=True)
     page = write_html(res, tmp_path / "r.html").read_text()
-    modes = page[page.index("<h2>Energy per mode</h2>"):page.index("<h2>Energy per particle type</h2>")]
+    modes = page[page.index("<h2>Energy per mode</h2>") : page.index("<h2>Energy per particle type</h2>")]
     rows = re.findall(r"<tr>\s*<td>([^<]*)</td>\s*<td>([^<]*)</td>\s*<td>([^<]*)</td>", modes)
     assert [r[1] for r in rows] == ["u_n", "u_t", "u_r", "u_adh"]
     last = res.frames.iloc[-1]
     assert rows[2][2] == f"{last['u_r']:.4g}" and rows[3][2] == f"{last['u_adh']:.4g}" and last["u_adh"] < 0
-    frames = page[page.index("<h2>Frames</h2>"):]
+    frames = page[page.index("<h2>Frames</h2>") :]
     assert "<th>u_r (J)</th>" in frames and "<th>u_adh (J)</th>" in frames
 
 
 @pytest.mark.slow
 def test_material_names_and_step(tmp_path):
-    prov = {**PROVENANCE, "scene": {"materials": {"1": {"E": 1e7, "nu": 0.3, "name": "soft"},
-                                                  "2": {"E": 5e7, "nu": 0.25}}}}
+    prov = {
+        **PROVENANCE,
+        "scene": {"materials": {"1": {"E": 1e7, "nu": 0.3, "name": "soft"}, "2": {"E": 5e7, "nu": 0.25}}},
+    }
     res = results(provenance=prov)
     page = write_html(res, tmp_path / "r.html", step=100, names={2: "glass", 3: "steel"}).read_text()
     assert "detailed frame: <b>timestep 100</b>" in page
-    per_type = page[page.index("<h2>Energy per particle type</h2>"):page.index("<figure>")]
+    per_type = page[page.index("<h2>Energy per particle type</h2>") : page.index("<figure>")]
     assert re.search(r"<td>1</td>\s*<td>soft</td>", per_type) and re.search(r"<td>2</td>\s*<td>glass</td>", per_type)
-    materials = page[page.index("<h2>Materials</h2>"):]
+    materials = page[page.index("<h2>Materials</h2>") :]
     assert re.search(r"<td>3</td>\s*<td>steel</td>", materials)  # the walls' type
-    walls = page[page.index("<h2>Walls</h2>"):page.index("<h2>Contact point</h2>")]
+    walls = page[page.index("<h2>Walls</h2>") : page.index("<h2>Contact point</h2>")]
     assert walls.count("<td>steel</td>") == 2
     text = text_summary(res, step=100, names={2: "glass"})
     assert "frame at timestep 100" in text
@@ -169,8 +190,22 @@ def test_run_type_names_travel_to_the_report(tmp_path, capsys):
     from demsplit import cli
 
     out = tmp_path / "o.h5"
-    assert cli.main(["run", str(SAMPLES / "liggghts" / "packing" / "in.packing"), "-o", str(out), "-q",
-                     "--type-name", "1=glass", "--type-name", "2=steel"]) == 0
+    assert (
+        cli.main(
+            [
+                "run",
+                str(SAMPLES / "liggghts" / "packing" / "in.packing"),
+                "-o",
+                str(out),
+                "-q",
+                "--type-name",
+                "1=glass",
+                "--type-name",
+                "2=steel",
+            ]
+        )
+        == 0
+    )
     assert load_results(out).type_names() == {1: "glass", 2: "steel"}
     assert cli.main(["report", str(out), "--type-name", "2=brass"]) == 0  # the report's option wins
     text = capsys.readouterr().out
@@ -181,14 +216,30 @@ def browser_check(page: Path, tmp_path: Path) -> tuple[int, int, list[str]]:
     """Load ``page`` in headless Chromium: (images, images decoded, console messages). A copy of the page
     gets a script that, on load, counts the images whose pixels decoded (naturalWidth > 0)."""
     chromium = require_program("chromium")
-    probe = ("<script>window.addEventListener('load', () => { const imgs = [...document.images]; "
-             "document.body.setAttribute('data-images', imgs.length + ' ' + "
-             "imgs.filter(i => i.complete && i.naturalWidth > 0).length); });</script>")
+    probe = (
+        "<script>window.addEventListener('load', () => { const imgs = [...document.images]; "
+        "document.body.setAttribute('data-images', imgs.length + ' ' + "
+        "imgs.filter(i => i.complete && i.naturalWidth > 0).length); });</script>"
+    )
     copy = tmp_path / ("probe-" + page.name)
     copy.write_text(page.read_text().replace("</body>", probe + "</body>"))
-    proc = subprocess.run([chromium, "--headless", "--disable-gpu", "--no-sandbox", "--enable-logging=stderr", "--v=0",
-                           f"--user-data-dir={tmp_path / 'chromium-profile'}", "--dump-dom", copy.as_uri()],
-                          capture_output=True, text=True, timeout=180, env={**os.environ, "HOME": str(tmp_path)})
+    proc = subprocess.run(
+        [
+            chromium,
+            "--headless",
+            "--disable-gpu",
+            "--no-sandbox",
+            "--enable-logging=stderr",
+            "--v=0",
+            f"--user-data-dir={tmp_path / 'chromium-profile'}",
+            "--dump-dom",
+            copy.as_uri(),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=180,
+        env={**os.environ, "HOME": str(tmp_path)},
+    )
     assert proc.returncode == 0, proc.stderr[-2000:]
     found = re.search(r'data-images="(\d+) (\d+)"', proc.stdout)
     assert found, "the page did not finish loading: " + proc.stderr[-2000:]
@@ -223,7 +274,7 @@ def test_the_report_opens_with_the_headline(packing_store, tmp_path):
     page = write_html(res, tmp_path / "r.html").read_text()
     start = page.index("<div class='summary' id='summary'>")
     assert start < page.index("<figure>") and start < page.index("<h2>Energy per mode</h2>")
-    box = page[start:page.index("<h2>Energy per mode</h2>")]
+    box = page[start : page.index("<h2>Energy per mode</h2>")]
     assert "id='not-computed'" in box and "expected share error" in box
     p, c = one.raw.particles, one.raw.contacts
     u, equal, radius = (p.groupby("type")[col].sum() for col in ("u", "u_equal", "u_radius"))
@@ -242,11 +293,16 @@ def test_the_report_opens_with_the_headline(packing_store, tmp_path):
     for t in (1, 2):
         w = walls[of_type == t]
         row = table.set_index("type").loc[t]
-        np.testing.assert_allclose(row["equal_off_walls_pct"], ((w["u1"] + w["u2"]) / 2 - w["u1"]).sum() / u[t] * 100,
-                                   rtol=1e-9)
+        np.testing.assert_allclose(
+            row["equal_off_walls_pct"], ((w["u1"] + w["u2"]) / 2 - w["u1"]).sum() / u[t] * 100, rtol=1e-9
+        )
         np.testing.assert_allclose(row["radius_off_walls_pct"], w["u2"].sum() / u[t] * 100, rtol=1e-9)
-    folded = re.search(r"<details id='frames-table'><summary>The per-frame table \((\d+) rows\)</summary>(.*?)"
-                       r"</details>", page, re.S)
+    folded = re.search(
+        r"<details id='frames-table'><summary>The per-frame table \((\d+) rows\)</summary>(.*?)"
+        r"</details>",
+        page,
+        re.S,
+    )
     assert folded and int(folded.group(1)) == len(res.steps) == folded.group(2).count("<tr>")  # header: <tr style
     headers = [h for h in re.findall(r"<th>([^<]*)</th>", page) if h not in LABEL_COLUMNS]
     assert headers and all(UNIT_HEADER.match(h) for h in headers), [h for h in headers if not UNIT_HEADER.match(h)]
@@ -267,8 +323,11 @@ def test_the_report_renders_in_a_browser(packing_store, tmp_path):
     assert images == 10 and decoded == images and console == []
     # the check can fail: a damaged figure and a script error are seen
     broken = tmp_path / "broken.html"
-    broken.write_text(page.read_text().replace("base64,iVBOR", "base64,AAAA", 1)
-                      .replace("</body>", "<script>undefinedFunction()</script></body>"))
+    broken.write_text(
+        page.read_text()
+        .replace("base64,iVBOR", "base64,AAAA", 1)
+        .replace("</body>", "<script>undefinedFunction()</script></body>")
+    )
     images, decoded, console = browser_check(broken, tmp_path)
     assert (images, decoded) == (10, 9) and len(console) == 1 and "undefinedFunction" in console[0]
 

@@ -64,16 +64,17 @@ OWN_DUMPS = f"""compute cpgl all pair/gran/local pos id force delta
 dump datoms all custom 2500 atoms.txt id type x y z vx vy vz fx fy fz omegax omegay omegaz radius mass
 dump_modify datoms format "{FULL}"
 dump dvis all custom 2500 vis.txt id type x y z radius
-dump dpair all local 2500 pairs.txt {' '.join(f'c_cpgl[{k}]' for k in range(1, 14))}
-dump_modify dpair format "{' '.join(['%.17g'] * 13)}"
+dump dpair all local 2500 pairs.txt {" ".join(f"c_cpgl[{k}]" for k in range(1, 14))}
+dump_modify dpair format "{" ".join(["%.17g"] * 13)}"
 run 30000
 """.encode()
 """A full-precision atom dump, a printed one (``vis.txt``, %g) and a pair dump without the tangential history."""
 
 
 def liggghts_run(script: Path) -> None:
-    proc = subprocess.run([require_program("liggghts"), "-in", script.name], cwd=script.parent, capture_output=True,
-                          timeout=600)
+    proc = subprocess.run(
+        [require_program("liggghts"), "-in", script.name], cwd=script.parent, capture_output=True, timeout=600
+    )
     assert proc.returncode == 0, [line for line in proc.stdout.splitlines() if b"ERROR" in line]
 
 
@@ -135,8 +136,11 @@ LATIN1 = "# Modèle de référence, écrit sous Windows\n".encode("latin-1")
 @pytest.mark.simulator
 def test_latin1_prepare_then_check_before_and_after_liggghts(tmp_path, capsys):
     script = tmp_path / "in.user"
-    script.write_bytes(LATIN1 + HEAD.replace(b"PAIR_EXTRA", b"")
-                       + b"dump dvis all custom 5000 vis.txt id type x y z radius\nrun 30000\n")
+    script.write_bytes(
+        LATIN1
+        + HEAD.replace(b"PAIR_EXTRA", b"")
+        + b"dump dvis all custom 5000 vis.txt id type x y z radius\nrun 30000\n"
+    )
     assert main(["check", str(script)]) != 2 and "UTF-8" not in capsys.readouterr().out
     assert main(["prepare", str(script)]) == 0
     told = capsys.readouterr().out
@@ -216,8 +220,9 @@ def test_one_material_the_report_says_it_is_the_50_50_split(tmp_path, capsys):
     from demsplit.results.report import split_headline
 
     script = tmp_path / "in.user"
-    script.write_bytes(HEAD.replace(b"PAIR_EXTRA", b"").replace(b"primitive type 2", b"primitive type 1")
-                       + b"run 30000\n")
+    script.write_bytes(
+        HEAD.replace(b"PAIR_EXTRA", b"").replace(b"primitive type 2", b"primitive type 1") + b"run 30000\n"
+    )
     assert main(["prepare", str(script), "-q"]) == 0
     out = script.with_name("in.user.demsplit")
     liggghts_run(out)
@@ -233,9 +238,10 @@ def test_one_material_the_report_says_it_is_the_50_50_split(tmp_path, capsys):
     assert "(the walls too are of this material)" in said and "against a wall it gives the particle" in said
     assert main(["report", str(tmp_path / "r.h5"), "-o", str(tmp_path / "r.html"), "-q"]) == 0
     box = (tmp_path / "r.html").read_text()
-    box = box[box.index("<div class='summary'"):box.index("<h2>Energy per mode</h2>")]
+    box = box[box.index("<div class='summary'") : box.index("<h2>Energy per mode</h2>")]
     assert "it is the 50/50 split" in box and "radius off by walls" in box
     assert main(["report", str(tmp_path / "r.h5")]) == 0
     text = capsys.readouterr().out.splitlines()
-    assert text[1].startswith("  Against the material law, the 50/50 split agrees with it and the radius split gives "
-                              "type 1 ")
+    assert text[1].startswith(
+        "  Against the material law, the 50/50 split agrees with it and the radius split gives type 1 "
+    )

@@ -10,7 +10,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from demsplit.cli import main
 from demsplit.readers.yade_snapshot import _open_store
 from demsplit.yade import write_snapshot
@@ -38,10 +37,17 @@ def run(path: Path, tmp_path: Path, capsys) -> tuple[int, str]:
     return rc, capsys.readouterr().err
 
 
-@pytest.mark.parametrize("table, column, value", [
-    ("interactions", "depth", np.nan), ("interactions", "fsex", np.inf), ("interactions", "nx", np.nan),
-    ("interactions", "kno", -np.inf), ("bodies", "radius", np.nan), ("bodies", "x", np.inf),
-])
+@pytest.mark.parametrize(
+    "table, column, value",
+    [
+        ("interactions", "depth", np.nan),
+        ("interactions", "fsex", np.inf),
+        ("interactions", "nx", np.nan),
+        ("interactions", "kno", -np.inf),
+        ("bodies", "radius", np.nan),
+        ("bodies", "x", np.inf),
+    ],
+)
 def test_a_non_finite_number_is_refused_with_its_place(tmp_path, capsys, table, column, value):
     rc, err = run(damaged_snapshot(tmp_path, table, column, value), tmp_path, capsys)
     assert rc == 2 and "timestep 24000" in err and "row" in err
@@ -49,10 +55,15 @@ def test_a_non_finite_number_is_refused_with_its_place(tmp_path, capsys, table, 
     assert not (tmp_path / "out.h5").exists()
 
 
-@pytest.mark.parametrize("table, column, value, what", [
-    ("bodies", "radius", -1e-3, "must be > 0"), ("interactions", "kno", -5.0, "must be >= 0"),
-    ("interactions", "nx", 0.9, "unit normal"), ("interactions", "depth", 1.0, "larger than its smaller radius"),
-])
+@pytest.mark.parametrize(
+    "table, column, value, what",
+    [
+        ("bodies", "radius", -1e-3, "must be > 0"),
+        ("interactions", "kno", -5.0, "must be >= 0"),
+        ("interactions", "nx", 0.9, "unit normal"),
+        ("interactions", "depth", 1.0, "larger than its smaller radius"),
+    ],
+)
 def test_a_value_out_of_range_or_implausible_is_refused(tmp_path, capsys, table, column, value, what):
     rc, err = run(damaged_snapshot(tmp_path, table, column, value), tmp_path, capsys)
     assert rc == 2 and what in err and "timestep 24000" in err and "(row " in err
@@ -90,8 +101,17 @@ def test_a_binary_atom_dump_with_an_infinite_position_is_refused(tmp_path, capsy
     for name in ("in.periodic", "pairs.txt", "wall.txt", "floor.stl"):
         (tmp_path / name).write_bytes((src / name).read_bytes())
     (tmp_path / "atoms.bin").write_bytes(bytes(data))
-    rc = main(["run", str(tmp_path / "in.periodic"), "--atoms", str(tmp_path / "atoms.bin"),
-               "-o", str(tmp_path / "out.h5"), "-q"])
+    rc = main(
+        [
+            "run",
+            str(tmp_path / "in.periodic"),
+            "--atoms",
+            str(tmp_path / "atoms.bin"),
+            "-o",
+            str(tmp_path / "out.h5"),
+            "-q",
+        ]
+    )
     err = capsys.readouterr().err
     assert rc == 2 and "x = inf is not a finite number" in err and "atoms.bin" in err
     assert not (tmp_path / "out.h5").exists()
@@ -111,7 +131,7 @@ def test_a_damaged_compressed_dump_reads_like_a_cut_file(tmp_path, capsys, damag
         data = data[: int(len(data) * 0.8)]
     elif damage == "flipped byte":
         k = int(len(data) * 0.8)
-        data = data[:k] + bytes([data[k] ^ 0xFF]) + data[k + 1:]
+        data = data[:k] + bytes([data[k] ^ 0xFF]) + data[k + 1 :]
     else:  # a second gzip member cut short: the first member is whole
         data = data + gzip.compress(b"ITEM: TIMESTEP\n206000\nITEM: NUMBER OF ENTRIES\n")[:20]
     (tmp_path / "pairs_full.txt.gz").write_bytes(data)
@@ -137,8 +157,8 @@ def test_a_record_length_beyond_the_file_is_damage_not_a_hang(tmp_path, length):
     records, problem = npy_records(SNAPSHOT)
     assert problem is None and len(records) == 3
     head = records[1][0] - 23  # the second record's header: 'DSREC ' + 16 digits + newline
-    assert data[head:head + 6] == b"DSREC " and len(NPY_STREAM_MAGIC) < head
-    data[head + 6:head + 22] = length
+    assert data[head : head + 6] == b"DSREC " and len(NPY_STREAM_MAGIC) < head
+    data[head + 6 : head + 22] = length
     bad = tmp_path / "bad.npys"
     bad.write_bytes(bytes(data))
     records, problem = npy_records(bad)
@@ -189,6 +209,7 @@ def test_hdf5_inputs_never_read_data_from_elsewhere(tmp_path, capsys, kind):
 
 # --- a YADE snapshot record of another layout: one message, never another exception ----------------------------
 
+
 def rewritten(tmp_path: Path, fmt: str, change) -> Path:
     """The Mindlin sample's snapshots with ``change(snapshots)`` applied, rewritten valid (framing, checksums)."""
     store = _open_store(SNAPSHOT)
@@ -203,19 +224,23 @@ def rewritten(tmp_path: Path, fmt: str, change) -> Path:
 def _set(table: str, column: str, value):
     def change(snapshots):
         snapshots[1][1][table][column] = value(snapshots[1][1][table][column])
+
     return change
 
 
 def _meta(key, value):
     def change(snapshots):
         snapshots[1][0][key] = value
+
     return change
 
 
 RECORD_DAMAGE = {
     "missing column": (lambda s: s[1][1]["interactions"].pop("ny"), "column interactions.ny is missing"),
-    "one component of a force missing": (lambda s: s[1][1]["interactions"].pop("fsey"),
-                                         "column interactions.fsey is missing"),
+    "one component of a force missing": (
+        lambda s: s[1][1]["interactions"].pop("fsey"),
+        "column interactions.fsey is missing",
+    ),
     "text in a number column": (_set("bodies", "vy", lambda c: c.astype("S8")), "bodies.vy holds |S8 values"),
     "2-D column": (_set("bodies", "radius", lambda c: c.reshape(-1, 1)), "bodies.radius has shape"),
     "short column": (_set("interactions", "depth", lambda c: c[:-1]), "interactions.depth has"),
@@ -224,8 +249,10 @@ RECORD_DAMAGE = {
     "iteration as text": (_meta("iter", "24000"), "'iter' is not an iteration number"),
     "time as text": (_meta("time", "later"), "'time' is not a finite time"),
     "time beyond the doubles": (_meta("time", 2**1100), "'time' is not a finite time"),
-    "a kind that is not ASCII": (_set("bodies", "kind", lambda c: np.where(np.arange(len(c)) == 3, b"\x8e\xff", c)),
-                                 "bodies.kind holds text that is not ASCII"),
+    "a kind that is not ASCII": (
+        _set("bodies", "kind", lambda c: np.where(np.arange(len(c)) == 3, b"\x8e\xff", c)),
+        "bodies.kind holds text that is not ASCII",
+    ),
     "material not a number": (lambda s: s[0][0]["materials"][0].update(young="soft"), "are not both finite numbers"),
     "cell of 2 numbers": (lambda s: s[1][0].update(periodic=True, hSize=[1.0, 2.0]), "'hSize' is not a 3x3"),
     "an iteration twice": (lambda s: s.insert(2, s[1]), "iteration 16000 is in the file twice"),
@@ -236,8 +263,15 @@ HDF5_CANNOT_HOLD = {"time beyond the doubles"}
 """Damage the HDF5 snapshot writer cannot write (2**1100 is no attribute value): npy only."""
 
 
-@pytest.mark.parametrize("fmt, damage", [(fmt, damage) for fmt in ("npy", "hdf5") for damage in RECORD_DAMAGE
-                                         if not (fmt == "hdf5" and damage in HDF5_CANNOT_HOLD)])
+@pytest.mark.parametrize(
+    "fmt, damage",
+    [
+        (fmt, damage)
+        for fmt in ("npy", "hdf5")
+        for damage in RECORD_DAMAGE
+        if not (fmt == "hdf5" and damage in HDF5_CANNOT_HOLD)
+    ],
+)
 def test_a_snapshot_record_of_another_layout_is_one_message(tmp_path, capsys, fmt, damage):
     """A column missing, of another dtype, shape or length, metadata of the wrong type: exit 2 naming the
     snapshot and what is wrong (they were KeyError, TypeError, IndexError, ValueError: internal errors)."""
@@ -263,8 +297,12 @@ def test_a_pickled_object_column_is_refused_not_unpickled(tmp_path, capsys):
         np.save(buf, tables[t][c], allow_pickle=True)
     payload = buf.getvalue()
     path = tmp_path / "pickled.npys"
-    path.write_bytes(NPY_STREAM_MAGIC + b"DSREC %016d\n" % len(payload) + payload
-                     + b"DSEND %08x\n" % (zlib.crc32(payload) & 0xFFFFFFFF))
+    path.write_bytes(
+        NPY_STREAM_MAGIC
+        + b"DSREC %016d\n" % len(payload)
+        + payload
+        + b"DSEND %08x\n" % (zlib.crc32(payload) & 0xFFFFFFFF)
+    )
     rc, err = run(path, tmp_path, capsys)
     assert rc == 2 and "snapshot 0 cannot be read" in err and "allow_pickle" in err, err
 

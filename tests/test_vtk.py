@@ -9,7 +9,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from demsplit.cli import main
 from demsplit.results import load_results
 from demsplit.results.tables import with_not_computed_as_nan
@@ -62,6 +61,7 @@ def exported(tmp_path_factory):
                 assert main(["export", str(store), "--vtk", str(root / "vtk")]) == 0
             made[run] = store, root / "vtk", printed.getvalue()
         return made[run]
+
     return export
 
 
@@ -205,9 +205,17 @@ def test_a_mesh_wall_is_drawn_where_liggghts_put_it(tmp_path):
     floor = b"fix floor all wall/gran model hertz tangential history primitive type 2 zplane 0.0"
     assert floor in HEAD
     script = tmp_path / "in.mesh"
-    script.write_bytes(HEAD.replace(b"PAIR_EXTRA", b"").replace(floor, (
-        b"fix floor all mesh/surface file floor.stl type 2 scale 0.25 rotate axis 0 1 0 angle 8 move 0 0 0.0005\n"
-        b"fix wfloor all wall/gran model hertz tangential history mesh n_meshes 1 meshes floor")) + b"run 30000\n")
+    script.write_bytes(
+        HEAD.replace(b"PAIR_EXTRA", b"").replace(
+            floor,
+            (
+                b"fix floor all mesh/surface file floor.stl type 2 scale 0.25 rotate axis 0 1 0 angle 8 "
+                b"move 0 0 0.0005\n"
+                b"fix wfloor all wall/gran model hertz tangential history mesh n_meshes 1 meshes floor"
+            ),
+        )
+        + b"run 30000\n"
+    )
     assert main(["prepare", str(script), "--every", "10000", "-q"]) == 0
     liggghts_run(script.with_name("in.mesh.demsplit"))
     store = tmp_path / "r.h5"

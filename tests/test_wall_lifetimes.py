@@ -18,8 +18,8 @@ import pytest
 from demsplit import analyze
 from demsplit.physics.bodies import FrameContacts, LawRows
 from demsplit.readers import open_run
-from demsplit.readers.liggghts import walls_present
 from demsplit.readers.lammps_dump import open_dump
+from demsplit.readers.liggghts import walls_present
 from demsplit.readers.liggghts_script import read_script
 
 GATE = Path(__file__).resolve().parent.parent / "sample_dumps" / "liggghts" / "gate" / "in.gate"
@@ -28,10 +28,12 @@ GRAVITY = np.array([0.0, 0.0, -9.81])
 
 def script(tmp_path: Path, body: str) -> Path:
     path = tmp_path / "in.walls"
-    path.write_text("units si\nregion d block 0 1 0 1 0 1 units box\ncreate_box 2 d\n"
-                    "fix m1 all property/global youngsModulus peratomtype 1e7 1e7\n"
-                    "fix m2 all property/global poissonsRatio peratomtype 0.3 0.3\n"
-                    "pair_style gran model hertz tangential history\n" + body)
+    path.write_text(
+        "units si\nregion d block 0 1 0 1 0 1 units box\ncreate_box 2 d\n"
+        "fix m1 all property/global youngsModulus peratomtype 1e7 1e7\n"
+        "fix m2 all property/global poissonsRatio peratomtype 0.3 0.3\n"
+        "pair_style gran model hertz tangential history\n" + body
+    )
     return path
 
 
@@ -42,35 +44,47 @@ def present(path: Path, steps: list[int], dump: str = "d") -> list[tuple[int, ..
 
 
 def test_walls_follow_the_runs_fix_and_unfix(tmp_path):
-    path = script(tmp_path, "dump d all custom 100 a.txt id type x y z radius\n"
-                            "fix a all wall/gran model hertz tangential history primitive type 2 zplane 0\n"
-                            "run 1000\n"
-                            "fix b all wall/gran model hertz tangential history primitive type 2 zplane 1\n"
-                            "run 1000\n"
-                            "unfix a\n"
-                            "run 1000\n")
+    path = script(
+        tmp_path,
+        "dump d all custom 100 a.txt id type x y z radius\n"
+        "fix a all wall/gran model hertz tangential history primitive type 2 zplane 0\n"
+        "run 1000\n"
+        "fix b all wall/gran model hertz tangential history primitive type 2 zplane 1\n"
+        "run 1000\n"
+        "unfix a\n"
+        "run 1000\n",
+    )
     # step 1000 ends the first run (b not yet), 2000 the second (a still there)
     assert present(path, [0, 1000, 1100, 2000, 2100, 3000]) == [(0,), (0,), (0, 1), (0, 1), (1,), (1,)]
 
 
 def test_a_dump_defined_between_runs_writes_the_boundary_step_in_the_next_run(tmp_path):
-    path = script(tmp_path, "run 1000\n"
-                            "fix a all wall/gran model hertz tangential history primitive type 2 zplane 0\n"
-                            "dump d all custom 100 a.txt id type x y z radius\n"
-                            "run 1000 upto\n"  # to timestep 1000: nothing runs, the dump writes step 1000
-                            "run 500\n")
+    path = script(
+        tmp_path,
+        "run 1000\n"
+        "fix a all wall/gran model hertz tangential history primitive type 2 zplane 0\n"
+        "dump d all custom 100 a.txt id type x y z radius\n"
+        "run 1000 upto\n"  # to timestep 1000: nothing runs, the dump writes step 1000
+        "run 500\n",
+    )
     assert present(path, [1000, 1100, 1500]) == [(0,), (0,), (0,)]
-    path = script(tmp_path, "reset_timestep 5000\n"
-                            "dump d all custom 100 a.txt id type x y z radius\n"
-                            "run 100\n"
-                            "fix a all wall/gran model hertz tangential history primitive type 2 zplane 0\n"
-                            "run 100\n")
+    path = script(
+        tmp_path,
+        "reset_timestep 5000\n"
+        "dump d all custom 100 a.txt id type x y z radius\n"
+        "run 100\n"
+        "fix a all wall/gran model hertz tangential history primitive type 2 zplane 0\n"
+        "run 100\n",
+    )
     assert present(path, [5000, 5100, 5200]) == [(), (), (0,)]
 
 
 def test_walls_there_from_the_start_to_the_end_need_no_filter(tmp_path):
-    path = script(tmp_path, "fix a all wall/gran model hertz tangential history primitive type 2 zplane 0\n"
-                            "dump d all custom 100 a.txt id type x y z radius\nrun 100\nrun 100\n")
+    path = script(
+        tmp_path,
+        "fix a all wall/gran model hertz tangential history primitive type 2 zplane 0\n"
+        "dump d all custom 100 a.txt id type x y z radius\nrun 100\nrun 100\n",
+    )
     assert present(path, [0, 100, 200]) == [None, None, None]
 
 
@@ -104,8 +118,9 @@ def test_every_dumped_force_is_gravity_plus_the_rebuilt_contacts(frames):
     largest force, for every particle of every frame: a phantom wall contact or a missing one breaks it."""
     scene, frames = frames
     law = scene.model.contact_law
-    dumped_frames = {f.step: f for f in open_dump(GATE.parent / "atoms.txt.gz").frames(["id", "mass", "fx", "fy",
-                                                                                      "fz"])}
+    dumped_frames = {
+        f.step: f for f in open_dump(GATE.parent / "atoms.txt.gz").frames(["id", "mass", "fx", "fy", "fz"])
+    }
     checked = 0
     for frame in frames:
         p, c = frame.particles, frame.contacts

@@ -7,9 +7,9 @@ import os
 import threading
 
 import pytest
-from demsplit.runtime import writeback
 from demsplit.results.store import load_results
 from demsplit.results.writer import ResultWriter
+from demsplit.runtime import writeback
 from result_frames import PROVENANCE, WALLS_META, synthetic_frame
 
 
@@ -76,8 +76,7 @@ def test_the_final_frame_asks_for_a_write_back_after_each_column(tmp_path, monke
     its pages are on their way to disk before ``close``'s fsync; any other frame once, after the frame."""
     asked = []
     monkeypatch.setattr(writeback.WriteBack, "request", lambda self, path: asked.append(os.path.basename(path)))
-    with ResultWriter(tmp_path / "out.h5", PROVENANCE, walls_meta=WALLS_META,
-                      final_step=1000 if final else 2000) as w:
+    with ResultWriter(tmp_path / "out.h5", PROVENANCE, walls_meta=WALLS_META, final_step=1000 if final else 2000) as w:
         w.append(synthetic_frame(0, n_particles=1500, n_pairs=1500))  # fewer rows than a chunk: carried
         assert len(asked) == 1
         w.append(synthetic_frame(1000, n_particles=1500, n_pairs=1500))  # completes a chunk of two tables

@@ -30,23 +30,30 @@ from test_yade_simulator import SAMPLE_SCRIPTS, run_yade
 
 pytestmark = pytest.mark.simulator
 
-SCENES = {"mindlin": "yade:Law2_ScGeom_MindlinPhys_Mindlin",
-          "cundall": "yade:Law2_ScGeom_FrictPhys_CundallStrack",
-          "periodic": "yade:Law2_ScGeom_MindlinPhys_Mindlin",
-          "clumps": "yade:Law2_ScGeom_MindlinPhys_Mindlin",
-          "viscel": "yade:Law2_ScGeom_ViscElPhys_Basic",
-          "viscofrict": "yade:Law2_ScGeom_ViscoFrictPhys_CundallStrack",
-          "hertz_linear": "yade:Law2_ScGeom_MindlinPhys_HertzWithLinearShear",
-          "deresiewitz": "yade:Law2_ScGeom_MindlinPhys_MindlinDeresiewitz",
-          "adhesion": "yade:Law2_ScGeom_MindlinPhys_Mindlin",
-          "cohfrict": "yade:Law2_ScGeom6D_CohFrictPhys_CohesionMoment",
-          "jcfpm": "yade:Law2_ScGeom_JCFpmPhys_JointedCohesiveFrictionalPM"}
+SCENES = {
+    "mindlin": "yade:Law2_ScGeom_MindlinPhys_Mindlin",
+    "cundall": "yade:Law2_ScGeom_FrictPhys_CundallStrack",
+    "periodic": "yade:Law2_ScGeom_MindlinPhys_Mindlin",
+    "clumps": "yade:Law2_ScGeom_MindlinPhys_Mindlin",
+    "viscel": "yade:Law2_ScGeom_ViscElPhys_Basic",
+    "viscofrict": "yade:Law2_ScGeom_ViscoFrictPhys_CundallStrack",
+    "hertz_linear": "yade:Law2_ScGeom_MindlinPhys_HertzWithLinearShear",
+    "deresiewitz": "yade:Law2_ScGeom_MindlinPhys_MindlinDeresiewitz",
+    "adhesion": "yade:Law2_ScGeom_MindlinPhys_Mindlin",
+    "cohfrict": "yade:Law2_ScGeom6D_CohFrictPhys_CohesionMoment",
+    "jcfpm": "yade:Law2_ScGeom_JCFpmPhys_JointedCohesiveFrictionalPM",
+}
 TAGS = ("before", "between", "end", "run")
 """Where the state was saved from: a PyRunner before the InteractionLoop, between it and NewtonIntegrator, at
 the end of O.engines; after O.run(N, True)."""
-FUNCTION_MODES = {"normElastEnergy": ("u_n", "u_adh"), "elasticEnergy": ("u_n", "u_t"),
-                  "shearElastEnergy": ("u_t",), "bendingElastEnergy": ("u_r",), "twistElastEnergy": ("u_tw",),
-                  "elastPotential": ("u_n", "u_t")}
+FUNCTION_MODES = {
+    "normElastEnergy": ("u_n", "u_adh"),
+    "elasticEnergy": ("u_n", "u_t"),
+    "shearElastEnergy": ("u_t",),
+    "bendingElastEnergy": ("u_r",),
+    "twistElastEnergy": ("u_tw",),
+    "elastPotential": ("u_n", "u_t"),
+}
 """The modes whose sum each of YADE's own energies is (YADE's sources: HertzMindlin.cpp, ElasticContactLaw.cpp,
 CohesiveFrictionalContactLaw.cpp; normElastEnergy includes the adhesion work where includeAdhesion is set)."""
 VISCEL_MODULI = {0: Material(2e7, 0.3), 1: Material(1e8, 0.2)}
@@ -82,8 +89,9 @@ _analysed: dict = {}
 def analysed(out: Path, scene: str):
     """The four states of a scene analysed as one run (once per module)."""
     if scene not in _analysed:
-        _analysed[scene] = demsplit.analyze(states(out, scene), state_cache=out / "cache",
-                                            materials=VISCEL_MODULI if scene == "viscel" else None)
+        _analysed[scene] = demsplit.analyze(
+            states(out, scene), state_cache=out / "cache", materials=VISCEL_MODULI if scene == "viscel" else None
+        )
     return _analysed[scene]
 
 
@@ -104,8 +112,10 @@ def test_totals_and_contacts_are_those_of_the_saved_instant(saved, scene):
         if ref["tag"] != "before":  # O.energy's elastic entry is zeroed by ForceResetter before the InteractionLoop
             own.update({k: v for k, v in ref["energy"].items() if k == "elastPotential"})
         pairs = [((state.name, mode), fr[mode], value) for mode, value in ref["sums"].items()]
-        pairs += [((state.name, name), sum(fr[m] for m in FUNCTION_MODES[name] if m in fr), value)
-                  for name, value in own.items()]
+        pairs += [
+            ((state.name, name), sum(fr[m] for m in FUNCTION_MODES[name] if m in fr), value)
+            for name, value in own.items()
+        ]
         for what, ours, value in pairs:
             assert value != 0 and ours == pytest.approx(value, rel=1e-9), what
             worst.append(abs(ours - value) / abs(value))
@@ -171,8 +181,24 @@ def test_viscel_needs_the_split_moduli(saved, tmp_path, capsys):
     err = capsys.readouterr().err
     assert "never reads its young and poisson" in err and "--material" in err
     assert not (tmp_path / "no.h5").exists()
-    assert main(["run", str(state), "-o", str(tmp_path / "yes.h5"), "-q", "--state-cache", str(saved / "cache"),
-                 "--material", "0:3e7:0.25", "--material", "1:9e7:0.2"]) == 0
+    assert (
+        main(
+            [
+                "run",
+                str(state),
+                "-o",
+                str(tmp_path / "yes.h5"),
+                "-q",
+                "--state-cache",
+                str(saved / "cache"),
+                "--material",
+                "0:3e7:0.25",
+                "--material",
+                "1:9e7:0.2",
+            ]
+        )
+        == 0
+    )
     materials = load_results(tmp_path / "yes.h5").provenance["scene"]["materials"]
     assert (materials["0"]["E"], materials["0"]["nu"], materials["1"]["E"]) == (3e7, 0.25, 9e7)
 
@@ -194,8 +220,10 @@ def test_the_report_prints_yades_own_total(saved, tmp_path):
     """A run that tracks O.energy: the terminal summary and the HTML report print YADE's elastPotential beside
     demsplit's u_n + u_t."""
     out = tmp_path / "c.h5"
-    assert main(["run", *map(str, states(saved, "cundall")), "-o", str(out), "-q",
-                 "--state-cache", str(saved / "cache")]) == 0
+    assert (
+        main(["run", *map(str, states(saved, "cundall")), "-o", str(out), "-q", "--state-cache", str(saved / "cache")])
+        == 0
+    )
     res = load_results(out)
     value = reference(states(saved, "cundall")[-1])["energy"]["elastPotential"]
     text = text_summary(res)

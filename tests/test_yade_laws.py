@@ -14,20 +14,22 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from conftest import require_program
-from demsplit.physics.partition import partition, per_particle
 from demsplit.errors import UnsupportedModelError
+from demsplit.physics.partition import partition, per_particle
 from demsplit.readers.yade_snapshot import _open_store, open_yade_snapshot
 from demsplit.yade import write_snapshot
 from test_yade_simulator import SAMPLE_SCRIPTS, run_yade
 
-LAWS = {"viscel": "yade:Law2_ScGeom_ViscElPhys_Basic",
-        "viscofrict": "yade:Law2_ScGeom_ViscoFrictPhys_CundallStrack",
-        "hertz_linear": "yade:Law2_ScGeom_MindlinPhys_HertzWithLinearShear",
-        "deresiewitz": "yade:Law2_ScGeom_MindlinPhys_MindlinDeresiewitz",
-        "cohfrict": "yade:Law2_ScGeom6D_CohFrictPhys_CohesionMoment",
-        "jcfpm": "yade:Law2_ScGeom_JCFpmPhys_JointedCohesiveFrictionalPM",
-        "adhesion": "yade:Law2_ScGeom_MindlinPhys_Mindlin",
-        "capillary": "yade:Law2_ScGeom_FrictPhys_CundallStrack"}
+LAWS = {
+    "viscel": "yade:Law2_ScGeom_ViscElPhys_Basic",
+    "viscofrict": "yade:Law2_ScGeom_ViscoFrictPhys_CundallStrack",
+    "hertz_linear": "yade:Law2_ScGeom_MindlinPhys_HertzWithLinearShear",
+    "deresiewitz": "yade:Law2_ScGeom_MindlinPhys_MindlinDeresiewitz",
+    "cohfrict": "yade:Law2_ScGeom6D_CohFrictPhys_CohesionMoment",
+    "jcfpm": "yade:Law2_ScGeom_JCFpmPhys_JointedCohesiveFrictionalPM",
+    "adhesion": "yade:Law2_ScGeom_MindlinPhys_Mindlin",
+    "capillary": "yade:Law2_ScGeom_FrictPhys_CundallStrack",
+}
 
 pytestmark = pytest.mark.simulator
 
@@ -96,8 +98,9 @@ def test_the_quirks_the_laws_rely_on(law_run):
         run = open_yade_snapshot(path)
         assert run.scene.model.params["include_adhesion"] is True
         c = run.frame(1).contacts
-        np.testing.assert_allclose(c["adhesion_force"][c["wall"] < 0],
-                                   4 * np.pi * 0.5 / (1 / c["r1"] + 1 / c["r2"])[c["wall"] < 0], rtol=1e-12)
+        np.testing.assert_allclose(
+            c["adhesion_force"][c["wall"] < 0], 4 * np.pi * 0.5 / (1 / c["r1"] + 1 / c["r2"])[c["wall"] < 0], rtol=1e-12
+        )
     if law == "capillary":  # without Debian-shipped tables every capillary force is 0: said, not assumed
         frame = open_yade_snapshot(path).frame(1)
         assert np.all(t["fcapx"] == 0) and any("every capillary force is 0" in n for n in frame.notes)

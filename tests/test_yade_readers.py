@@ -43,8 +43,13 @@ class TestPeriodicSnapshotsNpy(ReaderContract):
 class TestVtkExport(ReaderContract):
     reader = YadeVtkRun
     path = YADE / "mindlin_box-spheres-00024000.vtk"
-    options = {"materials": {0: ds.Material(2e7, 0.3), 1: ds.Material(1e8, 0.2)},
-               "law": "yade:Law2_ScGeom_MindlinPhys_Mindlin", "wall_type": 1}
+    options = {
+        "materials": {0: ds.Material(2e7, 0.3), 1: ds.Material(1e8, 0.2)},
+        "law": "yade:Law2_ScGeom_MindlinPhys_Mindlin",
+        "wall_type": 1,
+    }
+
+
 MINDLIN = ("mindlin_box.h5", "mindlin_box.npys")
 CUNDALL = ("cundall_periodic.h5", "cundall_periodic.npys")
 
@@ -209,16 +214,18 @@ def test_writer_round_trip(tmp_path, fmt):
 
 def test_vtk_export_agrees_with_the_snapshot_to_percent_g():
     mindlin = laws.law_class("yade:Law2_ScGeom_MindlinPhys_Mindlin").phys  # the attributes the law reads
-    frame = _vtk_frame(YADE / "mindlin_box-spheres-00024000.vtk", YADE / "mindlin_box-intrs-00024000.vtk",
-                       attributes=mindlin)
+    frame = _vtk_frame(
+        YADE / "mindlin_box-spheres-00024000.vtk", YADE / "mindlin_box-intrs-00024000.vtk", attributes=mindlin
+    )
     ref = open_yade_snapshot(YADE / "mindlin_box.h5").frame(2)
     assert frame.step == ref.step == 24000
     assert frame.n_contacts == ref.n_contacts == 235
     for c in ("id1", "id2", "wall"):
         np.testing.assert_array_equal(frame.contacts[c], ref.contacts[c])
     for c in ("delta", "nx", "ny", "nz", "r1", "r2", "kno", "ftx", "ks"):  # %g: 6 digits
-        np.testing.assert_allclose(frame.contacts[c], ref.contacts[c], rtol=5e-6,
-                                   atol=1e-12 * np.abs(ref.contacts[c]).max(), err_msg=c)
+        np.testing.assert_allclose(
+            frame.contacts[c], ref.contacts[c], rtol=5e-6, atol=1e-12 * np.abs(ref.contacts[c]).max(), err_msg=c
+        )
 
 
 def test_vtk_without_penetration_depth_is_refused():
@@ -239,14 +246,20 @@ def test_vtk_export_is_a_registered_run_whose_energies_match_the_snapshot():
     materials = {0: ds.Material(2e7, 0.3), 1: ds.Material(1e8, 0.2)}
     with pytest.raises(InputFormatError, match="do not hold the materials"):
         open_run(YADE / "mindlin_box-spheres-00024000.vtk")
-    run = open_run(YADE / "mindlin_box-spheres-00024000.vtk", materials=materials,
-                   law="yade:Law2_ScGeom_MindlinPhys_Mindlin", wall_type=1)
+    run = open_run(
+        YADE / "mindlin_box-spheres-00024000.vtk",
+        materials=materials,
+        law="yade:Law2_ScGeom_MindlinPhys_Mindlin",
+        wall_type=1,
+    )
     assert isinstance(run, YadeVtkRun) and run.steps.tolist() == [24000] and len(run) == 1
     frame = run.frame(0)
     ref_run = open_yade_snapshot(YADE / "mindlin_box.h5")
     ref = ref_run.frame(2)
-    e, e_ref = partition(frame.contacts, run.scene, frame.particles), partition(ref.contacts, ref_run.scene,
-                                                                                ref.particles)
+    e, e_ref = (
+        partition(frame.contacts, run.scene, frame.particles),
+        partition(ref.contacts, ref_run.scene, ref.particles),
+    )
     np.testing.assert_allclose(e.u_n.sum(), e_ref.u_n.sum(), rtol=3e-5)
 
 
@@ -304,9 +317,11 @@ def test_vtk_series_of_several_steps_and_a_missing_interactions_file(tmp_path):
     shutil.copy(YADE / "mindlin_box-intrs-00024000.vtk", tmp_path / "mindlin_box-intrs-00024000.vtk")
     with open_run(tmp_path / "mindlin_box-spheres-00025000.vtk", **VTK_OPTIONS) as run:
         assert run.steps.tolist() == [24000, 25000] and len(run) == 2
-        assert [Path(s).name for s in run.sources] == ["mindlin_box-spheres-00024000.vtk",
-                                                       "mindlin_box-intrs-00024000.vtk",
-                                                       "mindlin_box-spheres-00025000.vtk"]
+        assert [Path(s).name for s in run.sources] == [
+            "mindlin_box-spheres-00024000.vtk",
+            "mindlin_box-intrs-00024000.vtk",
+            "mindlin_box-spheres-00025000.vtk",
+        ]
         assert run.frame(0).n_contacts == 235
         with pytest.raises(InputFormatError, match="interactions file of this sphere file is missing") as err:
             run.frame(1)
@@ -347,12 +362,29 @@ def _joint_frame(smooth_joint: bool):
     """Two JCFpm contacts of spheres r = 1 mm: one on a joint overlapped by 1.5 mm (the spheres slid past each
     other), one bond in tension, and the scene of that law."""
     law = laws.make("yade:Law2_ScGeom_JCFpmPhys_JointedCohesiveFrictionalPM", {"smooth_joint": smooth_joint})
-    contacts = {"id1": np.array([0, 1]), "id2": np.array([1, 2]), "wall": np.array([-1, -1]),
-                "delta": np.array([1.5e-3, -1e-4]), "nx": np.ones(2), "ny": np.zeros(2), "nz": np.zeros(2),
-                "x1": np.zeros(2), "y1": np.zeros(2), "z1": np.zeros(2), "r1": np.full(2, 1e-3),
-                "r2": np.full(2, 1e-3), "on_joint": np.array([1.0, 0.0])}
-    particles = {"id": np.arange(3), "type": np.zeros(3, np.int32), "x": np.zeros(3), "y": np.zeros(3),
-                 "z": np.zeros(3), "radius": np.full(3, 1e-3)}
+    contacts = {
+        "id1": np.array([0, 1]),
+        "id2": np.array([1, 2]),
+        "wall": np.array([-1, -1]),
+        "delta": np.array([1.5e-3, -1e-4]),
+        "nx": np.ones(2),
+        "ny": np.zeros(2),
+        "nz": np.zeros(2),
+        "x1": np.zeros(2),
+        "y1": np.zeros(2),
+        "z1": np.zeros(2),
+        "r1": np.full(2, 1e-3),
+        "r2": np.full(2, 1e-3),
+        "on_joint": np.array([1.0, 0.0]),
+    }
+    particles = {
+        "id": np.arange(3),
+        "type": np.zeros(3, np.int32),
+        "x": np.zeros(3),
+        "y": np.zeros(3),
+        "z": np.zeros(3),
+        "radius": np.full(3, 1e-3),
+    }
     scene = ds.Scene({0: ds.Material(1e9, 0.3)}, ds.ContactModel(law.key, {"smooth_joint": smooth_joint}))
     return ds.Frame(step=1, particles=particles, contacts=contacts), scene
 
@@ -361,9 +393,7 @@ def test_a_smooth_joint_may_overlap_beyond_the_smaller_radius():
     """JCFpm declares its plausibility limits: a contact on a smooth joint up to r1 + r2, a bond at any gap; the
     validation applies the law's limit (it refused YADE's own JCFpm example as a broken dump)."""
     from demsplit.errors import ContactError
-    from demsplit.validate import validated_frame
-
-    from demsplit.validate import overlap_limit
+    from demsplit.validate import overlap_limit, validated_frame
 
     frame, scene = _joint_frame(smooth_joint=True)
     validated_frame(frame, scene)
@@ -414,11 +444,28 @@ def test_a_wall_without_material_is_refused_not_split_in_half():
     from demsplit.errors import MaterialError
 
     scene = ds.Scene({0: ds.Material(1e7, 0.3)}, walls=[ds.Wall("w", "yade_wall", type=5)])
-    contacts = {"id1": np.array([0]), "id2": np.array([-1]), "wall": np.array([0]), "delta": np.array([1e-5]),
-                "nx": np.ones(1), "ny": np.zeros(1), "nz": np.zeros(1), "x1": np.zeros(1), "y1": np.zeros(1),
-                "z1": np.zeros(1), "r1": np.full(1, 1e-3), "r2": np.full(1, 1e-3)}
-    particles = {"id": np.array([0]), "type": np.array([0], np.int32), "x": np.zeros(1), "y": np.zeros(1),
-                 "z": np.zeros(1), "radius": np.full(1, 1e-3)}
+    contacts = {
+        "id1": np.array([0]),
+        "id2": np.array([-1]),
+        "wall": np.array([0]),
+        "delta": np.array([1e-5]),
+        "nx": np.ones(1),
+        "ny": np.zeros(1),
+        "nz": np.zeros(1),
+        "x1": np.zeros(1),
+        "y1": np.zeros(1),
+        "z1": np.zeros(1),
+        "r1": np.full(1, 1e-3),
+        "r2": np.full(1, 1e-3),
+    }
+    particles = {
+        "id": np.array([0]),
+        "type": np.array([0], np.int32),
+        "x": np.zeros(1),
+        "y": np.zeros(1),
+        "z": np.zeros(1),
+        "radius": np.full(1, 1e-3),
+    }
     assert not scene.single_material
     with pytest.raises(MaterialError, match=r"wall type\(s\) \[5\] have no material"):
         partition(contacts, scene, particles)

@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import bz2
 import gzip
-import re
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -53,8 +53,18 @@ def run(sims: Path, out: Path, *inputs: str | Path, cache: Path | None = None, e
     """``demsplit run`` of ``inputs`` (names in ``sims``, or paths) into ``out/r.h5`` with the converted states of
     ``cache`` (default: those of the fixture)."""
     out.mkdir(exist_ok=True)
-    return main(["run", *(str(sims / i) for i in inputs), "-o", str(out / "r.h5"), "-q",
-                 "--state-cache", str(cache or sims / "cache"), *extra])
+    return main(
+        [
+            "run",
+            *(str(sims / i) for i in inputs),
+            "-o",
+            str(out / "r.h5"),
+            "-q",
+            "--state-cache",
+            str(cache or sims / "cache"),
+            *extra,
+        ]
+    )
 
 
 def one_error(capsys) -> str:
@@ -121,8 +131,10 @@ def test_an_iteration_given_twice(sims, tmp_path, capsys):
     assert run(sims, tmp_path / "b", "facets-006000.yade.gz", "again-006000.xml.bz2", "facets-003000.yade.gz") == 0
     res = demsplit.load_results(tmp_path / "b" / "r.h5")
     assert res.steps.tolist() == [3000, 6000]
-    assert any("again-006000.xml.bz2 is the same state as" in n and "facets-006000.yade.gz" in n
-               for n in res.provenance["notes"])
+    assert any(
+        "again-006000.xml.bz2 is the same state as" in n and "facets-006000.yade.gz" in n
+        for n in res.provenance["notes"]
+    )
 
 
 def test_a_bad_file_among_the_states_is_refused_by_name_or_skipped_and_listed(sims, tmp_path, capsys):
@@ -155,8 +167,9 @@ def test_a_bad_file_among_the_states_is_refused_by_name_or_skipped_and_listed(si
     res = demsplit.load_results(tmp_path / "b" / "r.h5")
     assert res.steps.tolist() == [3000, 6000]
     bad = {b["error"].split(":")[0]: b["error"] for b in res.provenance["bad_frames"]}
-    assert sorted(bad) == [str(d / f"facets-{n}") for n in ("007000.yade.gz", "008000.yade.gz", "010000.yade.gz",
-                                                             "011000.xml")]
+    assert sorted(bad) == [
+        str(d / f"facets-{n}") for n in ("007000.yade.gz", "008000.yade.gz", "010000.yade.gz", "011000.xml")
+    ]
     assert "the file is empty" in bad[str(d / "facets-007000.yade.gz")]
     assert "gzip stream is cut short" in bad[str(d / "facets-008000.yade.gz")]
     assert "is not a boost archive" in bad[str(d / "facets-010000.yade.gz")]
@@ -199,8 +212,10 @@ def test_the_cache_is_keyed_and_checked_by_content(sims, tmp_path, damage):
         assert path.name.endswith(f"-{file_digest(path)}.npys")
 
 
-@pytest.mark.skipif(not hasattr(os, "geteuid") or os.geteuid() != 0 or not shutil.which("mount"),
-                    reason="mounts a small tmpfs (root only)")
+@pytest.mark.skipif(
+    not hasattr(os, "geteuid") or os.geteuid() != 0 or not shutil.which("mount"),
+    reason="mounts a small tmpfs (root only)",
+)
 def test_a_cache_on_a_full_disk_leaves_nothing_a_later_run_trusts(sims, tmp_path, capsys):
     """The cache on a tmpfs too small for a converted state: exit 2 naming the cache's file and the cause, nothing
     left on the file system; with space, the rerun converts the state again and keeps it whole."""
@@ -232,12 +247,24 @@ def test_yade_has_a_time_limit(sims, tmp_path, capsys):
     for exe in (hang, inside):
         exe.chmod(0o755)
     fresh = tmp_path / "fresh"
-    for k, (exe, limit, says) in enumerate(((hang, "2", "before it loaded a state"),
-                                             (inside, "1", "while it loaded and converted this state"),
-                                             ("yade", "0.2", "before it loaded a state"))):
+    for k, (exe, limit, says) in enumerate(
+        (
+            (hang, "2", "before it loaded a state"),
+            (inside, "1", "while it loaded and converted this state"),
+            ("yade", "0.2", "before it loaded a state"),
+        )
+    ):
         start = time.monotonic()
-        assert run(sims, tmp_path / str(k), "facets-003000.yade.gz", cache=fresh,
-                   extra=("--yade", str(exe), "--yade-timeout", limit)) == 2
+        assert (
+            run(
+                sims,
+                tmp_path / str(k),
+                "facets-003000.yade.gz",
+                cache=fresh,
+                extra=("--yade", str(exe), "--yade-timeout", limit),
+            )
+            == 2
+        )
         assert time.monotonic() - start < float(limit) + 15
         err = one_error(capsys)
         assert err.startswith(f"demsplit: error: {sims / 'facets-003000.yade.gz'}: ")
@@ -303,8 +330,14 @@ def test_info_describes_a_state_of_a_law_demsplit_does_not_analyse(sims, tmp_pat
     shutil.copytree(sims / "cache", tmp_path / "demsplit" / "yade-states")
     assert main(["info", str(sims / "viscelcap-000020.yade.gz")]) == 0
     text = capsys.readouterr().out
-    for words in ("iteration 20", "2 spheres, walls 1 wall", "interactions: 2 real",
-                  "Law2_ScGeom_ViscElCapPhys_Basic (not one demsplit analyses)", "0: ViscElCapMat",
-                  "YADE:       2023.02a", "analysis:   refused", "exactly one of"):
+    for words in (
+        "iteration 20",
+        "2 spheres, walls 1 wall",
+        "interactions: 2 real",
+        "Law2_ScGeom_ViscElCapPhys_Basic (not one demsplit analyses)",
+        "0: ViscElCapMat",
+        "YADE:       2023.02a",
+        "analysis:   refused",
+        "exactly one of",
+    ):
         assert words in text, words
-

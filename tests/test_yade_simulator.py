@@ -21,8 +21,9 @@ SITE = sysconfig.get_paths()["purelib"]  # where demsplit is installed (editable
 def run_yade(program: str, script: Path, out: Path, **env: str) -> str:
     """Run ``program -n -j1 -x script`` with demsplit importable; return stdout."""
     full_env = {**os.environ, "DEMSPLIT_SITE": SITE, "DEMSPLIT_OUT": str(out), **env}
-    proc = subprocess.run([program, "-n", "-j1", "-x", str(script)], cwd=out, env=full_env,
-                          capture_output=True, text=True, timeout=300)
+    proc = subprocess.run(
+        [program, "-n", "-j1", "-x", str(script)], cwd=out, env=full_env, capture_output=True, text=True, timeout=300
+    )
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     assert "Traceback" not in proc.stdout + proc.stderr, proc.stdout[-3000:] + proc.stderr[-3000:]
     return proc.stdout
@@ -106,10 +107,10 @@ def test_shares_of_pair_wall_facet_box_by_hand(yade, tmp_path):
     assert c["id2"][pair] == 1 and (c["id2"][[wall, facet, box]] == -1).all()
 
     # compliances c = (1 - nu^2)/E: soft (1 - 0.09)/1e7 = 9.1e-8, stiff (1 - 0.04)/5e7 = 1.92e-8 (1/Pa)
-    soft_n = 9.1e-8 / (9.1e-8 + 1.92e-8)      # = 0.8257713248638839
-    stiff_n = 1.92e-8 / (9.1e-8 + 1.92e-8)    # = 0.1742286751361162
+    soft_n = 9.1e-8 / (9.1e-8 + 1.92e-8)  # = 0.8257713248638839
+    stiff_n = 1.92e-8 / (9.1e-8 + 1.92e-8)  # = 0.1742286751361162
     # Mindlin compliances 2(2 - nu)(1 + nu)/E: soft 2*1.7*1.3/1e7 = 4.42e-7, stiff 2*1.8*1.2/5e7 = 8.64e-8
-    soft_t = 4.42e-7 / (4.42e-7 + 8.64e-8)    # = 0.8364875094625284
+    soft_t = 4.42e-7 / (4.42e-7 + 8.64e-8)  # = 0.8364875094625284
     stiff_t = 8.64e-8 / (4.42e-7 + 8.64e-8)
     e = partition(c, run.scene, frame.particles)
     np.testing.assert_allclose(e.share_n1[[pair, wall, facet, box]], [soft_n, stiff_n, soft_n, soft_n], rtol=1e-14)
@@ -123,11 +124,11 @@ def test_shares_of_pair_wall_facet_box_by_hand(yade, tmp_path):
     np.testing.assert_allclose(c["kno"][[pair, wall, facet, box]], kno, rtol=1e-13)
     delta = np.array([2e-4, 1e-4, 1e-4, 1e-4])
     np.testing.assert_allclose(c["delta"][[pair, wall, facet, box]], delta, rtol=1e-10)
-    np.testing.assert_allclose(e.u_n[[pair, wall, facet, box]], 0.4 * kno * delta ** 2.5, rtol=1e-9)
+    np.testing.assert_allclose(e.u_n[[pair, wall, facet, box]], 0.4 * kno * delta**2.5, rtol=1e-9)
 
     # contact point x_c = x1 + (r1 - share_n1 delta) n, with n from the particle towards its partner
     cp = e.cp[[pair, wall, facet, box]]
-    np.testing.assert_allclose(cp[0], [0, 0, 0.5 + R - soft_n * 2e-4], atol=1e-15)     # n = +z
+    np.testing.assert_allclose(cp[0], [0, 0, 0.5 + R - soft_n * 2e-4], atol=1e-15)  # n = +z
     np.testing.assert_allclose(cp[1], [1.0099 - (R - stiff_n * 1e-4), 0, 0], atol=1e-15)  # n = -x
     np.testing.assert_allclose(cp[2], [0, 0, 2.0099 - (R - soft_n * 1e-4)], atol=1e-15)  # n = -z
     np.testing.assert_allclose(cp[3], [3, 0, 0.0599 - (R - soft_n * 1e-4)], atol=1e-15)  # n = -z

@@ -48,8 +48,9 @@ def test_saved_states_give_the_in_run_snapshot(states, tmp_path):
                 np.testing.assert_array_equal(b[c].to_numpy(), a[c].to_numpy(), err_msg=f"{table}.{c}")
             else:  # to 1e-12 of the column's largest value (a coordinate near 0 differs in its last bits)
                 scale = np.abs(a[c].to_numpy()).max()
-                np.testing.assert_allclose(b[c].to_numpy(), a[c].to_numpy(), rtol=0, atol=1e-12 * scale,
-                                           err_msg=f"{table}.{c}")
+                np.testing.assert_allclose(
+                    b[c].to_numpy(), a[c].to_numpy(), rtol=0, atol=1e-12 * scale, err_msg=f"{table}.{c}"
+                )
 
 
 @pytest.mark.slow
@@ -61,11 +62,24 @@ def test_run_keeps_converted_states_next_to_the_output(states, tmp_path):
 @pytest.mark.slow
 def test_one_state_by_name_and_by_glob(states, tmp_path):
     cache = tmp_path / "cache"
-    assert main(["run", str(states / "state-010000.yade.gz"), "-o", str(tmp_path / "one.h5"), "-q",
-                 "--state-cache", str(cache)]) == 0
+    assert (
+        main(
+            [
+                "run",
+                str(states / "state-010000.yade.gz"),
+                "-o",
+                str(tmp_path / "one.h5"),
+                "-q",
+                "--state-cache",
+                str(cache),
+            ]
+        )
+        == 0
+    )
     assert demsplit.load_results(tmp_path / "one.h5").steps.tolist() == [10000]
-    assert main(["run", str(states / "state-*"), "-o", str(tmp_path / "glob.h5"), "-q",
-                 "--state-cache", str(cache)]) == 0
+    assert (
+        main(["run", str(states / "state-*"), "-o", str(tmp_path / "glob.h5"), "-q", "--state-cache", str(cache)]) == 0
+    )
     assert demsplit.load_results(tmp_path / "glob.h5").steps.tolist() == [10000, 20000]
     listed = [str(states / "state-020000.xml.bz2"), str(states / "state-010000.yade.gz")]  # any order
     assert main(["run", *listed, "-o", str(tmp_path / "list.h5"), "-q", "--state-cache", str(cache)]) == 0
@@ -79,8 +93,14 @@ def cli(*args: str, path: str | None = None, address_space: int | None = None) -
 
     env = {**os.environ, **({"PATH": path} if path is not None else {})}
     limit = None if address_space is None else lambda: resource.setrlimit(resource.RLIMIT_AS, (address_space,) * 2)
-    return subprocess.run([sys.executable, "-m", "demsplit.cli", *args], capture_output=True, text=True, env=env,
-                          timeout=600, preexec_fn=limit)
+    return subprocess.run(
+        [sys.executable, "-m", "demsplit.cli", *args],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=600,
+        preexec_fn=limit,
+    )
 
 
 DAMAGED_STATE_MEMORY = 3 << 30
@@ -93,8 +113,15 @@ error."""
 def test_info_describes_a_state(states, tmp_path):
     proc = cli("info", str(states / "state-020000.xml.bz2"))
     assert proc.returncode == 0, proc.stderr
-    for word in ("YADE saved state", "iterations: [20000]", "spheres", "real", "Law2_ScGeom_MindlinPhys_Mindlin",
-                 "E=2e+07 Pa nu=0.3", "facet"):
+    for word in (
+        "YADE saved state",
+        "iterations: [20000]",
+        "spheres",
+        "real",
+        "Law2_ScGeom_MindlinPhys_Mindlin",
+        "E=2e+07 Pa nu=0.3",
+        "facet",
+    ):
         assert word in proc.stdout, word
 
 
@@ -102,14 +129,42 @@ def test_info_describes_a_state(states, tmp_path):
 def test_a_second_run_reads_the_cache_without_yade(states, tmp_path):
     cache = tmp_path / "cache"
     no_yade = str(Path(sys.executable).parent)  # this Python's bin: no yade on this PATH
-    first = cli("run", str(states / "state-010000.yade.gz"), "-o", str(tmp_path / "a.h5"), "-q",
-                "--state-cache", str(cache), path=no_yade)
+    first = cli(
+        "run",
+        str(states / "state-010000.yade.gz"),
+        "-o",
+        str(tmp_path / "a.h5"),
+        "-q",
+        "--state-cache",
+        str(cache),
+        path=no_yade,
+    )
     assert first.returncode == 2 and "apt-get install yade" in first.stderr  # nothing cached: YADE is needed
-    assert main(["run", str(states / "state-010000.yade.gz"), "-o", str(tmp_path / "b.h5"), "-q",
-                 "--state-cache", str(cache)]) == 0
+    assert (
+        main(
+            [
+                "run",
+                str(states / "state-010000.yade.gz"),
+                "-o",
+                str(tmp_path / "b.h5"),
+                "-q",
+                "--state-cache",
+                str(cache),
+            ]
+        )
+        == 0
+    )
     assert len(list(cache.iterdir())) == 1
-    again = cli("run", str(states / "state-010000.yade.gz"), "-o", str(tmp_path / "c.h5"), "-q",
-                "--state-cache", str(cache), path=no_yade)
+    again = cli(
+        "run",
+        str(states / "state-010000.yade.gz"),
+        "-o",
+        str(tmp_path / "c.h5"),
+        "-q",
+        "--state-cache",
+        str(cache),
+        path=no_yade,
+    )
     assert again.returncode == 0, again.stderr
 
 
@@ -118,8 +173,16 @@ def test_a_damaged_state_is_one_clear_error(states, tmp_path):
     data = (states / "state-010000.yade.gz").read_bytes()
     cut = tmp_path / "cut.yade.gz"
     cut.write_bytes(data[: len(data) // 2])
-    proc = cli("run", str(cut), "-o", str(tmp_path / "x.h5"), "-q", "--state-cache", str(tmp_path / "cache"),
-               address_space=DAMAGED_STATE_MEMORY)
+    proc = cli(
+        "run",
+        str(cut),
+        "-o",
+        str(tmp_path / "x.h5"),
+        "-q",
+        "--state-cache",
+        str(tmp_path / "cache"),
+        address_space=DAMAGED_STATE_MEMORY,
+    )
     assert proc.returncode == 2 and "gzip stream is cut short" in proc.stderr and "Traceback" not in proc.stderr
     assert not (tmp_path / "x.h5").exists()
     assert not (tmp_path / "cache").exists()  # nothing half-converted is cached
@@ -143,8 +206,14 @@ class TestSavedStates(ReaderContract):
 def test_a_state_saved_by_yade_mpfr150_is_read_by_that_build(tmp_path):
     """yade cannot load it; demsplit falls back to the high-precision build that can."""
     mpfr = require_program("yade-mpfr150")
-    run_yade(mpfr, SAMPLE_SCRIPTS / "saved_states.py", tmp_path, DEMSPLIT_ITER="2000", DEMSPLIT_EVERY="2000",
-             DEMSPLIT_SITE="")
+    run_yade(
+        mpfr,
+        SAMPLE_SCRIPTS / "saved_states.py",
+        tmp_path,
+        DEMSPLIT_ITER="2000",
+        DEMSPLIT_EVERY="2000",
+        DEMSPLIT_SITE="",
+    )
     state = tmp_path / "state-002000.yade.gz"
     assert main(["run", str(state), "-o", str(tmp_path / "r.h5"), "-q", "--state-cache", str(tmp_path / "c")]) == 0
     res = demsplit.load_results(tmp_path / "r.h5")

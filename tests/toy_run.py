@@ -35,8 +35,14 @@ class ToyRun(Run):
     format_name = "toy"
     formats = ("a demsplit toy run (TOY 1)",)
     cli_group = "toy inputs"
-    cli_options = (Option("stiffness", ("--toy-stiffness",), "the toy law's stiffness (N/m), instead of the "
-                          "file's", {"type": float, "metavar": "K"}),)
+    cli_options = (
+        Option(
+            "stiffness",
+            ("--toy-stiffness",),
+            "the toy law's stiffness (N/m), instead of the file's",
+            {"type": float, "metavar": "K"},
+        ),
+    )
 
     @classmethod
     def detect(cls, path: Path | None, head: bytes) -> bool:
@@ -60,8 +66,9 @@ class ToyRun(Run):
             elif words[0] == "c" and frames:
                 frames[-1][2].append([int(w) for w in words[1:]])
             else:
-                raise InputFormatError(f"unknown line {line!r}.", file=path, line=number,
-                                       fix="write law, material, step, p and c lines.")
+                raise InputFormatError(
+                    f"unknown line {line!r}.", file=path, line=number, fix="write law, material, step, p and c lines."
+                )
         if model is None:
             raise InputFormatError("no law line.", file=path, fix="name the run's law: law KEY NAME=VALUE ...")
         if stiffness is not None:
@@ -79,8 +86,14 @@ class ToyRun(Run):
     def frame(self, k: int) -> Frame:
         step, rows, pairs = self._frames[k]
         p = np.array(rows, dtype=np.float64).reshape(-1, 6)
-        particles = {"id": p[:, 0].astype(np.int64), "type": p[:, 1].astype(np.int32), "x": p[:, 2],
-                     "y": p[:, 3], "z": p[:, 4], "radius": p[:, 5]}
+        particles = {
+            "id": p[:, 0].astype(np.int64),
+            "type": p[:, 1].astype(np.int32),
+            "x": p[:, 2],
+            "y": p[:, 3],
+            "z": p[:, 4],
+            "radius": p[:, 5],
+        }
         ids = np.array(pairs, dtype=np.int64).reshape(-1, 2)
         row = {int(i): r for r, i in enumerate(particles["id"])}
         i1 = np.array([row[i] for i in ids[:, 0]], dtype=np.int64)
@@ -89,8 +102,18 @@ class ToyRun(Run):
         d = centres[i2] - centres[i1]
         dist = np.sqrt(np.einsum("ij,ij->i", d, d))
         n = d / dist[:, None]
-        contacts = {"id1": ids[:, 0], "id2": ids[:, 1], "wall": np.full(len(ids), -1, np.int64),
-                    "delta": p[i1, 5] + p[i2, 5] - dist, "nx": n[:, 0], "ny": n[:, 1], "nz": n[:, 2],
-                    "x1": centres[i1, 0], "y1": centres[i1, 1], "z1": centres[i1, 2], "r1": p[i1, 5],
-                    "r2": p[i2, 5]}
+        contacts = {
+            "id1": ids[:, 0],
+            "id2": ids[:, 1],
+            "wall": np.full(len(ids), -1, np.int64),
+            "delta": p[i1, 5] + p[i2, 5] - dist,
+            "nx": n[:, 0],
+            "ny": n[:, 1],
+            "nz": n[:, 2],
+            "x1": centres[i1, 0],
+            "y1": centres[i1, 1],
+            "z1": centres[i1, 2],
+            "r1": p[i1, 5],
+            "r2": p[i2, 5],
+        }
         return Frame(step=step, particles=particles, contacts=contacts, source=(str(self._path),))

@@ -34,8 +34,28 @@ sys.path.insert(0, str(HERE))
 
 import fe  # noqa: E402
 
-KEYS = ("model", "refine", "kappa", "steps", "ndofs", "nelements", "P_fe", "e_P", "e_S", "U1", "U2", "Pi_c",
-        "ratio_fe", "share_fe", "share_err", "work", "e_work", "converged", "residual", "seconds")
+KEYS = (
+    "model",
+    "refine",
+    "kappa",
+    "steps",
+    "ndofs",
+    "nelements",
+    "P_fe",
+    "e_P",
+    "e_S",
+    "U1",
+    "U2",
+    "Pi_c",
+    "ratio_fe",
+    "share_fe",
+    "share_err",
+    "work",
+    "e_work",
+    "converged",
+    "residual",
+    "seconds",
+)
 
 
 def run(R1, R2, E1, nu1, E2, nu2, delta, **kw) -> dict:
@@ -69,16 +89,21 @@ def main():
     md = []
     # 1. Hertz limit
     rows = []
-    for name, R2, E2 in (("sphere R2 = 2 R1", 10 * mm, 210 * GPa), ("elastic block", math.inf, 210 * GPa),
-                         ("rigid plane", math.inf, math.inf)):
+    for name, R2, E2 in (
+        ("sphere R2 = 2 R1", 10 * mm, 210 * GPa),
+        ("elastic block", math.inf, 210 * GPa),
+        ("rigid plane", math.inf, math.inf),
+    ):
         d = fe.delta_for(0.01, 5 * mm, R2)
         r = run(5 * mm, R2, 210 * GPa, 0.3, E2, 0.3, d, model="small", steps=8)
         r["case"] = name
         rows.append(r)
         print(name, r, flush=True)
     res["hertz"] = rows
-    md += ["## Hertz limit, a/R1 = 0.01, small strain\n",
-           table(rows, ["case", "ndofs", "P_fe", "e_P", "e_S", "share_fe", "share_err", "e_work", "seconds"])]
+    md += [
+        "## Hertz limit, a/R1 = 0.01, small strain\n",
+        table(rows, ["case", "ndofs", "P_fe", "e_P", "e_S", "share_fe", "share_err", "e_work", "seconds"]),
+    ]
     # 2. mesh convergence
     rows = []
     for case, E1 in (("2", 210 * GPa), ("5", 70 * GPa)):
@@ -89,9 +114,13 @@ def main():
                 rows.append(r)
                 print(case, r, flush=True)
     res["mesh"] = rows
-    md += ["## Mesh convergence, Feng & Gao Table 2 cases 2 and 5\n",
-           table(rows, ["case", "model", "refine", "ndofs", "P_fe", "U1", "U2", "ratio_fe", "share_fe",
-                        "converged", "seconds"])]
+    md += [
+        "## Mesh convergence, Feng & Gao Table 2 cases 2 and 5\n",
+        table(
+            rows,
+            ["case", "model", "refine", "ndofs", "P_fe", "U1", "U2", "ratio_fe", "share_fe", "converged", "seconds"],
+        ),
+    ]
     # 3. penalty
     rows = []
     for kappa in (30, 100, 300):
@@ -99,8 +128,10 @@ def main():
         rows.append(r)
         print(r, flush=True)
     res["penalty"] = rows
-    md += ["## Penalty, case 2, neo-Hookean\n",
-           table(rows, ["kappa", "P_fe", "U1", "U2", "Pi_c", "ratio_fe", "seconds"])]
+    md += [
+        "## Penalty, case 2, neo-Hookean\n",
+        table(rows, ["kappa", "P_fe", "U1", "U2", "Pi_c", "ratio_fe", "seconds"]),
+    ]
     # 4. energy conservation
     rows = []
     for steps in (4, 8, 16):
@@ -108,8 +139,10 @@ def main():
         rows.append(r)
         print(r, flush=True)
     res["work"] = rows
-    md += ["## Energy conservation, case 2, neo-Hookean\n",
-           table(rows, ["steps", "work", "U1", "U2", "Pi_c", "e_work", "seconds"])]
+    md += [
+        "## Energy conservation, case 2, neo-Hookean\n",
+        table(rows, ["steps", "work", "U1", "U2", "Pi_c", "e_work", "seconds"]),
+    ]
     # 5. nu = 0.49
     rows = []
     for model in ("small", "neohooke"):
@@ -118,8 +151,10 @@ def main():
             rows.append(r)
             print(r, flush=True)
     res["nu049"] = rows
-    md += ["## nu1 = 0.49, case 2 geometry\n",
-           table(rows, ["model", "refine", "ndofs", "P_fe", "ratio_fe", "share_fe", "seconds"])]
+    md += [
+        "## nu1 = 0.49, case 2 geometry\n",
+        table(rows, ["model", "refine", "ndofs", "P_fe", "ratio_fe", "share_fe", "seconds"]),
+    ]
     # 6. block size
     rows = []
     from sweep import sweep_points
@@ -133,8 +168,10 @@ def main():
             rows.append(r)
             print(r, flush=True)
     res["block"] = rows
-    md += ["## Block size (a plane), fit sweep point 49\n",
-           table(rows, ["model", "L_over_R1", "ndofs", "P_fe", "U1", "U2", "share_fe", "share_err", "seconds"])]
+    md += [
+        "## Block size (a plane), fit sweep point 49\n",
+        table(rows, ["model", "L_over_R1", "ndofs", "P_fe", "U1", "U2", "share_fe", "share_err", "seconds"]),
+    ]
     out = HERE / "results"
     out.mkdir(exist_ok=True)
     (out / "convergence.json").write_text(json.dumps(res, indent=1) + "\n")

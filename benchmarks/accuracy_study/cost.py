@@ -67,29 +67,43 @@ def errors(model: str, name: str) -> dict:
     """Share errors (FE minus split) of each split over the usable points of one sweep (fit or heldout)."""
     acc = load_accuracy()
     rows, _ = load(name, model)
-    num = {k: np.array([float(r[k]) for r in rows]) for k in ("a_over_R1", "a_over_R2", "nu1", "nu2", "E1", "E2",
-                                                              "share_fe", "share_law")}
-    corr = acc.corrected_share(num["a_over_R1"], num["a_over_R2"], num["nu1"], num["nu2"], num["E1"], num["E2"],
-                               reference=model)
+    num = {
+        k: np.array([float(r[k]) for r in rows])
+        for k in ("a_over_R1", "a_over_R2", "nu1", "nu2", "E1", "E2", "share_fe", "share_law")
+    }
+    corr = acc.corrected_share(
+        num["a_over_R1"], num["a_over_R2"], num["nu1"], num["nu2"], num["E1"], num["E2"], reference=model
+    )
     x1, x2 = num["a_over_R1"], num["a_over_R2"]
     rad = np.where(x2 == 0, 1.0, x2 / (x1 + x2))  # r1/(r1 + r2) = (a/R2)/(a/R1 + a/R2); 1 against a plane
     fe_ = num["share_fe"]
-    return {"50/50": stats(fe_ - 0.5), "radius": stats(fe_ - rad), "material": stats(fe_ - num["share_law"]),
-            "corrected": stats(fe_ - corr)}
+    return {
+        "50/50": stats(fe_ - 0.5),
+        "radius": stats(fe_ - rad),
+        "material": stats(fe_ - num["share_law"]),
+        "corrected": stats(fe_ - corr),
+    }
 
 
 def main():
     t = timings()
-    res = {"ns_per_contact": t, "errors": {m: {n: errors(m, n) for n in ("heldout", "fit")} for m in ("neohooke",
-                                                                                                       "small")}}
+    res = {
+        "ns_per_contact": t,
+        "errors": {m: {n: errors(m, n) for n in ("heldout", "fit")} for m in ("neohooke", "small")},
+    }
     (HERE / "results" / "cost_vs_error.json").write_text(json.dumps(res, indent=1) + "\n")
-    lines = ["| split | ns per contact | share error vs FE neo-Hookean, held-out sweep: rms / max | vs FE small "
-             "strain, held-out sweep: rms / max | vs FE neo-Hookean, fit sweep: rms / max |", "|---|---|---|---|---|"]
+    lines = [
+        "| split | ns per contact | share error vs FE neo-Hookean, held-out sweep: rms / max | vs FE small "
+        "strain, held-out sweep: rms / max | vs FE neo-Hookean, fit sweep: rms / max |",
+        "|---|---|---|---|---|",
+    ]
     for name in ("50/50", "radius", "material", "corrected"):
         e1, e2 = res["errors"]["neohooke"]["heldout"][name], res["errors"]["small"]["heldout"][name]
         e3 = res["errors"]["neohooke"]["fit"][name]
-        lines.append(f"| {name} | {t[name]:.1f} | {e1['rms']:.4f} / {e1['max_abs']:.4f} | "
-                     f"{e2['rms']:.4f} / {e2['max_abs']:.4f} | {e3['rms']:.4f} / {e3['max_abs']:.4f} |")
+        lines.append(
+            f"| {name} | {t[name]:.1f} | {e1['rms']:.4f} / {e1['max_abs']:.4f} | "
+            f"{e2['rms']:.4f} / {e2['max_abs']:.4f} | {e3['rms']:.4f} / {e3['max_abs']:.4f} |"
+        )
     md = "\n".join(lines) + "\n"
     (HERE / "results" / "cost_vs_error.md").write_text(md)
     print(md)

@@ -40,18 +40,50 @@ import fe  # noqa: E402
 mm, GPa = 1e-3, 1e9
 # case, E1 (GPa), ABAQUS P (N), S1, S2 (mJ) of Feng & Gao Table 2
 CASES = [(2, 210, 9302.5, 181.16, 185.65), (4, 105, 6239.0, 161.75, 83.80), (5, 70, 4696.9, 136.99, 47.58)]
-VARIANTS = [("small", "current", "slide"), ("small", "reference", "slide"), ("small", "current", "clamped"),
-            ("small", "reference", "clamped"), ("neohooke", "current", "slide"), ("neohooke", "current", "clamped")]
+VARIANTS = [
+    ("small", "current", "slide"),
+    ("small", "reference", "slide"),
+    ("small", "current", "clamped"),
+    ("small", "reference", "clamped"),
+    ("neohooke", "current", "slide"),
+    ("neohooke", "current", "clamped"),
+]
 
 
 def run(E1: float, model: str, gap: str, base: str, refine: float = 1.0) -> dict:
-    s = fe.summary(fe.solve(5 * mm, 10 * mm, E1 * GPa, 0.3, 210 * GPa, 0.3, 0.1 * mm, model=model, refine=refine,
-                            steps=2, gap=gap, base=base))
-    return {"model": model, "gap": gap, "base": base, "refine": refine, "E1_GPa": E1, "P_fe": float(s["P_fe"]),
-            "U1_mJ": 1e3 * float(s["U1"]), "U2_mJ": 1e3 * float(s["U2"]), "ratio_fe": float(s["ratio_fe"]),
-            "ratio_law": float(s["ratio_law"]), "e12": float(s["ratio_fe"] / s["ratio_law"] - 1),
-            "share_err": float(s["share_err"]), "converged": bool(s["converged"]), "ndofs": int(s["ndofs"]),
-            "seconds": float(s["seconds"])}
+    s = fe.summary(
+        fe.solve(
+            5 * mm,
+            10 * mm,
+            E1 * GPa,
+            0.3,
+            210 * GPa,
+            0.3,
+            0.1 * mm,
+            model=model,
+            refine=refine,
+            steps=2,
+            gap=gap,
+            base=base,
+        )
+    )
+    return {
+        "model": model,
+        "gap": gap,
+        "base": base,
+        "refine": refine,
+        "E1_GPa": E1,
+        "P_fe": float(s["P_fe"]),
+        "U1_mJ": 1e3 * float(s["U1"]),
+        "U2_mJ": 1e3 * float(s["U2"]),
+        "ratio_fe": float(s["ratio_fe"]),
+        "ratio_law": float(s["ratio_law"]),
+        "e12": float(s["ratio_fe"] / s["ratio_law"] - 1),
+        "share_err": float(s["share_err"]),
+        "converged": bool(s["converged"]),
+        "ndofs": int(s["ndofs"]),
+        "seconds": float(s["seconds"]),
+    }
 
 
 def main():
@@ -70,20 +102,37 @@ def main():
             print(f"case 2 small {gap} refine {refine}: e12 {100 * r['e12']:+.4f} %", flush=True)
     out = HERE / "results"
     (out / "e12.json").write_text(json.dumps({"variants": rows, "mesh": mesh}, indent=1) + "\n")
-    md = ["| material | gap | bases | e12 case 2 | e12 case 4 | e12 case 5 | P case 2 (N) | P case 4 | P case 5 |",
-          "|---|---|---|---|---|---|---|---|---|"]
+    md = [
+        "| material | gap | bases | e12 case 2 | e12 case 4 | e12 case 5 | P case 2 (N) | P case 4 | P case 5 |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
     ab = {c: (s1 / s2 * E1 / 210 - 1, P) for c, E1, P, s1, s2 in CASES}  # law ratio c1/c2 = E2/E1 = 210/E1
-    md.append("| ABAQUS (paper) | | | " + " | ".join(f"{100 * ab[c][0]:+.2f} %" for c, *_ in CASES) + " | "
-              + " | ".join(f"{ab[c][1]:.1f}" for c, *_ in CASES) + " |")
+    md.append(
+        "| ABAQUS (paper) | | | "
+        + " | ".join(f"{100 * ab[c][0]:+.2f} %" for c, *_ in CASES)
+        + " | "
+        + " | ".join(f"{ab[c][1]:.1f}" for c, *_ in CASES)
+        + " |"
+    )
     for model, gap, base in VARIANTS:
         sub = {r["case"]: r for r in rows if (r["model"], r["gap"], r["base"]) == (model, gap, base)}
-        md.append(f"| {model} | {gap} | {base} | " + " | ".join(f"{100 * sub[c]['e12']:+.2f} %" for c, *_ in CASES)
-                  + " | " + " | ".join(f"{sub[c]['P_fe']:.1f}" for c, *_ in CASES) + " |")
-    md += ["", "| gap | refine | ndofs | U1 (mJ) | U2 (mJ) | ratio | e12 | seconds |",
-           "|---|---|---|---|---|---|---|---|"]
+        md.append(
+            f"| {model} | {gap} | {base} | "
+            + " | ".join(f"{100 * sub[c]['e12']:+.2f} %" for c, *_ in CASES)
+            + " | "
+            + " | ".join(f"{sub[c]['P_fe']:.1f}" for c, *_ in CASES)
+            + " |"
+        )
+    md += [
+        "",
+        "| gap | refine | ndofs | U1 (mJ) | U2 (mJ) | ratio | e12 | seconds |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
     for r in mesh:
-        md.append(f"| {r['gap']} | {r['refine']:g} | {r['ndofs']} | {r['U1_mJ']:.3f} | {r['U2_mJ']:.3f} | "
-                  f"{r['ratio_fe']:.5f} | {100 * r['e12']:+.3f} % | {r['seconds']:.1f} |")
+        md.append(
+            f"| {r['gap']} | {r['refine']:g} | {r['ndofs']} | {r['U1_mJ']:.3f} | {r['U2_mJ']:.3f} | "
+            f"{r['ratio_fe']:.5f} | {100 * r['e12']:+.3f} % | {r['seconds']:.1f} |"
+        )
     (out / "e12.md").write_text("\n".join(md) + "\n")
     print("\n".join(md))
 

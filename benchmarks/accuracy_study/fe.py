@@ -93,8 +93,9 @@ def _snap(m: MeshTri, kind: str, R: float, C: float) -> MeshTri:
     return MeshTri(p, m.t)
 
 
-def body_mesh(kind: str, R: float, h_c: float, grading: float, patch: float, h_max: float,
-              C: float | None = None) -> MeshTri:
+def body_mesh(
+    kind: str, R: float, h_c: float, grading: float, patch: float, h_max: float, C: float | None = None
+) -> MeshTri:
     """Graded triangle mesh of one body in pole-local coordinates (r, s): s (m) is the depth below the pole.
 
     ``kind`` 'sphere': the quarter disk r >= 0, s <= R of the sphere of radius R centred at (0, R); with
@@ -108,8 +109,13 @@ def body_mesh(kind: str, R: float, h_c: float, grading: float, patch: float, h_m
     if kind == "sphere":
         ang = np.linspace(0.0, np.pi / 2, 9)
         inner = np.linspace(0.0, np.pi / 2, 4)
-        pts = np.vstack([[0.0, C], np.c_[R * np.sin(ang), C - C * np.cos(ang)],
-                         np.c_[0.55 * R * np.sin(inner), C - 0.55 * C * np.cos(inner)]])
+        pts = np.vstack(
+            [
+                [0.0, C],
+                np.c_[R * np.sin(ang), C - C * np.cos(ang)],
+                np.c_[0.55 * R * np.sin(inner), C - 0.55 * C * np.cos(inner)],
+            ]
+        )
     elif kind == "block":
         x = np.linspace(0.0, R, 5)
         pts = np.array([[xi, yi] for xi in x for yi in x])
@@ -229,10 +235,12 @@ class Body:
 
         if model == "small":
             if self.K_small is None:
+
                 @BilinearForm
                 def a(du, v, w):
                     r = w.x[0]
                     return np.einsum("ij...,ij...", _stress(_grad3(du, r), "small", lam, mu), _grad3(v, r)) * r
+
                 self.K_small = asm(a, self.basis).tocsr()
             return self.K_small @ u, self.K_small
 
@@ -265,8 +273,19 @@ class Body:
         return TWO_PI * e.assemble(self.basis, prev=self.basis.interpolate(u))
 
 
-def make_body(which: int, kind: str, R: float, E: float, nu: float, model: str, h_c: float, grading: float,
-              patch: float, surf_reach: float, C: float | None = None) -> Body:
+def make_body(
+    which: int,
+    kind: str,
+    R: float,
+    E: float,
+    nu: float,
+    model: str,
+    h_c: float,
+    grading: float,
+    patch: float,
+    surf_reach: float,
+    C: float | None = None,
+) -> Body:
     """Body 1 (above z = 0) or 2 (below) with its mesh, basis and the facets of its surface within r <= surf_reach.
 
     ``C``: vertical semi-axis of a spheroid (horizontal semi-axis R); None for a sphere."""
@@ -443,10 +462,26 @@ class Result:
     params: dict
 
 
-def solve(R1: float, R2: float, E1: float, nu1: float, E2: float, nu2: float, delta: float, model: str = "small",
-          refine: float = 1.0, steps: int = 8, kappa: float = 100.0, block: float | None = None,
-          tol: float = 1e-8, maxit: int = 40, C1: float | None = None, C2: float | None = None,
-          gap: str = "current", base: str = "slide") -> Result:
+def solve(
+    R1: float,
+    R2: float,
+    E1: float,
+    nu1: float,
+    E2: float,
+    nu2: float,
+    delta: float,
+    model: str = "small",
+    refine: float = 1.0,
+    steps: int = 8,
+    kappa: float = 100.0,
+    block: float | None = None,
+    tol: float = 1e-8,
+    maxit: int = 40,
+    C1: float | None = None,
+    C2: float | None = None,
+    gap: str = "current",
+    base: str = "slide",
+) -> Result:
     """Load two bodies to overlap ``delta`` (m) in ``steps`` steps uniform in sqrt(delta).
 
     C1, C2 (m): vertical semi-axes of spheroids whose horizontal semi-axes are R1, R2 (None: spheres); Hertz
@@ -481,8 +516,9 @@ def solve(R1: float, R2: float, E1: float, nu1: float, E2: float, nu2: float, de
     else:
         kind2 = "sphere" if math.isfinite(R2) else "block"
         L2 = R2 if math.isfinite(R2) else (block or 20.0 * R1)
-        b2 = make_body(2, kind2, L2, E2, nu2, model, h_c, grading, patch, reach * 1.5,
-                       C2 if kind2 == "sphere" else None)
+        b2 = make_body(
+            2, kind2, L2, E2, nu2, model, h_c, grading, patch, reach * 1.5, C2 if kind2 == "sphere" else None
+        )
         b2.offset = b1.ndofs
         nd = b1.ndofs + b2.ndofs
     eps = kappa * H["Estar"] / h_c
@@ -504,7 +540,7 @@ def solve(R1: float, R2: float, E1: float, nu1: float, E2: float, nu2: float, de
         fs, Ks = [], []
         for b in bodies:
             b.model = model
-            f, K = b.residual(U[b.offset:b.offset + b.ndofs], tangent)
+            f, K = b.residual(U[b.offset : b.offset + b.ndofs], tangent)
             fs.append(f)
             Ks.append(K)
         f = np.concatenate(fs)
@@ -615,7 +651,7 @@ def solve(R1: float, R2: float, E1: float, nu1: float, E2: float, nu2: float, de
             b.model = model
         out["P"].append(TWO_PI * np.sum(fint[top]))
         out["U1"].append(b1.energy(U[: b1.ndofs]))
-        out["U2"].append(b2.energy(U[b1.ndofs:]) if b2 is not None else 0.0)
+        out["U2"].append(b2.energy(U[b1.ndofs :]) if b2 is not None else 0.0)
         out["Pi"].append(Pi)
     arr = {k: np.array(v) for k, v in out.items()}
     # work of the reaction: int P d(delta) = int 2 s P(s^2) ds, Simpson (steps even) on the uniform s grid
@@ -624,10 +660,37 @@ def solve(R1: float, R2: float, E1: float, nu1: float, E2: float, nu2: float, de
 
     work = float(simpson(g, x=s_grid))
     nel = b1.mesh.nelements + (b2.mesh.nelements if b2 is not None else 0)
-    return Result(deltas, np.abs(arr["P"]), arr["U1"], arr["U2"], arr["Pi"], work, converged, its, worst,
-                  time.perf_counter() - t0, nd, nel,
-                  dict(R1=rho1, R2=rho2, E1=E1, nu1=nu1, E2=E2, nu2=nu2, delta=delta, model=model, refine=refine,
-                       steps=steps, kappa=kappa, C1=C1, C2=C2, gap=gap, base=base))
+    return Result(
+        deltas,
+        np.abs(arr["P"]),
+        arr["U1"],
+        arr["U2"],
+        arr["Pi"],
+        work,
+        converged,
+        its,
+        worst,
+        time.perf_counter() - t0,
+        nd,
+        nel,
+        dict(
+            R1=rho1,
+            R2=rho2,
+            E1=E1,
+            nu1=nu1,
+            E2=E2,
+            nu2=nu2,
+            delta=delta,
+            model=model,
+            refine=refine,
+            steps=steps,
+            kappa=kappa,
+            C1=C1,
+            C2=C2,
+            gap=gap,
+            base=base,
+        ),
+    )
 
 
 def summary(res: Result) -> dict:
@@ -639,13 +702,25 @@ def summary(res: Result) -> dict:
     return {
         **p,
         "a_over_R1": H["a"] / p["R1"],
-        "P_fe": res.P[-1], "P_hertz": H["P"], "e_P": res.P[-1] / H["P"] - 1.0,
-        "U1": U1, "U2": U2, "Pi_c": Pi, "S_hertz": H["S"], "e_S": (U1 + U2 + Pi) / H["S"] - 1.0,
-        "work": res.work, "e_work": res.work / (U1 + U2 + Pi) - 1.0,
-        "share_fe": share, "share_law": H["f1"], "share_err": share - H["f1"],
+        "P_fe": res.P[-1],
+        "P_hertz": H["P"],
+        "e_P": res.P[-1] / H["P"] - 1.0,
+        "U1": U1,
+        "U2": U2,
+        "Pi_c": Pi,
+        "S_hertz": H["S"],
+        "e_S": (U1 + U2 + Pi) / H["S"] - 1.0,
+        "work": res.work,
+        "e_work": res.work / (U1 + U2 + Pi) - 1.0,
+        "share_fe": share,
+        "share_law": H["f1"],
+        "share_err": share - H["f1"],
         "ratio_fe": U1 / U2 if U2 > 0 else math.inf,
         "ratio_law": H["f1"] / (1 - H["f1"]) if H["f1"] < 1 else math.inf,
-        "converged": res.converged, "newton_its": res.newton_its, "residual": res.residual,
+        "converged": res.converged,
+        "newton_its": res.newton_its,
+        "residual": res.residual,
         "seconds": res.seconds,
-        "ndofs": res.ndofs, "nelements": res.nelements,
+        "ndofs": res.ndofs,
+        "nelements": res.nelements,
     }

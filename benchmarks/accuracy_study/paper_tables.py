@@ -65,29 +65,62 @@ def run_case(case, refine: float = 1.0) -> dict:
     mm, GPa = 1e-3, 1e9
     row = {"table": table, "case": no, "delta_mm": d, "E1_GPa": E1, "nu1": nu1}
     for model in ("small", "neohooke"):
-        res = fe.solve(R1 * mm, R2 * mm, E1 * GPa, nu1, 210 * GPa, 0.3, d * mm, model=model, refine=refine, steps=4,
-                       C1=None if C1 is None else C1 * mm, C2=None if C2 is None else C2 * mm)
+        res = fe.solve(
+            R1 * mm,
+            R2 * mm,
+            E1 * GPa,
+            nu1,
+            210 * GPa,
+            0.3,
+            d * mm,
+            model=model,
+            refine=refine,
+            steps=4,
+            C1=None if C1 is None else C1 * mm,
+            C2=None if C2 is None else C2 * mm,
+        )
         s = fe.summary(res)
-        row.update({"a_over_R1": s["a_over_R1"], "ratio_law": s["ratio_law"], "P_hertz": s["P_hertz"],
-                    f"P_{model}": s["P_fe"], f"S1_{model}_mJ": s["U1"] * 1e3, f"S2_{model}_mJ": s["U2"] * 1e3,
-                    f"ratio_{model}": s["ratio_fe"], f"e12_{model}": s["ratio_fe"] / s["ratio_law"] - 1,
-                    f"converged_{model}": s["converged"], f"seconds_{model}": s["seconds"]})
-    row.update({"P_abaqus": P_ab, "S1_abaqus_mJ": S1_ab, "S2_abaqus_mJ": S2_ab, "ratio_abaqus": S1_ab / S2_ab,
-                "e12_abaqus": S1_ab / S2_ab / row["ratio_law"] - 1})
+        row.update(
+            {
+                "a_over_R1": s["a_over_R1"],
+                "ratio_law": s["ratio_law"],
+                "P_hertz": s["P_hertz"],
+                f"P_{model}": s["P_fe"],
+                f"S1_{model}_mJ": s["U1"] * 1e3,
+                f"S2_{model}_mJ": s["U2"] * 1e3,
+                f"ratio_{model}": s["ratio_fe"],
+                f"e12_{model}": s["ratio_fe"] / s["ratio_law"] - 1,
+                f"converged_{model}": s["converged"],
+                f"seconds_{model}": s["seconds"],
+            }
+        )
+    row.update(
+        {
+            "P_abaqus": P_ab,
+            "S1_abaqus_mJ": S1_ab,
+            "S2_abaqus_mJ": S2_ab,
+            "ratio_abaqus": S1_ab / S2_ab,
+            "e12_abaqus": S1_ab / S2_ab / row["ratio_law"] - 1,
+        }
+    )
     return row
 
 
 def markdown(rows) -> str:
-    head = ("| table | case | a/R1 | law S1/S2 | ABAQUS | FE small | FE neo-Hookean | e12 ABAQUS | e12 small | "
-            "e12 neo-H | P ABAQUS (N) | P Hertz | P small | P neo-H |")
+    head = (
+        "| table | case | a/R1 | law S1/S2 | ABAQUS | FE small | FE neo-Hookean | e12 ABAQUS | e12 small | "
+        "e12 neo-H | P ABAQUS (N) | P Hertz | P small | P neo-H |"
+    )
     out = [head, "|" + "|".join(["---"] * 14) + "|"]
     for r in rows:
         pab = f"{r['P_abaqus']:.1f}" if r["P_abaqus"] else "-"
-        out.append(f"| {r['table']} | {r['case']} | {r['a_over_R1']:.3f} | {r['ratio_law']:.4f} | "
-                   f"{r['ratio_abaqus']:.4f} | {r['ratio_small']:.4f} | {r['ratio_neohooke']:.4f} | "
-                   f"{100 * r['e12_abaqus']:+.2f} % | {100 * r['e12_small']:+.2f} % | "
-                   f"{100 * r['e12_neohooke']:+.2f} % | {pab} | {r['P_hertz']:.1f} | {r['P_small']:.1f} | "
-                   f"{r['P_neohooke']:.1f} |")
+        out.append(
+            f"| {r['table']} | {r['case']} | {r['a_over_R1']:.3f} | {r['ratio_law']:.4f} | "
+            f"{r['ratio_abaqus']:.4f} | {r['ratio_small']:.4f} | {r['ratio_neohooke']:.4f} | "
+            f"{100 * r['e12_abaqus']:+.2f} % | {100 * r['e12_small']:+.2f} % | "
+            f"{100 * r['e12_neohooke']:+.2f} % | {pab} | {r['P_hertz']:.1f} | {r['P_small']:.1f} | "
+            f"{r['P_neohooke']:.1f} |"
+        )
     return "\n".join(out) + "\n"
 
 
@@ -99,8 +132,11 @@ def main(argv=None):
     for case in CASES:
         r = run_case(case, args.refine)
         rows.append(r)
-        print(f"table {r['table']} case {r['case']}: law {r['ratio_law']:.4f} ABAQUS {r['ratio_abaqus']:.4f} "
-              f"small {r['ratio_small']:.4f} neo-Hookean {r['ratio_neohooke']:.4f}", flush=True)
+        print(
+            f"table {r['table']} case {r['case']}: law {r['ratio_law']:.4f} ABAQUS {r['ratio_abaqus']:.4f} "
+            f"small {r['ratio_small']:.4f} neo-Hookean {r['ratio_neohooke']:.4f}",
+            flush=True,
+        )
     out = HERE / "results"
     out.mkdir(exist_ok=True)
     with open(out / "paper_tables.csv", "w", newline="") as fh:

@@ -43,11 +43,23 @@ def main():
                     continue
                 p = pts[r["i"]]
                 d = fe.delta_for(p["a_over_R1"], p["R1"], p["R2"])
-                row = {"sweep": name, "model": model, "i": r["i"], "residual": r["residual"],
-                       "share_fe": r["share_fe"]}
+                row = {"sweep": name, "model": model, "i": r["i"], "residual": r["residual"], "share_fe": r["share_fe"]}
                 for steps in (4, 8):
-                    s = fe.summary(fe.solve(p["R1"], p["R2"], p["E1"], p["nu1"], p["E2"], p["nu2"], d, model=model,
-                                            refine=1.0, steps=steps, block=p["block_L"]))
+                    s = fe.summary(
+                        fe.solve(
+                            p["R1"],
+                            p["R2"],
+                            p["E1"],
+                            p["nu1"],
+                            p["E2"],
+                            p["nu2"],
+                            d,
+                            model=model,
+                            refine=1.0,
+                            steps=steps,
+                            block=p["block_L"],
+                        )
+                    )
                     row[f"share_{steps}"] = float(s["share_fe"])
                     row[f"residual_{steps}"] = float(s["residual"])
                     row[f"converged_{steps}"] = bool(s["converged"])
@@ -55,12 +67,17 @@ def main():
                 rows_out.append(row)
                 print(row, flush=True)
     (HERE / "results" / "stalled.json").write_text(json.dumps(rows_out, indent=1) + "\n")
-    md = ["| sweep | material | point | residual | share | share, 4 steps (residual) | share, 8 steps (residual) | "
-          "largest change |", "|---|---|---|---|---|---|---|---|"]
+    md = [
+        "| sweep | material | point | residual | share | share, 4 steps (residual) | share, 8 steps (residual) | "
+        "largest change |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
     for r in rows_out:
-        md.append(f"| {r['sweep']} | {r['model']} | {r['i']} | {r['residual']:.1e} | {r['share_fe']:.6f} | "
-                  f"{r['share_4']:.6f} ({r['residual_4']:.0e}) | {r['share_8']:.6f} ({r['residual_8']:.0e}) | "
-                  f"{r['max_change']:.1e} |")
+        md.append(
+            f"| {r['sweep']} | {r['model']} | {r['i']} | {r['residual']:.1e} | {r['share_fe']:.6f} | "
+            f"{r['share_4']:.6f} ({r['residual_4']:.0e}) | {r['share_8']:.6f} ({r['residual_8']:.0e}) | "
+            f"{r['max_change']:.1e} |"
+        )
     worst = max((r["max_change"] for r in rows_out), default=0.0)
     md += ["", "| stalled points | largest change of share |", "|---|---|", f"| {len(rows_out)} | {worst:.1e} |"]
     (HERE / "results" / "stalled.md").write_text("\n".join(md) + "\n")

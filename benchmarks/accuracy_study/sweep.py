@@ -65,8 +65,19 @@ def sweep_points(n: int, seed: int = SEEDS["fit"]) -> list[dict]:
         else:
             Er = math.exp(rng.uniform(math.log(0.1), math.log(10.0)))
         E1 = 100e9
-        pts.append(dict(i=i, a_over_R1=aR, R1=R1, R2=R2, E1=E1, E2=E1 * Er, nu1=rng.uniform(0.0, 0.49),
-                        nu2=rng.uniform(0.0, 0.49), block_L=BLOCK * R1 if math.isinf(R2) else None))
+        pts.append(
+            dict(
+                i=i,
+                a_over_R1=aR,
+                R1=R1,
+                R2=R2,
+                E1=E1,
+                E2=E1 * Er,
+                nu1=rng.uniform(0.0, 0.49),
+                nu2=rng.uniform(0.0, 0.49),
+                block_L=BLOCK * R1 if math.isinf(R2) else None,
+            )
+        )
     return pts
 
 
@@ -78,8 +89,19 @@ def run_point(pt: dict, model: str) -> dict:
     best = None
     for steps in (2, 4, 8):  # more load steps when Newton fails (an inverted element, no convergence) or stalls
         try:
-            res = fe.solve(pt["R1"], pt["R2"], pt["E1"], pt["nu1"], pt["E2"], pt["nu2"], delta, model=model,
-                           refine=1.0, steps=steps, block=pt["block_L"])
+            res = fe.solve(
+                pt["R1"],
+                pt["R2"],
+                pt["E1"],
+                pt["nu1"],
+                pt["E2"],
+                pt["nu2"],
+                delta,
+                model=model,
+                refine=1.0,
+                steps=steps,
+                block=pt["block_L"],
+            )
         except (RuntimeError, FloatingPointError) as exc:
             print(f"{model} #{pt['i']} steps={steps}: {exc}", flush=True)
             continue
@@ -90,10 +112,17 @@ def run_point(pt: dict, model: str) -> dict:
     if best is None:
         return {"i": pt["i"], "model": model, "failed": True}
     s = fe.summary(best)
-    s = {k: (float(v) if isinstance(v, (np.floating, np.integer, np.bool_, float, int, bool)) else v)
-         for k, v in s.items()}
-    s.update(i=pt["i"], a_over_R2=(s["a_over_R1"] * pt["R1"] / pt["R2"]), E_ratio=pt["E2"] / pt["E1"],
-             block_L=pt["block_L"], stall_retried=True)
+    s = {
+        k: (float(v) if isinstance(v, (np.floating, np.integer, np.bool_, float, int, bool)) else v)
+        for k, v in s.items()
+    }
+    s.update(
+        i=pt["i"],
+        a_over_R2=(s["a_over_R1"] * pt["R1"] / pt["R2"]),
+        E_ratio=pt["E2"] / pt["E1"],
+        block_L=pt["block_L"],
+        stall_retried=True,
+    )
     return s
 
 
@@ -124,8 +153,10 @@ def read_rows(path: Path) -> list[dict]:
 def same_inputs(row: dict, pt: dict) -> bool:
     """Whether a stored row was solved for this point (the FE inputs equal to 1e-12 relative)."""
     got = {k: row.get(k) for k in INPUTS}  # (block_L: None for a sphere, and in rows written before it was one)
-    return all(got[k] == pt[k] or (got[k] is not None and pt[k] is not None
-                                   and abs(got[k] - pt[k]) <= 1e-12 * abs(pt[k])) for k in INPUTS)
+    return all(
+        got[k] == pt[k] or (got[k] is not None and pt[k] is not None and abs(got[k] - pt[k]) <= 1e-12 * abs(pt[k]))
+        for k in INPUTS
+    )
 
 
 def main(argv=None):
@@ -139,8 +170,12 @@ def main(argv=None):
     out = RESULTS / f"sweep_{args.name}"
     out.mkdir(parents=True, exist_ok=True)
     pts = sweep_points(args.points, seed)
-    info = {"command": f"nice -n 10 python benchmarks/accuracy_study/sweep.py --name {args.name} "
-                       f"--points {args.points}", "seed": seed, "points": args.points, "models": {}}
+    info = {
+        "command": f"nice -n 10 python benchmarks/accuracy_study/sweep.py --name {args.name} --points {args.points}",
+        "seed": seed,
+        "points": args.points,
+        "models": {},
+    }
     t0 = time.perf_counter()
     for model in args.models.split(","):
         path = out / f"sweep_{model}.csv"
@@ -151,9 +186,15 @@ def main(argv=None):
             if r is None or not same_inputs(r, pt) or (r["residual"] > STALLED and not r.get("stall_retried")):
                 r = run_point(pt, model)
                 solved += 1
-                print(f"{model} #{pt['i']} a/R1={pt['a_over_R1']:.3f} "
-                      + ("FAILED" if r.get("failed") else
-                         f"share err {r['share_err']:+.5f} conv={r['converged']} {r['seconds']:.1f}s"), flush=True)
+                print(
+                    f"{model} #{pt['i']} a/R1={pt['a_over_R1']:.3f} "
+                    + (
+                        "FAILED"
+                        if r.get("failed")
+                        else f"share err {r['share_err']:+.5f} conv={r['converged']} {r['seconds']:.1f}s"
+                    ),
+                    flush=True,
+                )
             if r.get("failed"):
                 failed.append(pt["i"])
             else:
@@ -163,8 +204,12 @@ def main(argv=None):
             w = csv.DictWriter(fh, fieldnames=keys)
             w.writeheader()
             w.writerows(rows)
-        info["models"][model] = {"solved": len(rows), "failed": failed, "solved_now": solved,
-                                 "not_converged": [r["i"] for r in rows if not r["converged"]]}
+        info["models"][model] = {
+            "solved": len(rows),
+            "failed": failed,
+            "solved_now": solved,
+            "not_converged": [r["i"] for r in rows if not r["converged"]],
+        }
         print(model, info["models"][model], flush=True)
     info["wall_seconds_this_run"] = time.perf_counter() - t0
     if (out / "sweep.json").exists():  # keep the entries of the models not run now

@@ -29,8 +29,9 @@ class FrameContacts:
     with what the stages derive from them computed once: :attr:`index`, :attr:`rows`, :attr:`bodies`.
     ``index`` may be given when the caller has built it already."""
 
-    def __init__(self, contacts: Table, scene: Scene, particles: Table | None = None,
-                 index: ParticleIndex | None = None) -> None:
+    def __init__(
+        self, contacts: Table, scene: Scene, particles: Table | None = None, index: ParticleIndex | None = None
+    ) -> None:
         self.contacts, self.scene, self.particles = contacts, scene, particles
         if index is not None:
             self.index = index
@@ -39,8 +40,10 @@ class FrameContacts:
     def index(self) -> ParticleIndex:
         """Row of every particle id (:class:`demsplit.frame.ParticleIndex`)."""
         if self.particles is None:
-            raise InputFormatError("contacts carry no material types and no particles table was given.",
-                                   fix="pass the frame's particles so types can be looked up by id.")
+            raise InputFormatError(
+                "contacts carry no material types and no particles table was given.",
+                fix="pass the frame's particles so types can be looked up by id.",
+            )
         return ParticleIndex(self.particles["id"])
 
     @cached_property
@@ -81,9 +84,19 @@ class ContactBodies:
     partition itself works from the types, once per pair of types).
     """
 
-    def __init__(self, type1: np.ndarray | None, type2: np.ndarray | None, E1: np.ndarray | float | None,
-                 nu1: np.ndarray | float | None, E2: np.ndarray | float | None, nu2: np.ndarray | float | None,
-                 single_material: bool, scene: Scene | None = None, *, pairs: tuple | None = None) -> None:
+    def __init__(
+        self,
+        type1: np.ndarray | None,
+        type2: np.ndarray | None,
+        E1: np.ndarray | float | None,
+        nu1: np.ndarray | float | None,
+        E2: np.ndarray | float | None,
+        nu2: np.ndarray | float | None,
+        single_material: bool,
+        scene: Scene | None = None,
+        *,
+        pairs: tuple | None = None,
+    ) -> None:
         self._types = (type1, type2)
         self._constants = (E1, nu1, E2, nu2)
         self.single_material = single_material
@@ -218,9 +231,10 @@ def _contact_pairs(frame: FrameContacts) -> tuple[np.ndarray | None, np.ndarray 
     code = np.empty(len(rows1), dtype=_code_dtype(n_types))
     present, bad_wall, bad_type = gather_types(rows1, rows2, ptype, wall_types, n_types, code)
     if bad_wall >= 0:
-        raise ContactError(f"a wall contact names wall {int(wall.max())} but the scene has "
-                           f"{len(wall_types)} wall(s).",
-                           fix="describe every wall of the run in the scene (input script).")
+        raise ContactError(
+            f"a wall contact names wall {int(wall.max())} but the scene has {len(wall_types)} wall(s).",
+            fix="describe every wall of the run in the scene (input script).",
+        )
     if bad_type >= 0:  # a type outside the material table: the lookup's error lists them
         scene.lookup(ptype[rows1], what="particle")
         pair = rows2 >= 0
@@ -248,7 +262,8 @@ class LawRows:
         if name not in self.contacts:
             raise InputFormatError(
                 f"the contact law {self.law} needs the contact column {name!r}, which the input does not have.",
-                fix="dump it (see the reader's documentation for the column) or describe the model explicitly.")
+                fix="dump it (see the reader's documentation for the column) or describe the model explicitly.",
+            )
         return np.asarray(self.contacts[name], dtype=np.float64)[self.rows]
 
     def per_pair(self, rule) -> np.ndarray | float:
@@ -271,9 +286,11 @@ class LawRows:
         t1, t2 = np.asarray(type1)[self.rows], np.asarray(type2)[self.rows]
         n = len(values)
         if np.any((t1 < 1) | (t1 > n) | (t2 < 1) | (t2 > n)):
-            raise InputFormatError(f"the contact law {self.law} has a per-type-pair table for types 1..{n}, "
-                                   f"but contacts have types {sorted(set(np.concatenate([t1, t2]).tolist()))}.",
-                                   fix="give the property one value per pair of atom types, wall types included.")
+            raise InputFormatError(
+                f"the contact law {self.law} has a per-type-pair table for types 1..{n}, "
+                f"but contacts have types {sorted(set(np.concatenate([t1, t2]).tolist()))}.",
+                fix="give the property one value per pair of atom types, wall types included.",
+            )
         return values[t1 - 1, t2 - 1]
 
     def reduced_mass(self) -> np.ndarray:
@@ -285,8 +302,10 @@ class LawRows:
 
     def particle_column(self, name: str) -> tuple[np.ndarray, np.ndarray]:
         if self.particles is None or name not in self.particles:
-            raise InputFormatError(f"the contact law {self.law} needs the particle column {name!r}, which the atom "
-                                   "dump does not have.", fix=f"add '{name}' to the dump custom columns.")
+            raise InputFormatError(
+                f"the contact law {self.law} needs the particle column {name!r}, which the atom dump does not have.",
+                fix=f"add '{name}' to the dump custom columns.",
+            )
         c, rows = self.contacts, self.rows
         index = self.frame.index
         values = np.asarray(self.particles[name], dtype=np.float64)

@@ -40,8 +40,9 @@ def hertz_energy_from_moduli(delta: ArrayLike, R_eff: ArrayLike, E_eff: ArrayLik
     return hertz_energy_formula(overlap(delta), f64(R_eff), f64(E_eff))
 
 
-def hertz_force(delta: ArrayLike, R1: ArrayLike, R2: ArrayLike,
-                E1: ArrayLike, nu1: ArrayLike, E2: ArrayLike, nu2: ArrayLike) -> np.ndarray:
+def hertz_force(
+    delta: ArrayLike, R1: ArrayLike, R2: ArrayLike, E1: ArrayLike, nu1: ArrayLike, E2: ArrayLike, nu2: ArrayLike
+) -> np.ndarray:
     """Hertz normal force P = (4/3) E* sqrt(R*) delta^(3/2) (N), eqs. (2), (3), (12).
 
     R2 = inf for a plane; E = inf for a rigid body.
@@ -49,8 +50,9 @@ def hertz_force(delta: ArrayLike, R1: ArrayLike, R2: ArrayLike,
     return hertz_force_from_moduli(delta, effective_radius(R1, R2), effective_modulus(E1, nu1, E2, nu2))
 
 
-def hertz_energy(delta: ArrayLike, R1: ArrayLike, R2: ArrayLike,
-                 E1: ArrayLike, nu1: ArrayLike, E2: ArrayLike, nu2: ArrayLike) -> np.ndarray:
+def hertz_energy(
+    delta: ArrayLike, R1: ArrayLike, R2: ArrayLike, E1: ArrayLike, nu1: ArrayLike, E2: ArrayLike, nu2: ArrayLike
+) -> np.ndarray:
     """Hertz elastic energy S = (8/15) E* sqrt(R*) delta^(5/2) (J), eq. (13)."""
     return hertz_energy_from_moduli(delta, effective_radius(R1, R2), effective_modulus(E1, nu1, E2, nu2))
 

@@ -64,10 +64,10 @@ class Mode:
 
 
 NORMAL = Mode("normal", "u_n", "share_n1", "normal elastic energy (J), split by (1 - nu^2)/E", _normal_rule)
-TANGENTIAL = Mode("tangential", "u_t", "share_t1", "tangential spring energy (J), split by (2 - nu)/G",
-                  _tangential_rule)
-ROLLING = Mode("rolling", "u_r", "share_r1", "rolling (bending) spring energy (J), split by (1 - nu^2)/E",
-               _normal_rule)
+TANGENTIAL = Mode(
+    "tangential", "u_t", "share_t1", "tangential spring energy (J), split by (2 - nu)/G", _tangential_rule
+)
+ROLLING = Mode("rolling", "u_r", "share_r1", "rolling (bending) spring energy (J), split by (1 - nu^2)/E", _normal_rule)
 TWISTING = Mode("twisting", "u_tw", "share_tw1", "twisting spring energy (J), split by 1/G", _twisting_rule)
 
 MODES: tuple[Mode, ...] = (NORMAL, TANGENTIAL, ROLLING, TWISTING)

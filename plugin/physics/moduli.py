@@ -74,15 +74,13 @@ def _inverse_sum(a: np.ndarray, b: np.ndarray, what: str) -> np.ndarray:
 
 def effective_modulus(E1: ArrayLike, nu1: ArrayLike, E2: ArrayLike, nu2: ArrayLike) -> np.ndarray:
     """Contact modulus E* = 1/(c1 + c2) (Pa), eq. (2)."""
-    return _inverse_sum(plane_strain_compliance(E1, nu1), plane_strain_compliance(E2, nu2),
-                        "contact modulus E*")
+    return _inverse_sum(plane_strain_compliance(E1, nu1), plane_strain_compliance(E2, nu2), "contact modulus E*")
 
 
 def effective_shear_modulus(E1: ArrayLike, nu1: ArrayLike, E2: ArrayLike, nu2: ArrayLike) -> np.ndarray:
     """Contact shear modulus G* = 1/(t1 + t2), t = (2 - nu)/G (Pa), as LIGGGHTS
     (``global_properties.cpp``) and YADE (``HertzMindlin.cpp``) build it."""
-    return _inverse_sum(mindlin_compliance(E1, nu1), mindlin_compliance(E2, nu2),
-                        "contact shear modulus G*")
+    return _inverse_sum(mindlin_compliance(E1, nu1), mindlin_compliance(E2, nu2), "contact shear modulus G*")
 
 
 def effective_radius(R1: ArrayLike, R2: ArrayLike) -> np.ndarray:
@@ -99,8 +97,10 @@ def effective_radius(R1: ArrayLike, R2: ArrayLike) -> np.ndarray:
 
 def curvature_error() -> ContactError:
     """The error of a contact whose curvatures 1/R1 + 1/R2 do not add up to > 0."""
-    return ContactError("the sum of the two curvatures 1/R1 + 1/R2 must be > 0.",
-                        fix="check the radii: two planes cannot be in Hertz contact.")
+    return ContactError(
+        "the sum of the two curvatures 1/R1 + 1/R2 must be > 0.",
+        fix="check the radii: two planes cannot be in Hertz contact.",
+    )
 
 
 def reduced_mass(m1: ArrayLike, m2: ArrayLike) -> np.ndarray:

@@ -72,6 +72,7 @@ class ContactLawEnergy(_ByMode):
         if self.not_computed is None:  # every value known
             self.not_computed = np.zeros(self.u.shape[-1], dtype=np.int32)
 
+
 @dataclass
 class ContactEnergy(_ByMode):
     """Per-contact results of :func:`partition`.
@@ -107,14 +108,14 @@ class ContactEnergy(_ByMode):
         if self.u_adh is not None:
             out[ADHESION_COLUMN] = self.u_adh
         out.update({m.share_column: self.shares[k] for k, m in enumerate(self.modes)})
-        out.update(u1=self.u1, u2=self.u2, depth1=self.depth1, cpx=self.cp[:, 0], cpy=self.cp[:, 1],
-                   cpz=self.cp[:, 2])
+        out.update(u1=self.u1, u2=self.u2, depth1=self.depth1, cpx=self.cp[:, 0], cpy=self.cp[:, 1], cpz=self.cp[:, 2])
         out["not_computed"] = self.not_computed
         return out
 
 
-def law_groups(contacts: Table, scene: Scene,
-               types: tuple[np.ndarray, np.ndarray] | None = None) -> list[tuple[ContactModel, slice | np.ndarray]]:
+def law_groups(
+    contacts: Table, scene: Scene, types: tuple[np.ndarray, np.ndarray] | None = None
+) -> list[tuple[ContactModel, slice | np.ndarray]]:
     """Rows of the contacts each law acts on: the scene's law, a wall's own law where it differs (LIGGGHTS
     ``fix wall/gran`` with another model), and the law of each pair of particle types that has its own
     (``Scene.pair_models``: then ``types``, the material types of body 1 and body 2 of every contact, are
@@ -147,8 +148,9 @@ def law_groups(contacts: Table, scene: Scene,
     return [(m, np.flatnonzero(mask)) for m, mask in groups if mask.any()]
 
 
-def contact_energies(contacts: Table, scene: Scene, particles: Table | None = None, *,
-                     compiled: bool = True) -> ContactLawEnergy:
+def contact_energies(
+    contacts: Table, scene: Scene, particles: Table | None = None, *, compiled: bool = True
+) -> ContactLawEnergy:
     """:func:`law_energies` of a contact table, its scene and its particles."""
     return law_energies(FrameContacts(contacts, scene, particles), compiled=compiled)
 
@@ -194,20 +196,27 @@ def law_energies(frame: FrameContacts, *, compiled: bool = True) -> ContactLawEn
             if mode.column in result.modes:
                 u[k, rows] = result.modes[mode.column]
             elif mode.column not in result.skipped:
-                skipped.setdefault(mode.column, f"the contact law {law.key}{whose} has no {mode.name} energy (0 for "
-                                   f"{'these' if several else 'its'} contacts)")
+                skipped.setdefault(
+                    mode.column,
+                    f"the contact law {law.key}{whose} has no {mode.name} energy (0 for "
+                    f"{'these' if several else 'its'} contacts)",
+                )
         if u_adh is not None:
             if ADHESION_COLUMN in result.modes:
                 u_adh[rows] = result.modes[ADHESION_COLUMN]
             elif ADHESION_COLUMN not in result.skipped:
                 others = _with_mode(models, laws, scene, ADHESION_COLUMN) if several else ""
-                skipped.setdefault(ADHESION_COLUMN, f"the contact law {law.key}{whose} has no cohesion (0 for "
-                                   f"{'these' if several else 'its'} contacts)"
-                                   + (f"; the cohesion of {others} is computed" if others else ""))
+                skipped.setdefault(
+                    ADHESION_COLUMN,
+                    f"the contact law {law.key}{whose} has no cohesion (0 for "
+                    f"{'these' if several else 'its'} contacts)"
+                    + (f"; the cohesion of {others} is computed" if others else ""),
+                )
         missing.update(result.skipped)  # modes the law has, whose columns the data lacks
         bits = sum(NOT_COMPUTED_BITS[m] for m in result.skipped)
-        bits_without_history = sum(NOT_COMPUTED_BITS[m] for m in law.mode_columns
-                                   if m not in result.skipped and m not in result.unknown)
+        bits_without_history = sum(
+            NOT_COMPUTED_BITS[m] for m in law.mode_columns if m not in result.skipped and m not in result.unknown
+        )
         decided = {m: mask for m, mask in result.unknown.items() if mask.any()}  # rows the law itself says are unknown
         for m, why in result.unknown_why.items():  # every law's reason, once
             if m in decided and why not in missing.get(m, ""):
@@ -233,8 +242,9 @@ def _served(model, scene: Scene) -> str:
     if own:
         return f"wall{'s' if len(own) > 1 else ''} {', '.join(repr(n) for n in own)}"
     rest = [w.name for w in scene.walls if w.model is None or w.model == scene.model]
-    return "the particle pairs" + (f" and wall{'s' if len(rest) > 1 else ''} {', '.join(map(repr, rest))}"
-                                   if rest else "")
+    return "the particle pairs" + (
+        f" and wall{'s' if len(rest) > 1 else ''} {', '.join(map(repr, rest))}" if rest else ""
+    )
 
 
 def _with_mode(models, laws, scene: Scene, column: str) -> str:
@@ -278,13 +288,11 @@ def comparison_shares(frame: FrameContacts, split: str) -> np.ndarray:
         return _per_contact(radius_share(contacts["r1"], contacts["r2"]))
     if split == "springs":
         n = table_length(contacts)
-        return _per_contact(np.broadcast_to(springs_share(bodies.E1, contacts["r1"], bodies.E2, contacts["r2"]),
-                                            (n,)))
+        return _per_contact(np.broadcast_to(springs_share(bodies.E1, contacts["r1"], bodies.E2, contacts["r2"]), (n,)))
     raise ValueError(f"unknown split {split!r}; use one of {SPLITS}")
 
 
-def _material_shares(bodies, n: int, tangential_rule: str,
-                     modes: tuple[Mode, ...]) -> tuple[np.ndarray, np.ndarray]:
+def _material_shares(bodies, n: int, tangential_rule: str, modes: tuple[Mode, ...]) -> tuple[np.ndarray, np.ndarray]:
     """Shares of body 1 of every mode under the material law, as ``(values, code)`` for the loops:
     one value per pair of types present (coded) in a multi-material scene, 1/2 in a single-material one."""
     from ..kernels import NO_CODE
@@ -295,19 +303,32 @@ def _material_shares(bodies, n: int, tangential_rule: str,
     code = rows[0][1]
     if len(code):
         return np.stack([values for values, _ in rows]), code
-    return np.concatenate([_per_contact(np.broadcast_to(values, (n,)) if len(values) == 1 else values)
-                           for values, _ in rows]), NO_CODE
+    return np.concatenate(
+        [_per_contact(np.broadcast_to(values, (n,)) if len(values) == 1 else values) for values, _ in rows]
+    ), NO_CODE
 
 
-def partition(contacts: Table, scene: Scene, particles: Table | None = None, *, split: str = "material",
-              tangential_rule: str = "mindlin") -> ContactEnergy:
+def partition(
+    contacts: Table,
+    scene: Scene,
+    particles: Table | None = None,
+    *,
+    split: str = "material",
+    tangential_rule: str = "mindlin",
+) -> ContactEnergy:
     """:func:`split_energies` of a contact table's :func:`law_energies`, with its scene and its particles."""
     frame = FrameContacts(contacts, scene, particles)
     return split_energies(frame, law_energies(frame), split=split, tangential_rule=tangential_rule)
 
 
-def split_energies(frame: FrameContacts, energies: ContactLawEnergy, *, split: str = "material",
-                   tangential_rule: str = "mindlin", normal_shares: np.ndarray | None = None) -> ContactEnergy:
+def split_energies(
+    frame: FrameContacts,
+    energies: ContactLawEnergy,
+    *,
+    split: str = "material",
+    tangential_rule: str = "mindlin",
+    normal_shares: np.ndarray | None = None,
+) -> ContactEnergy:
     """Split every contact's elastic energy between its two bodies and place the contact point.
 
     u1 = sum_m s_m u_m,  u2 = sum_m (1 - s_m) u_m,  depth1 = s_n delta,  x_c = x1 + (r1 - depth1) n,
@@ -326,20 +347,35 @@ def split_energies(frame: FrameContacts, energies: ContactLawEnergy, *, split: s
     if split == "material":
         values, code = _material_shares(bodies, n, tangential_rule, energies.modes)
         if normal_shares is not None:  # one share per contact and mode: gather the coded or constant ones
-            full = values[:, code] if len(code) else np.repeat(values, n, axis=1) if values.shape[1] == 1 \
-                else values
-            full = np.array(np.repeat(full, len(energies.modes), axis=0) if len(full) == 1 else full,
-                            dtype=np.float64)
+            full = values[:, code] if len(code) else np.repeat(values, n, axis=1) if values.shape[1] == 1 else values
+            full = np.array(np.repeat(full, len(energies.modes), axis=0) if len(full) == 1 else full, dtype=np.float64)
             full[0] = normal_shares
             values, code = full, NO_CODE
     else:
         values, code = comparison_shares(frame, split), NO_CODE
     delta = np.asarray(contacts["delta"], dtype=np.float64)
     shares, u1, u2, depth1, cp = split_contacts(
-        values, code, energies.u, delta,
-        *(np.asarray(contacts[c], dtype=np.float64) for c in ("x1", "y1", "z1", "nx", "ny", "nz", "r1")))
-    return ContactEnergy(energies.u, shares, u1, u2, depth1, cp.T, delta < 0, split, dict(energies.skipped),
-                         energies.modes, energies.u_adh, dict(energies.missing), energies.not_computed)
+        values,
+        code,
+        energies.u,
+        delta,
+        *(np.asarray(contacts[c], dtype=np.float64) for c in ("x1", "y1", "z1", "nx", "ny", "nz", "r1")),
+    )
+    return ContactEnergy(
+        energies.u,
+        shares,
+        u1,
+        u2,
+        depth1,
+        cp.T,
+        delta < 0,
+        split,
+        dict(energies.skipped),
+        energies.modes,
+        energies.u_adh,
+        dict(energies.missing),
+        energies.not_computed,
+    )
 
 
 def per_particle(contacts: Table, energy: ContactEnergy, particles: Table, n_walls: int = 0) -> tuple[Table, Table]:
@@ -363,17 +399,22 @@ def body_tables(frame: FrameContacts, energy: ContactEnergy, n_walls: int = 0) -
     particles = frame.particles
     rows1, rows2 = frame.rows
     n_walls = max(n_walls, int(max_wall(rows2)) + 1)
-    pu, n_contacts, wu, w_contacts = body_sums(rows1, rows2, energy.shares, energy.u, table_length(particles),
-                                               n_walls)
+    pu, n_contacts, wu, w_contacts = body_sums(rows1, rows2, energy.shares, energy.u, table_length(particles), n_walls)
     columns = [m.column for m in energy.modes]
     ptable = {
         "id": np.asarray(particles["id"], dtype=np.int64),
         "type": np.asarray(particles["type"], dtype=np.int32),
         **{c: np.asarray(particles[c], dtype=np.float64) for c in ("x", "y", "z", "radius")},
-        "u": _total(pu), **dict(zip(columns, pu)), "n_contacts": n_contacts,
+        "u": _total(pu),
+        **dict(zip(columns, pu)),
+        "n_contacts": n_contacts,
     }
-    wtable = {"wall": np.arange(n_walls, dtype=np.int64), "u": _total(wu), **dict(zip(columns, wu)),
-              "n_contacts": w_contacts}
+    wtable = {
+        "wall": np.arange(n_walls, dtype=np.int64),
+        "u": _total(wu),
+        **dict(zip(columns, wu)),
+        "n_contacts": w_contacts,
+    }
     # a body is incomplete in every mode one of its contacts is; n_not_computed counts those contacts
     unknown = energy.not_computed != 0
     pair = rows2 >= 0
@@ -383,8 +424,9 @@ def body_tables(frame: FrameContacts, energy: ContactEnergy, n_walls: int = 0) -
     np.bitwise_or.at(pbits, rows2[pair], energy.not_computed[pair])
     np.bitwise_or.at(wbits, -1 - rows2[~pair], energy.not_computed[~pair])
     ptable["not_computed"] = pbits
-    ptable["n_not_computed"] = (np.bincount(rows1[unknown], minlength=len(pbits))
-                                + np.bincount(rows2[pair & unknown], minlength=len(pbits)))
+    ptable["n_not_computed"] = np.bincount(rows1[unknown], minlength=len(pbits)) + np.bincount(
+        rows2[pair & unknown], minlength=len(pbits)
+    )
     wtable["not_computed"] = wbits
     wtable["n_not_computed"] = np.bincount(-1 - rows2[~pair & unknown], minlength=n_walls)
     if energy.u_adh is not None:  # the interface's work, half to each body

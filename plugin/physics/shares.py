@@ -63,12 +63,10 @@ def normal_share(E1: ArrayLike, nu1: ArrayLike, E2: ArrayLike, nu2: ArrayLike) -
 
     Dimensionless, in [0, 1]; E = inf (rigid) gives exactly 0 and its partner 1.
     """
-    return share_from_compliances(plane_strain_compliance(E1, nu1),
-                                  plane_strain_compliance(E2, nu2))
+    return share_from_compliances(plane_strain_compliance(E1, nu1), plane_strain_compliance(E2, nu2))
 
 
-def tangential_share(E1: ArrayLike, nu1: ArrayLike, E2: ArrayLike, nu2: ArrayLike,
-                     rule: str = "mindlin") -> np.ndarray:
+def tangential_share(E1: ArrayLike, nu1: ArrayLike, E2: ArrayLike, nu2: ArrayLike, rule: str = "mindlin") -> np.ndarray:
     """Fraction of the tangential elastic energy stored in body 1.
 
     ``rule="mindlin"`` (default): share1 = t1/(t1 + t2), t_i = (2 - nu_i)/G_i.
@@ -125,8 +123,10 @@ def radius_share(r1: ArrayLike, r2: ArrayLike) -> np.ndarray:
 def springs_share(E1: ArrayLike, r1: ArrayLike, E2: ArrayLike, r2: ArrayLike) -> np.ndarray:
     """Share of body 1 for two springs k_i = E_i r_i in series (YADE ``FrictPhys``):
     the energy F^2/(2 k_i) of each spring gives share1 = (1/k1)/(1/k1 + 1/k2)."""
-    return share_from_compliances(1.0 / (np.asarray(E1, dtype=np.float64) * np.asarray(r1, dtype=np.float64)),
-                                  1.0 / (np.asarray(E2, dtype=np.float64) * np.asarray(r2, dtype=np.float64)))
+    return share_from_compliances(
+        1.0 / (np.asarray(E1, dtype=np.float64) * np.asarray(r1, dtype=np.float64)),
+        1.0 / (np.asarray(E2, dtype=np.float64) * np.asarray(r2, dtype=np.float64)),
+    )
 
 
 def overlap_depths(delta: ArrayLike, share1: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
@@ -136,8 +136,7 @@ def overlap_depths(delta: ArrayLike, share1: ArrayLike) -> tuple[np.ndarray, np.
     return d1, delta - d1
 
 
-def contact_point(x1: ArrayLike, n: ArrayLike, r1: ArrayLike, delta: ArrayLike,
-                  share1: ArrayLike) -> np.ndarray:
+def contact_point(x1: ArrayLike, n: ArrayLike, r1: ArrayLike, delta: ArrayLike, share1: ArrayLike) -> np.ndarray:
     """Material-weighted contact point x_c = x1 + (r1 - share1 delta) n (m), eq. (31).
 
     x1 : centre of body 1, shape (..., 3) (m); n : unit normal from body 1 to
@@ -146,5 +145,9 @@ def contact_point(x1: ArrayLike, n: ArrayLike, r1: ArrayLike, delta: ArrayLike,
     (share1 = 1) puts the point on its surface.
     """
     depth1, _ = overlap_depths(delta, share1)
-    return contact_point_coordinate(np.asarray(x1, dtype=np.float64), np.asarray(n, dtype=np.float64),
-                                    np.asarray(r1, dtype=np.float64)[..., None], depth1[..., None])
+    return contact_point_coordinate(
+        np.asarray(x1, dtype=np.float64),
+        np.asarray(n, dtype=np.float64),
+        np.asarray(r1, dtype=np.float64)[..., None],
+        depth1[..., None],
+    )

@@ -10,5 +10,13 @@ from .schema import TABLES, UNITS, Table, canonical_table, to_dataframe, walls_m
 from .store import load_results
 from .tables import Results
 
-__all__ = ["TABLES", "UNITS", "Results", "Table", "canonical_table", "load_results", "to_dataframe",
-           "walls_meta_from_scene"]
+__all__ = [
+    "TABLES",
+    "UNITS",
+    "Results",
+    "Table",
+    "canonical_table",
+    "load_results",
+    "to_dataframe",
+    "walls_meta_from_scene",
+]

@@ -68,7 +68,7 @@ def top_share(x: np.ndarray, fraction: float) -> float:
     if n == 0 or total == 0:
         return math.nan
     k = max(1, math.ceil(fraction * n))
-    return float(np.sort(x)[n - k:].sum() / total)
+    return float(np.sort(x)[n - k :].sum() / total)
 
 
 def distribution_stats(x: np.ndarray) -> dict[str, float]:
@@ -144,8 +144,10 @@ def size_bins(radius: np.ndarray, bins=None) -> np.ndarray:
     if isinstance(bins, (list, tuple, np.ndarray)):
         edges = np.asarray(bins, dtype=np.float64)
         if edges.ndim != 1 or len(edges) < 2 or np.any(np.diff(edges) <= 0):
-            raise DemsplitError(f"size bin edges must be an increasing sequence of at least 2 radii, got {bins!r}.",
-                                fix="pass ascending edges in metres, e.g. [0.001, 0.002, 0.004].")
+            raise DemsplitError(
+                f"size bin edges must be an increasing sequence of at least 2 radii, got {bins!r}.",
+                fix="pass ascending edges in metres, e.g. [0.001, 0.002, 0.004].",
+            )
         return edges
     if len(r) == 0:
         return np.array([0.0, 0.0])
@@ -159,18 +161,24 @@ def size_bins(radius: np.ndarray, bins=None) -> np.ndarray:
         except ValueError:
             n = 0
     elif bins is not None:
-        raise DemsplitError(f"cannot use {bins!r} as size bins.",
-                            fix="pass an int, 'log:N', 'linear:N', 'quantile:N' or a sequence of edges.")
+        raise DemsplitError(
+            f"cannot use {bins!r} as size bins.",
+            fix="pass an int, 'log:N', 'linear:N', 'quantile:N' or a sequence of edges.",
+        )
     if n < 1 or kind not in ("log", "linear", "quantile"):
-        raise DemsplitError(f"cannot use {bins!r} as size bins.",
-                            fix="pass an int >= 1, 'log:N', 'linear:N', 'quantile:N' or a sequence of edges.")
+        raise DemsplitError(
+            f"cannot use {bins!r} as size bins.",
+            fix="pass an int >= 1, 'log:N', 'linear:N', 'quantile:N' or a sequence of edges.",
+        )
     lo, hi = r.min(), r.max()
     if kind == "quantile":
         return np.unique(np.quantile(r, np.linspace(0.0, 1.0, n + 1)))
     if kind == "log":
         if lo <= 0:
-            raise DemsplitError(f"log-spaced size bins need radii > 0, found a radius of {lo!r} m.",
-                                fix="pass bins='linear:N' or explicit edges.")
+            raise DemsplitError(
+                f"log-spaced size bins need radii > 0, found a radius of {lo!r} m.",
+                fix="pass bins='linear:N' or explicit edges.",
+            )
         return np.geomspace(lo, hi, n + 1) if hi > lo else np.array([lo, hi])
     return np.linspace(lo, hi, n + 1) if hi > lo else np.array([lo, hi])
 
@@ -210,9 +218,11 @@ def per_clump(particles: pd.DataFrame) -> pd.DataFrame:
     _require(particles, ["clump", "u", "u_n", "u_t", "n_contacts"], "particles")
     members = particles[particles["clump"] >= 0]
     sums = {c: (c, "sum") for c in ["u", *energy_columns(particles)]}
-    out = (members.groupby(["step", "clump"], sort=True)
-           .agg(n_members=("id", "size"), **sums, n_contacts=("n_contacts", "sum"))
-           .reset_index())
+    out = (
+        members.groupby(["step", "clump"], sort=True)
+        .agg(n_members=("id", "size"), **sums, n_contacts=("n_contacts", "sum"))
+        .reset_index()
+    )
     return out
 
 
@@ -251,8 +261,13 @@ def per_frame(particles: pd.DataFrame, walls: pd.DataFrame, frames: pd.DataFrame
         out["balance_rel_error"] = (out["u_particles"] + out["u_walls"] - out["u_contacts"]).abs() / out["u_contacts"]
     stats = grouped_stats(particles, ["step"], "u").drop(columns=["count", "total"])
     out = out.merge(stats, on="step", how="left")
-    out.attrs["units"] = {**frames.attrs.get("units", {}), "u_contacts": "J", "u_particles": "J",
-                          "u_walls": "J", "balance_rel_error": "1"}
+    out.attrs["units"] = {
+        **frames.attrs.get("units", {}),
+        "u_contacts": "J",
+        "u_particles": "J",
+        "u_walls": "J",
+        "balance_rel_error": "1",
+    }
     return out
 
 
@@ -327,13 +342,15 @@ def contact_point_shift(contacts: pd.DataFrame, *, by_frame: bool = True) -> pd.
     for rows in (pair, ~pair):  # pair and wall points may come from dumps of different precision
         with np.errstate(invalid="ignore", divide="ignore"):
             bound[rows] = np.linalg.norm(printed_half_unit(sim[rows]), axis=1) / contacts["delta"].to_numpy()[rows]
-    df = pd.DataFrame({
-        "step": contacts["step"].to_numpy(),
-        "kind": np.where(contacts["wall"].to_numpy() < 0, "pair", "wall"),
-        "d": d,
-        "bound": bound,
-        "missing": np.isnan(sim).any(axis=1),
-    })
+    df = pd.DataFrame(
+        {
+            "step": contacts["step"].to_numpy(),
+            "kind": np.where(contacts["wall"].to_numpy() < 0, "pair", "wall"),
+            "d": d,
+            "bound": bound,
+            "missing": np.isnan(sim).any(axis=1),
+        }
+    )
     keys = ["step", "kind"] if by_frame else ["kind"]
     rows = []
     for key, sub in df.groupby(keys, sort=True):
@@ -342,8 +359,12 @@ def contact_point_shift(contacts: pd.DataFrame, *, by_frame: bool = True) -> pd.
         row.update(count=len(ok), n_missing=int(sub["missing"].sum()))
         if len(ok):
             bounds = sub["bound"].to_numpy()[~sub["missing"].to_numpy() & np.isfinite(sub["d"].to_numpy())]
-            row.update(median=float(np.median(ok)), p95=float(np.quantile(ok, 0.95)), max=float(ok.max()),
-                       print_bound_median=float(np.median(bounds)))
+            row.update(
+                median=float(np.median(ok)),
+                p95=float(np.quantile(ok, 0.95)),
+                max=float(ok.max()),
+                print_bound_median=float(np.median(bounds)),
+            )
         else:
             row.update(median=math.nan, p95=math.nan, max=math.nan, print_bound_median=math.nan)
         rows.append(row)

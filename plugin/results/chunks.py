@@ -39,6 +39,8 @@ CHUNK_ROWS = 65536
 table whose first frame is smaller gets smaller chunks (:func:`chunk_rows`)."""
 MIN_CHUNK_ROWS = 1024
 """Rows per chunk, at least (8 KiB of float64)."""
+
+
 class TableSink:
     """Streams one table's rows into resizable chunked datasets, whole chunks at a time.
 
@@ -55,8 +57,16 @@ class TableSink:
     called after each column's chunks are written (the writer's write-back, :class:`ResultWriter`).
     """
 
-    def __init__(self, h5, name: str, schema: dict[str, str], filters: dict[str, str], chunk_rows: int,
-                 pool: Executor, on_written: Callable[[], None]) -> None:
+    def __init__(
+        self,
+        h5,
+        name: str,
+        schema: dict[str, str],
+        filters: dict[str, str],
+        chunk_rows: int,
+        pool: Executor,
+        on_written: Callable[[], None],
+    ) -> None:
         self.name, self.schema, self.filters, self.pool = name, schema, filters, pool
         self.on_written = on_written
         self.chunk_rows = chunk_rows
@@ -71,9 +81,14 @@ class TableSink:
         """The empty, resizable dataset of ``col`` with its chosen filter."""
         kind = self.filters[col]
         ds = self.group.create_dataset(
-            col, shape=(0,), maxshape=(None,), dtype=np.dtype(self.schema[col]), chunks=(self.chunk_rows,),
+            col,
+            shape=(0,),
+            maxshape=(None,),
+            dtype=np.dtype(self.schema[col]),
+            chunks=(self.chunk_rows,),
             compression=None if kind == "none" else kind,
-            compression_opts=GZIP_LEVEL if kind == "gzip" else None, shuffle=kind != "none",
+            compression_opts=GZIP_LEVEL if kind == "gzip" else None,
+            shuffle=kind != "none",
         )
         ds.attrs["unit"] = UNITS.get(col, "")
         return ds
@@ -131,18 +146,20 @@ class TableSink:
         ds.resize((start + sum(len(c) for c in chunks),))  # the rows, not the padding: it never shrinks
         if self.filters[col] == "lzf":  # h5py's own filter: HDF5 applies it to the chunk-aligned slices
             for k, c in enumerate(chunks):
-                ds[start + k * self.chunk_rows: start + k * self.chunk_rows + len(c)] = c
+                ds[start + k * self.chunk_rows : start + k * self.chunk_rows + len(c)] = c
         else:
             if blobs is None:
-                blobs = self._compressed(chunks) if self.filters[col] == "gzip" else \
-                    (_padded(c, self.chunk_rows) for c in chunks)
+                blobs = (
+                    self._compressed(chunks)
+                    if self.filters[col] == "gzip"
+                    else (_padded(c, self.chunk_rows) for c in chunks)
+                )
             for k, blob in enumerate(blobs):
                 ds.id.write_direct_chunk((start + k * self.chunk_rows,), blob)
         self.on_written()
 
 
-def choose_filters(tables: Mapping[str, Table], compression: str,
-                    pool: Executor) -> dict[str, dict[str, str]]:
+def choose_filters(tables: Mapping[str, Table], compression: str, pool: Executor) -> dict[str, dict[str, str]]:
     """Each column's filter: ``compression`` itself, or for ``auto`` the choice
     of :func:`_choose_filter` on the column's first chunk of rows (measured in
     the thread pool), by dtype when the table has no rows."""
@@ -176,7 +193,7 @@ def _whole_chunks(carry: np.ndarray, values: np.ndarray, size: int) -> tuple[lis
         chunks.append(carry)
         values = values[fill:]
     whole = len(values) // size * size
-    chunks.extend(values[k: k + size] for k in range(0, whole, size))
+    chunks.extend(values[k : k + size] for k in range(0, whole, size))
     return chunks, np.array(values[whole:])
 
 

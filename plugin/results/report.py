@@ -30,14 +30,19 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..outputs import REPORT, REPORT_GENERATOR, check_output_path, write_output
 from ..errors import StoreError
+from ..outputs import REPORT, REPORT_GENERATOR, check_output_path, write_output
 from .aggregate import elastic_columns
 from .schema import UNBOUNDED, UNITS, known
 from .tables import NOT_COMPUTED_TEXT, Results, not_computed_mask
 
-MODE_NAMES = {"u_n": "normal", "u_t": "tangential", "u_r": "rolling", "u_tw": "twisting",
-              "u_adh": "cohesion work (signed, apart from the elastic total)"}
+MODE_NAMES = {
+    "u_n": "normal",
+    "u_t": "tangential",
+    "u_r": "rolling",
+    "u_tw": "twisting",
+    "u_adh": "cohesion work (signed, apart from the elastic total)",
+}
 
 NOT_MODES = frozenset({"u_equal", "u_radius", "u_springs", "u_particles", "u_walls", "u_contacts"})
 """``u_*`` columns that are not energy modes: the other splits' per-particle totals and the frame sums."""
@@ -71,8 +76,11 @@ def _with_names(df: pd.DataFrame, names: Mapping[int, str], column: str = "type"
     if not names or column not in df:
         return df
     out = df.copy()
-    out.insert(list(out.columns).index(column) + 1, "material",
-               [names.get(int(t), "") if pd.notna(t) else "" for t in out[column]])
+    out.insert(
+        list(out.columns).index(column) + 1,
+        "material",
+        [names.get(int(t), "") if pd.notna(t) else "" for t in out[column]],
+    )
     return out
 
 
@@ -132,8 +140,9 @@ def not_computed(results: Results, frame: pd.Series | None = None) -> list[str]:
         if isinstance(w, Mapping) and w.get("missing") and f"'{w.get('name')}'" not in told:
             items.append(f"wall '{w.get('name')}': {w['missing']}")
     if frame is not None and frame.get("n_not_computed", 0):
-        items.append(f"{int(frame['n_not_computed'])} contact(s) of this frame have modes not computed "
-                     "(column not_computed)")
+        items.append(
+            f"{int(frame['n_not_computed'])} contact(s) of this frame have modes not computed (column not_computed)"
+        )
     return items
 
 
@@ -148,11 +157,14 @@ def simulator_energies(results: Results, step: int, frame: pd.Series) -> list[st
             continue
         modes = [m for m in e["modes"] if m in frame]
         ours, theirs = float(sum(frame[m] for m in modes)), float(e["value"])
-        line = (f"YADE's own {e['name']} = {theirs:.10g} J, demsplit's {' + '.join(modes)} = {ours:.10g} J"
-                + (f" (relative difference {abs(ours - theirs) / abs(theirs):.2g})" if theirs else ""))
+        line = f"YADE's own {e['name']} = {theirs:.10g} J, demsplit's {' + '.join(modes)} = {ours:.10g} J" + (
+            f" (relative difference {abs(ours - theirs) / abs(theirs):.2g})" if theirs else ""
+        )
         if theirs == 0 and ours > 0 and e["name"].startswith("O.energy"):
-            line += ("; YADE's ForceResetter zeroes it at the start of each step, so a state saved before the "
-                     "InteractionLoop holds 0")
+            line += (
+                "; YADE's ForceResetter zeroes it at the start of each step, so a state saved before the "
+                "InteractionLoop holds 0"
+            )
         lines.append(line)
     return lines
 
@@ -233,20 +245,32 @@ def _headline_sentences(one: Results, rules: list[str], walls_part: Mapping[str,
     if not rules:
         out.append("The 50/50 and radius splits were not computed (demsplit run --no-compare).")
     if len(elastic) == 1 and len(present) >= 1:
-        (E, nu), = elastic
-        out.append(f"One particle material (E = {E:g} Pa, nu = {nu:g}): between two particles the material law "
-                   "splits by compliance, (1 - nu^2)/E, which is the same for both, so it gives each half: there it "
-                   "is the 50/50 split"
-                   + (", and the difference to 50/50 above comes from the wall contacts, whose material differs."
-                      if walled and other_walls else " (the walls too are of this material)." if walled else "."))
+        ((E, nu),) = elastic
+        out.append(
+            f"One particle material (E = {E:g} Pa, nu = {nu:g}): between two particles the material law "
+            "splits by compliance, (1 - nu^2)/E, which is the same for both, so it gives each half: there it "
+            "is the 50/50 split"
+            + (
+                ", and the difference to 50/50 above comes from the wall contacts, whose material differs."
+                if walled and other_walls
+                else " (the walls too are of this material)."
+                if walled
+                else "."
+            )
+        )
     if "radius" in rules:
-        out.append("The radius split gives body 1 the share r1/(r1 + r2) of a contact (the split behind LIGGGHTS' "
-                   "contact point and Aspherix): between particles it favours the larger one, which the material "
-                   "law, by compliance, does not"
-                   + ("; against a wall it gives the particle r1/(r1 + r_wall), the whole contact where the wall is "
-                      "flat (r_wall = inf, LIGGGHTS' walls), where the material law gives the wall its compliance's "
-                      "share: 'radius off by walls' is that part of the error, in percentage points."
-                      if walled and "radius" in walls_part else "."))
+        out.append(
+            "The radius split gives body 1 the share r1/(r1 + r2) of a contact (the split behind LIGGGHTS' "
+            "contact point and Aspherix): between particles it favours the larger one, which the material "
+            "law, by compliance, does not"
+            + (
+                "; against a wall it gives the particle r1/(r1 + r_wall), the whole contact where the wall is "
+                "flat (r_wall = inf, LIGGGHTS' walls), where the material law gives the wall its compliance's "
+                "share: 'radius off by walls' is that part of the error, in percentage points."
+                if walled and "radius" in walls_part
+                else "."
+            )
+        )
     return out
 
 
@@ -276,8 +300,10 @@ def headline_lead(table: pd.DataFrame, names: Mapping[int, str]) -> str:
         if abs(off.iloc[k]) < AGREES_PCT:
             parts.append(f"the {label} split agrees with it")
             continue
-        parts.append(f"the {label} split gives {who} {abs(off.iloc[k]):.3g} % too "
-                     f"{'much' if off.iloc[k] > 0 else 'little'} energy")
+        parts.append(
+            f"the {label} split gives {who} {abs(off.iloc[k]):.3g} % too "
+            f"{'much' if off.iloc[k] > 0 else 'little'} energy"
+        )
     return ("Against the material law, " + " and ".join(parts) + " (the worst material of each).") if parts else ""
 
 
@@ -285,16 +311,25 @@ def _headline_text(one: Results, names: Mapping[int, str]) -> list[str]:
     """The headline as the terminal summary's first lines."""
     table, sentences = split_headline(one, names)
     lead = headline_lead(table, names)
-    return ([f"  {lead}" if lead else "  Energy per material under the material law:"]
-            + ["    " + line for line in _headline_shown(table).to_string(index=False).splitlines()]
-            + [f"  {sentence}" for sentence in sentences])
+    return (
+        [f"  {lead}" if lead else "  Energy per material under the material law:"]
+        + ["    " + line for line in _headline_shown(table).to_string(index=False).splitlines()]
+        + [f"  {sentence}" for sentence in sentences]
+    )
 
 
-HEADLINE_COLUMNS = {"particles": "particles (1)", "material_law": "material law (J)", "share_pct": "share (%)",
-                    "equal": "50/50 (J)", "equal_off_pct": "50/50 off (%)",
-                    "equal_off_walls_pct": "50/50 off by walls (%)", "radius": "radius (J)",
-                    "radius_off_pct": "radius off (%)", "radius_off_walls_pct": "radius off by walls (%)",
-                    "expected_error_pct": "expected error (%)"}
+HEADLINE_COLUMNS = {
+    "particles": "particles (1)",
+    "material_law": "material law (J)",
+    "share_pct": "share (%)",
+    "equal": "50/50 (J)",
+    "equal_off_pct": "50/50 off (%)",
+    "equal_off_walls_pct": "50/50 off by walls (%)",
+    "radius": "radius (J)",
+    "radius_off_pct": "radius off (%)",
+    "radius_off_walls_pct": "radius off by walls (%)",
+    "expected_error_pct": "expected error (%)",
+}
 """The headline table's column headers, with their units."""
 
 
@@ -318,20 +353,25 @@ def text_summary(results: Results, step: int | None = None, names: Mapping[int, 
     if missing:
         lines += ["  NOT COMPUTED (these values are unknown, not 0; they are left out of every total below):"]
         lines += [f"    - {n}" for n in missing]
-    lines.append(f"  {int(fr['n_particles'])} particles, {int(fr['n_contacts'])} contacts "
-                 f"({int(fr['n_wall_contacts'])} with walls); elastic contact energy {u_total:.6g} J ({parts})"
-                 + (f"; cohesion work {_mode_total(fr, one.raw.contacts, 'u_adh')}, apart" if "u_adh" in fr else ""))
+    lines.append(
+        f"  {int(fr['n_particles'])} particles, {int(fr['n_contacts'])} contacts "
+        f"({int(fr['n_wall_contacts'])} with walls); elastic contact energy {u_total:.6g} J ({parts})"
+        + (f"; cohesion work {_mode_total(fr, one.raw.contacts, 'u_adh')}, apart" if "u_adh" in fr else "")
+    )
     lines += [f"  {line}" for line in simulator_energies(results, step, fr)]
     model = results.provenance.get("model")
     if model:
-        params = ", ".join(f"{k}={v!r}" for k, v in sorted(model.get("params", {}).items())
-                           if v is not None and v != "off")
+        params = ", ".join(
+            f"{k}={v!r}" for k, v in sorted(model.get("params", {}).items()) if v is not None and v != "off"
+        )
         lines.append(f"  contact law: {model.get('law')}" + (f" ({params})" if params else ""))
     if known(fr.get("overlap_max_rel_error")):
         bound = fr["overlap_max_rel_error"]
         shown = "unbounded (a contact the printed positions may hide)" if bound >= UNBOUNDED else f"{bound:.3g}"
-        lines.append("  overlaps recomputed from printed positions (contacts without a dumped delta, e.g. primitive "
-                     f"walls): max relative error bound {shown}")
+        lines.append(
+            "  overlaps recomputed from printed positions (contacts without a dumped delta, e.g. primitive "
+            f"walls): max relative error bound {shown}"
+        )
     if u_total == 0:  # nothing to distribute: no table of shares and inequalities of zeros
         lines += ["", EMPTY_FRAME]
         return _closing(results, lines)
@@ -342,22 +382,37 @@ def text_summary(results: Results, step: int | None = None, names: Mapping[int, 
     table = table[cols]
     if names:
         table = table.assign(material=[names.get(int(t), "") for t in table["type"]])
-    lines += ["", "Energy per particle type (J; material distribution law; expected_error: the split's expected "
-              "relative error, finite-element model):", _fmt(table).to_string(index=False)]
+    lines += [
+        "",
+        "Energy per particle type (J; material distribution law; expected_error: the split's expected "
+        "relative error, finite-element model):",
+        _fmt(table).to_string(index=False),
+    ]
     if {"u_equal", "u_radius"} <= set(one.raw.particles.columns):
         sc = one.split_comparison()
         sc = sc[["type"] + [c for c in sc.columns if c.startswith(("total_", "misattribution_"))]]
-        lines += ["", "Split comparison (J; misattribution in % of the material-law total):",
-                  _fmt(sc).to_string(index=False)]
+        lines += [
+            "",
+            "Split comparison (J; misattribution in % of the material-law total):",
+            _fmt(sc).to_string(index=False),
+        ]
     if len(one.raw.walls):
         we = one.wall_energy()
-        lines += ["", "Walls (J):", _fmt(we[[c for c in ("wall", "name", "kind", "u", *energy_modes(we),
-                                                         "n_contacts", "share") if c in we]],
-                                         not_computed_mask(we)).to_string(index=False)]
+        lines += [
+            "",
+            "Walls (J):",
+            _fmt(
+                we[[c for c in ("wall", "name", "kind", "u", *energy_modes(we), "n_contacts", "share") if c in we]],
+                not_computed_mask(we),
+            ).to_string(index=False),
+        ]
     if {"cpx_sim", "cpy_sim", "cpz_sim"} <= set(one.raw.contacts.columns):
-        lines += ["", "Contact point: |cp - cp_simulator| / overlap (print_bound_median: what the dump's printed "
-                  "digits alone allow; a shift not far above it measures the print precision):",
-                  _fmt(one.contact_point_shift()).to_string(index=False)]
+        lines += [
+            "",
+            "Contact point: |cp - cp_simulator| / overlap (print_bound_median: what the dump's printed "
+            "digits alone allow; a shift not far above it measures the print precision):",
+            _fmt(one.contact_point_shift()).to_string(index=False),
+        ]
     if "share_n1_error" in one.raw.contacts:
         lines += ["", accuracy_line(one.raw.contacts, results.provenance.get("options", {}).get("split", "material"))]
     return _closing(results, lines)
@@ -373,8 +428,11 @@ def _closing(results: Results, lines: list[str]) -> str:
     pf = results.per_frame()
     held = pf[pf["u_contacts"] > 0]
     if len(held):
-        lines += ["", f"Energy balance over {len(held)} frame(s) with energy: max |sum particles + sum walls - sum "
-                  f"contacts| / sum contacts = {held['balance_rel_error'].max():.3g}"]
+        lines += [
+            "",
+            f"Energy balance over {len(held)} frame(s) with energy: max |sum particles + sum walls - sum "
+            f"contacts| / sum contacts = {held['balance_rel_error'].max():.3g}",
+        ]
     return "\n".join(lines) + "\n"
 
 
@@ -394,14 +452,17 @@ def accuracy_line(contacts: pd.DataFrame, split: str) -> str:
     total = u.sum()
     frac = u[big].sum() / total if total > 0 else 0.0
     weighted = (err * u).sum() / total if total > 0 else 0.0
-    return (f"Accuracy of the split ({split}; finite-element error model, docs/accuracy.md): expected share "
-            f"error {weighted:.2%} energy-weighted, max {err.max() if len(err) else 0:.2%}; {frac:.1%} of the "
-            f"normal energy in contacts beyond 1 % expected error; {int(beyond.sum())} contact(s) beyond the Hertz "
-            f"range a/R > {HERTZ_VALIDITY}, {int(extrapolated.sum())} beyond the model's fit a/R > {FIT_A_OVER_R} "
-            "(their expected error extrapolated)")
+    return (
+        f"Accuracy of the split ({split}; finite-element error model, docs/accuracy.md): expected share "
+        f"error {weighted:.2%} energy-weighted, max {err.max() if len(err) else 0:.2%}; {frac:.1%} of the "
+        f"normal energy in contacts beyond 1 % expected error; {int(beyond.sum())} contact(s) beyond the Hertz "
+        f"range a/R > {HERTZ_VALIDITY}, {int(extrapolated.sum())} beyond the model's fit a/R > {FIT_A_OVER_R} "
+        "(their expected error extrapolated)"
+    )
 
 
 # --------------------------------------------------------------------------- figures
+
 
 def _png(fig, alt: str) -> str:
     """The figure as an <img> tag with a base64 PNG data URI (closes the figure)."""
@@ -420,8 +481,10 @@ def _figure(fig, caption: str, alt: str) -> str:
 
 def _subset(particles: pd.DataFrame) -> tuple[pd.DataFrame, str]:
     if len(particles) > SCATTER_MAX_POINTS:
-        return (particles.sample(SCATTER_MAX_POINTS, random_state=0),
-                f" (a random subset of {SCATTER_MAX_POINTS} of the {len(particles)} particles)")
+        return (
+            particles.sample(SCATTER_MAX_POINTS, random_state=0),
+            f" (a random subset of {SCATTER_MAX_POINTS} of the {len(particles)} particles)",
+        )
     return particles, ""
 
 
@@ -433,8 +496,9 @@ def _fig_histogram(particles: pd.DataFrame, step: int, names: Mapping[int, str])
     if len(positive):
         edges = np.geomspace(positive["u"].min(), positive["u"].max() * (1 + 1e-12), 41)
         for t, sub in positive.groupby("type"):
-            ax.hist(sub["u"], bins=edges, histtype="step", linewidth=1.5,
-                    label=f"{_type_label(t, names)} (n = {len(sub)})")
+            ax.hist(
+                sub["u"], bins=edges, histtype="step", linewidth=1.5, label=f"{_type_label(t, names)} (n = {len(sub)})"
+            )
         ax.set_xscale("log")
         ax.legend()
     ax.set_xlabel("particle elastic energy u (J)")
@@ -551,8 +615,18 @@ def _fig_views(particles: pd.DataFrame, step: int) -> tuple[object, str]:
     cut = np.abs(particles["y"].to_numpy() - y0) < r
     sl = particles[cut]
     rc = np.sqrt(np.maximum(sl["radius"].to_numpy() ** 2 - (sl["y"].to_numpy() - y0) ** 2, 0.0))
-    coll = EllipseCollection(2 * rc, 2 * rc, np.zeros(len(sl)), units="xy", offsets=sl[["x", "z"]].to_numpy(),
-                             offset_transform=ax1.transData, cmap=cmap, norm=norm, edgecolors="k", linewidths=0.2)
+    coll = EllipseCollection(
+        2 * rc,
+        2 * rc,
+        np.zeros(len(sl)),
+        units="xy",
+        offsets=sl[["x", "z"]].to_numpy(),
+        offset_transform=ax1.transData,
+        cmap=cmap,
+        norm=norm,
+        edgecolors="k",
+        linewidths=0.2,
+    )
     coll.set_array(np.where(sl["u"].to_numpy() > 0, sl["u"].to_numpy(), np.nan))
     ax1.add_collection(coll)
     if len(particles):
@@ -605,9 +679,15 @@ def _fig_misattribution(particles: pd.DataFrame, step: int):
 
     fig, ax = plt.subplots(figsize=(7, 4))
     p = particles[particles["u"] > 0]
-    errs = {label: ((p[col] - p["u"]) / p["u"]).to_numpy() for col, label in
-            (("u_equal", "50/50 split"), ("u_radius", "radius-weighted split"), ("u_springs", "series springs"))
-            if col in p}
+    errs = {
+        label: ((p[col] - p["u"]) / p["u"]).to_numpy()
+        for col, label in (
+            ("u_equal", "50/50 split"),
+            ("u_radius", "radius-weighted split"),
+            ("u_springs", "series springs"),
+        )
+        if col in p
+    }
     values = np.concatenate(list(errs.values())) if errs else np.empty(0)
     values = values[np.isfinite(values)]
     if len(values):
@@ -634,8 +714,17 @@ def misattribution_table(particles: pd.DataFrame) -> pd.DataFrame:
             continue
         e = ((p[col] - p["u"]) / p["u"]).to_numpy()
         q = np.quantile(e, [0.05, 0.5, 0.95])
-        rows.append({"split": label, "particles": len(e), "p05": q[0], "median": q[1], "p95": q[2],
-                     "max_abs": float(np.abs(e).max()), "beyond_10pct": float((np.abs(e) > 0.1).mean())})
+        rows.append(
+            {
+                "split": label,
+                "particles": len(e),
+                "p05": q[0],
+                "median": q[1],
+                "p95": q[2],
+                "max_abs": float(np.abs(e).max()),
+                "beyond_10pct": float((np.abs(e) > 0.1).mean()),
+            }
+        )
     return pd.DataFrame(rows)
 
 
@@ -670,8 +759,12 @@ def _fig_split(sc: pd.DataFrame, step: int, names: Mapping[int, str]):
     fig, ax = plt.subplots(figsize=(7, 4))
     types = sc["type"].to_numpy()
     x = np.arange(len(types))
-    labels = {"material": "material law (Feng & Gao)", "equal": "50/50", "radius": "radius-weighted",
-              "springs": "series springs (YADE linear law)"}
+    labels = {
+        "material": "material law (Feng & Gao)",
+        "equal": "50/50",
+        "radius": "radius-weighted",
+        "springs": "series springs (YADE linear law)",
+    }
     rules = [r for r in labels if f"total_{r}" in sc]
     width = 0.8 / len(rules)
     for k, rule in enumerate(rules):
@@ -715,14 +808,31 @@ pre{background:#f6f6f6;padding:0.5em;font-size:0.8em;overflow-x:auto}
 details{margin:1em 0}summary{cursor:pointer;font-weight:bold}"""
 
 
-LABEL_COLUMNS = frozenset({"step", "type", "material", "wall", "name", "kind", "mode", "column", "split",
-                           "size_class", "frame"})
+LABEL_COLUMNS = frozenset(
+    {"step", "type", "material", "wall", "name", "kind", "mode", "column", "split", "size_class", "frame"}
+)
 """Columns that name or number a row: shown without a unit."""
 
-STAT_UNITS = {**dict.fromkeys(("total", "mean", "std", "p05", "p25", "p50", "p75", "p95", "u_contacts"), "J"),
-              **dict.fromkeys(("count", "share_of_total", "top1_share", "top10_share", "gini", "expected_error",
-                               "share", "balance_rel_error", "nu"), "1"),
-              "r_lo": "m", "r_hi": "m", "E": "Pa"}
+STAT_UNITS = {
+    **dict.fromkeys(("total", "mean", "std", "p05", "p25", "p50", "p75", "p95", "u_contacts"), "J"),
+    **dict.fromkeys(
+        (
+            "count",
+            "share_of_total",
+            "top1_share",
+            "top10_share",
+            "gini",
+            "expected_error",
+            "share",
+            "balance_rel_error",
+            "nu",
+        ),
+        "1",
+    ),
+    "r_lo": "m",
+    "r_hi": "m",
+    "E": "Pa",
+}
 """Units of the report's derived columns (the statistics of the per-type, per-size and per-frame tables, the
 materials'); the stored columns' are :data:`~demsplit.results.schema.UNITS`."""
 
@@ -746,16 +856,19 @@ def column_unit(column: str, units: Mapping[str, str] | None = None) -> str:
     raise KeyError(f"the report has no unit for the column {column!r}")
 
 
-def _table(df: pd.DataFrame, unknown: Mapping[str, np.ndarray] | None = None,
-           units: Mapping[str, str] | None = None) -> str:
+def _table(
+    df: pd.DataFrame, unknown: Mapping[str, np.ndarray] | None = None, units: Mapping[str, str] | None = None
+) -> str:
     """``df`` as an HTML table (:func:`_fmt`), each number column's header with its unit (:func:`column_unit`)."""
     out = _fmt(df, unknown)
     out.columns = [c if c in LABEL_COLUMNS else f"{c} ({column_unit(c, units)})" for c in out.columns]
     return out.to_html(index=False, border=0, escape=True)
 
 
-RELATIVE_UNITS = {c: "1" for c in ("particles", "p05", "median", "p95", "max", "max_abs", "beyond_10pct", "n_missing",
-                                   "print_bound_median")}
+RELATIVE_UNITS = {
+    c: "1"
+    for c in ("particles", "p05", "median", "p95", "max", "max_abs", "beyond_10pct", "n_missing", "print_bound_median")
+}
 """Units of the misattribution and contact-point tables, whose statistics are of relative values."""
 
 
@@ -768,10 +881,16 @@ def _mode_table(one: Results) -> pd.DataFrame:
     for col in energy_modes(pd.DataFrame(columns=list(found))):
         table = one.raw.frames if col in one.raw.frames else one.raw.contacts if col in one.raw.contacts else None
         total = table[col].sum() if table is not None else np.nan
-        rows.append({"mode": MODE_NAMES.get(col, col), "column": col, "contacts": float(total),
-                     "particles": float(one.raw.particles[col].sum()) if col in one.raw.particles else np.nan,
-                     "walls": float(one.raw.walls[col].sum()) if col in one.raw.walls else np.nan,
-                     "contacts_not_computed": int(unknown[col].sum()) if col in unknown else 0})
+        rows.append(
+            {
+                "mode": MODE_NAMES.get(col, col),
+                "column": col,
+                "contacts": float(total),
+                "particles": float(one.raw.particles[col].sum()) if col in one.raw.particles else np.nan,
+                "walls": float(one.raw.walls[col].sum()) if col in one.raw.walls else np.nan,
+                "contacts_not_computed": int(unknown[col].sum()) if col in unknown else 0,
+            }
+        )
     return pd.DataFrame(rows, columns=["mode", "column", "contacts", "particles", "walls", "contacts_not_computed"])
 
 
@@ -780,52 +899,110 @@ def _energy_sections(one: Results, step: int, names: Mapping[int, str]) -> list[
     radius and height, per size class, and the split comparison."""
     esc = html.escape
     body: list[str] = []
-    cols = ["type", "count", "total", "share_of_total", "mean", "std", "p05", "p50", "p95", "top1_share",
-            "top10_share", "gini"]
+    cols = [
+        "type",
+        "count",
+        "total",
+        "share_of_total",
+        "mean",
+        "std",
+        "p05",
+        "p50",
+        "p95",
+        "top1_share",
+        "top10_share",
+        "gini",
+    ]
     per_type = one.per_type()
     cols += ["expected_error"] if "expected_error" in per_type else []
-    body += ["<h2>Energy per particle type</h2>",
-             _table(_with_names(per_type[cols + (["n_not_computed"] if "n_not_computed" in per_type
-                                                 and per_type["n_not_computed"].any() else [])], names)),
-             _figure(_fig_histogram(one.raw.particles, step, names),
-                     "Histogram of per-particle elastic energy (material distribution law).",
-                     "Energy histogram per type")]
-    body += ["<h2>Distribution</h2>", _figure(
-        _fig_distribution(one.raw.particles, step, names),
-        "Left: probability density of u/&lt;u&gt; over log-spaced bins, &lt;u&gt; the mean over every particle of "
-        "the group (particles with u = 0 count in the normalisation, not in the curve). Right: the complementary "
-        "cumulative distribution P(u/&lt;u&gt; &ge; x). Log axes: a power-law tail is a straight line.",
-        "Normalised distribution and CCDF")]
+    body += [
+        "<h2>Energy per particle type</h2>",
+        _table(
+            _with_names(
+                per_type[
+                    cols
+                    + (["n_not_computed"] if "n_not_computed" in per_type and per_type["n_not_computed"].any() else [])
+                ],
+                names,
+            )
+        ),
+        _figure(
+            _fig_histogram(one.raw.particles, step, names),
+            "Histogram of per-particle elastic energy (material distribution law).",
+            "Energy histogram per type",
+        ),
+    ]
+    body += [
+        "<h2>Distribution</h2>",
+        _figure(
+            _fig_distribution(one.raw.particles, step, names),
+            "Left: probability density of u/&lt;u&gt; over log-spaced bins, &lt;u&gt; the mean over every particle of "
+            "the group (particles with u = 0 count in the normalisation, not in the curve). Right: the complementary "
+            "cumulative distribution P(u/&lt;u&gt; &ge; x). Log axes: a power-law tail is a straight line.",
+            "Normalised distribution and CCDF",
+        ),
+    ]
     fig, note = _fig_radius(one.raw.particles, step, names)
     body.append(_figure(fig, f"Particle energy against radius{esc(note)}.", "Energy against radius"))
     if {"x", "y", "z"} <= set(one.raw.particles.columns):
-        body += ["<h2>Where the energy sits</h2>",
-                 _figure(_fig_height(one.raw.particles, step, names),
-                         f"Mean energy per particle (left) and share of the frame's particle energy (right) in "
-                         f"{HEIGHT_BINS} horizontal slabs of z (particles by their centre).", "Energy against height")]
+        body += [
+            "<h2>Where the energy sits</h2>",
+            _figure(
+                _fig_height(one.raw.particles, step, names),
+                f"Mean energy per particle (left) and share of the frame's particle energy (right) in "
+                f"{HEIGHT_BINS} horizontal slabs of z (particles by their centre).",
+                "Energy against height",
+            ),
+        ]
         fig, note = _fig_views(one.raw.particles, step)
-        body.append(_figure(fig, "Left: the particles cut by the plane y = median y, drawn as their cross-sections "
-                            "and coloured by u (log scale; grey: u = 0). Right: every particle's centre projected on "
-                            f"the x-z plane{esc(note)}, the highest energies drawn last.", "Slice and projection"))
+        body.append(
+            _figure(
+                fig,
+                "Left: the particles cut by the plane y = median y, drawn as their cross-sections "
+                "and coloured by u (log scale; grey: u = 0). Right: every particle's centre projected on "
+                f"the x-z plane{esc(note)}, the highest energies drawn last.",
+                "Slice and projection",
+            )
+        )
     per_size = one.per_size()
-    body += ["<h2>Energy per size class</h2>",
-             _figure(_fig_size(per_size, step), "Each bar spans its radius class [r_lo, r_hi] (log-spaced classes "
-                     "between the smallest and the largest radius of this frame); log energy axes.",
-                     "Energy per size class"),
-             _table(per_size)]
+    body += [
+        "<h2>Energy per size class</h2>",
+        _figure(
+            _fig_size(per_size, step),
+            "Each bar spans its radius class [r_lo, r_hi] (log-spaced classes "
+            "between the smallest and the largest radius of this frame); log energy axes.",
+            "Energy per size class",
+        ),
+        _table(per_size),
+    ]
     if {"u_equal", "u_radius"} <= set(one.raw.particles.columns):
         sc = one.split_comparison()
-        body += ["<h2>Split comparison</h2>", _figure(
-            _fig_split(sc, step, names),
-            "Energy held per type under the material law, the 50/50 split and the radius-weighted split; "
-            "misattribution = (split total - material total)/material total.", "Energy per type under each split"),
-            _table(_with_names(sc[["step", "type", "count"] + [c for c in sc.columns if c.startswith(
-                ("total_", "misattribution_", "gini_"))]], names)),
-            _figure(_fig_misattribution(one.raw.particles, step),
-                    "Per-particle misattribution (u_split - u)/u of the simpler splits, over the particles with "
-                    "u &gt; 0 (values beyond the 99.5th percentile are gathered in the last bin). -1: the split "
-                    "gives the particle nothing; +1: twice its energy.", "Per-particle misattribution"),
-            _table(misattribution_table(one.raw.particles), units=RELATIVE_UNITS)]
+        body += [
+            "<h2>Split comparison</h2>",
+            _figure(
+                _fig_split(sc, step, names),
+                "Energy held per type under the material law, the 50/50 split and the radius-weighted split; "
+                "misattribution = (split total - material total)/material total.",
+                "Energy per type under each split",
+            ),
+            _table(
+                _with_names(
+                    sc[
+                        ["step", "type", "count"]
+                        + [c for c in sc.columns if c.startswith(("total_", "misattribution_", "gini_"))]
+                    ],
+                    names,
+                )
+            ),
+            _figure(
+                _fig_misattribution(one.raw.particles, step),
+                "Per-particle misattribution (u_split - u)/u of the simpler splits, over the particles with "
+                "u &gt; 0 (values beyond the 99.5th percentile are gathered in the last bin). -1: the split "
+                "gives the particle nothing; +1: twice its energy.",
+                "Per-particle misattribution",
+            ),
+            _table(misattribution_table(one.raw.particles), units=RELATIVE_UNITS),
+        ]
     return body
 
 
@@ -835,31 +1012,40 @@ def _summary_box(results: Results, one: Results, step: int, names: Mapping[int, 
     what was not computed."""
     esc = html.escape
     fr = one.raw.frames.iloc[0]
-    out = ["<div class='summary' id='summary'>",
-           f"<h2>Summary: the elastic energy per material, timestep {step}</h2>"]
+    out = ["<div class='summary' id='summary'>", f"<h2>Summary: the elastic energy per material, timestep {step}</h2>"]
     if u_total > 0:
         table, sentences = split_headline(one, names)
         lead = headline_lead(table, names)
-        out += [f"<p class='lead'>{esc(lead)}</p>" if lead else "",
-                f"<p>{u_total:.4g} J of elastic energy in {int(fr['n_contacts'])} contacts, held by the particles "
-                "as the material law (Feng &amp; Gao) splits it, and where the two simpler splits other tools use "
-                "put it instead (off: (split &minus; material law)/material law).</p>",
-                _headline_shown(table).to_html(index=False, border=0, escape=True),
-                *(f"<p>{esc(sentence)}</p>" for sentence in sentences)]
+        out += [
+            f"<p class='lead'>{esc(lead)}</p>" if lead else "",
+            f"<p>{u_total:.4g} J of elastic energy in {int(fr['n_contacts'])} contacts, held by the particles "
+            "as the material law (Feng &amp; Gao) splits it, and where the two simpler splits other tools use "
+            "put it instead (off: (split &minus; material law)/material law).</p>",
+            _headline_shown(table).to_html(index=False, border=0, escape=True),
+            *(f"<p>{esc(sentence)}</p>" for sentence in sentences),
+        ]
         split = (results.provenance.get("options") or {}).get("split", "material")
-        out.append(f"<p>{esc(accuracy_line(one.raw.contacts, split))}</p>" if "share_n1_error" in one.raw.contacts
-                   else "<p>The expected error of the split was not computed (demsplit run --no-accuracy, or a "
-                   "store without contacts).</p>")
+        out.append(
+            f"<p>{esc(accuracy_line(one.raw.contacts, split))}</p>"
+            if "share_n1_error" in one.raw.contacts
+            else "<p>The expected error of the split was not computed (demsplit run --no-accuracy, or a "
+            "store without contacts).</p>"
+        )
     else:
         out.append(f"<p>{esc(EMPTY_FRAME)}</p>")
     missing = not_computed(results, fr)
     if missing:
-        out += ["<div class='missing' id='not-computed'><h3>Not computed</h3><p>These values are unknown, not 0; "
-                "they are left out of every total below.</p><ul>",
-                *(f"<li>{esc(m)}</li>" for m in missing), "</ul></div>"]
+        out += [
+            "<div class='missing' id='not-computed'><h3>Not computed</h3><p>These values are unknown, not 0; "
+            "they are left out of every total below.</p><ul>",
+            *(f"<li>{esc(m)}</li>" for m in missing),
+            "</ul></div>",
+        ]
     else:
-        out.append("<p class='ok' id='not-computed'>Not computed: nothing (the store records no mode, wall or "
-                   "contact left out).</p>")
+        out.append(
+            "<p class='ok' id='not-computed'>Not computed: nothing (the store records no mode, wall or "
+            "contact left out).</p>"
+        )
     return [*out, "</div>"]
 
 
@@ -869,14 +1055,18 @@ def _frames_summary(pf: pd.DataFrame) -> str:
     if not len(pf):
         return ""
     picks = {"first": 0, "last": len(pf) - 1, "most energy": int(np.argmax(pf["u_contacts"].to_numpy()))}
-    cols = [c for c in ("step", "time", "n_particles", "n_contacts", "u_contacts", "u_walls", "balance_rel_error")
-            if c in pf]
+    cols = [
+        c
+        for c in ("step", "time", "n_particles", "n_contacts", "u_contacts", "u_walls", "balance_rel_error")
+        if c in pf
+    ]
     rows = pf.iloc[list(picks.values())][cols].reset_index(drop=True)
     rows.insert(0, "frame", list(picks))
     worst = pf["balance_rel_error"].max() if "balance_rel_error" in pf else np.nan
-    return (f"<p>{len(pf)} frames; largest energy balance error |sum particles + sum walls &minus; sum contacts| / "
-            f"sum contacts: {'-' if not np.isfinite(worst) else f'{worst:.3g}'}.</p>"
-            + _table(rows))
+    return (
+        f"<p>{len(pf)} frames; largest energy balance error |sum particles + sum walls &minus; sum contacts| / "
+        f"sum contacts: {'-' if not np.isfinite(worst) else f'{worst:.3g}'}.</p>" + _table(rows)
+    )
 
 
 def _shown_path(text: str) -> str:
@@ -888,9 +1078,15 @@ def _shown_path(text: str) -> str:
     return text
 
 
-def write_html(results: Results, path: str | Path, step: int | None = None,
-               names: Mapping[int, str] | None = None, *, inputs: Iterable[str | Path] = (),
-               overwrite: bool = False) -> Path:
+def write_html(
+    results: Results,
+    path: str | Path,
+    step: int | None = None,
+    names: Mapping[int, str] | None = None,
+    *,
+    inputs: Iterable[str | Path] = (),
+    overwrite: bool = False,
+) -> Path:
     """Write the HTML report of frame ``step`` (default: the last) and the per-frame series to ``path``
     (atomically: ``path.tmp``, then renamed); ``names``: material names of types (:meth:`Results.type_names`).
     ``path`` is never one of ``inputs``, nor an existing file that is not a demsplit report unless
@@ -908,56 +1104,101 @@ def write_html(results: Results, path: str | Path, step: int | None = None,
     esc = html.escape
     time = f" (t = {fr['time']:.6g} s)" if known(fr.get("time")) else ""
     steps = results.steps
-    head = [f"<h1>demsplit report</h1><p>{len(steps)} frame(s), timesteps {int(steps.min())} to {int(steps.max())}; "
-            f"detailed frame: <b>timestep {step}</b>{esc(time)} (another: <code>demsplit report FILE --step N</code>)."]
+    head = [
+        f"<h1>demsplit report</h1><p>{len(steps)} frame(s), timesteps {int(steps.min())} to {int(steps.max())}; "
+        f"detailed frame: <b>timestep {step}</b>{esc(time)} (another: <code>demsplit report FILE --step N</code>)."
+    ]
     source = (prov.get("scene") or {}).get("source")
     model = prov.get("model") or {}
     if source or model:
         head.append(f"<br>Run: {esc(_shown_path(str(source or '?')))}; contact law {esc(str(model.get('law', '?')))}.")
-    head.append(f"<br>{int(fr['n_particles'])} particles, {int(fr['n_contacts'])} contacts "
-                f"({int(fr['n_wall_contacts'])} with walls).</p>")
+    head.append(
+        f"<br>{int(fr['n_particles'])} particles, {int(fr['n_contacts'])} contacts "
+        f"({int(fr['n_wall_contacts'])} with walls).</p>"
+    )
     u_total = sum(fr[m] for m in elastic_columns(one.raw.frames))
     head += _summary_box(results, one, step, names, u_total)
     other = [n for n in prov.get("notes", []) if "NOT COMPUTED" not in n]
     if other:
-        head += ["<details><summary>Notes of the run</summary><ul>", *(f"<li>{esc(n)}</li>" for n in other),
-                 "</ul></details>"]
-    body = [*head, "<h2>Energy per mode</h2>",
-            "<p>Totals of this frame (J). The elastic modes sum to the elastic total; the cohesion work "
-            "<code>u_adh</code>, where present, is signed and kept apart.</p>",
-            _table(_mode_table(one), units={"contacts": "J", "particles": "J", "walls": "J",
-                                            "contacts_not_computed": "1"})]
+        head += [
+            "<details><summary>Notes of the run</summary><ul>",
+            *(f"<li>{esc(n)}</li>" for n in other),
+            "</ul></details>",
+        ]
+    body = [
+        *head,
+        "<h2>Energy per mode</h2>",
+        "<p>Totals of this frame (J). The elastic modes sum to the elastic total; the cohesion work "
+        "<code>u_adh</code>, where present, is signed and kept apart.</p>",
+        _table(_mode_table(one), units={"contacts": "J", "particles": "J", "walls": "J", "contacts_not_computed": "1"}),
+    ]
     own = simulator_energies(results, step, fr)
     if own:
-        body += ["<p id='simulator-energies'>The simulator's own numbers of this instant:</p><ul>",
-                 *(f"<li>{esc(line)}</li>" for line in own), "</ul>"]
+        body += [
+            "<p id='simulator-energies'>The simulator's own numbers of this instant:</p><ul>",
+            *(f"<li>{esc(line)}</li>" for line in own),
+            "</ul>",
+        ]
     if "share_n1_error" in one.raw.contacts:
         body.append(f"<p>{esc(accuracy_line(one.raw.contacts, prov.get('options', {}).get('split', 'material')))}</p>")
     body += _energy_sections(one, step, names) if u_total > 0 else [f"<p>{esc(EMPTY_FRAME)}</p>"]
-    frame_cols = ["step", "time", "n_particles", "n_contacts", "n_wall_contacts", "u_contacts", *energy_modes(pf),
-                  "u_walls", "balance_rel_error", "gini"]
-    body += ["<h2>Frames</h2>", _figure(_fig_frames(pf), "Elastic total, every energy mode and the energy held by "
-                                        "walls per frame, on a log axis so that small terms are visible.",
-                                        "Energy per frame"),
-             _frames_summary(pf),
-             f"<details id='frames-table'><summary>The per-frame table ({len(pf)} rows)</summary>",
-             _table(pf[[c for c in dict.fromkeys(frame_cols) if c in pf]]), "</details>"]
+    frame_cols = [
+        "step",
+        "time",
+        "n_particles",
+        "n_contacts",
+        "n_wall_contacts",
+        "u_contacts",
+        *energy_modes(pf),
+        "u_walls",
+        "balance_rel_error",
+        "gini",
+    ]
+    body += [
+        "<h2>Frames</h2>",
+        _figure(
+            _fig_frames(pf),
+            "Elastic total, every energy mode and the energy held by "
+            "walls per frame, on a log axis so that small terms are visible.",
+            "Energy per frame",
+        ),
+        _frames_summary(pf),
+        f"<details id='frames-table'><summary>The per-frame table ({len(pf)} rows)</summary>",
+        _table(pf[[c for c in dict.fromkeys(frame_cols) if c in pf]]),
+        "</details>",
+    ]
     if len(one.raw.walls):
         we = one.wall_energy()
         body += ["<h2>Walls</h2>", _table(_with_names(we, names), not_computed_mask(we))]
     if {"cpx_sim", "cpy_sim", "cpz_sim"} <= set(one.raw.contacts.columns) and len(one.raw.contacts):
-        body += ["<h2>Contact point</h2>", _figure(
-            _fig_cp(one.raw.contacts, step), "Distance between the material-weighted contact point and the simulator's "
-            "own, in units of the overlap.", "Contact point shift"),
-            _table(one.contact_point_shift(), units=RELATIVE_UNITS)]
+        body += [
+            "<h2>Contact point</h2>",
+            _figure(
+                _fig_cp(one.raw.contacts, step),
+                "Distance between the material-weighted contact point and the simulator's "
+                "own, in units of the overlap.",
+                "Contact point shift",
+            ),
+            _table(one.contact_point_shift(), units=RELATIVE_UNITS),
+        ]
     materials = (prov.get("scene") or {}).get("materials") or {}
     if materials or names:
         rows = {int(t): {k: v for k, v in (m or {}).items() if k != "name"} for t, m in materials.items()}
-        body += ["<h2>Materials</h2>", _table(pd.DataFrame(
-            [{"type": t, "material": names.get(t, ""), **rows.get(t, {})} for t in sorted({*rows, *names})]))]
-    body += ["<details id='provenance'><summary>Provenance (inputs with their BLAKE3 digest, options, scene, "
-             "demsplit version)</summary>",
-             f"<pre>{esc(json.dumps(prov, indent=2, sort_keys=True, default=str))}</pre></details>"]
-    page = (f"<!DOCTYPE html><html><head><meta charset='utf-8'>{REPORT_GENERATOR}<title>demsplit report</title>"
-            f"<style>{_CSS}</style></head><body>{''.join(body)}</body></html>")
+        body += [
+            "<h2>Materials</h2>",
+            _table(
+                pd.DataFrame(
+                    [{"type": t, "material": names.get(t, ""), **rows.get(t, {})} for t in sorted({*rows, *names})]
+                )
+            ),
+        ]
+    body += [
+        "<details id='provenance'><summary>Provenance (inputs with their BLAKE3 digest, options, scene, "
+        "demsplit version)</summary>",
+        f"<pre>{esc(json.dumps(prov, indent=2, sort_keys=True, default=str))}</pre></details>",
+    ]
+    page = (
+        f"<!DOCTYPE html><html><head><meta charset='utf-8'>{REPORT_GENERATOR}<title>demsplit report</title>"
+        f"<style>{_CSS}</style></head><body>{''.join(body)}</body></html>"
+    )
     return write_output(path, page, kind=REPORT, inputs=inputs, overwrite=overwrite)

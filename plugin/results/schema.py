@@ -25,14 +25,69 @@ Table = dict[str, np.ndarray]
 TABLES = ("particles", "contacts", "walls", "frames")
 """The tables of a result set, in the order they are stored."""
 
-_ENERGY = {c: "J" for c in ("u", "u_n", "u_t", "u_r", "u_tw", "u_adh", "u_n_error", "u_equal", "u_radius",
-                            "u_springs", "u1", "u2", "u_particles", "u_walls")}
-_LENGTH = {c: "m" for c in ("x", "y", "z", "radius", "delta", "depth1", "cpx", "cpy", "cpz", "cpx_sim", "cpy_sim",
-                             "cpz_sim", *(f"box_{a}{end}" for a in "xyz" for end in ("lo", "hi")))}
-_COUNT = {c: "1" for c in ("step", "id", "clump", "n_members", "id1", "id2", "wall", "type", "n_contacts",
-                           "n_particles", "n_wall_contacts", "n_not_computed", "share_n1", "share_t1", "share_r1",
-                           "share_tw1", "not_computed", "overlap_max_rel_error", "a_over_r1", "a_over_r2",
-                           "share_n1_error")}
+_ENERGY = {
+    c: "J"
+    for c in (
+        "u",
+        "u_n",
+        "u_t",
+        "u_r",
+        "u_tw",
+        "u_adh",
+        "u_n_error",
+        "u_equal",
+        "u_radius",
+        "u_springs",
+        "u1",
+        "u2",
+        "u_particles",
+        "u_walls",
+    )
+}
+_LENGTH = {
+    c: "m"
+    for c in (
+        "x",
+        "y",
+        "z",
+        "radius",
+        "delta",
+        "depth1",
+        "cpx",
+        "cpy",
+        "cpz",
+        "cpx_sim",
+        "cpy_sim",
+        "cpz_sim",
+        *(f"box_{a}{end}" for a in "xyz" for end in ("lo", "hi")),
+    )
+}
+_COUNT = {
+    c: "1"
+    for c in (
+        "step",
+        "id",
+        "clump",
+        "n_members",
+        "id1",
+        "id2",
+        "wall",
+        "type",
+        "n_contacts",
+        "n_particles",
+        "n_wall_contacts",
+        "n_not_computed",
+        "share_n1",
+        "share_t1",
+        "share_r1",
+        "share_tw1",
+        "not_computed",
+        "overlap_max_rel_error",
+        "a_over_r1",
+        "a_over_r2",
+        "share_n1_error",
+    )
+}
 UNITS: dict[str, str] = {**_ENERGY, **_LENGTH, **_COUNT, "time": "s"}
 """Unit of every known column; a column not listed here gets the unit ``""`` (unknown)."""
 
@@ -54,8 +109,19 @@ def known(value) -> bool:
     return value is not None and bool(np.isfinite(value)) and value >= 0
 
 
-_INT64 = ("step", "id", "clump", "n_members", "id1", "id2", "wall", "n_contacts", "n_particles", "n_wall_contacts",
-          "n_not_computed")
+_INT64 = (
+    "step",
+    "id",
+    "clump",
+    "n_members",
+    "id1",
+    "id2",
+    "wall",
+    "n_contacts",
+    "n_particles",
+    "n_wall_contacts",
+    "n_not_computed",
+)
 _INT32 = ("type", "not_computed")
 
 

@@ -49,8 +49,9 @@ def demsplit_version() -> str:
         return "unknown"
 
 
-def build_provenance(inputs: Iterable[str | Path], *, scene=None, options: dict | None = None, wait: bool = True,
-                     **extra) -> dict:
+def build_provenance(
+    inputs: Iterable[str | Path], *, scene=None, options: dict | None = None, wait: bool = True, **extra
+) -> dict:
     """A provenance dict: ``inputs`` (fingerprints), ``scene`` (materials per type,
     walls) and ``model`` (contact model) from a :class:`demsplit.scene.Scene`,
     ``options``, ``demsplit_version``, plus any ``extra`` entries (e.g.
@@ -58,8 +59,11 @@ def build_provenance(inputs: Iterable[str | Path], *, scene=None, options: dict 
     ``wait=False``: an input whose digest is still being computed has digest None
     (:func:`~demsplit.fingerprint.file_fingerprint`), which the
     :class:`~demsplit.results.writer.ResultWriter` fills in."""
-    prov: dict = {"inputs": [file_fingerprint(p, wait=wait) for p in inputs], "options": dict(options or {}),
-                  "demsplit_version": demsplit_version()}
+    prov: dict = {
+        "inputs": [file_fingerprint(p, wait=wait) for p in inputs],
+        "options": dict(options or {}),
+        "demsplit_version": demsplit_version(),
+    }
     if scene is not None:
         prov["scene"] = scene_to_dict(scene)
         prov["model"] = prov["scene"].pop("model")
@@ -86,16 +90,28 @@ def to_json(obj, what: str) -> str:
     try:
         return json.dumps(obj, sort_keys=True, allow_nan=True)
     except (TypeError, ValueError) as exc:
-        raise StoreError(f"the {what} is not JSON-serialisable: {exc}.",
-                         fix=f"put only str, numbers, lists and dicts in the {what}.") from exc
+        raise StoreError(
+            f"the {what} is not JSON-serialisable: {exc}.", fix=f"put only str, numbers, lists and dicts in the {what}."
+        ) from exc
 
 
 MAX_CHUNK_ROWS = 1 << 20
 """The most rows a chunk of a stored column may declare: the writer's chunks are at most
 :data:`~demsplit.results.chunks.CHUNK_ROWS`; a larger one is not a store's (memory per chunk read is bounded)."""
 
-_PROVENANCE_TYPES = {"inputs": list, "options": dict, "scene": dict, "model": dict, "notes": list, "bad_frames": list,
-                     "type_names": dict, "named_files": list, "not_computed": dict, "skipped": dict, "run": dict}
+_PROVENANCE_TYPES = {
+    "inputs": list,
+    "options": dict,
+    "scene": dict,
+    "model": dict,
+    "notes": list,
+    "bad_frames": list,
+    "type_names": dict,
+    "named_files": list,
+    "not_computed": dict,
+    "skipped": dict,
+    "run": dict,
+}
 """The type of each provenance entry that readers of a store use (a missing entry is fine)."""
 
 
@@ -103,8 +119,14 @@ class _Layout:
     """What a store holds, read from its index and attributes and checked (:func:`open_store`): the
     timesteps, each table's row offsets per frame and columns, the provenance and the walls' metadata."""
 
-    def __init__(self, steps: np.ndarray, offsets: dict[str, np.ndarray], columns: dict[str, list[str]],
-                 provenance: dict, walls_meta: list) -> None:
+    def __init__(
+        self,
+        steps: np.ndarray,
+        offsets: dict[str, np.ndarray],
+        columns: dict[str, list[str]],
+        provenance: dict,
+        walls_meta: list,
+    ) -> None:
         self.steps, self.offsets, self.columns = steps, offsets, columns
         self.provenance, self.walls_meta = provenance, walls_meta
 
@@ -129,13 +151,19 @@ def open_store(path: str | Path):
     if not path.is_file():
         work = work_dir_of(path)
         hint = f" An interrupted run left its finished frames in {work}." if work.exists() else ""
-        raise StoreError(f"no result store here.{hint}", file=path,
-                         fix="run demsplit first (or continue the interrupted run: demsplit run ... --resume).")
+        raise StoreError(
+            f"no result store here.{hint}",
+            file=path,
+            fix="run demsplit first (or continue the interrupted run: demsplit run ... --resume).",
+        )
     try:
         h5 = h5py.File(path, "r")
     except Exception as exc:  # h5py raises OSError, and others on damaged metadata
-        raise StoreError(f"not a readable HDF5 file ({type(exc).__name__}).", file=path,
-                         fix="point to a store written by demsplit run.") from None
+        raise StoreError(
+            f"not a readable HDF5 file ({type(exc).__name__}).",
+            file=path,
+            fix="point to a store written by demsplit run.",
+        ) from None
     try:
         layout = _check_layout(h5, path, refuse_foreign_storage)
     except StoreError:
@@ -158,14 +186,20 @@ def _check_layout(h5, path: Path, refuse_foreign_storage) -> _Layout:
     from ..errors import InputFormatError
 
     if text_attribute(h5, "format") != FORMAT:
-        raise StoreError(f"not a demsplit result store (its format attribute is not {FORMAT!r}).", file=path,
-                         fix="point to a store written by demsplit run.")
+        raise StoreError(
+            f"not a demsplit result store (its format attribute is not {FORMAT!r}).",
+            file=path,
+            fix="point to a store written by demsplit run.",
+        )
     version = h5.attrs.get("format_version")
     if not isinstance(version, (int, np.integer)) or version < 1:
         raise _damaged(path, "its format_version attribute is not a positive integer.")
     if int(version) > FORMAT_VERSION:
-        raise StoreError(f"store format version {int(version)} is newer than this demsplit reads "
-                         f"({FORMAT_VERSION}).", file=path, fix="upgrade demsplit.")
+        raise StoreError(
+            f"store format version {int(version)} is newer than this demsplit reads ({FORMAT_VERSION}).",
+            file=path,
+            fix="upgrade demsplit.",
+        )
     try:
         refuse_foreign_storage(h5, path)
     except InputFormatError as exc:
@@ -180,8 +214,14 @@ def _check_layout(h5, path: Path, refuse_foreign_storage) -> _Layout:
     _check_names(provenance, path)
     walls_meta = _json_attr(h5, "walls_meta", list, path)
     for w in walls_meta:
-        if not (isinstance(w, dict) and _small_int(w.get("wall")) and w["wall"] >= 0 and isinstance(w.get("name"), str)
-                and isinstance(w.get("kind"), str) and (w.get("type") is None or _small_int(w["type"]))):
+        if not (
+            isinstance(w, dict)
+            and _small_int(w.get("wall"))
+            and w["wall"] >= 0
+            and isinstance(w.get("name"), str)
+            and isinstance(w.get("kind"), str)
+            and (w.get("type") is None or _small_int(w["type"]))
+        ):
             raise _damaged(path, "an entry of its walls_meta attribute is not {wall: index, name, kind, type}.")
     if len({w["wall"] for w in walls_meta}) != len(walls_meta):
         raise _damaged(path, "its walls_meta attribute lists a wall twice.")
@@ -191,8 +231,11 @@ def _check_layout(h5, path: Path, refuse_foreign_storage) -> _Layout:
     steps = _index_column(index, "step", path)
     if len(steps) and np.any(np.diff(steps) <= 0):
         k = int(np.flatnonzero(np.diff(steps) <= 0)[0]) + 1
-        raise _damaged(path, f"frame {k} has timestep {int(steps[k])}, not after the frame before it "
-                             f"({int(steps[k - 1])}): each frame is stored once, in step order.")
+        raise _damaged(
+            path,
+            f"frame {k} has timestep {int(steps[k])}, not after the frame before it "
+            f"({int(steps[k - 1])}): each frame is stored once, in step order.",
+        )
     offsets, columns = {}, {}
     for name in TABLES:
         off = _index_column(index, name, path)
@@ -218,7 +261,7 @@ def _check_layout(h5, path: Path, refuse_foreign_storage) -> _Layout:
 
 def _small_int(value) -> bool:
     """Whether a JSON value is an integer of 32 bits (an index, a material type; not a bool)."""
-    return isinstance(value, int) and not isinstance(value, bool) and -2**31 <= value < 2**31
+    return isinstance(value, int) and not isinstance(value, bool) and -(2**31) <= value < 2**31
 
 
 def _check_names(provenance: dict, path: Path) -> None:
@@ -230,10 +273,12 @@ def _check_names(provenance: dict, path: Path) -> None:
     materials = scene.get("materials")
     for what, names in (("type_names", provenance.get("type_names") or {}), ("scene materials", materials or {})):
         if not isinstance(names, dict) or not all(
-                isinstance(t, str) and t.lstrip("-").isdecimal() and _small_int(int(t)) for t in names):
+            isinstance(t, str) and t.lstrip("-").isdecimal() and _small_int(int(t)) for t in names
+        ):
             raise _damaged(path, f"its provenance's {what} are not keyed by material type.")
-    if any(not isinstance(n, str) for n in (provenance.get("type_names") or {}).values()) or \
-            any(not isinstance(m, dict) for m in (materials or {}).values()):
+    if any(not isinstance(n, str) for n in (provenance.get("type_names") or {}).values()) or any(
+        not isinstance(m, dict) for m in (materials or {}).values()
+    ):
         raise _damaged(path, "its provenance's material names are not text, or its materials not JSON objects.")
 
 
@@ -274,8 +319,11 @@ def _check_column(d, table: str, col: str, rows: int, path: Path) -> None:
         raise _damaged(path, f"{where} is missing.")
     kind = canonical_dtype(col).kind
     if d.ndim != 1 or d.dtype.kind not in ("iu" if kind in "iu" else "f") or d.dtype.itemsize > 8:
-        raise _damaged(path, f"{where} is {d.dtype} of shape {d.shape}, not a column of "
-                             f"{'integers' if kind in 'iu' else 'real numbers'}.")
+        raise _damaged(
+            path,
+            f"{where} is {d.dtype} of shape {d.shape}, not a column of "
+            f"{'integers' if kind in 'iu' else 'real numbers'}.",
+        )
     if d.shape[0] != rows:
         raise _damaged(path, f"{where} has {d.shape[0]} rows; the index says {rows}.")
     if d.chunks is not None and d.chunks[0] > MAX_CHUNK_ROWS:
@@ -311,8 +359,11 @@ def read_store(path: str | Path, *, steps: Iterable[int] | None = None, every_fr
     except StoreError:
         raise
     except MemoryError:
-        raise StoreError("the store does not fit in memory.", file=path,
-                         fix="read fewer frames at a time (load_results(path, steps=[...])).") from None
+        raise StoreError(
+            "the store does not fit in memory.",
+            file=path,
+            fix="read fewer frames at a time (load_results(path, steps=[...])).",
+        ) from None
     except Exception as exc:  # a chunk h5py cannot decode (a damaged byte, a filter it does not have)
         raise _damaged(path, f"its data cannot be read ({type(exc).__name__}: {_short(exc)}).") from None
 
@@ -324,8 +375,11 @@ def _read_tables(h5, layout: _Layout, path: Path, steps: Iterable[int] | None, e
         wanted = np.asarray(list(steps), dtype=np.int64)
         missing = np.setdiff1d(wanted, stored_steps)
         if len(missing):
-            raise StoreError(f"timestep(s) {missing.tolist()[:10]} are not in the store "
-                             f"({len(stored_steps)} frames).", file=path, fix="pick stored timesteps.")
+            raise StoreError(
+                f"timestep(s) {missing.tolist()[:10]} are not in the store ({len(stored_steps)} frames).",
+                file=path,
+                fix="pick stored timesteps.",
+            )
         frames_k = frames_k[np.isin(stored_steps, wanted)]
     frames = {}
     for name in TABLES:
@@ -333,11 +387,21 @@ def _read_tables(h5, layout: _Layout, path: Path, steps: Iterable[int] | None, e
         whole = steps is None or (every_frame_row and name == "frames")
         table = {}
         for col in layout.columns[name]:
-            values = group[col][()] if whole else np.concatenate(
-                [group[col][off[k]:off[k + 1]] for k in frames_k] or [np.empty(0, group[col].dtype)])
+            values = (
+                group[col][()]
+                if whole
+                else np.concatenate(
+                    [group[col][off[k] : off[k + 1]] for k in frames_k] or [np.empty(0, group[col].dtype)]
+                )
+            )
             table[col] = _checked_column(values, name, col, path)
-        _check_rows(table, name, path, stored_steps if whole else stored_steps[frames_k],
-                    off if whole else np.concatenate([[0], np.cumsum(np.diff(off)[frames_k])]))
+        _check_rows(
+            table,
+            name,
+            path,
+            stored_steps if whole else stored_steps[frames_k],
+            off if whole else np.concatenate([[0], np.cumsum(np.diff(off)[frames_k])]),
+        )
         frames[name] = to_dataframe(table)
     return Results(**frames, provenance=layout.provenance, walls_meta=layout.walls_meta)
 
@@ -353,8 +417,11 @@ def _checked_column(values: np.ndarray, table: str, col: str, path: Path) -> np.
             bad = ~np.isfinite(values)
         if bad.any():
             row = int(np.flatnonzero(bad)[0])
-            raise _damaged(path, f"table {table}, column {col}, row {row} is {float(values[row])} "
-                                 f"({int(bad.sum())} value(s) are not finite; demsplit stores none).")
+            raise _damaged(
+                path,
+                f"table {table}, column {col}, row {row} is {float(values[row])} "
+                f"({int(bad.sum())} value(s) are not finite; demsplit stores none).",
+            )
     return values
 
 
@@ -369,8 +436,11 @@ def _check_rows(table: Table, name: str, path: Path, steps: np.ndarray, offsets:
         bad = table["step"] != expected
         if bad.any():
             row = int(np.flatnonzero(bad)[0])
-            raise _damaged(path, f"table {name}, row {row} has timestep {int(table['step'][row])}; the index puts it "
-                                 f"in the frame of timestep {int(expected[row])}.")
+            raise _damaged(
+                path,
+                f"table {name}, row {row} has timestep {int(table['step'][row])}; the index puts it "
+                f"in the frame of timestep {int(expected[row])}.",
+            )
     if name == "frames" and "step" in table and not np.array_equal(table["step"], steps):
         raise _damaged(path, "the frames table's timesteps are not the index's.")
     keys = _KEYS.get(name)

@@ -79,8 +79,15 @@ class Results:
     constructor takes the tables as stored (:class:`RawTables`).
     """
 
-    def __init__(self, particles: pd.DataFrame, contacts: pd.DataFrame, walls: pd.DataFrame, frames: pd.DataFrame,
-                 provenance: dict | None = None, walls_meta: list[dict] | None = None) -> None:
+    def __init__(
+        self,
+        particles: pd.DataFrame,
+        contacts: pd.DataFrame,
+        walls: pd.DataFrame,
+        frames: pd.DataFrame,
+        provenance: dict | None = None,
+        walls_meta: list[dict] | None = None,
+    ) -> None:
         self.raw = RawTables(particles, contacts, walls, frames)
         self.provenance: dict = dict(provenance or {})
         self.walls_meta: list[dict] = list(walls_meta or [])
@@ -116,12 +123,11 @@ class Results:
         """Results from tables that already hold every frame (missing tables are empty)."""
         unknown = set(tables) - set(TABLES)
         if unknown:
-            raise StoreError(f"unknown table(s) {sorted(unknown)}; expected some of {list(TABLES)}.",
-                             fix="name the tables particles, contacts, walls, frames.")
-        frames = {
-            name: to_dataframe(_sorted_by_step(canonical_table(name, tables.get(name, {}))))
-            for name in TABLES
-        }
+            raise StoreError(
+                f"unknown table(s) {sorted(unknown)}; expected some of {list(TABLES)}.",
+                fix="name the tables particles, contacts, walls, frames.",
+            )
+        frames = {name: to_dataframe(_sorted_by_step(canonical_table(name, tables.get(name, {})))) for name in TABLES}
         return cls(**frames, provenance=dict(provenance or {}), walls_meta=list(walls_meta or []))
 
     @classmethod
@@ -143,8 +149,11 @@ class Results:
             step = int(np.asarray(frame["frames"]["step"])[0]) if "frames" in frame else None
             for name, table in frame.items():
                 if name not in parts:
-                    raise StoreError(f"unknown table {name!r}; expected some of {list(TABLES)}.", step=step,
-                                     fix="name the tables particles, contacts, walls, frames.")
+                    raise StoreError(
+                        f"unknown table {name!r}; expected some of {list(TABLES)}.",
+                        step=step,
+                        fix="name the tables particles, contacts, walls, frames.",
+                    )
                 cols = columns.setdefault(name, list(table))
                 if list(table) != cols:
                     raise StoreError(
@@ -192,11 +201,15 @@ class Results:
         import html
 
         head, tables, walls = self._summary()
-        rows = "".join(f"<tr><td><code>{name}</code></td><td>{n}</td><td>{html.escape(', '.join(cols))}</td></tr>"
-                       for name, n, cols in tables)
+        rows = "".join(
+            f"<tr><td><code>{name}</code></td><td>{n}</td><td>{html.escape(', '.join(cols))}</td></tr>"
+            for name, n, cols in tables
+        )
         wall_line = f"<p>wall names: {html.escape(', '.join(walls))}</p>" if walls else ""
-        return (f"<div><b>demsplit Results</b>: {html.escape(head)}<table><tr><th>table</th><th>rows</th>"
-                f"<th>columns (unit)</th></tr>{rows}</table>{wall_line}</div>")
+        return (
+            f"<div><b>demsplit Results</b>: {html.escape(head)}<table><tr><th>table</th><th>rows</th>"
+            f"<th>columns (unit)</th></tr>{rows}</table>{wall_line}</div>"
+        )
 
     def type_names(self, names: Mapping[int, str] | None = None) -> dict[int, str]:
         """Material name of each particle/wall type that has one: YADE's material labels
@@ -219,13 +232,17 @@ class Results:
     def frame(self, step: int) -> Results:
         """The results of one frame (timestep ``step``)."""
         if step not in set(self.steps.tolist()):
-            raise StoreError(f"no frame with timestep {step}; the results hold {len(self.steps)} frame(s), "
-                             f"timesteps {describe_steps(self.steps)}.",
-                             fix="pick one of the stored timesteps.")
+            raise StoreError(
+                f"no frame with timestep {step}; the results hold {len(self.steps)} frame(s), "
+                f"timesteps {describe_steps(self.steps)}.",
+                fix="pick one of the stored timesteps.",
+            )
         pick = {name: getattr(self.raw, name) for name in TABLES}
         return Results(
-            **{name: _with_units((df[df["step"] == step] if "step" in df else df).reset_index(drop=True), df)
-               for name, df in pick.items()},  # a table not stored (run --no-contacts) has no columns
+            **{
+                name: _with_units((df[df["step"] == step] if "step" in df else df).reset_index(drop=True), df)
+                for name, df in pick.items()
+            },  # a table not stored (run --no-contacts) has no columns
             provenance=self.provenance,
             walls_meta=self.walls_meta,
         )

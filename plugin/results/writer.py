@@ -71,14 +71,19 @@ def check_output(path: str | Path, *, resume: bool = False, overwrite: bool = Fa
     work = work_dir_of(path)
     writer = _live_writer(work)
     if writer:
-        raise StoreError(f"another demsplit process (pid {writer}) is writing this store.", file=path,
-                         fix="wait for it to finish, or write to another path.")
+        raise StoreError(
+            f"another demsplit process (pid {writer}) is writing this store.",
+            file=path,
+            fix="wait for it to finish, or write to another path.",
+        )
     if work.exists() and not _resumable(work):
         shutil.rmtree(work, ignore_errors=True)
     if work.exists() and not resume:
-        raise StoreError(f"an interrupted run left its finished frames in {work}.", file=path,
-                         fix=f"continue it: run the same command again with --resume; or delete {work} to "
-                             "start over.")
+        raise StoreError(
+            f"an interrupted run left its finished frames in {work}.",
+            file=path,
+            fix=f"continue it: run the same command again with --resume; or delete {work} to start over.",
+        )
 
 
 def _resumable(work: Path) -> bool:
@@ -89,7 +94,7 @@ def _resumable(work: Path) -> bool:
         return False
     try:
         published = (work / _PUBLISHED).read_text().split()
-        st = os.stat(work.parent / work.name[1:-len(".partial")])
+        st = os.stat(work.parent / work.name[1 : -len(".partial")])
     except (OSError, ValueError):
         return True
     return published != [str(st.st_dev), str(st.st_ino)]
@@ -135,9 +140,17 @@ class ResultWriter:
     to hide its write-back behind: ``close()``'s fsync then finds little left to write.
     """
 
-    def __init__(self, path: str | Path, provenance: Mapping, *, resume: bool = False,
-                 walls_meta: list[dict] | None = None, compression: str | None = COMPRESSION,
-                 final_step: int | None = None, overwrite: bool = False) -> None:
+    def __init__(
+        self,
+        path: str | Path,
+        provenance: Mapping,
+        *,
+        resume: bool = False,
+        walls_meta: list[dict] | None = None,
+        compression: str | None = COMPRESSION,
+        final_step: int | None = None,
+        overwrite: bool = False,
+    ) -> None:
         self.path = Path(path)
         self.final_step = final_step
         self._final_frame = False  # the frame being appended is the one at final_step
@@ -145,8 +158,11 @@ class ResultWriter:
         self.walls_meta = list(walls_meta or [])
         self.compression = "none" if compression is None else compression
         if self.compression not in COMPRESSIONS:
-            raise StoreError(f"unknown compression {compression!r}; expected one of {list(COMPRESSIONS)}.",
-                             file=self.path, fix="pick one of " + ", ".join(COMPRESSIONS) + ".")
+            raise StoreError(
+                f"unknown compression {compression!r}; expected one of {list(COMPRESSIONS)}.",
+                file=self.path,
+                fix="pick one of " + ", ".join(COMPRESSIONS) + ".",
+            )
         check_output(self.path, resume=resume, overwrite=overwrite)
         self.work_dir = work_dir_of(self.path)
         self._store = self.work_dir / _STORE
@@ -191,9 +207,15 @@ class ResultWriter:
         return known
 
     def _manifest(self) -> dict:
-        return {"format": FORMAT, "format_version": FORMAT_VERSION, "work_version": WORK_VERSION,
-                "identity": resume_identity(self.provenance), "provenance": self.provenance,
-                "walls_meta": self.walls_meta, "compression": self.compression}
+        return {
+            "format": FORMAT,
+            "format_version": FORMAT_VERSION,
+            "work_version": WORK_VERSION,
+            "identity": resume_identity(self.provenance),
+            "provenance": self.provenance,
+            "walls_meta": self.walls_meta,
+            "compression": self.compression,
+        }
 
     def _write_manifest(self) -> None:
         manifest = self._manifest()
@@ -207,8 +229,11 @@ class ResultWriter:
         except FileExistsError:
             pid = _live_writer(self.work_dir)
             if pid:
-                raise StoreError(f"another demsplit process (pid {pid}) is writing this store.", file=self.path,
-                                 fix="wait for it to finish, or write to another path.") from None
+                raise StoreError(
+                    f"another demsplit process (pid {pid}) is writing this store.",
+                    file=self.path,
+                    fix="wait for it to finish, or write to another path.",
+                ) from None
             lock.unlink(missing_ok=True)
             fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
         with os.fdopen(fd, "w") as f:
@@ -221,10 +246,16 @@ class ResultWriter:
             old = json.loads((self.work_dir / _MANIFEST).read_text())
         except (OSError, ValueError):
             old = None
-        if old is None or [old.get(k) for k in ("format", "format_version", "work_version")] != \
-                [FORMAT, FORMAT_VERSION, WORK_VERSION]:
-            raise StoreError(f"{self.work_dir} holds no readable run manifest of this demsplit version.",
-                             file=self.path, fix=f"delete {self.work_dir} and run again without resume.")
+        if old is None or [old.get(k) for k in ("format", "format_version", "work_version")] != [
+            FORMAT,
+            FORMAT_VERSION,
+            WORK_VERSION,
+        ]:
+            raise StoreError(
+                f"{self.work_dir} holds no readable run manifest of this demsplit version.",
+                file=self.path,
+                fix=f"delete {self.work_dir} and run again without resume.",
+            )
         if old["identity"] != manifest["identity"]:
             diff = [k for k in manifest["identity"] if manifest["identity"][k] != old["identity"].get(k)]
             raise StoreError(
@@ -242,9 +273,11 @@ class ResultWriter:
             return
         header, carry = _read_records(commit)
         if header.get("compression") != self.compression:
-            raise StoreError(f"cannot resume: the interrupted run used --compression {header.get('compression')}.",
-                             file=self.path, fix=f"resume with --compression {header.get('compression')}, or delete "
-                                                 f"{self.work_dir} to start over.")
+            raise StoreError(
+                f"cannot resume: the interrupted run used --compression {header.get('compression')}.",
+                file=self.path,
+                fix=f"resume with --compression {header.get('compression')}, or delete {self.work_dir} to start over.",
+            )
         fresh = self._store.with_name(_STORE + ".new")
         self._open(fresh, _schema_of(carry), header["filters"], header["chunks"])  # the records keep the column order
         import h5py
@@ -252,13 +285,17 @@ class ResultWriter:
         try:
             with h5py.File(self._store, "r", libver=LIBVER, swmr=True) as h5:
                 for name, sink in self._sinks.items():
-                    sink.adopt(h5[name], header["written"][name],
-                               {col: np.array(v) for col, v in carry.get(name, {}).items()})
+                    sink.adopt(
+                        h5[name], header["written"][name], {col: np.array(v) for col, v in carry.get(name, {}).items()}
+                    )
         except (OSError, KeyError, ValueError) as exc:
             self._release()
             fresh.unlink(missing_ok=True)
-            raise StoreError(f"cannot read the interrupted run's store ({type(exc).__name__}: {exc}).",
-                             file=self._store, fix=f"delete {self.work_dir} and run again without resume.") from exc
+            raise StoreError(
+                f"cannot read the interrupted run's store ({type(exc).__name__}: {exc}).",
+                file=self._store,
+                fix=f"delete {self.work_dir} and run again without resume.",
+            ) from exc
         self._h5.flush()
         os.replace(fresh, self._store)  # the commit record describes the copy as it did the original
         self._steps = [int(s) for s in header["steps"]]
@@ -322,8 +359,14 @@ class ResultWriter:
             yield
         except OSError as exc:
             kept = self._steps_committed()
-            note = (f"; the {kept} frame(s) committed before it are kept in {self.work_dir} for --resume "
-                    f"(delete it to start over)") if kept else ""
+            note = (
+                (
+                    f"; the {kept} frame(s) committed before it are kept in {self.work_dir} for --resume "
+                    f"(delete it to start over)"
+                )
+                if kept
+                else ""
+            )
             raise system_error(exc, self.path, doing="cannot write the store", note=note) from exc
 
     def _steps_committed(self) -> int:
@@ -333,8 +376,13 @@ class ResultWriter:
             return 0
 
     # -- writing ---------------------------------------------------------
-    def _open(self, path: Path, schema: Mapping[str, Mapping[str, str]], filters: Mapping[str, Mapping[str, str]],
-              chunks: Mapping[str, int]):
+    def _open(
+        self,
+        path: Path,
+        schema: Mapping[str, Mapping[str, str]],
+        filters: Mapping[str, Mapping[str, str]],
+        chunks: Mapping[str, int],
+    ):
         """Create the store at ``path`` with every table's datasets (``chunks``:
         rows per chunk of each table), and start SWMR writing."""
         import h5py
@@ -342,9 +390,18 @@ class ResultWriter:
         # no chunk cache: every chunk is written whole, once, and not read back (with lzf, whose chunks
         # HDF5 filters itself, the cache held ~100 MB more at the peak on the medium benchmark run)
         self._h5 = h5py.File(path, "w", libver=LIBVER, rdcc_nbytes=0)
-        self._sinks = {name: TableSink(self._h5, name, dict(schema.get(name, {})), dict(filters.get(name, {})),
-                                        chunks.get(name, CHUNK_ROWS), threads.pool(),
-                                        on_written=self._column_written) for name in TABLES}
+        self._sinks = {
+            name: TableSink(
+                self._h5,
+                name,
+                dict(schema.get(name, {})),
+                dict(filters.get(name, {})),
+                chunks.get(name, CHUNK_ROWS),
+                threads.pool(),
+                on_written=self._column_written,
+            )
+            for name in TABLES
+        }
         self._h5.swmr_mode = True
 
     def append(self, tables: Mapping[str, Mapping[str, np.ndarray]]) -> None:
@@ -358,28 +415,43 @@ class ResultWriter:
             raise StoreError("append() after close().", file=self.path, fix="append every frame before closing.")
         step = _frame_step(tables)
         if step in self._steps:
-            raise StoreError("this frame was already stored (two frames with the same timestep?).",
-                             file=self.path, step=step, fix="skip timesteps in writer.done_steps.")
+            raise StoreError(
+                "this frame was already stored (two frames with the same timestep?).",
+                file=self.path,
+                step=step,
+                fix="skip timesteps in writer.done_steps.",
+            )
         unknown = set(tables) - set(TABLES)
         if unknown:
-            raise StoreError(f"unknown table(s) {sorted(unknown)}; expected some of {list(TABLES)}.",
-                             step=step, fix="name the tables particles, contacts, walls, frames.")
+            raise StoreError(
+                f"unknown table(s) {sorted(unknown)}; expected some of {list(TABLES)}.",
+                step=step,
+                fix="name the tables particles, contacts, walls, frames.",
+            )
         canon = {name: canonical_table(name, tables[name], step=step) for name in TABLES if name in tables}
         for name, table in canon.items():
             if "step" in table and np.any(table["step"] != step):
-                raise StoreError(f"table {name!r} has rows of other timesteps than its frame.", step=step,
-                                 fix="append one frame at a time.")
+                raise StoreError(
+                    f"table {name!r} has rows of other timesteps than its frame.",
+                    step=step,
+                    fix="append one frame at a time.",
+                )
             _refuse_non_finite(name, table, step)
         schema = _schema_of(canon)
         if self._h5 is None:
-            self._open(self._store, schema, choose_filters(canon, self.compression, threads.pool()),
-                       {name: chunk_rows(len(next(iter(table.values()), ()))) for name, table in canon.items()})
+            self._open(
+                self._store,
+                schema,
+                choose_filters(canon, self.compression, threads.pool()),
+                {name: chunk_rows(len(next(iter(table.values()), ()))) for name, table in canon.items()},
+            )
         for name, cols in schema.items():
             if cols != self._sinks[name].schema:
                 raise StoreError(
                     f"table {name!r} has columns {list(cols)}, earlier frames had {list(self._sinks[name].schema)}.",
-                    step=step, fix="give every frame the same columns (fill what is unknown with NaN; "
-                                   "a table absent from the first frame must stay absent, or be empty there).",
+                    step=step,
+                    fix="give every frame the same columns (fill what is unknown with NaN; "
+                    "a table absent from the first frame must stay absent, or be empty there).",
                 )
         self._final_frame = step == self.final_step
         for name, sink in self._sinks.items():
@@ -406,10 +478,14 @@ class ResultWriter:
                 return
             self._write_manifest()
         self._h5.flush()
-        header = {"steps": self._steps, "rows": self._rows, "compression": self.compression,
-                  "filters": {name: sink.filters for name, sink in self._sinks.items()},
-                  "chunks": {name: sink.chunk_rows for name, sink in self._sinks.items()},
-                  "written": {name: sink.written for name, sink in self._sinks.items()}}
+        header = {
+            "steps": self._steps,
+            "rows": self._rows,
+            "compression": self.compression,
+            "filters": {name: sink.filters for name, sink in self._sinks.items()},
+            "chunks": {name: sink.chunk_rows for name, sink in self._sinks.items()},
+            "written": {name: sink.written for name, sink in self._sinks.items()},
+        }
         _write_records(self.work_dir / _COMMIT, header, {name: sink.carry for name, sink in self._sinks.items()})
 
     def close(self) -> None:
@@ -440,8 +516,11 @@ class ResultWriter:
                 self._release()
                 if final != self._store:  # the commit record stays valid: say which file completes the run
                     st = os.stat(final)
-                    write_atomic(self.work_dir / _PUBLISHED, lambda f: f.write(f"{st.st_dev} {st.st_ino}".encode()),
-                                  durable=False)
+                    write_atomic(
+                        self.work_dir / _PUBLISHED,
+                        lambda f: f.write(f"{st.st_dev} {st.st_ino}".encode()),
+                        durable=False,
+                    )
                 publish(final, self.path)
         except BaseException:
             self.abandon()  # the committed frames stay for --resume
@@ -452,9 +531,14 @@ class ResultWriter:
     def _write_index(self) -> None:
         """The frame index and the attributes, into the open store."""
         h5 = self._h5
-        h5.attrs.update(format=FORMAT, format_version=FORMAT_VERSION, demsplit_version=demsplit_version(),
-                        provenance=to_json(self.provenance, "provenance"),
-                        walls_meta=to_json(self.walls_meta, "walls_meta"), compression=self.compression)
+        h5.attrs.update(
+            format=FORMAT,
+            format_version=FORMAT_VERSION,
+            demsplit_version=demsplit_version(),
+            provenance=to_json(self.provenance, "provenance"),
+            walls_meta=to_json(self.walls_meta, "walls_meta"),
+            compression=self.compression,
+        )
         index = h5.create_group("index")
         index.create_dataset("step", data=np.array(self._steps, dtype=np.int64))
         for name in TABLES:
@@ -498,10 +582,13 @@ def _refuse_non_finite(name: str, table: Table, step: int) -> None:
         bad = ~np.isfinite(values)
         if bad.any():
             row = int(np.flatnonzero(bad)[0])
-            raise StoreError(f"table {name}, column {col}, row {row} is {float(values[row])} ({int(bad.sum())} "
-                             "value(s) of the column are not finite): no stored number is NaN or inf.", step=step,
-                             fix=f"give a finite number, or {UNKNOWN} in a frames column of "
-                                 f"{', '.join(UNKNOWN_COLUMNS)} whose value is not known.")
+            raise StoreError(
+                f"table {name}, column {col}, row {row} is {float(values[row])} ({int(bad.sum())} "
+                "value(s) of the column are not finite): no stored number is NaN or inf.",
+                step=step,
+                fix=f"give a finite number, or {UNKNOWN} in a frames column of "
+                f"{', '.join(UNKNOWN_COLUMNS)} whose value is not known.",
+            )
 
 
 def _write_records(path: Path, header: Mapping, tables: Mapping[str, Table]) -> None:
@@ -546,8 +633,10 @@ def _alive(pid: int) -> bool:
 def _frame_step(tables: Mapping[str, Mapping[str, np.ndarray]]) -> int:
     frames = tables.get("frames")
     if frames is None or "step" not in frames or len(np.atleast_1d(frames["step"])) != 1:
-        raise StoreError("each appended frame needs a 'frames' table with exactly one row and a 'step' column.",
-                         fix="pass tables['frames'] = {'step': np.array([step]), ...}.")
+        raise StoreError(
+            "each appended frame needs a 'frames' table with exactly one row and a 'step' column.",
+            fix="pass tables['frames'] = {'step': np.array([step]), ...}.",
+        )
     return int(np.atleast_1d(frames["step"])[0])
 
 
@@ -564,8 +653,11 @@ def _read_records(path: Path) -> tuple[dict, dict[str, Table]]:
             tables = {name: {col: _map_record(f, size) for col in cols} for name, cols in header.pop("columns")}
             return header, tables
     except (OSError, ValueError, EOFError, KeyError) as exc:
-        raise StoreError(f"cannot read the commit record: {exc}.", file=path,
-                         fix=f"delete {path.parent} and run again without resume.") from exc
+        raise StoreError(
+            f"cannot read the commit record: {exc}.",
+            file=path,
+            fix=f"delete {path.parent} and run again without resume.",
+        ) from exc
 
 
 def _map_record(f, size: int) -> np.ndarray:

@@ -143,30 +143,35 @@ def _word_intrinsics():
         def codegen(context, builder, signature, args):
             data = context.make_array(signature.args[0])(context, builder, args[0]).data
             return builder.ptrtoint(data, ir.IntType(64))
+
         return types.int64(arr), codegen
 
     @intrinsic
     def byte_at(typingctx, base, i):
         def codegen(context, builder, signature, args):
             return builder.zext(builder.load(_pointer(builder, *args, 8), align=1), ir.IntType(64))
+
         return types.int64(types.int64, types.int64), codegen
 
     @intrinsic
     def word_at(typingctx, base, i):
         def codegen(context, builder, signature, args):
             return builder.load(_pointer(builder, *args, 64), align=1)
+
         return types.uint64(types.int64, types.int64), codegen
 
     @intrinsic
     def trailing_zeros(typingctx, x):
         def codegen(context, builder, signature, args):
             return builder.cttz(args[0], ir.Constant(ir.IntType(1), 0))
+
         return types.uint64(types.uint64), codegen
 
     @intrinsic
     def popcount(typingctx, x):
         def codegen(context, builder, signature, args):
             return builder.ctpop(args[0])
+
         return types.uint64(types.uint64), codegen
 
     @intrinsic
@@ -174,11 +179,14 @@ def _word_intrinsics():
         def codegen(context, builder, signature, args):
             vector = ir.VectorType(ir.IntType(8), 64)
             text = builder.load(builder.bitcast(_pointer(builder, *args[:2], 8), vector.as_pointer()), align=1)
-            one = builder.insert_element(ir.Constant(vector, None), builder.trunc(args[2], ir.IntType(8)),
-                                         ir.Constant(ir.IntType(32), 0))
-            bounds = builder.shuffle_vector(one, ir.Constant(vector, None),
-                                            ir.Constant(ir.VectorType(ir.IntType(32), 64), [0] * 64))
+            one = builder.insert_element(
+                ir.Constant(vector, None), builder.trunc(args[2], ir.IntType(8)), ir.Constant(ir.IntType(32), 0)
+            )
+            bounds = builder.shuffle_vector(
+                one, ir.Constant(vector, None), ir.Constant(ir.VectorType(ir.IntType(32), 64), [0] * 64)
+            )
             return builder.bitcast(builder.icmp_unsigned("<", text, bounds), ir.IntType(64))
+
         return types.uint64(types.int64, types.int64, types.int64), codegen
 
     return address, byte_at, word_at, trailing_zeros, popcount, bytes_below

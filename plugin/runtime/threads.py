@@ -17,6 +17,7 @@ from typing import TypeVar
 
 T = TypeVar("T")
 
+
 def _cores() -> int:
     """``DEMSPLIT_THREADS`` when set to a positive integer, else the cores this process may run on."""
     value = os.environ.get("DEMSPLIT_THREADS", "")

@@ -46,8 +46,10 @@ def energy_error(case: str) -> float:
     return worst
 
 
-print("case | pair rows, wall contacts (per frame) | F_n per contact | atom force | atom torque | atoms left out "
-      "(force, torque) | energies vs reference | conservation | not computed (reason code: contacts)")
+print(
+    "case | pair rows, wall contacts (per frame) | F_n per contact | atom force | atom torque | atoms left out "
+    "(force, torque) | energies vs reference | conservation | not computed (reason code: contacts)"
+)
 for case in CASES:
     run, steps = assembled(case)
     fn, force, torque, left, conservation, rows, reasons = 0.0, 0.0, 0.0, [], 0.0, [], {}
@@ -70,5 +72,7 @@ for case in CASES:
             if code:
                 reasons.setdefault(int(code), []).append(int((frame.contacts["unknown_why"] == code).sum()))
     shown = ", ".join(f"{k}: {'/'.join(map(str, v))}" for k, v in sorted(reasons.items())) or "-"
-    print(f"{case} | {', '.join(rows)} | {fn:.1e} | {force:.1e} | {torque:.1e} | {', '.join(left)} | "
-          f"{energy_error(case):.1e} | {conservation:.1e} | {shown}")
+    print(
+        f"{case} | {', '.join(rows)} | {fn:.1e} | {force:.1e} | {torque:.1e} | {', '.join(left)} | "
+        f"{energy_error(case):.1e} | {conservation:.1e} | {shown}"
+    )

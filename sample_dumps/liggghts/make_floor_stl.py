@@ -3,6 +3,7 @@ squares, two triangles each (normals +z), so the wall dump's triangle ids vary.
 
 Usage: python3 make_floor_stl.py OUT.stl HALF_WIDTH Z N
 """
+
 import sys
 
 out, half, z, n = sys.argv[1], float(sys.argv[2]), float(sys.argv[3]), int(sys.argv[4])

@@ -51,7 +51,7 @@ def errors(scene: str) -> dict[str, np.ndarray]:
         iw = row_index(ids, w.data[:, WALL_ID])
         delta = np.concatenate([p.data[:, DELTA], w.data[:, DELTA]])
         rstar = np.concatenate([r[i1] * r[i2] / (r[i1] + r[i2]), r[iw]])
-        u = np.sqrt(rstar) * delta ** 2.5
+        u = np.sqrt(rstar) * delta**2.5
 
         def add(key, d, rs=rstar, delta=delta, u=u):
             ue = np.sqrt(rs) * np.clip(d, 0, None) ** 2.5
@@ -61,8 +61,15 @@ def errors(scene: str) -> dict[str, np.ndarray]:
             out.setdefault("lost_" + key, []).append([int((d <= 0).sum())])
 
         for key, xr in (("float32", x.astype(np.float32).astype(np.float64)), ("6digits", printed(x, 6))):
-            add(key, np.concatenate([r[i1] + r[i2] - np.linalg.norm(minimum_image(xr[i1] - xr[i2], a), axis=1),
-                                     r[iw] - np.linalg.norm(xr[iw] - w.data[:, WALL_CP], axis=1)]))
+            add(
+                key,
+                np.concatenate(
+                    [
+                        r[i1] + r[i2] - np.linalg.norm(minimum_image(xr[i1] - xr[i2], a), axis=1),
+                        r[iw] - np.linalg.norm(xr[iw] - w.data[:, WALL_CP], axis=1),
+                    ]
+                ),
+            )
         r11 = printed(r, 11)
         add("vtkdelta", printed(delta, 11), np.concatenate([r11[i1] * r11[i2] / (r11[i1] + r11[i2]), r11[iw]]))
     return {k: np.concatenate(v) for k, v in out.items()}
@@ -78,14 +85,22 @@ def main() -> None:
     for scene in SCENES:
         e = errors(scene)
         print(f"== {scene}: {len(e['delta_float32'])} contacts (pairs and mesh floor, all frames)")
-        for name, key in (("float32 positions", "float32"), ("6-digit positions", "6digits"),
-                          ("dumped delta (11 digits)", "vtkdelta")):
+        for name, key in (
+            ("float32 positions", "float32"),
+            ("6-digit positions", "6digits"),
+            ("dumped delta (11 digits)", "vtkdelta"),
+        ):
             for what in ("delta", "u_n"):
                 v = e[f"{what}_{key}"]
-                total = f"frame total max {e[f'u_n_{key}_total'].max():.2g}" if what == "u_n" else \
-                    f"lost (delta <= 0) {int(e[f'lost_{key}'].sum())}"
-                print(f"  {what:5s} {name:26s} median {np.median(v):8.2g}  p95 {np.percentile(v, 95):8.2g}"
-                      f"  max {v.max():8.2g}  | {total}")
+                total = (
+                    f"frame total max {e[f'u_n_{key}_total'].max():.2g}"
+                    if what == "u_n"
+                    else f"lost (delta <= 0) {int(e[f'lost_{key}'].sum())}"
+                )
+                print(
+                    f"  {what:5s} {name:26s} median {np.median(v):8.2g}  p95 {np.percentile(v, 95):8.2g}"
+                    f"  max {v.max():8.2g}  | {total}"
+                )
 
 
 if __name__ == "__main__":

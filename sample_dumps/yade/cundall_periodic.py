@@ -41,24 +41,31 @@ def export_state():
     if O.iter >= N_ITER:
         vtk = export.VTKExporter(os.path.join(out, "cundall_periodic"))
         vtk.exportSpheres(what=dict(id="b.id", matId="b.material.id"), numLabel=O.iter)
-        vtk.exportInteractions(what=dict(
-            id1="i.id1", id2="i.id2", kn="i.phys.kn", ks="i.phys.ks", shearForce="i.phys.shearForce"),
-            numLabel=O.iter)
+        vtk.exportInteractions(
+            what=dict(id1="i.id1", id2="i.id2", kn="i.phys.kn", ks="i.phys.ks", shearForce="i.phys.shearForce"),
+            numLabel=O.iter,
+        )
         export.text(os.path.join(out, "cundall_periodic.txt"))
 
 
 O.engines = [
     ForceResetter(),
     InsertionSortCollider([Bo1_Sphere_Aabb()]),
-    InteractionLoop([Ig2_Sphere_Sphere_ScGeom()], [Ip2_FrictMat_FrictMat_FrictPhys()],
-                    [Law2_ScGeom_FrictPhys_CundallStrack(label="cundall")]),
+    InteractionLoop(
+        [Ig2_Sphere_Sphere_ScGeom()],
+        [Ip2_FrictMat_FrictMat_FrictPhys()],
+        [Law2_ScGeom_FrictPhys_CundallStrack(label="cundall")],
+    ),
     # Between InteractionLoop and NewtonIntegrator: geometry, forces and positions of the same instant.
     PyRunner(command="export_state()", iterPeriod=EVERY, initRun=False),
-    PeriTriaxController(goal=(-2e5, -2e5, -2e5), stressMask=7, maxUnbalanced=1e-3, maxStrainRate=(20, 20, 20),
-                        dynCell=True, mass=0.05),
+    PeriTriaxController(
+        goal=(-2e5, -2e5, -2e5), stressMask=7, maxUnbalanced=1e-3, maxStrainRate=(20, 20, 20), dynCell=True, mass=0.05
+    ),
     NewtonIntegrator(damping=0.4),
 ]
 O.dt = 0.5 * utils.PWaveTimeStep()
 O.run(N_ITER + 1, True)
-print("cundall_periodic: %d spheres, %d real interactions, iter %d, elastPotential %.17g, elasticEnergy %.17g"
-      % (len(sp), O.interactions.countReal(), O.iter, O.energy["elastPotential"], cundall.elasticEnergy()))
+print(
+    "cundall_periodic: %d spheres, %d real interactions, iter %d, elastPotential %.17g, elasticEnergy %.17g"
+    % (len(sp), O.interactions.countReal(), O.iter, O.energy["elastPotential"], cundall.elasticEnergy())
+)

@@ -14,14 +14,21 @@ import re
 EXAMPLE = "/usr/share/doc/yade/examples/jointedCohesiveFrictionalPM/"
 out = os.environ.get("DEMSPLIT_OUT", ".")
 source = open(EXAMPLE + "gravityBis.py").read()
-trims = [("nSpheres = 3000.0", "nSpheres = float(os.environ.get('DEMSPLIT_SPHERES', '500'))"),
-         ("memoizeDb='/tmp/gts-triax-packings.sqlite', returnSpherePack=True)",
-          "returnSpherePack=True, seed=int(os.environ.get('DEMSPLIT_SEED', '4')))"),
-         ("O.saveTmp()", ""),
-         ("if refPoint:", "if refPoint is None:\n\trefPoint = max((b for b in O.bodies if isinstance(b.shape, Sphere)),"
-                         " key=lambda b: b.state.pos[2]).id\nif refPoint:"),
-         ("O.run(10000)", "O.run(int(os.environ.get('DEMSPLIT_ITER', '1500')), True)"),
-         ("plot.plot()", "")]
+trims = [
+    ("nSpheres = 3000.0", "nSpheres = float(os.environ.get('DEMSPLIT_SPHERES', '500'))"),
+    (
+        "memoizeDb='/tmp/gts-triax-packings.sqlite', returnSpherePack=True)",
+        "returnSpherePack=True, seed=int(os.environ.get('DEMSPLIT_SEED', '4')))",
+    ),
+    ("O.saveTmp()", ""),
+    (
+        "if refPoint:",
+        "if refPoint is None:\n\trefPoint = max((b for b in O.bodies if isinstance(b.shape, Sphere)),"
+        " key=lambda b: b.state.pos[2]).id\nif refPoint:",
+    ),
+    ("O.run(10000)", "O.run(int(os.environ.get('DEMSPLIT_ITER', '1500')), True)"),
+    ("plot.plot()", ""),
+]
 for old, new in trims:
     assert old in source, old
     source = source.replace(old, new)
@@ -43,11 +50,26 @@ for i in O.interactions:
     deep += i.geom.penetrationDepth > min(i.geom.refR1, i.geom.refR2) and i.phys.isOnJoint
 name = os.path.join(out, "jcfpm_example.yade.gz")
 with open(name + ".json", "w") as f:
-    json.dump({"scene": "jcfpm_example", "tag": "run", "iter": O.iter, "time": O.time, "dt": O.dt,
-               "count_real": O.interactions.countReal(), "law_energies": {}, "sums": sums,
-               "energy": {k: float(v) for k, v in O.energy.items()}, "joint_deeper_than_a_radius": deep,
-               "on_joint": sum(1 for i in O.interactions if i.phys.isOnJoint)}, f, indent=1)
+    json.dump(
+        {
+            "scene": "jcfpm_example",
+            "tag": "run",
+            "iter": O.iter,
+            "time": O.time,
+            "dt": O.dt,
+            "count_real": O.interactions.countReal(),
+            "law_energies": {},
+            "sums": sums,
+            "energy": {k: float(v) for k, v in O.energy.items()},
+            "joint_deeper_than_a_radius": deep,
+            "on_joint": sum(1 for i in O.interactions if i.phys.isOnJoint),
+        },
+        f,
+        indent=1,
+    )
 O.save(name)
-print("jcfpm_example: %d bodies, %d real interactions (%d on the joint, %d of them deeper than a radius) at "
-      "iteration %d"
-      % (len(O.bodies), O.interactions.countReal(), sum(1 for i in O.interactions if i.phys.isOnJoint), deep, O.iter))
+print(
+    "jcfpm_example: %d bodies, %d real interactions (%d on the joint, %d of them deeper than a radius) at "
+    "iteration %d"
+    % (len(O.bodies), O.interactions.countReal(), sum(1 for i in O.interactions if i.phys.isOnJoint), deep, O.iter)
+)

@@ -28,25 +28,55 @@ if os.path.exists(snapshot):
 
 if law == "viscel":
     # stiffness from young (kn_i = 2 E_i R_i, ks_i = poisson kn_i) and the dashpots cn, cs
-    mats = [ViscElMat(cn=0.5, cs=0.2, young=2e7, poisson=0.3, density=2500, frictionAngle=0.4),
-            ViscElMat(cn=0.5, cs=0.2, young=1e8, poisson=0.2, density=2500, frictionAngle=0.4)]
+    mats = [
+        ViscElMat(cn=0.5, cs=0.2, young=2e7, poisson=0.3, density=2500, frictionAngle=0.4),
+        ViscElMat(cn=0.5, cs=0.2, young=1e8, poisson=0.2, density=2500, frictionAngle=0.4),
+    ]
     ip2, law2, ig2 = Ip2_ViscElMat_ViscElMat_ViscElPhys(), Law2_ScGeom_ViscElPhys_Basic(label="law"), "ScGeom"
 elif law == "cohfrict":
-    mats = [CohFrictMat(young=2e7, poisson=0.3, density=2500, frictionAngle=0.4, isCohesive=True,
-                        normalCohesion=1e5, shearCohesion=1e5, momentRotationLaw=True, alphaKr=2.0, alphaKtw=1.0),
-            CohFrictMat(young=1e8, poisson=0.2, density=2500, frictionAngle=0.4, isCohesive=True,
-                        normalCohesion=1e5, shearCohesion=1e5, momentRotationLaw=True, alphaKr=2.0, alphaKtw=1.0)]
+    mats = [
+        CohFrictMat(
+            young=2e7,
+            poisson=0.3,
+            density=2500,
+            frictionAngle=0.4,
+            isCohesive=True,
+            normalCohesion=1e5,
+            shearCohesion=1e5,
+            momentRotationLaw=True,
+            alphaKr=2.0,
+            alphaKtw=1.0,
+        ),
+        CohFrictMat(
+            young=1e8,
+            poisson=0.2,
+            density=2500,
+            frictionAngle=0.4,
+            isCohesive=True,
+            normalCohesion=1e5,
+            shearCohesion=1e5,
+            momentRotationLaw=True,
+            alphaKr=2.0,
+            alphaKtw=1.0,
+        ),
+    ]
     ip2 = Ip2_CohFrictMat_CohFrictMat_CohFrictPhys(setCohesionNow=False, setCohesionOnNewContacts=True)
-    law2, ig2 = Law2_ScGeom6D_CohFrictPhys_CohesionMoment(useIncrementalForm=True, always_use_moment_law=True,
-                                                          label="law"), "ScGeom6D"
+    law2, ig2 = (
+        Law2_ScGeom6D_CohFrictPhys_CohesionMoment(useIncrementalForm=True, always_use_moment_law=True, label="law"),
+        "ScGeom6D",
+    )
 elif law == "jcfpm":
-    mats = [JCFpmMat(young=2e7, poisson=0.3, density=2500, frictionAngle=0.4, tensileStrength=1e5, cohesion=1e5),
-            JCFpmMat(young=1e8, poisson=0.2, density=2500, frictionAngle=0.4, tensileStrength=1e5, cohesion=1e5)]
+    mats = [
+        JCFpmMat(young=2e7, poisson=0.3, density=2500, frictionAngle=0.4, tensileStrength=1e5, cohesion=1e5),
+        JCFpmMat(young=1e8, poisson=0.2, density=2500, frictionAngle=0.4, tensileStrength=1e5, cohesion=1e5),
+    ]
     ip2 = Ip2_JCFpmMat_JCFpmMat_JCFpmPhys(cohesiveTresholdIteration=1)
     law2, ig2 = Law2_ScGeom_JCFpmPhys_JointedCohesiveFrictionalPM(label="law"), "ScGeom-bonds"
 else:
-    mats = [FrictMat(young=2e7, poisson=0.3, density=2500, frictionAngle=0.4),
-            FrictMat(young=1e8, poisson=0.2, density=2500, frictionAngle=0.4)]
+    mats = [
+        FrictMat(young=2e7, poisson=0.3, density=2500, frictionAngle=0.4),
+        FrictMat(young=1e8, poisson=0.2, density=2500, frictionAngle=0.4),
+    ]
     if law == "viscofrict":
         ip2 = Ip2_FrictMat_FrictMat_ViscoFrictPhys()
         law2 = Law2_ScGeom_ViscoFrictPhys_CundallStrack(shearCreep=True, viscosity=1e3, label="law")
@@ -70,7 +100,6 @@ sp.makeCloud((0.001, 0.001, 0.001), (L - 0.001, L - 0.001, H), rMean=0.004, rRel
 for k, (c, r) in enumerate(sp):
     O.bodies.append(utils.sphere(c, r, material=soft if k % 2 else stiff))
 O.bodies.append(geom.facetBox((L / 2, L / 2, H / 2), (L / 2, L / 2, H / 2), wallMask=31, material=stiff))
-
 
 
 def export_state():

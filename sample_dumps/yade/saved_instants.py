@@ -23,9 +23,13 @@ START = int(os.environ.get("DEMSPLIT_START", "1800"))
 
 def law_energies(kind):
     """The law functor's own energy functions that exist for this law (J)."""
-    names = {"mindlin": ("normElastEnergy",), "adhesion": ("normElastEnergy",),
-             "cundall": ("elasticEnergy",), "viscofrict": ("elasticEnergy",),
-             "cohfrict": ("normElastEnergy", "shearElastEnergy", "bendingElastEnergy", "twistElastEnergy")}
+    names = {
+        "mindlin": ("normElastEnergy",),
+        "adhesion": ("normElastEnergy",),
+        "cundall": ("elasticEnergy",),
+        "viscofrict": ("elasticEnergy",),
+        "cohfrict": ("normElastEnergy", "shearElastEnergy", "bendingElastEnergy", "twistElastEnergy"),
+    }
     return {n: float(getattr(law, n)()) for n in names.get(kind, ())}
 
 
@@ -76,19 +80,30 @@ saves, by iteration."""
 
 def hold():
     if start <= O.iter <= start + 4:
-        held[O.iter] = {b.id: list(O.cell.wrap(b.state.pos) if O.periodic else b.state.pos)
-                        for b in O.bodies if isinstance(b.shape, Sphere)}
+        held[O.iter] = {
+            b.id: list(O.cell.wrap(b.state.pos) if O.periodic else b.state.pos)
+            for b in O.bodies
+            if isinstance(b.shape, Sphere)
+        }
 
 
 def save(tag):
     name = os.path.join(out, "%s-%s.%s" % (scene, tag, "xml.bz2" if tag == "between" else "yade.gz"))
     forces_at = O.iter - 1 if tag in ("before", "run") else O.iter  # the iteration whose InteractionLoop ran last
-    ref = {"scene": scene, "tag": tag, "iter": O.iter, "time": O.time, "dt": O.dt,
-           "count_real": O.interactions.countReal(), "law_energies": law_energies(kind),
-           "energy": {k: float(v) for k, v in O.energy.items()}, "sums": phys_sums(kind),
-           "positions": held[forces_at],
-           "made_in_last_100": sum(1 for i in O.interactions if i.iterMadeReal > O.iter - 100),
-           "max_speed": max(b.state.vel.norm() for b in O.bodies if isinstance(b.shape, Sphere))}
+    ref = {
+        "scene": scene,
+        "tag": tag,
+        "iter": O.iter,
+        "time": O.time,
+        "dt": O.dt,
+        "count_real": O.interactions.countReal(),
+        "law_energies": law_energies(kind),
+        "energy": {k: float(v) for k, v in O.energy.items()},
+        "sums": phys_sums(kind),
+        "positions": held[forces_at],
+        "made_in_last_100": sum(1 for i in O.interactions if i.iterMadeReal > O.iter - 100),
+        "max_speed": max(b.state.vel.norm() for b in O.bodies if isinstance(b.shape, Sphere)),
+    }
     with open(name + ".json", "w") as f:
         json.dump(ref, f, indent=1)
     O.save(name)
@@ -117,13 +132,19 @@ def cloud(lo, hi, soft, stiff, seed, r=0.003, speed=0.2):
 
 
 def engines(shapes, ip2, law2, newton):
-    bo1 = {"Sphere": Bo1_Sphere_Aabb(aabbEnlargeFactor=bonds), "Facet": Bo1_Facet_Aabb(), "Wall": Bo1_Wall_Aabb(),
-           "Box": Bo1_Box_Aabb()}
+    bo1 = {
+        "Sphere": Bo1_Sphere_Aabb(aabbEnlargeFactor=bonds),
+        "Facet": Bo1_Facet_Aabb(),
+        "Wall": Bo1_Wall_Aabb(),
+        "Box": Bo1_Box_Aabb(),
+    }
     six = kind == "cohfrict"
-    ig2 = {"Sphere": Ig2_Sphere_Sphere_ScGeom6D() if six else
-           Ig2_Sphere_Sphere_ScGeom(interactionDetectionFactor=bonds),
-           "Facet": Ig2_Facet_Sphere_ScGeom6D() if six else Ig2_Facet_Sphere_ScGeom(),
-           "Wall": Ig2_Wall_Sphere_ScGeom(), "Box": Ig2_Box_Sphere_ScGeom()}
+    ig2 = {
+        "Sphere": Ig2_Sphere_Sphere_ScGeom6D() if six else Ig2_Sphere_Sphere_ScGeom(interactionDetectionFactor=bonds),
+        "Facet": Ig2_Facet_Sphere_ScGeom6D() if six else Ig2_Facet_Sphere_ScGeom(),
+        "Wall": Ig2_Wall_Sphere_ScGeom(),
+        "Box": Ig2_Box_Sphere_ScGeom(),
+    }
     at = {"before": start + 1, "between": start + 2, "end": start + 3}  # where the PyRunner sits: when it saves
     O.engines = [
         ForceResetter(),
@@ -154,21 +175,37 @@ def build():
         soft, stiff = two(FrictMat)
         L = 0.03
         cloud((0.001, 0.001, 0.007), (L - 0.001, L - 0.001, 0.03), soft, stiff, 1)
-        O.bodies.append(geom.facetBox((L / 2, L / 2, 0.03), (L / 2, L / 2, 0.03), wallMask=31,
-                                      material=FrictMat(young=1e9, poisson=0.3, density=2500, frictionAngle=0.4)))
-        O.bodies.append(utils.box((L / 2, L / 2, 0.003), (0.006, 0.006, 0.003), fixed=True,
-                                  material=FrictMat(young=5e8, poisson=0.25, density=2500, frictionAngle=0.4)))
+        O.bodies.append(
+            geom.facetBox(
+                (L / 2, L / 2, 0.03),
+                (L / 2, L / 2, 0.03),
+                wallMask=31,
+                material=FrictMat(young=1e9, poisson=0.3, density=2500, frictionAngle=0.4),
+            )
+        )
+        O.bodies.append(
+            utils.box(
+                (L / 2, L / 2, 0.003),
+                (0.006, 0.006, 0.003),
+                fixed=True,
+                material=FrictMat(young=5e8, poisson=0.25, density=2500, frictionAngle=0.4),
+            )
+        )
         law = Law2_ScGeom_MindlinPhys_Mindlin()
         engines(("Sphere", "Facet", "Box"), Ip2_FrictMat_FrictMat_MindlinPhys(en=0.6, es=0.6), law, newton)
     elif scene == "cundall":  # CundallStrack between Walls, O.energy tracked
         soft, stiff = two(FrictMat)
         L = 0.03
         cloud((0.001, 0.001, 0.001), (L - 0.001, L - 0.001, 0.03), soft, stiff, 2)
-        O.bodies.append([utils.wall(0, axis=2, sense=1, material=stiff),
-                         utils.wall(0, axis=0, sense=1, material=soft),
-                         utils.wall(L, axis=0, sense=-1, material=soft),
-                         utils.wall(0, axis=1, sense=1, material=stiff),
-                         utils.wall(L, axis=1, sense=-1, material=stiff)])
+        O.bodies.append(
+            [
+                utils.wall(0, axis=2, sense=1, material=stiff),
+                utils.wall(0, axis=0, sense=1, material=soft),
+                utils.wall(L, axis=0, sense=-1, material=soft),
+                utils.wall(0, axis=1, sense=1, material=stiff),
+                utils.wall(L, axis=1, sense=-1, material=stiff),
+            ]
+        )
         O.trackEnergy = True
         law = Law2_ScGeom_FrictPhys_CundallStrack()
         engines(("Sphere", "Wall"), Ip2_FrictMat_FrictMat_FrictPhys(), law, newton)
@@ -189,17 +226,22 @@ def build():
     elif scene == "clumps":  # rotating clumps and spheres on Walls of two inline materials
         soft, stiff = two(FrictMat)
         L = 0.04
-        O.bodies.append([utils.wall(0, axis=2, sense=1, material=FrictMat(young=3e8, poisson=0.3, density=2500)),
-                         utils.wall(0, axis=0, sense=1, material=FrictMat(young=6e8, poisson=0.2, density=2500)),
-                         utils.wall(L, axis=0, sense=-1, material=stiff),
-                         utils.wall(0, axis=1, sense=1, material=stiff),
-                         utils.wall(L, axis=1, sense=-1, material=soft)])
+        O.bodies.append(
+            [
+                utils.wall(0, axis=2, sense=1, material=FrictMat(young=3e8, poisson=0.3, density=2500)),
+                utils.wall(0, axis=0, sense=1, material=FrictMat(young=6e8, poisson=0.2, density=2500)),
+                utils.wall(L, axis=0, sense=-1, material=stiff),
+                utils.wall(0, axis=1, sense=1, material=stiff),
+                utils.wall(L, axis=1, sense=-1, material=soft),
+            ]
+        )
         rnd = random.Random(4)
         for k in range(27):  # three layers of 3 x 3 clumps
             c = Vector3(0.007 + 0.013 * (k % 3), 0.007 + 0.013 * (k // 3 % 3), 0.008 + 0.013 * (k // 9))
             a = Vector3(rnd.uniform(-1, 1), rnd.uniform(-1, 1), rnd.uniform(-1, 1)).normalized() * 0.003
-            cid, members = O.bodies.appendClumped([utils.sphere(c - a, 0.0035, material=soft),
-                                                    utils.sphere(c + a, 0.0025, material=stiff)])
+            cid, members = O.bodies.appendClumped(
+                [utils.sphere(c - a, 0.0035, material=soft), utils.sphere(c + a, 0.0025, material=stiff)]
+            )
             O.bodies[cid].state.vel = Vector3(rnd.uniform(-0.5, 0.5), rnd.uniform(-0.5, 0.5), -1.5)
             O.bodies[cid].state.angVel = Vector3(rnd.uniform(-50, 50), rnd.uniform(-50, 50), rnd.uniform(-50, 50))
         cloud((0.001, 0.001, 0.046), (L - 0.001, L - 0.001, 0.052), soft, stiff, 4, speed=1.5)
@@ -226,11 +268,20 @@ def build():
         law = Law2_ScGeom_MindlinPhys_Mindlin(includeAdhesion=True)
         engines(("Sphere", "Facet"), Ip2_FrictMat_FrictMat_MindlinPhys(gamma=0.5), law, newton)
     elif scene == "cohfrict":
-        box_scene(10, CohFrictMat, isCohesive=True, normalCohesion=1e5, shearCohesion=1e5, momentRotationLaw=True,
-                  alphaKr=2.0, alphaKtw=1.0)
+        box_scene(
+            10,
+            CohFrictMat,
+            isCohesive=True,
+            normalCohesion=1e5,
+            shearCohesion=1e5,
+            momentRotationLaw=True,
+            alphaKr=2.0,
+            alphaKtw=1.0,
+        )
         law = Law2_ScGeom6D_CohFrictPhys_CohesionMoment(useIncrementalForm=True, always_use_moment_law=True)
-        engines(("Sphere", "Facet"), Ip2_CohFrictMat_CohFrictMat_CohFrictPhys(setCohesionOnNewContacts=True), law,
-                newton)
+        engines(
+            ("Sphere", "Facet"), Ip2_CohFrictMat_CohFrictMat_CohFrictPhys(setCohesionOnNewContacts=True), law, newton
+        )
     elif scene == "jcfpm":  # bonds made within 1.2 x the contact distance at the first iteration
         bonds = 1.2
         box_scene(11, JCFpmMat, tensileStrength=1e4, cohesion=1e4)
@@ -240,8 +291,19 @@ def build():
         raise SystemExit("unknown scene %r" % scene)
 
 
-ALL = ("mindlin", "cundall", "periodic", "clumps", "viscel", "viscofrict", "hertz_linear", "deresiewitz",
-       "adhesion", "cohfrict", "jcfpm")
+ALL = (
+    "mindlin",
+    "cundall",
+    "periodic",
+    "clumps",
+    "viscel",
+    "viscofrict",
+    "hertz_linear",
+    "deresiewitz",
+    "adhesion",
+    "cohfrict",
+    "jcfpm",
+)
 for scene in [s for s in os.environ.get("DEMSPLIT_SCENES", ",".join(ALL)).split(",") if s]:
     O.reset()
     held.clear()
@@ -251,5 +313,7 @@ for scene in [s for s in os.environ.get("DEMSPLIT_SCENES", ",".join(ALL)).split(
     O.run(start + 3, True)  # through the PyRunner saves
     O.run(2, True)
     save("run")  # after O.run(N, True)
-    print("saved_instants %s: %d bodies, %d real interactions at iteration %d"
-          % (scene, len(O.bodies), O.interactions.countReal(), O.iter))
+    print(
+        "saved_instants %s: %d bodies, %d real interactions at iteration %d"
+        % (scene, len(O.bodies), O.interactions.countReal(), O.iter)
+    )

@@ -38,12 +38,17 @@ def save_state():
 O.engines = [
     ForceResetter(),
     InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Facet_Aabb()]),
-    InteractionLoop([Ig2_Sphere_Sphere_ScGeom(), Ig2_Facet_Sphere_ScGeom()], [Ip2_FrictMat_FrictMat_MindlinPhys()],
-                    [Law2_ScGeom_MindlinPhys_Mindlin(label="law")]),
+    InteractionLoop(
+        [Ig2_Sphere_Sphere_ScGeom(), Ig2_Facet_Sphere_ScGeom()],
+        [Ip2_FrictMat_FrictMat_MindlinPhys()],
+        [Law2_ScGeom_MindlinPhys_Mindlin(label="law")],
+    ),
     PyRunner(command="save_state()", iterPeriod=EVERY, initRun=False),
     NewtonIntegrator(gravity=(0, 0, -50.0), damping=0.4),
 ]
 O.dt = 0.5 * utils.PWaveTimeStep()
 O.run(N_ITER + 1, True)
-print("saved_states: %d spheres, %d real interactions, iter %d, normElastEnergy %.17g"
-      % (len(sp), O.interactions.countReal(), O.iter, law.normElastEnergy()))
+print(
+    "saved_states: %d spheres, %d real interactions, iter %d, normElastEnergy %.17g"
+    % (len(sp), O.interactions.countReal(), O.iter, law.normElastEnergy())
+)

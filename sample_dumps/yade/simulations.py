@@ -26,8 +26,9 @@ def materials():
 
 def spheres(soft, stiff, seed, r=0.003):
     rnd = random.Random(seed)
-    for k, b in enumerate(pack.regularHexa(pack.inAlignedBox((0.001, 0.001, 0.001), (0.023, 0.023, 0.02)),
-                                           radius=r, gap=0)):
+    for k, b in enumerate(
+        pack.regularHexa(pack.inAlignedBox((0.001, 0.001, 0.001), (0.023, 0.023, 0.02)), radius=r, gap=0)
+    ):
         s = utils.sphere(b.state.pos, r * rnd.uniform(0.9, 0.99), material=soft if k % 2 else stiff)
         s.state.vel = Vector3(*(rnd.uniform(-0.2, 0.2) for _ in range(3)))
         O.bodies.append(s)
@@ -39,8 +40,9 @@ def engines(shapes):
     O.engines = [
         ForceResetter(),
         InsertionSortCollider([bo1[s] for s in shapes]),
-        InteractionLoop([ig2[s] for s in shapes], [Ip2_FrictMat_FrictMat_MindlinPhys()],
-                        [Law2_ScGeom_MindlinPhys_Mindlin()]),
+        InteractionLoop(
+            [ig2[s] for s in shapes], [Ip2_FrictMat_FrictMat_MindlinPhys()], [Law2_ScGeom_MindlinPhys_Mindlin()]
+        ),
         NewtonIntegrator(gravity=(0, 0, -200.0), damping=0.3),
     ]
     O.dt = 0.5 * utils.PWaveTimeStep()
@@ -71,16 +73,21 @@ first.state.vel = kept + Vector3(0, 0, 1)
 save("changed-006000.yade.gz")
 first.state.vel = kept
 top = max(b.state.pos[2] + b.shape.radius for b in O.bodies if isinstance(b.shape, Sphere))
-lid = O.bodies.append(utils.wall(top - 1e-4, axis=2, sense=-1,
-                                 material=FrictMat(young=5e8, poisson=0.25, density=2500, frictionAngle=0.4)))
+lid = O.bodies.append(
+    utils.wall(
+        top - 1e-4, axis=2, sense=-1, material=FrictMat(young=5e8, poisson=0.25, density=2500, frictionAngle=0.4)
+    )
+)
 O.bodies[lid].state.vel = Vector3(0, 0, -0.01)  # pressing on the spheres
 O.run(3000, True)
 save("facets-009000.yade.gz")
 O.bodies.erase(box[0])
 O.run(3000, True)
 save("facets-012000.yade.gz")
-print("simulations facets: %d bodies, %d real interactions at iteration %d"
-      % (len([b for b in O.bodies if b is not None]), O.interactions.countReal(), O.iter))
+print(
+    "simulations facets: %d bodies, %d real interactions at iteration %d"
+    % (len([b for b in O.bodies if b is not None]), O.interactions.countReal(), O.iter)
+)
 
 O.reset()
 facet_box(2)
@@ -94,25 +101,46 @@ for k in range(18):
     c = Vector3(0.005 + 0.008 * (k % 3), 0.005 + 0.008 * (k // 3 % 3), 0.005 + 0.008 * (k // 9))
     a = Vector3(rnd.uniform(-1, 1), rnd.uniform(-1, 1), rnd.uniform(-1, 1)).normalized() * 0.0015
     O.bodies.appendClumped([utils.sphere(c - a, 0.0025, material=soft), utils.sphere(c + a, 0.002, material=stiff)])
-O.bodies.append([utils.wall(0, axis=2, sense=1, material=stiff), utils.wall(0, axis=0, sense=1, material=stiff),
-                 utils.wall(0.024, axis=0, sense=-1, material=stiff), utils.wall(0, axis=1, sense=1, material=stiff),
-                 utils.wall(0.024, axis=1, sense=-1, material=stiff)])
+O.bodies.append(
+    [
+        utils.wall(0, axis=2, sense=1, material=stiff),
+        utils.wall(0, axis=0, sense=1, material=stiff),
+        utils.wall(0.024, axis=0, sense=-1, material=stiff),
+        utils.wall(0, axis=1, sense=1, material=stiff),
+        utils.wall(0.024, axis=1, sense=-1, material=stiff),
+    ]
+)
 engines(("Sphere", "Wall"))
 O.run(4500, True)
 save("clumps-004500.yade.gz")
-print("simulations clumps: %d bodies, %d real interactions at iteration %d"
-      % (len(O.bodies), O.interactions.countReal(), O.iter))
+print(
+    "simulations clumps: %d bodies, %d real interactions at iteration %d"
+    % (len(O.bodies), O.interactions.countReal(), O.iter)
+)
 
 O.reset()  # a law demsplit does not analyse (ViscElCap), for `demsplit info`
 vec = O.materials.append(ViscElCapMat(kn=1e4, ks=5e3, cn=0, cs=0, density=2500, frictionAngle=0.4, Capillar=False))
-O.bodies.append([utils.sphere((0, 0, 0.0095), 0.01, material=vec), utils.sphere((0, 0, 0.029), 0.01, material=vec),
-                 utils.wall(0, axis=2, sense=1, material=vec)])
-O.engines = [ForceResetter(), InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Wall_Aabb()]),
-             InteractionLoop([Ig2_Sphere_Sphere_ScGeom(), Ig2_Wall_Sphere_ScGeom()],
-                             [Ip2_ViscElCapMat_ViscElCapMat_ViscElCapPhys()], [Law2_ScGeom_ViscElCapPhys_Basic()]),
-             NewtonIntegrator(gravity=(0, 0, -9.81))]
+O.bodies.append(
+    [
+        utils.sphere((0, 0, 0.0095), 0.01, material=vec),
+        utils.sphere((0, 0, 0.029), 0.01, material=vec),
+        utils.wall(0, axis=2, sense=1, material=vec),
+    ]
+)
+O.engines = [
+    ForceResetter(),
+    InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Wall_Aabb()]),
+    InteractionLoop(
+        [Ig2_Sphere_Sphere_ScGeom(), Ig2_Wall_Sphere_ScGeom()],
+        [Ip2_ViscElCapMat_ViscElCapMat_ViscElCapPhys()],
+        [Law2_ScGeom_ViscElCapPhys_Basic()],
+    ),
+    NewtonIntegrator(gravity=(0, 0, -9.81)),
+]
 O.dt = 1e-6
 O.run(20, True)
 save("viscelcap-000020.yade.gz")
-print("simulations viscelcap: %d bodies, %d real interactions at iteration %d"
-      % (len(O.bodies), O.interactions.countReal(), O.iter))
+print(
+    "simulations viscelcap: %d bodies, %d real interactions at iteration %d"
+    % (len(O.bodies), O.interactions.countReal(), O.iter)
+)

@@ -21,7 +21,6 @@ VALIDATION = REPO / "benchmarks" / "accuracy_study"
 sys.path.insert(0, str(VALIDATION))
 
 import fe  # noqa: E402
-
 from demsplit.physics import accuracy  # noqa: E402
 from demsplit.physics.shares import normal_share  # noqa: E402
 
@@ -63,8 +62,7 @@ def test_material_split_is_exact_at_small_contacts(hertz_case):
 def test_neohooke_case_conserves_energy_and_splits_near_the_law():
     """Feng & Gao Table 2 case 2 (a/R1 = 0.115) on a coarse mesh: finite strain, energy conserved, share
     within 1 % of the law and below it (the paper's ABAQUS ratio is 2.4 % below)."""
-    res = fe.solve(5 * mm, 10 * mm, 210 * GPa, 0.3, 210 * GPa, 0.3, 0.1 * mm, model="neohooke", refine=0.5,
-                   steps=8)
+    res = fe.solve(5 * mm, 10 * mm, 210 * GPa, 0.3, 210 * GPa, 0.3, 0.1 * mm, model="neohooke", refine=0.5, steps=8)
     s = fe.summary(res)
     assert s["converged"]
     assert abs(s["e_work"]) < 1e-3, s["e_work"]
@@ -78,8 +76,10 @@ def test_neohooke_energy_of_a_near_rigid_block_is_not_round_off():
     are ~1e-7 and its neo-Hookean energy, written as mu/2 (tr C - 3) - ..., was round-off 14 times the
     small-strain value (a share 1.2 % off); fe.py's density keeps the digits."""
     d = fe.delta_for(0.03, 5 * mm, math.inf)
-    s = {m: fe.summary(fe.solve(5 * mm, math.inf, 100 * GPa, 0.25, 1e5 * GPa, 0.45, d, model=m, refine=0.5,
-                                steps=2)) for m in ("small", "neohooke")}
+    s = {
+        m: fe.summary(fe.solve(5 * mm, math.inf, 100 * GPa, 0.25, 1e5 * GPa, 0.45, d, model=m, refine=0.5, steps=2))
+        for m in ("small", "neohooke")
+    }
     assert s["neohooke"]["converged"]
     assert s["neohooke"]["U2"] == pytest.approx(s["small"]["U2"], rel=0.05)
     assert abs(s["neohooke"]["share_err"]) < 1e-4
@@ -96,13 +96,17 @@ def test_error_model_reproduces_committed_heldout_predictions():
     assert len(rows) >= 10
     for model in sorted({r["model"] for r in rows}):
         sub = [r for r in rows if r["model"] == model]
-        col = {k: np.array([float(r[k]) for r in sub]) for k in ("a_over_R1", "a_over_R2", "nu1", "nu2", "E1", "E2",
-                                                                 "predicted_error", "share_law", "share_model")}
-        got = accuracy.expected_share_error(col["a_over_R1"], col["a_over_R2"], col["nu1"], col["nu2"], col["E1"],
-                                            col["E2"], reference=model)
+        col = {
+            k: np.array([float(r[k]) for r in sub])
+            for k in ("a_over_R1", "a_over_R2", "nu1", "nu2", "E1", "E2", "predicted_error", "share_law", "share_model")
+        }
+        got = accuracy.expected_share_error(
+            col["a_over_R1"], col["a_over_R2"], col["nu1"], col["nu2"], col["E1"], col["E2"], reference=model
+        )
         np.testing.assert_allclose(got, col["predicted_error"], rtol=0, atol=1e-9)
-        share = accuracy.corrected_share(col["a_over_R1"], col["a_over_R2"], col["nu1"], col["nu2"], col["E1"],
-                                         col["E2"], reference=model)
+        share = accuracy.corrected_share(
+            col["a_over_R1"], col["a_over_R2"], col["nu1"], col["nu2"], col["E1"], col["E2"], reference=model
+        )
         np.testing.assert_allclose(share, col["share_model"], rtol=0, atol=1e-9)
         np.testing.assert_allclose(share - got, col["share_law"], rtol=0, atol=1e-12)
 
@@ -129,9 +133,12 @@ def test_error_model_is_not_extrapolated():
     big = accuracy.expected_share_error(0.6, 0.2, 0.3, 0.2, 70e9, 210e9)
     assert big == accuracy.expected_share_error(0.3, 0.2, 0.3, 0.2, 70e9, 210e9)
     assert accuracy.log_ratio_correction(0.1, 0.6, 0.3, 0.2, 70e9, 70e9) == accuracy.log_ratio_correction(
-        0.1, 0.3, 0.3, 0.2, 70e9, 70e9)
-    np.testing.assert_array_equal(accuracy.beyond_fit([0.1, 0.31, 0.1, 0.1], [0.0, 0.1, 0.1, 0.1],
-                                                      [0.3, 0.3, 0.5, -0.1], 0.3), [False, True, True, True])
+        0.1, 0.3, 0.3, 0.2, 70e9, 70e9
+    )
+    np.testing.assert_array_equal(
+        accuracy.beyond_fit([0.1, 0.31, 0.1, 0.1], [0.0, 0.1, 0.1, 0.1], [0.3, 0.3, 0.5, -0.1], 0.3),
+        [False, True, True, True],
+    )
 
 
 def test_error_model_limits():
@@ -156,8 +163,21 @@ def test_geometrically_linear_e12_does_not_depend_on_E():
     e12 = {}
     for gap in ("reference", "current"):
         for E1 in (210, 70):
-            s = fe.summary(fe.solve(5 * mm, 10 * mm, E1 * GPa, 0.3, 210 * GPa, 0.3, 0.1 * mm, model="small",
-                                    refine=0.5, steps=2, gap=gap))
+            s = fe.summary(
+                fe.solve(
+                    5 * mm,
+                    10 * mm,
+                    E1 * GPa,
+                    0.3,
+                    210 * GPa,
+                    0.3,
+                    0.1 * mm,
+                    model="small",
+                    refine=0.5,
+                    steps=2,
+                    gap=gap,
+                )
+            )
             assert s["converged"]
             e12[gap, E1] = s["ratio_fe"] / s["ratio_law"] - 1
     assert abs(e12["reference", 210] - e12["reference", 70]) < 5e-4

@@ -30,8 +30,9 @@ L = TypeVar("L", bound=type[ContactLaw])
 def register(cls: L) -> L:
     """Class decorator: add a law to the registry under ``cls.key`` (once)."""
     if cls.key in _REGISTRY and _REGISTRY[cls.key] is not cls:
-        raise ValueError(f"two contact laws are registered as {cls.key!r}: "
-                         f"{_REGISTRY[cls.key].__module__} and {cls.__module__}")
+        raise ValueError(
+            f"two contact laws are registered as {cls.key!r}: {_REGISTRY[cls.key].__module__} and {cls.__module__}"
+        )
     _REGISTRY[cls.key] = cls
     return cls
 
@@ -49,7 +50,8 @@ def law_class(key: str) -> type[ContactLaw]:
         raise UnsupportedModelError(
             f"contact law {key!r} is not supported; demsplit has {', '.join(supported())}.",
             fix="run the simulation with one of these laws, or add the law (docs/design.md, "
-                "'How to add a contact law').") from None
+            "'How to add a contact law').",
+        ) from None
 
 
 def simulator_words(simulator: str) -> dict[str, str]:
@@ -57,7 +59,7 @@ def simulator_words(simulator: str) -> dict[str, str]:
     ``simulator:name`` with the simulator's spelling of its name (``liggghts:hooke/hysteresis``,
     ``yade:Law2_ScGeom_MindlinPhys_Mindlin``), so the readers' word maps need no table of their own."""
     prefix = f"{simulator}:"
-    return {key[len(prefix):]: key for key in supported() if key.startswith(prefix)}
+    return {key[len(prefix) :]: key for key in supported() if key.startswith(prefix)}
 
 
 def make(key: str, params: Mapping[str, Any] | None = None) -> ContactLaw:
@@ -69,5 +71,14 @@ for _module in pkgutil.iter_modules(__path__):
     if _module.name != "base":
         import_module(f"{__name__}.{_module.name}")
 
-__all__ = ["DEFAULT", "ContactLaw", "ContactRows", "LawEnergy", "law_class", "make", "register", "simulator_words",
-           "supported"]
+__all__ = [
+    "DEFAULT",
+    "ContactLaw",
+    "ContactRows",
+    "LawEnergy",
+    "law_class",
+    "make",
+    "register",
+    "simulator_words",
+    "supported",
+]

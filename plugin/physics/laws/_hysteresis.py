@@ -32,8 +32,9 @@ DELTA_MAX = "delta_max"
 """Contact column of the largest overlap so far (m), the normal model's first history value."""
 
 
-def hysteretic_force(delta: np.ndarray, delta_max: np.ndarray, k1: np.ndarray, k2max: np.ndarray,
-                     kc: np.ndarray, delta_lim: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def hysteretic_force(
+    delta: np.ndarray, delta_max: np.ndarray, k1: np.ndarray, k2max: np.ndarray, kc: np.ndarray, delta_lim: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Elastic normal force f (N) and unloading stiffness k2 (N/m) of the hysteretic spring
     (module docstring); 0 force without overlap."""
     d = overlap(delta)
@@ -52,8 +53,9 @@ def unloading_energy(f: np.ndarray, k2: np.ndarray) -> np.ndarray:
     return np.divide(f * f, 2.0 * k2, out=np.zeros_like(f), where=k2 > 0)
 
 
-def delta_max_of_force(f: np.ndarray, delta: np.ndarray, k1: np.ndarray, k2max: np.ndarray,
-                       delta_lim: np.ndarray) -> np.ndarray:
+def delta_max_of_force(
+    f: np.ndarray, delta: np.ndarray, k1: np.ndarray, k2max: np.ndarray, delta_lim: np.ndarray
+) -> np.ndarray:
     """The largest overlap delta_max (m) of a contact at overlap ``delta`` (m) whose elastic force is ``f`` (N)
     (module docstring): (delta + sqrt(delta^2 - 4 (f - k1 delta)/a))/2 with a = (k2Max - k1)/delta_lim, delta
     itself where f >= k1 delta. Beyond delta_lim the unloading line no longer depends on delta_max: a force that no
@@ -65,8 +67,9 @@ def delta_max_of_force(f: np.ndarray, delta: np.ndarray, k1: np.ndarray, k2max: 
     return np.where(f >= k1 * d, d, 0.5 * (d + np.sqrt(np.maximum(disc, d * d))))
 
 
-def hysteresis_parameters(rows: ContactRows, k1: np.ndarray, k2max_over_k1, kc_over_k1, plasticity_depth
-                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def hysteresis_parameters(
+    rows: ContactRows, k1: np.ndarray, k2max_over_k1, kc_over_k1, plasticity_depth
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """k2Max, kc (N/m) and delta_lim = k2Max/(k2Max - k1) phiF 2 R* (m) of every row, from the loading stiffness
     ``k1`` and the per-type-pair ratios k2Max/k1, kc/k1 and the plasticity depth phiF."""
     k2max = k1 * rows.type_pair(k2max_over_k1)
@@ -76,8 +79,9 @@ def hysteresis_parameters(rows: ContactRows, k1: np.ndarray, k2max_over_k1, kc_o
     return k2max, kc, lim
 
 
-def hysteresis_of(rows: ContactRows, k1: np.ndarray, k2max_over_k1, kc_over_k1, plasticity_depth
-                  ) -> tuple[np.ndarray, np.ndarray]:
+def hysteresis_of(
+    rows: ContactRows, k1: np.ndarray, k2max_over_k1, kc_over_k1, plasticity_depth
+) -> tuple[np.ndarray, np.ndarray]:
     """Force f (N) and unloading stiffness k2 (N/m) of every row, from the loading stiffness ``k1`` and the
     per-type-pair ratios k2Max/k1, kc/k1 and the plasticity depth phiF (:func:`hysteresis_parameters`)."""
     k2max, kc, lim = hysteresis_parameters(rows, k1, k2max_over_k1, kc_over_k1, plasticity_depth)

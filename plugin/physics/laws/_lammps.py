@@ -78,8 +78,14 @@ UNKNOWN_MODES, UNKNOWN_WHY = "unknown_modes", "unknown_why"
 DUMP_ROW = "dump_row"
 """Contact column: the row of a pair in its frame of the local dump (a wall contact: -1)."""
 
-TANGENTIAL_MODELS = {"linear_nohistory": False, "linear_history": True, "mindlin": True, "mindlin_rescale": True,
-                     "mindlin/force": True, "mindlin_rescale/force": True}
+TANGENTIAL_MODELS = {
+    "linear_nohistory": False,
+    "linear_history": True,
+    "mindlin": True,
+    "mindlin_rescale": True,
+    "mindlin/force": True,
+    "mindlin_rescale/force": True,
+}
 """LAMMPS ``tangential`` models -> whether they keep a spring."""
 DAMPING_MODELS = ("velocity", "mass_velocity", "viscoelastic", "tsuji")
 ROLLING_MODELS = ("none", "sds")
@@ -87,17 +93,17 @@ TWISTING_MODELS = ("none", "sds", "marshall")
 
 REASONS = {
     1: "LAMMPS' single() writes all zeros for a jkr pair closer than its pull-off distance (pair_granular.cpp"
-       ":1423-1437), so its tangential and rolling springs are in no dump",
+    ":1423-1437), so its tangential and rolling springs are in no dump",
     2: "dmt's Coulomb limit reads a variable only jkr sets (pair_granular.cpp:416, :1589): the first pair row of "
-       "a frame and any row at that limit hold a spring no dump gives",
+    "a frame and any row at that limit hold a spring no dump gives",
     3: "single() found the spring at its Coulomb limit but the step did not (the step's damping differs), so "
-       "the spring lies in an interval that the atoms' force and torque balance did not pin",
+    "the spring lies in an interval that the atoms' force and torque balance did not pin",
     4: "a particle touches two surfaces of a wall/gran/region region and the fix's contacts array keeps the last "
-       "one only (fix_wall_gran_region.cpp:244-254): the other contact's tangential spring is in no dump",
+    "one only (fix_wall_gran_region.cpp:244-254): the other contact's tangential spring is in no dump",
     5: "a jkr pair apart by less than its pull-off distance may still hold its neck: whether it does (its touch "
-       "flag) is in no dump, and compute pair/local's cutoff radius rows list touching pairs only",
+    "flag) is in no dump, and compute pair/local's cutoff radius rows list touching pairs only",
     6: "an atom of the contact does not close its force or torque balance with the rebuilt springs (a term of the "
-       "step is not what the dumps and the script say), so the springs of its contacts are not trusted",
+    "step is not what the dumps and the script say), so the springs of its contacts are not trusted",
 }
 """Why the reader could not rebuild a spring or a contact: the code it writes in the contact column ``unknown_why``
 (beside the modes' bits in ``unknown_modes``) -> the reason."""
@@ -105,8 +111,7 @@ REASONS = {
 
 def tsuji_alpha(e: float) -> float:
     """The tsuji damping coefficient alpha(e) of a coefficient of restitution e (pair_granular.cpp:986-993)."""
-    return (1.2728 - 4.2783 * e + 11.087 * e**2 - 22.348 * e**3 + 27.467 * e**4 - 18.022 * e**5
-            + 4.8218 * e**6)
+    return 1.2728 - 4.2783 * e + 11.087 * e**2 - 22.348 * e**3 + 27.467 * e**4 - 18.022 * e**5 + 4.8218 * e**6
 
 
 def lammps_radius(rows: ContactRows) -> np.ndarray:
@@ -147,8 +152,9 @@ def tangential_velocity(dv: np.ndarray, n: np.ndarray, ws: np.ndarray) -> np.nda
     return dv - dot(dv, n)[:, None] * n - np.cross(ws, n)
 
 
-def unsliding(p: np.ndarray, visc_s: np.ndarray, visc_h: np.ndarray, crit_s: np.ndarray, crit_h: np.ndarray
-              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def unsliding(
+    p: np.ndarray, visc_s: np.ndarray, visc_h: np.ndarray, crit_s: np.ndarray, crit_h: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The elastic force F_el of a spring (N) from the force p = F_el + visc_s that single() wrote, capped at
     crit_s, when the step applied F_el + visc_h capped at crit_h and reset the spring to its limit
     (pair_granular.cpp:510-536); visc_s, visc_h the damping forces at single()'s and the step's velocities.
@@ -228,8 +234,11 @@ class LammpsModel(ContactLaw):
     parameters: ClassVar[dict[str, tuple[Any, str]]] = {
         "damp": (ContactLaw.REQUIRED, "the normal damping coefficient (e for tsuji)"),
         "damping": ("viscoelastic", "damping model: velocity, mass_velocity, viscoelastic or tsuji"),
-        "tangential": (ContactLaw.REQUIRED, "tangential model: linear_nohistory, linear_history, mindlin, "
-                                            "mindlin_rescale, mindlin/force or mindlin_rescale/force"),
+        "tangential": (
+            ContactLaw.REQUIRED,
+            "tangential model: linear_nohistory, linear_history, mindlin, "
+            "mindlin_rescale, mindlin/force or mindlin_rescale/force",
+        ),
         "kt": (None, "tangential stiffness k_t (N/m, mindlin: N/m^(3/2)); None: NULL, from E and nu"),
         "xgammat": (0.0, "tangential damping over normal damping x_gammat"),
         "mu": (0.0, "tangential friction coefficient"),
@@ -242,26 +251,44 @@ class LammpsModel(ContactLaw):
         "gammatw": (0.0, "twisting damping gamma_tw (N m s/rad)"),
         "mutw": (0.0, "twisting friction coefficient"),
         "limit_damping": (False, "limit_damping: a negative normal force is clipped to 0"),
-        "history": (False, "whether another model of the pair style keeps a tangential history (LAMMPS' global "
-                           "flag: linear_nohistory beside it runs the history branch with k_t = 0)"),
+        "history": (
+            False,
+            "whether another model of the pair style keeps a tangential history (LAMMPS' global "
+            "flag: linear_nohistory beside it runs the history branch with k_t = 0)",
+        ),
         "wall": (False, "the model of a wall fix (its kn, k_t and torque formulas)"),
     }
-    example_params: ClassVar[dict[str, Any]] = {"damp": 0.5, "tangential": "mindlin", "xgammat": 1.0, "mu": 0.5,
-                                                "rolling": "sds", "kr": 20.0, "gammar": 0.002, "mur": 0.1,
-                                                "twisting": "marshall"}
+    example_params: ClassVar[dict[str, Any]] = {
+        "damp": 0.5,
+        "tangential": "mindlin",
+        "xgammat": 1.0,
+        "mu": 0.5,
+        "rolling": "sds",
+        "kr": 20.0,
+        "gammar": 0.002,
+        "mur": 0.1,
+        "twisting": "marshall",
+    }
 
     def check(self) -> None:
         p = self.params
-        for name, allowed in (("damping", DAMPING_MODELS), ("tangential", TANGENTIAL_MODELS),
-                              ("rolling", ROLLING_MODELS), ("twisting", TWISTING_MODELS)):
+        for name, allowed in (
+            ("damping", DAMPING_MODELS),
+            ("tangential", TANGENTIAL_MODELS),
+            ("rolling", ROLLING_MODELS),
+            ("twisting", TWISTING_MODELS),
+        ):
             if p[name] not in allowed:
-                raise UnsupportedModelError(f"{self.key}: {name} model {p[name]!r} is not supported; "
-                                            f"it takes {', '.join(allowed)}.")
+                raise UnsupportedModelError(
+                    f"{self.key}: {name} model {p[name]!r} is not supported; it takes {', '.join(allowed)}."
+                )
         self.kn = self.normal_coefficient()
         self.has_spring = TANGENTIAL_MODELS[p["tangential"]]
         if p["kt"] is None and self.has_spring and not self.has_material():
-            raise UnsupportedModelError(f"{self.key}: tangential k_t NULL needs a material model (E, nu).",
-                                        fix="give k_t on the line, as LAMMPS requires.")
+            raise UnsupportedModelError(
+                f"{self.key}: tangential k_t NULL needs a material model (E, nu).",
+                fix="give k_t on the line, as LAMMPS requires.",
+            )
         self.kt = float(p["kt"]) if p["kt"] is not None else self.null_kt() if self.has_spring else 0.0
         self.history_branch = not self.has_spring and bool(p["history"])
         self.rolling, self.twisting = p["rolling"] != "none", p["twisting"] != "none"
@@ -269,8 +296,17 @@ class LammpsModel(ContactLaw):
 
     def set_modes(self) -> None:
         """The modes the model has, and their columns, from :attr:`has_spring`, :attr:`rolling`, :attr:`twisting`."""
-        self.modes = tuple(m for m, has in (("u_n", True), ("u_t", self.has_spring), ("u_r", self.rolling),
-                                            ("u_tw", self.twisting), ("u_adh", self.adhesive)) if has)
+        self.modes = tuple(
+            m
+            for m, has in (
+                ("u_n", True),
+                ("u_t", self.has_spring),
+                ("u_r", self.rolling),
+                ("u_tw", self.twisting),
+                ("u_adh", self.adhesive),
+            )
+            if has
+        )
         self.mode_columns = {m: cols for m, cols in type(self).mode_columns.items() if m in self.modes}
 
     # -- the normal model ---------------------------------------------------------------------
@@ -369,9 +405,12 @@ class LammpsModel(ContactLaw):
 
     def normal_damping(self, a: np.ndarray, meff: np.ndarray, inits: int) -> np.ndarray:
         """eta_n (N s/m) of the damping model (pair_granular.cpp:363-373)."""
-        factor = {"velocity": lambda: np.ones_like(a), "mass_velocity": lambda: meff,
-                  "viscoelastic": lambda: a * meff,
-                  "tsuji": lambda: np.sqrt(meff * self.damping_stiffness(a))}[self.params["damping"]]()
+        factor = {
+            "velocity": lambda: np.ones_like(a),
+            "mass_velocity": lambda: meff,
+            "viscoelastic": lambda: a * meff,
+            "tsuji": lambda: np.sqrt(meff * self.damping_stiffness(a)),
+        }[self.params["damping"]]()
         return self.damp(inits) * factor
 
     def tangential_damping(self, eta_n: np.ndarray, a: np.ndarray, meff: np.ndarray) -> np.ndarray:
@@ -399,14 +438,17 @@ class LammpsModel(ContactLaw):
         modes = {"u_n": np.where(touching, self.normal_energy(delta, R, a), 0.0)}
         skipped = {m: why for m in self.mode_columns if (why := self.missing_mode(rows, m))}
         if "u_t" in self.modes and "u_t" not in skipped:
-            modes["u_t"] = np.where(touching, spring_energy_of_force(vectors(rows, SPRING_T),
-                                                                     self.tangential_stiffness(a)), 0.0)
+            modes["u_t"] = np.where(
+                touching, spring_energy_of_force(vectors(rows, SPRING_T), self.tangential_stiffness(a)), 0.0
+            )
         if "u_r" in self.modes and "u_r" not in skipped:
-            modes["u_r"] = np.where(touching, spring_energy_of_force(vectors(rows, SPRING_R), self.rolling_stiffness()),
-                                    0.0)
+            modes["u_r"] = np.where(
+                touching, spring_energy_of_force(vectors(rows, SPRING_R), self.rolling_stiffness()), 0.0
+            )
         if "u_tw" in self.modes and "u_tw" not in skipped:
-            modes["u_tw"] = np.where(touching, spring_energy_of_force(rows.column(SPRING_TW[0]),
-                                                                      self.twisting_stiffness(a)), 0.0)
+            modes["u_tw"] = np.where(
+                touching, spring_energy_of_force(rows.column(SPRING_TW[0]), self.twisting_stiffness(a)), 0.0
+            )
         if self.adhesive:
             modes["u_adh"] = np.where(touching, self.adhesion_work(delta, R, a), 0.0)
         unknown, why = self.unrebuilt(rows, [m for m in modes if m not in skipped])
@@ -433,12 +475,16 @@ class LammpsModel(ContactLaw):
         a pair's twisting spring neither (single() writes the torque only where it capped it)."""
         if self.params["wall"] and mode in ("u_r", "u_tw"):
             sub = self.params["rolling" if mode == "u_r" else "twisting"]
-            return (f"the {mode} energy of wall contacts ({self.key}, {sub}) is not computed: a LAMMPS wall fix's "
-                    "contacts array holds the contact's force only, never its rolling or twisting spring")
+            return (
+                f"the {mode} energy of wall contacts ({self.key}, {sub}) is not computed: a LAMMPS wall fix's "
+                "contacts array holds the contact's force only, never its rolling or twisting spring"
+            )
         if mode == "u_tw" and not rows.has(*SPRING_TW):
-            return (f"the u_tw energy of {self.key} (twisting {self.params['twisting']}) is not computed: LAMMPS "
-                    "keeps the twisting spring in the pair's history, which no compute dumps (pair/local's p9 is "
-                    "the torque only where single() capped it)")
+            return (
+                f"the u_tw energy of {self.key} (twisting {self.params['twisting']}) is not computed: LAMMPS "
+                "keeps the twisting spring in the pair's history, which no compute dumps (pair/local's p9 is "
+                "the torque only where single() capped it)"
+            )
         return super().missing_mode(rows, mode)
 
     def normal_force(self, rows: ContactRows) -> np.ndarray:
@@ -455,12 +501,23 @@ class LammpsModel(ContactLaw):
     def describe(self) -> str:
         """The normal model's line, with its sub-models."""
         p = self.params
-        wall = "" if not p["wall"] else " (wall)" if not self.has_material() else \
-            " (wall: k_n = 4/3 E/(2(1 - nu)), k_t NULL = E/4 (2 - nu)(1 + nu))"
-        parts = [f"{self.key}{wall}: {self.summary}", f"damping {p['damping']}",
-                 f"tangential {p['tangential']}" + (f" u_t = |F_el|^2/(2 k), k = {self.kt:g}"
-                                                      f"{' a' if p['tangential'].startswith('mindlin') else ''}"
-                                                      if self.has_spring else "")]
+        wall = (
+            ""
+            if not p["wall"]
+            else " (wall)"
+            if not self.has_material()
+            else " (wall: k_n = 4/3 E/(2(1 - nu)), k_t NULL = E/4 (2 - nu)(1 + nu))"
+        )
+        parts = [
+            f"{self.key}{wall}: {self.summary}",
+            f"damping {p['damping']}",
+            f"tangential {p['tangential']}"
+            + (
+                f" u_t = |F_el|^2/(2 k), k = {self.kt:g}{' a' if p['tangential'].startswith('mindlin') else ''}"
+                if self.has_spring
+                else ""
+            ),
+        ]
         if p["rolling"] != "none":
             parts.append(f"rolling sds u_r = |F_r,el|^2/(2 k_r), k_r = {float(p['kr']):g}")
         if p["twisting"] != "none":
@@ -479,8 +536,11 @@ class LammpsModel(ContactLaw):
         a = self.contact_radius(delta, R)
         F_ne = self.elastic_normal_force(delta, R, a)
         eta_n = self.normal_damping(a, meff, inits)
-        vel = {k: vectors(rows, tuple(f"{q}{c}_{k[-1]}" for c in "xyz"))
-               for q in ("dv", "ws", "wr") for k in (f"{q}_s", f"{q}_h")}
+        vel = {
+            k: vectors(rows, tuple(f"{q}{c}_{k[-1]}" for c in "xyz"))
+            for q in ("dv", "ws", "wr")
+            for k in (f"{q}_s", f"{q}_h")
+        }
         vn_s, vn_h = dot(vel["dv_s"], n_L), dot(vel["dv_h"], n_L)
         F_n_s, F_n_h = self.damped_normal_force(F_ne, eta_n, vn_s), self.damped_normal_force(F_ne, eta_n, vn_h)
         crit_s = float(self.params["mu"]) * self.coulomb_force(F_ne, F_n_s, R)
@@ -523,8 +583,9 @@ class LammpsModel(ContactLaw):
             if self.params["wall"]:  # the wall fix dumps no rolling force: the spring is unknown
                 F_r = np.full((n, 3), np.nan)
             else:
-                spring_r, capped_r, bad_r, _ = unsliding(p_r, -gr * vr_s, -gr * vr_h, mu_ratio * crit_s,
-                                                         mu_ratio * crit_h)
+                spring_r, capped_r, bad_r, _ = unsliding(
+                    p_r, -gr * vr_s, -gr * vr_h, mu_ratio * crit_s, mu_ratio * crit_h
+                )
                 F_r = spring_r - gr * vr_h
                 interval_r = capped_r & ~bad_r & np.any(vr_s != vr_h, axis=1)
                 capped_any |= capped_r
@@ -546,9 +607,25 @@ class LammpsModel(ContactLaw):
         nxfr = R[:, None] * np.cross(n_L, F_r)
         force = F_n_h[:, None] * n_L + F_t
         w_t = p_t / np.where(norm(p_t) > 0, norm(p_t), 1.0)[:, None]
-        return Rebuilt(spring_t, spring_r, force, -arm1[:, None] * nxft + nxfr, -arm2[:, None] * nxft - nxfr,
-                       F_n_s, np.abs(F_ne) + np.abs(F_n_s - F_ne), unknown, why, interval_t, interval_r, w_t,
-                       crit_s, L_t, arm1, arm2, np.full(n, self.twisting))
+        return Rebuilt(
+            spring_t,
+            spring_r,
+            force,
+            -arm1[:, None] * nxft + nxfr,
+            -arm2[:, None] * nxft - nxfr,
+            F_n_s,
+            np.abs(F_ne) + np.abs(F_n_s - F_ne),
+            unknown,
+            why,
+            interval_t,
+            interval_r,
+            w_t,
+            crit_s,
+            L_t,
+            arm1,
+            arm2,
+            np.full(n, self.twisting),
+        )
 
     def rolling_limit_ratio(self) -> float:
         """mu_r/mu: the rolling limit is mu_r F_ncrit (pair_granular.cpp:585)."""
@@ -559,8 +636,11 @@ class LammpsModel(ContactLaw):
 class LammpsMaterialModel(LammpsModel):
     """A normal model whose line carries E and nu (hertz/material, dmt, jkr): kn from them."""
 
-    parameters = {"E": (ContactLaw.REQUIRED, "Young's modulus E of the line (Pa)"),
-                  "nu": (ContactLaw.REQUIRED, "Poisson's ratio nu of the line"), **LammpsModel.parameters}
+    parameters = {
+        "E": (ContactLaw.REQUIRED, "Young's modulus E of the line (Pa)"),
+        "nu": (ContactLaw.REQUIRED, "Poisson's ratio nu of the line"),
+        **LammpsModel.parameters,
+    }
     example_params = {"E": 7e9, "nu": 0.3, **LammpsModel.example_params}
 
     def normal_coefficient(self) -> float:
@@ -571,8 +651,7 @@ class LammpsAdhesiveModel(LammpsMaterialModel):
     """dmt and jkr: E, nu and the surface energy gamma (J/m^2)."""
 
     adhesive = True
-    parameters = {**LammpsMaterialModel.parameters,
-                  "cohesion": (ContactLaw.REQUIRED, "surface energy gamma (J/m^2)")}
+    parameters = {**LammpsMaterialModel.parameters, "cohesion": (ContactLaw.REQUIRED, "surface energy gamma (J/m^2)")}
     example_params = {**LammpsMaterialModel.example_params, "cohesion": 0.05}
 
 
@@ -650,5 +729,7 @@ class LammpsLegacyModel(LammpsModel):
         return rows.r1, (np.zeros_like(rows.r1) if self.params["wall"] else rows.r2)
 
     def describe(self) -> str:
-        return (f"{self.key}{' (wall)' if self.params['wall'] else ''}: {self.summary} (k_n = {self.kn:g}, "
-                f"k_t = {self.kt:g}, gamma_t = {self.gammat:g})")
+        return (
+            f"{self.key}{' (wall)' if self.params['wall'] else ''}: {self.summary} (k_n = {self.kn:g}, "
+            f"k_t = {self.kt:g}, gamma_t = {self.gammat:g})"
+        )

@@ -49,8 +49,8 @@ import numpy as np
 
 from ...errors import ContactError, InputFormatError, UnsupportedModelError
 from ..elastic import history_spring_energy, overlap
-from ..moduli import effective_radius
 from ..modes import NOT_COMPUTED_BITS
+from ..moduli import effective_radius
 from ._liquid_bridge import BRIDGE_MODELS, FORMED_ON_TOUCH, WASHINO_FRACTION, LiquidBridges
 from .base import ContactLaw, ContactRows, LawEnergy
 
@@ -72,9 +72,11 @@ LIQUID_CONTENT = "f_surfaceLiquidContent"
 ``surfaceLiquidContent`` LIGGGHTS creates for them (volume of liquid over the particle's volume)."""
 BRIDGE_FLAG = "liquid_bridge"
 """Contact column of the liquid-bridge models' history value (``contflag``): 1 while the contact holds a bridge."""
-LIQUID_TRANSFER_FIX = ("fix liquidtransfer all transportequation/scalar equation_id liquidtransfer quantity "
-                       "surfaceLiquidContent default_value {initial:e} flux_quantity liquidFlux source_quantity "
-                       "liquidSource capacity_quantity none")
+LIQUID_TRANSFER_FIX = (
+    "fix liquidtransfer all transportequation/scalar equation_id liquidtransfer quantity "
+    "surfaceLiquidContent default_value {initial:e} flux_quantity liquidFlux source_quantity "
+    "liquidSource capacity_quantity none"
+)
 """The fix a liquid-bridge model creates when the first run starts (``cohesion_model_*_capillary_viscous.h``, with
 its ``%e`` of surfaceLiquidContentInitial); it creates the ``surfaceLiquidContent`` property/atom."""
 
@@ -123,8 +125,7 @@ def sjkr_area(delta: np.ndarray, r1: np.ndarray, r2: np.ndarray) -> np.ndarray:
     d = overlap(delta)
     wall = np.isinf(r2)
     S = np.where(wall, 1.0, r1 + r2)
-    pair = (np.pi / 4.0) * d * (2.0 * S - d) * (4.0 * r1 * np.where(wall, 1.0, r2) - 2.0 * S * d + d * d) \
-        / (S - d) ** 2
+    pair = (np.pi / 4.0) * d * (2.0 * S - d) * (4.0 * r1 * np.where(wall, 1.0, r2) - 2.0 * S * d + d * d) / (S - d) ** 2
     return np.where(wall, np.pi * (2.0 * r1 * d - d * d), pair)
 
 
@@ -152,37 +153,68 @@ class LiggghtsNormalModel(ContactLaw):
         "rolling_friction": (None, "coefficientRollingFriction mu_r, per type pair (epsd, epsd3)"),
         "rolling_stiffness": (None, "coeffRollStiffness, scalar (epsd3)"),
         "cohesion_energy_density": (None, "cohesionEnergyDensity k (J/m^3), per type pair (sjkr, sjkr2)"),
-        "friction_stiffness": (None, "coeffFrictionStiffness kT2kcMax, the tangential spring over kt, per type "
-                                     "pair (tan_luding)"),
+        "friction_stiffness": (
+            None,
+            "coeffFrictionStiffness kT2kcMax, the tangential spring over kt, per type pair (tan_luding)",
+        ),
         "rolling_stiffness_ratio": (None, "coeffRollingStiffness kR2kcMax, kr/(kt R*^2), per type pair (luding)"),
         "torsion": ("off", "the torsion setting of rolling_friction luding; only off is supported"),
         "surface_tension": (None, "surfaceTension gamma (N/m), scalar (liquid bridges)"),
         "contact_angle": (None, "contactAngle (degrees), per atom type (liquid bridges)"),
-        "max_separation_ratio": (None, "maxSeparationDistanceRatio: a bridge breaks at a gap of (ratio - 1)(r1 + r2), "
-                                       "scalar (liquid bridges)"),
-        "min_separation_ratio": (None, "minSeparationDistanceRatio, scalar: the viscous force's smallest gap over "
-                                       "R* (liquid bridges; dissipative, no energy)"),
-        "fluid_viscosity": (None, "fluidViscosity (Pa s), scalar (liquid bridges; the viscous force is "
-                                  "dissipative, no energy)"),
-        "liquid_content_initial": (None, "surfaceLiquidContentInitial, scalar: the liquid content every particle "
-                                         "starts with (liquid bridges; the energy reads the atom dump's)"),
-        "bridge_volume_fraction": (None, "the share of the two particles' liquid in a washino bridge: lbVolumeFraction "
-                                         f"with modifyLbVolume on (default {WASHINO_FRACTION})"),
+        "max_separation_ratio": (
+            None,
+            "maxSeparationDistanceRatio: a bridge breaks at a gap of (ratio - 1)(r1 + r2), scalar (liquid bridges)",
+        ),
+        "min_separation_ratio": (
+            None,
+            "minSeparationDistanceRatio, scalar: the viscous force's smallest gap over "
+            "R* (liquid bridges; dissipative, no energy)",
+        ),
+        "fluid_viscosity": (
+            None,
+            "fluidViscosity (Pa s), scalar (liquid bridges; the viscous force is dissipative, no energy)",
+        ),
+        "liquid_content_initial": (
+            None,
+            "surfaceLiquidContentInitial, scalar: the liquid content every particle "
+            "starts with (liquid bridges; the energy reads the atom dump's)",
+        ),
+        "bridge_volume_fraction": (
+            None,
+            "the share of the two particles' liquid in a washino bridge: lbVolumeFraction "
+            f"with modifyLbVolume on (default {WASHINO_FRACTION})",
+        ),
         "limit_liquid_content": ("off", "washino's limitLiquidContent setting; only off is supported"),
-        "contact_distance_factor": (None, "neigh_modify contact_distance_factor (default 1); LIGGGHTS raises it to "
-                                          "1.1 maxSeparationDistanceRatio (liquid bridges)"),
+        "contact_distance_factor": (
+            None,
+            "neigh_modify contact_distance_factor (default 1); LIGGGHTS raises it to "
+            "1.1 maxSeparationDistanceRatio (liquid bridges)",
+        ),
     }
     simulator_parameters = {
-        "characteristicVelocity": "characteristic_velocity", "coefficientRollingFriction": "rolling_friction",
-        "rollingStiffness": "rolling_stiffness", "cohesionEnergyDensity": "cohesion_energy_density", "kn": "kn",
-        "kt": "kt", "coefficientMaxElasticStiffness": "max_elastic_stiffness",
-        "coefficientAdhesionStiffness": "adhesion_stiffness", "coefficientPlasticityDepth": "plasticity_depth",
-        "LoadingStiffness": "loading_stiffness", "UnloadingStiffness": "unloading_stiffness",
-        "pullOffForce": "pull_off_force", "overlapExponent": "overlap_exponent", "surfaceEnergy": "surface_energy",
-        "coeffFrictionStiffness": "friction_stiffness", "coeffRollingStiffness": "rolling_stiffness_ratio",
-        "surfaceTension": "surface_tension", "contactAngle": "contact_angle",
-        "maxSeparationDistanceRatio": "max_separation_ratio", "minSeparationDistanceRatio": "min_separation_ratio",
-        "fluidViscosity": "fluid_viscosity", "surfaceLiquidContentInitial": "liquid_content_initial"}
+        "characteristicVelocity": "characteristic_velocity",
+        "coefficientRollingFriction": "rolling_friction",
+        "rollingStiffness": "rolling_stiffness",
+        "cohesionEnergyDensity": "cohesion_energy_density",
+        "kn": "kn",
+        "kt": "kt",
+        "coefficientMaxElasticStiffness": "max_elastic_stiffness",
+        "coefficientAdhesionStiffness": "adhesion_stiffness",
+        "coefficientPlasticityDepth": "plasticity_depth",
+        "LoadingStiffness": "loading_stiffness",
+        "UnloadingStiffness": "unloading_stiffness",
+        "pullOffForce": "pull_off_force",
+        "overlapExponent": "overlap_exponent",
+        "surfaceEnergy": "surface_energy",
+        "coeffFrictionStiffness": "friction_stiffness",
+        "coeffRollingStiffness": "rolling_stiffness_ratio",
+        "surfaceTension": "surface_tension",
+        "contactAngle": "contact_angle",
+        "maxSeparationDistanceRatio": "max_separation_ratio",
+        "minSeparationDistanceRatio": "min_separation_ratio",
+        "fluidViscosity": "fluid_viscosity",
+        "surfaceLiquidContentInitial": "liquid_content_initial",
+    }
     """LIGGGHTS ``fix property/global`` names of the parameters of its normal models and sub-models: a normal
     model takes those of the parameters it declares."""
     simulator_settings = {"ktToKnUser": ("kt_to_kn", 2.0 / 7.0, 1.0), "torsion": ("torsion", "on", "off")}
@@ -190,48 +222,78 @@ class LiggghtsNormalModel(ContactLaw):
 
     def check(self) -> None:
         p = self.params
-        for name, allowed in (("tangential", TANGENTIAL_MODELS), ("rolling", ROLLING_MODELS),
-                              ("cohesion", COHESION_MODELS)):
+        for name, allowed in (
+            ("tangential", TANGENTIAL_MODELS),
+            ("rolling", ROLLING_MODELS),
+            ("cohesion", COHESION_MODELS),
+        ):
             if p[name] not in allowed:
-                raise UnsupportedModelError(f"{self.key}: {name} model {p[name]!r} is not supported; "
-                                            f"it takes {', '.join(allowed)}.")
+                raise UnsupportedModelError(
+                    f"{self.key}: {name} model {p[name]!r} is not supported; it takes {', '.join(allowed)}."
+                )
         if p["torsion"] != "off":
             raise UnsupportedModelError(
                 f"{self.key}: rolling_friction luding with torsion on is not supported: LIGGGHTS 3.8 writes the "
                 "torsion torque into the rolling torque's history values (rolling_model_luding.h, calcTorTorque), "
-                "so the dump holds neither spring's state.", fix="analyse a run with torsion off, or leave it out.")
+                "so the dump holds neither spring's state.",
+                fix="analyse a run with torsion off, or leave it out.",
+            )
         if p["limit_liquid_content"] != "off":
             raise UnsupportedModelError(
                 f"{self.key}: cohesion washino/capillary/viscous with limitLiquidContent on is not supported: LIGGGHTS "
                 "3.8 clips the particles' liquid content inside the force evaluation (after the atom dump wrote it) "
                 "and replaces maxSeparationDistanceRatio by a value of its own, so the dump does not hold the "
-                "bridges' state.", fix="analyse a run with limitLiquidContent off.")
+                "bridges' state.",
+                fix="analyse a run with limitLiquidContent off.",
+            )
         bridge = p["cohesion"] in BRIDGE_MODELS
-        needed = {"rolling_friction": p["rolling"] in ("epsd", "epsd3"),
-                  "rolling_stiffness": p["rolling"] == "epsd3",
-                  "rolling_stiffness_ratio": p["rolling"] == "luding",
-                  "friction_stiffness": p["tangential"] == "tan_luding",
-                  "cohesion_energy_density": p["cohesion"] in ("sjkr", "sjkr2"),
-                  **{name: bridge for name in ("surface_tension", "contact_angle", "max_separation_ratio",
-                                               "min_separation_ratio", "fluid_viscosity", "liquid_content_initial")}}
+        needed = {
+            "rolling_friction": p["rolling"] in ("epsd", "epsd3"),
+            "rolling_stiffness": p["rolling"] == "epsd3",
+            "rolling_stiffness_ratio": p["rolling"] == "luding",
+            "friction_stiffness": p["tangential"] == "tan_luding",
+            "cohesion_energy_density": p["cohesion"] in ("sjkr", "sjkr2"),
+            **{
+                name: bridge
+                for name in (
+                    "surface_tension",
+                    "contact_angle",
+                    "max_separation_ratio",
+                    "min_separation_ratio",
+                    "fluid_viscosity",
+                    "liquid_content_initial",
+                )
+            },
+        }
         for name, need in needed.items():
             if need and p[name] is None:
-                raise UnsupportedModelError(f"{self.key} with tangential {p['tangential']}, rolling_friction "
-                                            f"{p['rolling']} and cohesion {p['cohesion']} needs the parameter "
-                                            f"{name!r} ({self.parameters[name][1]}).",
-                                            fix="define it in the script with fix property/global, as the run did.")
+                raise UnsupportedModelError(
+                    f"{self.key} with tangential {p['tangential']}, rolling_friction "
+                    f"{p['rolling']} and cohesion {p['cohesion']} needs the parameter "
+                    f"{name!r} ({self.parameters[name][1]}).",
+                    fix="define it in the script with fix property/global, as the run did.",
+                )
         for name in ("rolling_friction", "cohesion_energy_density", "friction_stiffness", "rolling_stiffness_ratio"):
             if p[name] is not None:
                 p[name] = self.table(name)
         if "pull_off_force" in p:  # a normal model with a constant pull-off force f0 (luding, edinburgh)
             f0 = np.asarray(p["pull_off_force"], dtype=np.float64)
             if not np.all(np.isfinite(f0)):
-                raise UnsupportedModelError(f"{self.key}: pullOffForce must be finite, got {f0.tolist()!r}.",
-                                            fix="correct the fix property/global line of the script.")
+                raise UnsupportedModelError(
+                    f"{self.key}: pullOffForce must be finite, got {f0.tolist()!r}.",
+                    fix="correct the fix property/global line of the script.",
+                )
             p["pull_off_force"] = f0.item() if f0.ndim == 0 else tuple(map(tuple, f0.tolist()))
-        self.modes = tuple(m for m, has in (("u_n", True), ("u_t", TANGENTIAL_MODELS[p["tangential"]]),
-                                            ("u_r", ROLLING_MODELS[p["rolling"]]),
-                                            ("u_adh", p["cohesion"] != "off" or self.has_pull_off())) if has)
+        self.modes = tuple(
+            m
+            for m, has in (
+                ("u_n", True),
+                ("u_t", TANGENTIAL_MODELS[p["tangential"]]),
+                ("u_r", ROLLING_MODELS[p["rolling"]]),
+                ("u_adh", p["cohesion"] != "off" or self.has_pull_off()),
+            )
+            if has
+        )
         self.mode_columns = {m: cols for m, cols in type(self).mode_columns.items() if m in self.modes}
         if bridge:
             self._check_bridge()
@@ -240,15 +302,23 @@ class LiggghtsNormalModel(ContactLaw):
         """The liquid-bridge parameters checked as LIGGGHTS does; the contact-angle table theta1 theta2/2 (rad, per
         type pair, LIGGGHTS 3.8.0: ``_liquid_bridge``), the liquid-content particle column and the bridge flag."""
         p = self.params
-        for name in ("surface_tension", "max_separation_ratio", "min_separation_ratio", "fluid_viscosity",
-                     "liquid_content_initial", "bridge_volume_fraction", "contact_distance_factor"):
+        for name in (
+            "surface_tension",
+            "max_separation_ratio",
+            "min_separation_ratio",
+            "fluid_viscosity",
+            "liquid_content_initial",
+            "bridge_volume_fraction",
+            "contact_distance_factor",
+        ):
             if p[name] is not None:
                 p[name] = float(self.table(name))
         angles = np.atleast_1d(np.asarray(p["contact_angle"], dtype=np.float64))
         if angles.ndim != 1 or not np.all((angles >= 0) & (angles <= 180)):
-            raise UnsupportedModelError(f"{self.key}: contactAngle must be one value per atom type in 0..180 degrees, "
-                                        f"got {angles.tolist()!r}.", fix="correct the fix property/global line of "
-                                        "the script (LIGGGHTS refuses it too).")
+            raise UnsupportedModelError(
+                f"{self.key}: contactAngle must be one value per atom type in 0..180 degrees, got {angles.tolist()!r}.",
+                fix="correct the fix property/global line of the script (LIGGGHTS refuses it too).",
+            )
         p["contact_angle"] = angles.item() if np.ndim(p["contact_angle"]) == 0 else tuple(angles.tolist())
         theta = angles * np.pi / 180.0  # as LIGGGHTS converts it (global_properties.cpp)
         self._theta = _table(0.5 * np.outer(theta, theta)) if theta.size > 1 else 0.5 * float(theta[0]) ** 2
@@ -266,8 +336,10 @@ class LiggghtsNormalModel(ContactLaw):
         """Parameter ``name`` as a per-type-pair table of nested tuples (or its scalar), checked finite and >= 0."""
         value = _table(self.params[name])
         if not np.all(np.isfinite(np.asarray(value, dtype=np.float64))) or np.any(np.asarray(value) < 0):
-            raise UnsupportedModelError(f"{self.key}: parameter {name!r} must be finite and >= 0, got {value!r}.",
-                                        fix="correct the fix property/global line of the script.")
+            raise UnsupportedModelError(
+                f"{self.key}: parameter {name!r} must be finite and >= 0, got {value!r}.",
+                fix="correct the fix property/global line of the script.",
+            )
         return value
 
     # -- what a normal model gives ------------------------------------------------------------
@@ -315,8 +387,12 @@ class LiggghtsNormalModel(ContactLaw):
         cohesion (none for sjkr, sjkr2; the bridge flag for the liquid bridges), tangential, rolling (``luding``:
         the rolling, then the torsion torque)."""
         rolling = (*ROLLING_TORQUE, *(TORSION_TORQUE if self.params["rolling"] == "luding" else ()))
-        return [*self.normal_history, *((BRIDGE_FLAG,) if self.params["cohesion"] in BRIDGE_MODELS else ()),
-                *(SHEAR if "u_t" in self.modes else ()), *(rolling if "u_r" in self.modes else ())]
+        return [
+            *self.normal_history,
+            *((BRIDGE_FLAG,) if self.params["cohesion"] in BRIDGE_MODELS else ()),
+            *(SHEAR if "u_t" in self.modes else ()),
+            *(rolling if "u_r" in self.modes else ()),
+        ]
 
     def describe(self) -> str:
         """The normal model's line, then the rolling and cohesion sub-models the contact has."""
@@ -324,8 +400,10 @@ class LiggghtsNormalModel(ContactLaw):
         if "u_r" in self.modes:
             extra.append(f"rolling {self.params['rolling']} u_r = |M_r|^2/(2 kr)")
         if self.params["cohesion"] in BRIDGE_MODELS:
-            extra.append(f"cohesion {self.params['cohesion']} work u_adh = int F_cap from rupture (liquid content "
-                         f"{LIQUID_CONTENT}; apart from u; its viscous force stores no energy)")
+            extra.append(
+                f"cohesion {self.params['cohesion']} work u_adh = int F_cap from rupture (liquid content "
+                f"{LIQUID_CONTENT}; apart from u; its viscous force stores no energy)"
+            )
         elif "u_adh" in self.modes:
             extra.append(f"cohesion {self.params['cohesion']} work u_adh = -k int A (apart from u)")
         return super().describe() + "".join(f"; {e}" for e in extra)
@@ -351,8 +429,9 @@ class LiggghtsNormalModel(ContactLaw):
         unknown = {}
         lost = rows.column("history_unknown").astype(np.int64) if rows.has("history_unknown") else None
         if lost is not None and lost.any():  # no history written: only a touching contact's history modes unknown
-            unknown = {m: ((lost & NOT_COMPUTED_BITS[m]) != 0) & touching for m in self.mode_columns
-                       if m not in skipped}
+            unknown = {
+                m: ((lost & NOT_COMPUTED_BITS[m]) != 0) & touching for m in self.mode_columns if m not in skipped
+            }
         if self.params["cohesion"] != "off" and "u_adh" not in skipped:
             modes["u_adh"], unknown_adh = self._cohesion(rows, work=True)
             if lost is not None and lost.any():
@@ -392,7 +471,8 @@ class LiggghtsNormalModel(ContactLaw):
                 f"a gap beyond its rupture distance, e.g. a gap of {float(-rows.delta[i]):g} m for a rupture "
                 f"distance of {float(bridges.rupture[i]):g} m: LIGGGHTS breaks such a bridge, so the liquid contents "
                 "or the positions are not those of the contact dump's step.",
-                fix=f"dump {LIQUID_CONTENT} in the atom dump of the same run and steps as the contact dump.")
+                fix=f"dump {LIQUID_CONTENT} in the atom dump of the same run and steps as the contact dump.",
+            )
         if not on_touch:  # a washino bridge acts wherever the gap is below rupture
             return value, none
         held = ~apart | (flag == 1)  # touching: LIGGGHTS always holds a bridge (surfacesIntersect sets contflag)
@@ -407,11 +487,22 @@ class LiggghtsNormalModel(ContactLaw):
         bad = ~(c1 >= 0) | (~wall & ~(c2 >= 0))
         if bad.any():
             value = c1[bad][0] if not (c1[bad][0] >= 0) else c2[bad][0]
-            raise InputFormatError(f"the liquid content {LIQUID_CONTENT} of a particle is {float(value)!r}; it must be "
-                                   ">= 0.", fix="check the atom dump's column (a damaged or foreign value).")
-        return LiquidBridges(p["cohesion"], rows.r1, rows.r2, c1, c2, rows.type_pair(self._theta),
-                             p["surface_tension"], p["max_separation_ratio"], self.contact_distance_factor(),
-                             WASHINO_FRACTION if p["bridge_volume_fraction"] is None else p["bridge_volume_fraction"])
+            raise InputFormatError(
+                f"the liquid content {LIQUID_CONTENT} of a particle is {float(value)!r}; it must be >= 0.",
+                fix="check the atom dump's column (a damaged or foreign value).",
+            )
+        return LiquidBridges(
+            p["cohesion"],
+            rows.r1,
+            rows.r2,
+            c1,
+            c2,
+            rows.type_pair(self._theta),
+            p["surface_tension"],
+            p["max_separation_ratio"],
+            self.contact_distance_factor(),
+            WASHINO_FRACTION if p["bridge_volume_fraction"] is None else p["bridge_volume_fraction"],
+        )
 
     def dump_setup(self) -> list[str]:
         """LIGGGHTS commands that, placed before the first run, let a ``dump custom`` write the law's particle columns
@@ -435,8 +526,11 @@ class LiggghtsNormalModel(ContactLaw):
             return 0.0
         r1, r2 = np.asarray(r1, dtype=np.float64), np.asarray(r2, dtype=np.float64)
         wall = np.isinf(r2)
-        return np.where(wall, (self.contact_distance_factor() - 1.0) * r1,
-                        (self.params["max_separation_ratio"] - 1.0) * (r1 + np.where(wall, 0.0, r2)))
+        return np.where(
+            wall,
+            (self.contact_distance_factor() - 1.0) * r1,
+            (self.params["max_separation_ratio"] - 1.0) * (r1 + np.where(wall, 0.0, r2)),
+        )
 
     def kr(self, rows: ContactRows) -> np.ndarray:
         """Rolling stiffness of the ``rolling_friction`` model (N m/rad), per row (module docstring)."""

@@ -52,8 +52,15 @@ def magnitude(a: np.ndarray) -> np.ndarray:
     return np.sqrt(np.einsum("ij,ij->i", a, a))
 
 
-def half_step_velocities(v: np.ndarray, omega: np.ndarray, force: np.ndarray, torque: np.ndarray,
-                         mass: np.ndarray, radius: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+def half_step_velocities(
+    v: np.ndarray,
+    omega: np.ndarray,
+    force: np.ndarray,
+    torque: np.ndarray,
+    mass: np.ndarray,
+    radius: np.ndarray,
+    dt: float,
+) -> tuple[np.ndarray, np.ndarray]:
     """The velocities (m/s, rad/s; (n, 3)) a step's force used, from the dumped end-of-step ones and the dumped force
     (N) and torque (N m): v - (dt/2) f/m, omega - (dt/2) tau/(0.4 m r^2) (module docstring)."""
     dtf = 0.5 * dt
@@ -62,8 +69,7 @@ def half_step_velocities(v: np.ndarray, omega: np.ndarray, force: np.ndarray, to
     return v - dtfm[:, None] * force, omega - dtirotate[:, None] * torque
 
 
-def contact_velocity(v: np.ndarray, en: np.ndarray, w_r: np.ndarray, dist: np.ndarray
-                     ) -> tuple[np.ndarray, np.ndarray]:
+def contact_velocity(v: np.ndarray, en: np.ndarray, w_r: np.ndarray, dist: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """v_n (m/s) and v_tr (m/s, (n, 3)) of a relative velocity ``v`` at a contact of normal ``en``, centre distance
     ``dist`` (m) and rotational term ``w_r`` = (c_1 omega_1 + c_2 omega_2)/r (rad/s): v_n = v . e_n,
     v_tr = v - v_n e_n - w_r x (r e_n)."""
@@ -96,8 +102,9 @@ def onto_cap(vec: np.ndarray, cap: np.ndarray) -> np.ndarray:
     return vec * (cap / np.where(mag > 0, mag, 1.0))[:, None]
 
 
-def applied_tangential_force(spring: np.ndarray, cap: np.ndarray, gamma_t: np.ndarray, vtr: np.ndarray,
-                             setup: bool) -> tuple[np.ndarray, np.ndarray]:
+def applied_tangential_force(
+    spring: np.ndarray, cap: np.ndarray, gamma_t: np.ndarray, vtr: np.ndarray, setup: bool
+) -> tuple[np.ndarray, np.ndarray]:
     """The tangential force (N, (n, 3)) a contact applied in the step and whether it sat at the Coulomb cap
     mu |F_n| (N), from its spring F_el = -k_t shear as the history holds it after the step (:func:`at_cap`): a
     capped one applied F_el rescaled to the cap (mid-run its history was rescaled to it: the rescaling only removes
@@ -107,8 +114,9 @@ def applied_tangential_force(spring: np.ndarray, cap: np.ndarray, gamma_t: np.nd
     return np.where(capped[:, None], onto_cap(spring, cap), spring - gamma_t[:, None] * vtr), capped
 
 
-def tangential_spring(force: np.ndarray, cap: np.ndarray, gamma_t: np.ndarray, vtr: np.ndarray,
-                      slack: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def tangential_spring(
+    force: np.ndarray, cap: np.ndarray, gamma_t: np.ndarray, vtr: np.ndarray, slack: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """The spring F_el = -k_t shear (N, (n, 3)) behind an applied tangential force ``force`` (N), and whether the
     contact sat at the cap mu |F_n| (``cap``, N), |F_t| within CAP_RTOL cap + ``slack`` of it: then F_el is F_t
     itself (mid-run, module docstring), else F_t + gamma_t v_tr."""
@@ -122,8 +130,7 @@ def rolling_increment(w: np.ndarray, en: np.ndarray, kr: np.ndarray, dt: float) 
     return tangential_part(w, en) * (dt * kr)[:, None]
 
 
-def applied_rolling_torque(history: np.ndarray, increment: np.ndarray, cap: np.ndarray,
-                           setup: bool) -> np.ndarray:
+def applied_rolling_torque(history: np.ndarray, increment: np.ndarray, cap: np.ndarray, setup: bool) -> np.ndarray:
     """The rolling spring torque M (N m, (n, 3)) an ``epsd2`` contact applied in the step, from its history after
     the step: mid-run the history holds it (on the cap mu_r |F_n| R* (N m) where it reached it,
     :func:`at_cap`); at a setup step (no update) it is cap(M_hist + k_r w_t dt)."""

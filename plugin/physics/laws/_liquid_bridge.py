@@ -76,9 +76,19 @@ class LiquidBridges:
     distance factor; ``fraction`` washino's bridge volume fraction.
     """
 
-    def __init__(self, model: str, r1: np.ndarray, r2: np.ndarray, c1: np.ndarray, c2: np.ndarray,
-                 theta: np.ndarray | float, gamma: float, max_ratio: float, cdf: float,
-                 fraction: float = WASHINO_FRACTION) -> None:
+    def __init__(
+        self,
+        model: str,
+        r1: np.ndarray,
+        r2: np.ndarray,
+        c1: np.ndarray,
+        c2: np.ndarray,
+        theta: np.ndarray | float,
+        gamma: float,
+        max_ratio: float,
+        cdf: float,
+        fraction: float = WASHINO_FRACTION,
+    ) -> None:
         if model not in BRIDGE_MODELS:
             raise ValueError(f"{model!r} is not a liquid-bridge model ({', '.join(BRIDGE_MODELS)})")
         self.model = model
@@ -91,14 +101,16 @@ class LiquidBridges:
         v2 = FOUR_THIRDS * np.pi * self.r2**3 * np.where(self.wall, 0.0, c2)  # walls are dry
         if model == BRIDGE_MODELS[0]:
             S = np.where(self.wall, r1, r1 + self.r2)
-            self.volume = 0.5 * v1 * (1.0 - np.sqrt(1.0 - self.r2**2 / S**2)) \
-                + 0.5 * v2 * (1.0 - np.sqrt(1.0 - r1**2 / S**2))
+            self.volume = 0.5 * v1 * (1.0 - np.sqrt(1.0 - self.r2**2 / S**2)) + 0.5 * v2 * (
+                1.0 - np.sqrt(1.0 - r1**2 / S**2)
+            )
         else:
             self.volume = fraction * (v1 + v2)
         self.present = self.volume >= MIN_VOLUME
         reach = (cdf - 1.0) * np.where(self.wall, r1, r1 + self.r2)
-        self.rupture = np.minimum(np.minimum((1.0 + 0.5 * self.theta) * np.cbrt(self.volume),
-                                             (max_ratio - 1.0) * (r1 + self.r2)), reach)
+        self.rupture = np.minimum(
+            np.minimum((1.0 + 0.5 * self.theta) * np.cbrt(self.volume), (max_ratio - 1.0) * (r1 + self.r2)), reach
+        )
         """s_rup (m): the bridge acts while the gap is below it."""
 
     # -- the force and its work ------------------------------------------------------------------
@@ -116,8 +128,13 @@ class LiquidBridges:
             f_touching = -2.0 * np.pi * R * self.gamma * np.cos(self.theta) * (1.0 + np.where(touching, delta, 0.0) * k)
             Ra, c, q, u = self._washino_apart(s)
             alpha = np.sqrt(u / Ra)
-            f_apart = -2.0 * np.pi * Ra * self.gamma * (np.cos(self.theta) * u / q
-                                                         + np.sin(alpha) * np.sin(alpha + self.theta))
+            f_apart = (
+                -2.0
+                * np.pi
+                * Ra
+                * self.gamma
+                * (np.cos(self.theta) * u / q + np.sin(alpha) * np.sin(alpha + self.theta))
+            )
         return np.where(touching, f_touching, np.where(apart, f_apart, 0.0))
 
     def work(self, delta: np.ndarray) -> np.ndarray:
@@ -171,8 +188,7 @@ class LiquidBridges:
         return R, c, q, c / (q + s)
 
 
-def _washino_sine_work(u: np.ndarray, u_rup: np.ndarray, R: np.ndarray, c: np.ndarray,
-                       theta: np.ndarray) -> np.ndarray:
+def _washino_sine_work(u: np.ndarray, u_rup: np.ndarray, R: np.ndarray, c: np.ndarray, theta: np.ndarray) -> np.ndarray:
     """int_s^s_rup sin(alpha) sin(alpha + theta) ds' (m), alpha = sqrt(u/R), u = c/(sqrt(s^2 + c) + s).
 
     With s = (c - u^2)/(2u) and u = R alpha^2, ds = -(c/(R alpha^3) + R alpha) d(alpha); in t = ln(alpha)

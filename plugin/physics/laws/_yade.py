@@ -110,9 +110,11 @@ class YadeLaw(ContactLaw):
     moduli: ClassVar[str] = "elastic"
     tracked_energies: ClassVar[Mapping[str, tuple[str, ...]]] = {}
 
-    SPRINGS_NOTE: ClassVar[str] = ("YADE's 'poisson' of {law} is the ratio ks/kn of the material's springs, not a "
-                                   "Poisson ratio: the split takes each material's young as E and nu = 0 "
-                                   "(compliance 1/E); --material ID:E:NU gives other moduli")
+    SPRINGS_NOTE: ClassVar[str] = (
+        "YADE's 'poisson' of {law} is the ratio ks/kn of the material's springs, not a "
+        "Poisson ratio: the split takes each material's young as E and nu = 0 "
+        "(compliance 1/E); --material ID:E:NU gives other moduli"
+    )
 
     def depth_from_phys(self, t: Table) -> np.ndarray:
         """The overlap delta (m) of each interaction of a saved state, from the attributes the law stored

@@ -143,12 +143,15 @@ class ContactLaw(ABC):
         unknown = sorted(set(params) - set(self.parameters))
         if unknown:
             raise UnsupportedModelError(
-                f"contact law {self.key}: unknown parameter(s) {unknown}; it takes {sorted(self.parameters)}.")
+                f"contact law {self.key}: unknown parameter(s) {unknown}; it takes {sorted(self.parameters)}."
+            )
         for name, (default, meaning) in self.parameters.items():
             if name not in params:
                 if default is ContactLaw.REQUIRED:
-                    raise UnsupportedModelError(f"contact law {self.key} needs the parameter {name!r} ({meaning}).",
-                                                fix=f"give {name} in the scene's model parameters.")
+                    raise UnsupportedModelError(
+                        f"contact law {self.key} needs the parameter {name!r} ({meaning}).",
+                        fix=f"give {name} in the scene's model parameters.",
+                    )
                 params[name] = default
         self.params: dict[str, Any] = params
         self.check()
@@ -190,13 +193,13 @@ class ContactLaw(ABC):
 
     def needs(self) -> tuple[str, ...]:
         """Every contact column this law reads when it can (required and per-mode)."""
-        return tuple(dict.fromkeys([*self.contact_columns, *(c for cols in self.mode_columns.values()
-                                                             for c in cols)]))
+        return tuple(dict.fromkeys([*self.contact_columns, *(c for cols in self.mode_columns.values() for c in cols)]))
 
     def missing_mode(self, rows: ContactRows, mode: str) -> str | None:
         """Why ``mode`` cannot be computed from these contacts (its columns are absent), or None."""
         cols = self.mode_columns.get(mode, ())
         if rows.has(*cols):
             return None
-        return (f"the contact data has no {' '.join(cols)} columns, so the {mode} energy of {self.key} "
-                "cannot be computed")
+        return (
+            f"the contact data has no {' '.join(cols)} columns, so the {mode} energy of {self.key} cannot be computed"
+        )

@@ -21,8 +21,9 @@ from .base import ContactRows
 class LammpsDmt(LammpsAdhesiveModel):
     key = "lammps:dmt"
     line_coefficients = ("E", "damp", "nu", "cohesion")
-    summary = ("DMT F_ne = k_n a delta - 4 pi gamma R, u_n = 2/5 k_n a delta^2, work of adhesion "
-               "u_adh = -4 pi gamma R delta")
+    summary = (
+        "DMT F_ne = k_n a delta - 4 pi gamma R, u_n = 2/5 k_n a delta^2, work of adhesion u_adh = -4 pi gamma R delta"
+    )
 
     def elastic_normal_force(self, delta: np.ndarray, R: np.ndarray, a: np.ndarray) -> np.ndarray:
         """F_ne = k_n a delta - 4 pi gamma R (N)."""

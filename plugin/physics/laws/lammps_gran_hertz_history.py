@@ -14,7 +14,6 @@ from ._lammps import LammpsLegacyModel
 @register
 class LammpsGranHertzHistory(LammpsLegacyModel):
     key = "lammps:gran/hertz/history"
-    summary = ("Hertz u_n = 2/5 k_n sqrt(R) delta^(5/2); tangential spring u_t = |F_el|^2/(2 p k_t), "
-               "p = sqrt(R delta)")
+    summary = "Hertz u_n = 2/5 k_n sqrt(R) delta^(5/2); tangential spring u_t = |F_el|^2/(2 p k_t), p = sqrt(R delta)"
     has_spring = True
     hertzian = True

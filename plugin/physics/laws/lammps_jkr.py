@@ -33,8 +33,9 @@ def jkr_contact_radius(kn: float, gamma: float, delta: np.ndarray, R: np.ndarray
     t4 = np.cbrt(t1 + t2 + 3.0 * math.sqrt(3.0) * math.pi * np.sqrt(np.maximum(0.0, t0 * (t1 + 2.0 * t2))))
     t5 = t3 / t4 + t4 / E
     t6 = np.sqrt(np.maximum(0.0, 2.0 * dR + t5))
-    return (t6 + np.sqrt(np.maximum(0.0, 4.0 * dR - t5 + 6.0 * math.sqrt(6.0) * gamma * math.pi * R2 / (E * t6)))) \
-        / math.sqrt(6.0)
+    return (
+        t6 + np.sqrt(np.maximum(0.0, 4.0 * dR - t5 + 6.0 * math.sqrt(6.0) * gamma * math.pi * R2 / (E * t6)))
+    ) / math.sqrt(6.0)
 
 
 def jkr_pulloff_distance(kn: float, gamma: float, R: np.ndarray) -> np.ndarray:
@@ -49,8 +50,10 @@ def jkr_pulloff_distance(kn: float, gamma: float, R: np.ndarray) -> np.ndarray:
 class LammpsJkr(LammpsAdhesiveModel):
     key = "lammps:jkr"
     line_coefficients = ("E", "damp", "nu", "cohesion")
-    summary = ("JKR F_ne = k_n a^3/R - 2 pi a^2 sqrt(4 gamma E/(pi a)), u_n = 8 E a^5/(15 R^2) - 4 E a^3 D/(3 R) "
-               "+ E a D^2 (D = a^2/R - delta), work of adhesion u_adh = -2 pi gamma a^2")
+    summary = (
+        "JKR F_ne = k_n a^3/R - 2 pi a^2 sqrt(4 gamma E/(pi a)), u_n = 8 E a^5/(15 R^2) - 4 E a^3 D/(3 R) "
+        "+ E a D^2 (D = a^2/R - delta), work of adhesion u_adh = -2 pi gamma a^2"
+    )
 
     def contact_radius(self, delta: np.ndarray, R: np.ndarray) -> np.ndarray:
         """a(delta) of LAMMPS' closed form (m)."""
@@ -59,8 +62,9 @@ class LammpsJkr(LammpsAdhesiveModel):
     def elastic_normal_force(self, delta: np.ndarray, R: np.ndarray, a: np.ndarray) -> np.ndarray:
         """F_ne = k_n a^3/R - 2 pi a^2 sqrt(4 gamma E/(pi a)) (N)."""
         E = 0.75 * self.kn
-        return self.kn * a**3 / R - 2.0 * math.pi * a * a * np.sqrt(4.0 * self.params["cohesion"] * E
-                                                                  / (math.pi * np.where(a > 0, a, 1.0)))
+        return self.kn * a**3 / R - 2.0 * math.pi * a * a * np.sqrt(
+            4.0 * self.params["cohesion"] * E / (math.pi * np.where(a > 0, a, 1.0))
+        )
 
     def normal_energy(self, delta: np.ndarray, R: np.ndarray, a: np.ndarray) -> np.ndarray:
         """u_n = 8 E a^5/(15 R^2) - 4 E a^3 D/(3 R) + E a D^2, D = a^2/R - delta (J)."""

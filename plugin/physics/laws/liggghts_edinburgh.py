@@ -37,8 +37,10 @@ DELTA_P = "delta_p_max"
 @register
 class LiggghtsEdinburgh(LiggghtsNormalModel):
     key = "liggghts:edinburgh"
-    summary = ("Edinburgh elasto-plastic (loading k1 delta^n, unloading k2 (delta^n - dp^n)), u_n = the energy "
-               "given back along the unloading curve; tangential history u_t = kt |shear|^2/2")
+    summary = (
+        "Edinburgh elasto-plastic (loading k1 delta^n, unloading k2 (delta^n - dp^n)), u_n = the energy "
+        "given back along the unloading curve; tangential history u_t = kt |shear|^2/2"
+    )
     mode_columns = {**LiggghtsNormalModel.mode_columns, "u_n": (DELTA_P,)}
     normal_history = (DELTA_P, "edinburgh_old_delta", "edinburgh_kc", "edinburgh_fo")
     parameters = {
@@ -58,10 +60,12 @@ class LiggghtsEdinburgh(LiggghtsNormalModel):
             raise UnsupportedModelError(
                 f"{self.key} with surfaceEnergy > 0 is not supported: LIGGGHTS then derives an adhesive branch "
                 "from the contact geometry step by step, whose elastic energy demsplit cannot rebuild from a dump.",
-                fix="analyse a run with surfaceEnergy 0, or leave this run out.")
+                fix="analyse a run with surfaceEnergy 0, or leave this run out.",
+            )
         if np.any(np.asarray(self.params["unloading_stiffness"]) <= 1):
-            raise UnsupportedModelError(f"{self.key}: UnloadingStiffness must exceed 1 (k2 > k1), got "
-                                        f"{self.params['unloading_stiffness']!r}.")
+            raise UnsupportedModelError(
+                f"{self.key}: UnloadingStiffness must exceed 1 (k2 > k1), got {self.params['unloading_stiffness']!r}."
+            )
         self.params["overlap_exponent"] = float(self.params["overlap_exponent"])
         if not self.params["overlap_exponent"] > 0:
             raise UnsupportedModelError(f"{self.key}: overlapExponent must be > 0.")

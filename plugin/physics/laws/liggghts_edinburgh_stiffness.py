@@ -28,8 +28,10 @@ from .liggghts_edinburgh import LiggghtsEdinburgh
 @register
 class LiggghtsEdinburghStiffness(LiggghtsEdinburgh):
     key = "liggghts:edinburgh/stiffness"
-    summary = ("Edinburgh elasto-plastic with given stiffness (loading k1 delta^n, unloading k2 (delta^n - dp^n)), "
-               "u_n = the energy given back along the unloading curve; tangential history u_t = k1 |shear|^2/2")
+    summary = (
+        "Edinburgh elasto-plastic with given stiffness (loading k1 delta^n, unloading k2 (delta^n - dp^n)), "
+        "u_n = the energy given back along the unloading curve; tangential history u_t = k1 |shear|^2/2"
+    )
     parameters = {
         **LiggghtsEdinburgh.parameters,
         "loading_stiffness": (ContactLaw.REQUIRED, "LoadingStiffness k1 per type pair (N/m^n)"),

@@ -38,8 +38,10 @@ def hertz_damping(stiffness: np.ndarray, m_eff: np.ndarray, restitution: np.ndar
 @register
 class LiggghtsHertz(LiggghtsNormalModel):
     key = "liggghts:hertz"
-    summary = ("Hertz u_n = (8/15) E* sqrt(R* delta) delta^2; tangential history u_t = kt |shear|^2/2 with "
-               "kt = 8 G* sqrt(R* delta)")
+    summary = (
+        "Hertz u_n = (8/15) E* sqrt(R* delta) delta^2; tangential history u_t = kt |shear|^2/2 with "
+        "kt = 8 G* sqrt(R* delta)"
+    )
     compiled = True
     applied_force = True
 
@@ -50,8 +52,7 @@ class LiggghtsHertz(LiggghtsNormalModel):
             shear = [rows.column(c) for c in SHEAR] if with_shear else [rows.delta] * 3
             E_eff, code = rows.pair_values(effective_modulus)
             G_eff = rows.pair_values(effective_shear_modulus)[0] if with_shear else E_eff
-            u_n, u_t, bad = hertz_history_energies(rows.delta, rows.r1, rows.r2, E_eff, G_eff, code, *shear,
-                                                   with_shear)
+            u_n, u_t, bad = hertz_history_energies(rows.delta, rows.r1, rows.r2, E_eff, G_eff, code, *shear, with_shear)
             if bad >= 0:
                 raise curvature_error()
         else:
@@ -61,18 +62,23 @@ class LiggghtsHertz(LiggghtsNormalModel):
         return {"u_n": u_n, "u_t": u_t} if with_shear else {"u_n": u_n}
 
     def normal_energy(self, rows: ContactRows) -> np.ndarray:
-        return hertz_energy_from_moduli(rows.delta, effective_radius(rows.r1, rows.r2),
-                                        rows.per_pair(effective_modulus))
+        return hertz_energy_from_moduli(
+            rows.delta, effective_radius(rows.r1, rows.r2), rows.per_pair(effective_modulus)
+        )
 
     def kn(self, rows: ContactRows) -> np.ndarray:
         """kn = (4/3) E* sqrt(R* delta) (N/m), ``normal_model_hertz.h``."""
-        return (4.0 / 3.0) * rows.per_pair(effective_modulus) * np.sqrt(effective_radius(rows.r1, rows.r2)
-                                                                        * overlap(rows.delta))
+        return (
+            (4.0 / 3.0)
+            * rows.per_pair(effective_modulus)
+            * np.sqrt(effective_radius(rows.r1, rows.r2) * overlap(rows.delta))
+        )
 
     def kt(self, rows: ContactRows) -> np.ndarray:
         """kt = 8 G* sqrt(R* delta) (N/m), ``normal_model_hertz.h``."""
-        return hertz_kt_formula(overlap(rows.delta), effective_radius(rows.r1, rows.r2),
-                                rows.per_pair(effective_shear_modulus))
+        return hertz_kt_formula(
+            overlap(rows.delta), effective_radius(rows.r1, rows.r2), rows.per_pair(effective_shear_modulus)
+        )
 
     def damping(self, rows: ContactRows, restitution: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
         """gamma_n, gamma_t (kg/s) of :func:`hertz_damping` (module docstring)."""
@@ -81,5 +87,4 @@ class LiggghtsHertz(LiggghtsNormalModel):
         return hertz_damping(s_n, m_eff, restitution), hertz_damping(self.kt(rows), m_eff, restitution)
 
     def normal_force(self, rows: ContactRows) -> np.ndarray:
-        return hertz_force_from_moduli(rows.delta, effective_radius(rows.r1, rows.r2),
-                                       rows.per_pair(effective_modulus))
+        return hertz_force_from_moduli(rows.delta, effective_radius(rows.r1, rows.r2), rows.per_pair(effective_modulus))

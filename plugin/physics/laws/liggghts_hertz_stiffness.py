@@ -20,15 +20,19 @@ from .base import ContactLaw, ContactRows
 @register
 class LiggghtsHertzStiffness(LiggghtsNormalModel):
     key = "liggghts:hertz/stiffness"
-    summary = ("Hertz with given stiffness, u_n = (2/5) kn sqrt(R*) delta^(5/2); tangential history "
-               "u_t = kt sqrt(R* delta) |shear|^2/2")
+    summary = (
+        "Hertz with given stiffness, u_n = (2/5) kn sqrt(R*) delta^(5/2); tangential history "
+        "u_t = kt sqrt(R* delta) |shear|^2/2"
+    )
     parameters = {
         **LiggghtsNormalModel.parameters,
         "kn": (ContactLaw.REQUIRED, "kn per type pair (N/m^(3/2))"),
         "kt": (ContactLaw.REQUIRED, "kt per type pair (N/m^(3/2))"),
     }
-    example_params = {"kn": ((2e9, 3e9, 2.5e9), (3e9, 4e9, 3.5e9), (2.5e9, 3.5e9, 5e9)),
-                      "kt": ((1e9, 1.5e9, 1.2e9), (1.5e9, 2e9, 1.7e9), (1.2e9, 1.7e9, 2.5e9))}
+    example_params = {
+        "kn": ((2e9, 3e9, 2.5e9), (3e9, 4e9, 3.5e9), (2.5e9, 3.5e9, 5e9)),
+        "kt": ((1e9, 1.5e9, 1.2e9), (1.5e9, 2e9, 1.7e9), (1.2e9, 1.7e9, 2.5e9)),
+    }
 
     def check(self) -> None:
         super().check()

@@ -41,8 +41,10 @@ def hooke_damping(kn: np.ndarray, m_eff: np.ndarray, restitution: np.ndarray | f
 @register
 class LiggghtsHooke(LiggghtsNormalModel):
     key = "liggghts:hooke"
-    summary = ("linear spring u_n = kn delta^2/2 with kn(E*, R*, m*, characteristicVelocity); tangential "
-               "history u_t = kt |shear|^2/2 with kt = kt_to_kn kn")
+    summary = (
+        "linear spring u_n = kn delta^2/2 with kn(E*, R*, m*, characteristicVelocity); tangential "
+        "history u_t = kt |shear|^2/2 with kt = kt_to_kn kn"
+    )
     particle_columns = ("mass",)
     parameters = {
         **LiggghtsNormalModel.parameters,
@@ -54,8 +56,12 @@ class LiggghtsHooke(LiggghtsNormalModel):
 
     def kn(self, rows: ContactRows) -> np.ndarray:
         """Normal stiffness of every row (N/m)."""
-        return liggghts_hooke_kn(effective_radius(rows.r1, rows.r2), rows.per_pair(effective_modulus),
-                                 rows.reduced_mass(), float(self.params["characteristic_velocity"]))
+        return liggghts_hooke_kn(
+            effective_radius(rows.r1, rows.r2),
+            rows.per_pair(effective_modulus),
+            rows.reduced_mass(),
+            float(self.params["characteristic_velocity"]),
+        )
 
     def normal_energy(self, rows: ContactRows) -> np.ndarray:
         return hooke_energy(rows.delta, self.kn(rows))

@@ -33,8 +33,10 @@ def hooke_hysteresis_damping(kn: np.ndarray, m_eff: np.ndarray, restitution: np.
 @register
 class LiggghtsHookeHysteresis(LiggghtsNormalModel):
     key = "liggghts:hooke/hysteresis"
-    summary = ("hysteretic spring (loading kn, unloading k2 through delta_max), u_n = f^2/(2 k2); tangential "
-               "history u_t = kn |shear|^2/2")
+    summary = (
+        "hysteretic spring (loading kn, unloading k2 through delta_max), u_n = f^2/(2 k2); tangential "
+        "history u_t = kn |shear|^2/2"
+    )
     particle_columns = ("mass",)
     mode_columns = {**LiggghtsNormalModel.mode_columns, "u_n": (DELTA_MAX,)}
     normal_history = (DELTA_MAX,)
@@ -45,8 +47,12 @@ class LiggghtsHookeHysteresis(LiggghtsNormalModel):
         "adhesion_stiffness": (ContactLaw.REQUIRED, "coefficientAdhesionStiffness kc/kn per type pair"),
         "plasticity_depth": (ContactLaw.REQUIRED, "coefficientPlasticityDepth phiF per type pair"),
     }
-    example_params = {"characteristic_velocity": 1.0, "max_elastic_stiffness": 2.0, "adhesion_stiffness": 0.0,
-                      "plasticity_depth": 0.05}
+    example_params = {
+        "characteristic_velocity": 1.0,
+        "max_elastic_stiffness": 2.0,
+        "adhesion_stiffness": 0.0,
+        "plasticity_depth": 0.05,
+    }
     applied_force = True
 
     def check(self) -> None:
@@ -56,16 +62,21 @@ class LiggghtsHookeHysteresis(LiggghtsNormalModel):
 
     def kn(self, rows: ContactRows) -> np.ndarray:
         """The ``hooke`` normal stiffness kn(E*, R*, m*, V) (N/m)."""
-        return liggghts_hooke_kn(effective_radius(rows.r1, rows.r2), rows.per_pair(effective_modulus),
-                                 rows.reduced_mass(), float(self.params["characteristic_velocity"]))
+        return liggghts_hooke_kn(
+            effective_radius(rows.r1, rows.r2),
+            rows.per_pair(effective_modulus),
+            rows.reduced_mass(),
+            float(self.params["characteristic_velocity"]),
+        )
 
     def kt(self, rows: ContactRows) -> np.ndarray:
         return self.kn(rows)
 
     def force_and_k2(self, rows: ContactRows) -> tuple[np.ndarray, np.ndarray]:
         p = self.params
-        return hysteresis_of(rows, self.kn(rows), p["max_elastic_stiffness"], p["adhesion_stiffness"],
-                             p["plasticity_depth"])
+        return hysteresis_of(
+            rows, self.kn(rows), p["max_elastic_stiffness"], p["adhesion_stiffness"], p["plasticity_depth"]
+        )
 
     def normal_energy(self, rows: ContactRows) -> np.ndarray:
         return unloading_energy(*self.force_and_k2(rows))
@@ -83,6 +94,7 @@ class LiggghtsHookeHysteresis(LiggghtsNormalModel):
         :func:`~._hysteresis.delta_max_of_force`."""
         p = self.params
         k1 = self.kn(rows)
-        k2max, _, lim = hysteresis_parameters(rows, k1, p["max_elastic_stiffness"], p["adhesion_stiffness"],
-                                              p["plasticity_depth"])
+        k2max, _, lim = hysteresis_parameters(
+            rows, k1, p["max_elastic_stiffness"], p["adhesion_stiffness"], p["plasticity_depth"]
+        )
         return {DELTA_MAX: delta_max_of_force(f, rows.delta, k1, k2max, lim)}

@@ -24,8 +24,10 @@ class LiggghtsHookeStiffness(LiggghtsNormalModel):
         "kn": (ContactLaw.REQUIRED, "kn per type pair (N/m)"),
         "kt": (ContactLaw.REQUIRED, "kt per type pair (N/m)"),
     }
-    example_params = {"kn": ((2e5, 3e5, 2.5e5), (3e5, 4e5, 3.5e5), (2.5e5, 3.5e5, 5e5)),
-                      "kt": ((1e5, 1.5e5, 1.2e5), (1.5e5, 2e5, 1.7e5), (1.2e5, 1.7e5, 2.5e5))}
+    example_params = {
+        "kn": ((2e5, 3e5, 2.5e5), (3e5, 4e5, 3.5e5), (2.5e5, 3.5e5, 5e5)),
+        "kt": ((1e5, 1.5e5, 1.2e5), (1.5e5, 2e5, 1.7e5), (1.2e5, 1.7e5, 2.5e5)),
+    }
 
     def check(self) -> None:
         super().check()

@@ -23,8 +23,10 @@ from .base import ContactLaw, ContactRows
 @register
 class LiggghtsLuding(LiggghtsNormalModel):
     key = "liggghts:luding"
-    summary = ("Luding hysteretic spring (loading k1, unloading k2 through delta_max), u_n = f^2/(2 k2); "
-               "tangential history u_t = k1 |shear|^2/2; pull-off work f0 delta in u_adh")
+    summary = (
+        "Luding hysteretic spring (loading k1, unloading k2 through delta_max), u_n = f^2/(2 k2); "
+        "tangential history u_t = k1 |shear|^2/2; pull-off work f0 delta in u_adh"
+    )
     mode_columns = {**LiggghtsNormalModel.mode_columns, "u_n": (DELTA_MAX,)}
     normal_history = (DELTA_MAX, "luding_kc", "luding_fo")
     parameters = {
@@ -35,8 +37,13 @@ class LiggghtsLuding(LiggghtsNormalModel):
         "plasticity_depth": (ContactLaw.REQUIRED, "coefficientPlasticityDepth phiF per type pair"),
         "pull_off_force": (ContactLaw.REQUIRED, "pullOffForce f0 per type pair (N)"),
     }
-    example_params = {"loading_stiffness": 1e5, "unloading_stiffness": 2.0, "adhesion_stiffness": 0.0,
-                      "plasticity_depth": 0.05, "pull_off_force": 0.0}
+    example_params = {
+        "loading_stiffness": 1e5,
+        "unloading_stiffness": 2.0,
+        "adhesion_stiffness": 0.0,
+        "plasticity_depth": 0.05,
+        "pull_off_force": 0.0,
+    }
 
     def check(self) -> None:
         super().check()
@@ -51,8 +58,9 @@ class LiggghtsLuding(LiggghtsNormalModel):
 
     def force_and_k2(self, rows: ContactRows) -> tuple[np.ndarray, np.ndarray]:
         p = self.params
-        return hysteresis_of(rows, self.kn(rows), p["unloading_stiffness"], p["adhesion_stiffness"],
-                             p["plasticity_depth"])
+        return hysteresis_of(
+            rows, self.kn(rows), p["unloading_stiffness"], p["adhesion_stiffness"], p["plasticity_depth"]
+        )
 
     def normal_energy(self, rows: ContactRows) -> np.ndarray:
         return unloading_energy(*self.force_and_k2(rows))

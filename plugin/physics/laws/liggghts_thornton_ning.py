@@ -50,13 +50,26 @@ FORCE_OLD = "tn_force_old"
 @register
 class LiggghtsThorntonNing(LiggghtsNormalModel):
     key = "liggghts:thornton_ning"
-    summary = ("Thornton-Ning elasto-plastic (force integrated step by step), u_n = the energy given back along "
-               "the Hertzian unloading branch from the stored force; tangential history u_t = kt |shear|^2/2 "
-               "with kt = 8 G* sqrt(R* delta)")
+    summary = (
+        "Thornton-Ning elasto-plastic (force integrated step by step), u_n = the energy given back along "
+        "the Hertzian unloading branch from the stored force; tangential history u_t = kt |shear|^2/2 "
+        "with kt = 8 G* sqrt(R* delta)"
+    )
     mode_columns = {**LiggghtsNormalModel.mode_columns, "u_n": (DELTA_OLD, FORCE_OLD)}
-    normal_history = ("tn_virgin_flag", DELTA_OLD, "tn_delta_max", FORCE_OLD, "tn_force_max", "tn_adhesion_flag",
-                      "tn_detaching_delta", "tn_detaching_flag", "tn_detaching_force", "tn_yielding_flag", "tn_kc",
-                      "tn_fo")
+    normal_history = (
+        "tn_virgin_flag",
+        DELTA_OLD,
+        "tn_delta_max",
+        FORCE_OLD,
+        "tn_force_max",
+        "tn_adhesion_flag",
+        "tn_detaching_delta",
+        "tn_detaching_flag",
+        "tn_detaching_force",
+        "tn_yielding_flag",
+        "tn_kc",
+        "tn_fo",
+    )
     parameters = {
         **LiggghtsNormalModel.parameters,
         "surface_energy": (0.0, "surfaceEnergy per type pair (J/m^2); only 0 is supported"),
@@ -72,7 +85,9 @@ class LiggghtsThorntonNing(LiggghtsNormalModel):
                 f"{self.key} with surfaceEnergy > 0 is not supported: LIGGGHTS then follows a JKR branch whose "
                 "radius and pull-off force change with yield, switches it by flags and detaches the contact at a "
                 "force that depends on the step size (normal_model_thornton_ning.h), so its elastic and adhesive "
-                "energies cannot be rebuilt from a dump.", fix="analyse a run with surfaceEnergy 0, or leave it out.")
+                "energies cannot be rebuilt from a dump.",
+                fix="analyse a run with surfaceEnergy 0, or leave it out.",
+            )
 
     def no_kn(self) -> UnsupportedModelError:
         """The error of a sub-model that needs kn, which this model does not set."""
@@ -80,7 +95,8 @@ class LiggghtsThorntonNing(LiggghtsNormalModel):
             f"{self.key} with rolling_friction {self.params['rolling']} is not supported: thornton_ning sets no "
             "normal stiffness kn (normal_model_thornton_ning.h never assigns sidata.kn), from which that rolling "
             "model takes its stiffness, so LIGGGHTS' rolling spring is undefined.",
-            fix="use rolling_friction epsd2 or luding (stiffness from kt) with thornton_ning.")
+            fix="use rolling_friction epsd2 or luding (stiffness from kt) with thornton_ning.",
+        )
 
     def kn(self, rows: ContactRows) -> np.ndarray:
         """None: LIGGGHTS' thornton_ning sets no kn (:meth:`no_kn`)."""
@@ -88,8 +104,9 @@ class LiggghtsThorntonNing(LiggghtsNormalModel):
 
     def kt(self, rows: ContactRows) -> np.ndarray:
         """kt = 8 G* sqrt(R* delta) (N/m), ``normal_model_thornton_ning.h``."""
-        return hertz_kt_formula(overlap(rows.delta), effective_radius(rows.r1, rows.r2),
-                                rows.per_pair(effective_shear_modulus))
+        return hertz_kt_formula(
+            overlap(rows.delta), effective_radius(rows.r1, rows.r2), rows.per_pair(effective_shear_modulus)
+        )
 
     def branch(self, rows: ContactRows) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(delta, delta_h, f_h, k): the overlap, the stored overlap and force, the Hertzian k = (4/3) E* sqrt(R*)

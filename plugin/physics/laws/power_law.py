@@ -19,14 +19,14 @@ class PowerLaw(ContactLaw):
     key = "demsplit:power_law"
     summary = "power law F = k delta^n, u_n = k delta^(n+1)/(n+1), no tangential spring"
     modes = ("u_n",)
-    parameters = {"k": (ContactLaw.REQUIRED, "stiffness k (N/m^n)"),
-                  "n": (ContactLaw.REQUIRED, "exponent n > 0")}
+    parameters = {"k": (ContactLaw.REQUIRED, "stiffness k (N/m^n)"), "n": (ContactLaw.REQUIRED, "exponent n > 0")}
     example_params = {"k": 1e7, "n": 1.5}
 
     def check(self) -> None:
         if not (float(self.params["n"]) > 0 and float(self.params["k"]) >= 0):
-            raise ContactError(f"{self.key} needs n > 0 and k >= 0, got n = {self.params['n']!r}, "
-                               f"k = {self.params['k']!r}.")
+            raise ContactError(
+                f"{self.key} needs n > 0 and k >= 0, got n = {self.params['n']!r}, k = {self.params['k']!r}."
+            )
 
     def energies(self, rows: ContactRows, *, compiled: bool = True) -> LawEnergy:
         return LawEnergy({"u_n": power_law_energy(rows.delta, self.params["k"], self.params["n"])})

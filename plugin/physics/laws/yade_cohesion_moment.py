@@ -18,7 +18,15 @@ import numpy as np
 
 from . import register
 from ._yade import (
-    NORM, SPRINGS, Phys, Table, YadeScGeomLaw, YadeStoredSprings, along_normal, stored_spring_energy, where_known,
+    NORM,
+    SPRINGS,
+    Phys,
+    Table,
+    YadeScGeomLaw,
+    YadeStoredSprings,
+    along_normal,
+    stored_spring_energy,
+    where_known,
 )
 from .base import ContactRows, LawEnergy
 
@@ -29,16 +37,26 @@ MOMENTS = {"u_r": ("mb", "kr"), "u_tw": ("mtw", "ktw")}
 @register
 class YadeCohesionMoment(YadeStoredSprings):
     key = "yade:Law2_ScGeom6D_CohFrictPhys_CohesionMoment"
-    summary = ("cohesive-frictional springs: u_n = |F_n|^2/(2 kn), u_t = |F_s|^2/(2 ks), bending u_r = |M_b|^2/(2 kr), "
-               "twisting u_tw = |M_tw|^2/(2 ktw), YADE's stored forces, moments and stiffnesses")
+    summary = (
+        "cohesive-frictional springs: u_n = |F_n|^2/(2 kn), u_t = |F_s|^2/(2 ks), bending u_r = |M_b|^2/(2 kr), "
+        "twisting u_tw = |M_tw|^2/(2 ktw), YADE's stored forces, moments and stiffnesses"
+    )
     modes = ("u_n", "u_t", "u_r", "u_tw")
     mode_columns = {**YadeScGeomLaw.mode_columns, **MOMENTS}
-    phys = (*SPRINGS, Phys("moment_bending", "mb", "mb", NORM), Phys("moment_twist", "mtw", "mtw", NORM),
-            Phys("kr", "kr", "kr"), Phys("ktw", "ktw", "ktw"), Phys("unp", "unp"))
-    simulator_energies = {"cohfrict_normElastEnergy": ("normElastEnergy", ("u_n",)),
-                          "cohfrict_shearElastEnergy": ("shearElastEnergy", ("u_t",)),
-                          "cohfrict_bendingElastEnergy": ("bendingElastEnergy", ("u_r",)),
-                          "cohfrict_twistElastEnergy": ("twistElastEnergy", ("u_tw",))}
+    phys = (
+        *SPRINGS,
+        Phys("moment_bending", "mb", "mb", NORM),
+        Phys("moment_twist", "mtw", "mtw", NORM),
+        Phys("kr", "kr", "kr"),
+        Phys("ktw", "ktw", "ktw"),
+        Phys("unp", "unp"),
+    )
+    simulator_energies = {
+        "cohfrict_normElastEnergy": ("normElastEnergy", ("u_n",)),
+        "cohfrict_shearElastEnergy": ("shearElastEnergy", ("u_t",)),
+        "cohfrict_bendingElastEnergy": ("bendingElastEnergy", ("u_r",)),
+        "cohfrict_twistElastEnergy": ("twistElastEnergy", ("u_tw",)),
+    }
 
     def energies(self, rows: ContactRows, *, compiled: bool = True) -> LawEnergy:
         modes, skipped = self.spring_energies(rows)

@@ -25,8 +25,10 @@ from .base import ContactRows, LawEnergy
 @register
 class YadeJCFpm(YadeStoredSprings):
     key = "yade:Law2_ScGeom_JCFpmPhys_JointedCohesiveFrictionalPM"
-    summary = ("bonded springs: u_n = |F_n|^2/(2 kn), u_t = |F_s|^2/(2 ks) from YADE's stored forces and "
-               "stiffnesses, bonds in tension included")
+    summary = (
+        "bonded springs: u_n = |F_n|^2/(2 kn), u_t = |F_s|^2/(2 ks) from YADE's stored forces and "
+        "stiffnesses, bonds in tension included"
+    )
     phys = (*SPRINGS, Phys("initD", "init_d"), Phys("isOnJoint", "on_joint", "on_joint"))
     parameters = {"smooth_joint": (False, "smoothJoint: contacts on a joint act along the joint's normal")}
     simulator_parameters = {"smoothJoint": "smooth_joint"}

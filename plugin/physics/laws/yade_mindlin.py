@@ -39,15 +39,32 @@ def hertz_energy_from_kno(delta: ArrayLike, kno: ArrayLike) -> np.ndarray:
 @register
 class YadeMindlin(YadeScGeomLaw):
     key = "yade:Law2_ScGeom_MindlinPhys_Mindlin"
-    summary = ("Hertz u_n = (2/5) kno delta^(5/2) with YADE's stored kno; Mindlin shear u_t = |F_t|^2/(2 ks) "
-               "from the stored shear force and stiffness")
+    summary = (
+        "Hertz u_n = (2/5) kno delta^(5/2) with YADE's stored kno; Mindlin shear u_t = |F_t|^2/(2 ks) "
+        "from the stored shear force and stiffness"
+    )
     contact_columns = ("kno",)
-    phys = (NORMAL_FORCE, Phys("shearElastic", "fse", "ft", VECTOR), KN, KS, KNO, KSO,
-            Phys("adhesionForce", "adhesion", "adhesion_force"))
-    parameters = {"normal_stiffness": ("stored", "kno as YADE stored it ('stored'), or rebuilt from the "
-                                                 "materials and the radii the reader gives ('materials')"),
-                  "include_adhesion": (False, "includeAdhesion: the DMT adhesion force F_adh = 4 pi R* gamma "
-                                              "(stored per interaction) pulls the bodies together")}
+    phys = (
+        NORMAL_FORCE,
+        Phys("shearElastic", "fse", "ft", VECTOR),
+        KN,
+        KS,
+        KNO,
+        KSO,
+        Phys("adhesionForce", "adhesion", "adhesion_force"),
+    )
+    parameters = {
+        "normal_stiffness": (
+            "stored",
+            "kno as YADE stored it ('stored'), or rebuilt from the "
+            "materials and the radii the reader gives ('materials')",
+        ),
+        "include_adhesion": (
+            False,
+            "includeAdhesion: the DMT adhesion force F_adh = 4 pi R* gamma "
+            "(stored per interaction) pulls the bodies together",
+        ),
+    }
     simulator_parameters = {"includeAdhesion": "include_adhesion"}
     simulator_energies = {"mindlin_normElastEnergy": ("normElastEnergy", ("u_n",))}
 
@@ -58,8 +75,10 @@ class YadeMindlin(YadeScGeomLaw):
             self.contact_columns = (*self.contact_columns, "adhesion_force")
             self.simulator_energies = {"mindlin_normElastEnergy": ("normElastEnergy", ("u_n", "u_adh"))}
         if self.params["normal_stiffness"] not in STIFFNESS_SOURCES:
-            raise UnsupportedModelError(f"{self.key}: normal_stiffness must be one of {STIFFNESS_SOURCES}, "
-                                        f"got {self.params['normal_stiffness']!r}.")
+            raise UnsupportedModelError(
+                f"{self.key}: normal_stiffness must be one of {STIFFNESS_SOURCES}, "
+                f"got {self.params['normal_stiffness']!r}."
+            )
         if self.params["normal_stiffness"] == "materials":
             self.contact_columns = tuple(c for c in self.contact_columns if c != "kno")
 
@@ -68,8 +87,9 @@ class YadeMindlin(YadeScGeomLaw):
         if "kno" in self.contact_columns:
             u_n = hertz_energy_from_kno(rows.delta, rows.column("kno"))
         else:
-            u_n = hertz_energy_from_moduli(rows.delta, effective_radius(rows.r1, rows.r2),
-                                           rows.per_pair(effective_modulus))
+            u_n = hertz_energy_from_moduli(
+                rows.delta, effective_radius(rows.r1, rows.r2), rows.per_pair(effective_modulus)
+            )
         if self.params["include_adhesion"]:  # the work of the constant DMT force since first touch
             modes["u_adh"] = -rows.column("adhesion_force") * overlap(rows.delta)
         return LawEnergy({"u_n": u_n, **modes}, skipped)
@@ -81,7 +101,8 @@ class YadeMindlin(YadeScGeomLaw):
 
     def normal_force(self, rows: ContactRows) -> np.ndarray:
         if "kno" not in self.contact_columns:
-            return hertz_force_from_moduli(rows.delta, effective_radius(rows.r1, rows.r2),
-                                           rows.per_pair(effective_modulus))
+            return hertz_force_from_moduli(
+                rows.delta, effective_radius(rows.r1, rows.r2), rows.per_pair(effective_modulus)
+            )
         d = overlap(rows.delta)
         return rows.column("kno") * np.sqrt(d) * d

@@ -55,13 +55,18 @@ class YadeViscElBasic(YadeScGeomLaw):
         return where_known(t["kn"] > 0, t["fn_elastic"] / t["kn"])
 
     def split_moduli(self, material: Mapping, physics: Sequence[Mapping] = ()) -> tuple[float, float] | str:
-        given = [a for a in STIFFNESS_ATTRIBUTES if isinstance(material.get(a), (int, float))
-                 and math.isfinite(material[a])]
+        given = [
+            a for a in STIFFNESS_ATTRIBUTES if isinstance(material.get(a), (int, float)) and math.isfinite(material[a])
+        ]
         if given:
-            return (f"it gives {', '.join(given)}, so {self.key} never reads its young and poisson (ViscElMat's "
-                    "defaults, not moduli of the material)")
+            return (
+                f"it gives {', '.join(given)}, so {self.key} never reads its young and poisson (ViscElMat's "
+                "defaults, not moduli of the material)"
+            )
         for f in physics:
             if all(f.get("attrs", {}).get(a) is not None for a in FUNCTOR_ATTRIBUTES):
-                return (f"{f['class']} sets tc, en and et, so {self.key} never reads its young and poisson "
-                        "(ViscElMat's defaults, not moduli of the material)")
+                return (
+                    f"{f['class']} sets tc, en and et, so {self.key} never reads its young and poisson "
+                    "(ViscElMat's defaults, not moduli of the material)"
+                )
         return super().split_moduli(material, physics)

@@ -15,6 +15,8 @@ from .yade_cundall_strack import YadeCundallStrack
 @register
 class YadeViscoFrictCundallStrack(YadeCundallStrack):
     key = "yade:Law2_ScGeom_ViscoFrictPhys_CundallStrack"
-    summary = ("linear springs with shear creep: u_n = kn delta^2/2 and u_t = |F_t|^2/(2 ks) with YADE's stored "
-               "kn, ks and (relaxed) shear force")
+    summary = (
+        "linear springs with shear creep: u_n = kn delta^2/2 and u_t = |F_t|^2/(2 ks) with YADE's stored "
+        "kn, ks and (relaxed) shear force"
+    )
     simulator_energies = {"viscofrict_elasticEnergy": ("elasticEnergy", ("u_n", "u_t"))}

@@ -24,8 +24,10 @@ from ..tables import Results
 
 LEADING = ("id", "type", "x", "y", "z", "radius")
 """The columns every frame starts with, in OVITO's and LAMMPS' names."""
-_ATOMS = re.compile(rb"\AITEM: TIMESTEP\n.*?^ITEM: ATOMS " + " ".join(LEADING).encode() + rb" [^\n]*\bnot_computed\b",
-                    re.DOTALL | re.MULTILINE)
+_ATOMS = re.compile(
+    rb"\AITEM: TIMESTEP\n.*?^ITEM: ATOMS " + " ".join(LEADING).encode() + rb" [^\n]*\bnot_computed\b",
+    re.DOTALL | re.MULTILINE,
+)
 
 
 def _is_export(path: Path) -> bool:
@@ -42,8 +44,9 @@ DUMP = OutputKind("per-particle dump written by demsplit export", _is_export)
 """The output kind of ``export --dump``: an existing file is replaced only when it is one."""
 
 
-def export_dump(results: Results, path: str | Path, inputs: Iterable[str | Path] = (), *,
-                overwrite: bool = False) -> Path:
+def export_dump(
+    results: Results, path: str | Path, inputs: Iterable[str | Path] = (), *, overwrite: bool = False
+) -> Path:
     """Write the per-particle table of every frame of ``results`` to the dump ``path`` (module docstring).
     ``inputs`` are never written over, nor an existing file that is not such a dump unless ``overwrite``
     (:mod:`demsplit.outputs`)."""
@@ -56,10 +59,14 @@ def export_dump(results: Results, path: str | Path, inputs: Iterable[str | Path]
             x = frame[["x", "y", "z"]].to_numpy()
             r = frame["radius"].to_numpy()[:, None]
             lo, hi = (x - r).min(axis=0), (x + r).max(axis=0)
-            f.write(f"ITEM: TIMESTEP\n{int(step)}\nITEM: NUMBER OF ATOMS\n{len(frame)}\n"
-                    "ITEM: BOX BOUNDS ff ff ff\n"
-                    + "".join(f"{a!r} {b!r}\n" for a, b in zip(lo.tolist(), hi.tolist()))
-                    + "ITEM: ATOMS " + " ".join(columns) + "\n")
+            f.write(
+                f"ITEM: TIMESTEP\n{int(step)}\nITEM: NUMBER OF ATOMS\n{len(frame)}\n"
+                "ITEM: BOX BOUNDS ff ff ff\n"
+                + "".join(f"{a!r} {b!r}\n" for a, b in zip(lo.tolist(), hi.tolist()))
+                + "ITEM: ATOMS "
+                + " ".join(columns)
+                + "\n"
+            )
             values = frame[columns].to_numpy(dtype=object) if any(integer) else frame[columns].to_numpy()
             fmt = " ".join("%d" if i else "%.17g" for i in integer)
             np.savetxt(f, values, fmt=fmt)

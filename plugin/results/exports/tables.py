@@ -14,8 +14,14 @@ from ..store import to_json
 from ..tables import Results
 
 
-def export_tables(results: Results, directory: str | Path, fmt: str = "parquet",
-                  inputs: Iterable[str | Path] = (), *, overwrite: bool = False) -> list[Path]:
+def export_tables(
+    results: Results,
+    directory: str | Path,
+    fmt: str = "parquet",
+    inputs: Iterable[str | Path] = (),
+    *,
+    overwrite: bool = False,
+) -> list[Path]:
     """Write each table to ``directory/<table>.parquet`` (or ``.csv``; with YADE clumps also
     ``clumps``, the per-clump sums) and the provenance to ``provenance.json``, each file atomically. Parquet files carry
     the units (field metadata ``unit``) and the provenance (schema metadata).
@@ -35,21 +41,25 @@ def export_tables(results: Results, directory: str | Path, fmt: str = "parquet",
         try:
             import pyarrow  # noqa: F401
         except ImportError:
-            raise StoreError("the Parquet export needs pyarrow, which is not installed.",
-                             fix="pip install 'demsplit[parquet]', or export with --csv DIR.") from None
+            raise StoreError(
+                "the Parquet export needs pyarrow, which is not installed.",
+                fix="pip install 'demsplit[parquet]', or export with --csv DIR.",
+            ) from None
     frames = {name: getattr(results, name) for name in TABLES}
     if "clump" in results.particles and (results.particles["clump"] >= 0).any():
         frames["clumps"] = results.per_clump()  # YADE clumps: the members' sums, next to the spheres
-        frames["clumps"].attrs["units"] = {c: results.particles.attrs.get("units", {}).get(c, "")
-                                           for c in frames["clumps"].columns}
+        frames["clumps"].attrs["units"] = {
+            c: results.particles.attrs.get("units", {}).get(c, "") for c in frames["clumps"].columns
+        }
     if fmt == "csv" and len(frames["walls"]):  # CSV has no metadata: the wall names go into the walls table
         meta = pd.DataFrame(results.walls_meta, columns=["wall", "name", "kind"])
         walls = frames["walls"].merge(meta.astype({"wall": np.int64}), on="wall", how="left")
         walls.attrs["units"] = {**frames["walls"].attrs.get("units", {}), "name": "", "kind": ""}
         frames["walls"] = walls
     extra = ["units.csv"] if fmt == "csv" else []
-    folder = OutputFolder(directory, [*(f"{t}.{fmt}" for t in frames), *extra, "provenance.json"], inputs,
-                          kind=fmt, overwrite=overwrite)
+    folder = OutputFolder(
+        directory, [*(f"{t}.{fmt}" for t in frames), *extra, "provenance.json"], inputs, kind=fmt, overwrite=overwrite
+    )
     prov = to_json({"provenance": results.provenance, "walls_meta": results.walls_meta}, "provenance")
     with folder:
         return _write_tables(folder, frames, fmt, prov, results.walls_meta)
@@ -73,11 +83,17 @@ def _write_tables(folder: OutputFolder, frames: dict, fmt: str, prov: str, walls
             table = table.cast(schema)
             written.append(folder.write(f"{name}.{fmt}", lambda tmp, t=table: pq.write_table(t, tmp)))
         else:
-            written.append(folder.write(f"{name}.{fmt}", lambda tmp, d=df: d.to_csv(tmp, index=False,
-                                                                                      float_format="%.17g")))
+            written.append(
+                folder.write(f"{name}.{fmt}", lambda tmp, d=df: d.to_csv(tmp, index=False, float_format="%.17g"))
+            )
     if fmt == "csv":  # CSV has no metadata: the unit of every column, in a table beside them
-        units = pd.DataFrame([{"table": name, "column": c, "unit": df.attrs.get("units", {}).get(c, "")}
-                              for name, df in frames.items() for c in df.columns])
+        units = pd.DataFrame(
+            [
+                {"table": name, "column": c, "unit": df.attrs.get("units", {}).get(c, "")}
+                for name, df in frames.items()
+                for c in df.columns
+            ]
+        )
         written.append(folder.write("units.csv", lambda tmp: units.to_csv(tmp, index=False)))
     written.append(folder.write("provenance.json", lambda tmp: tmp.write_bytes(prov.encode())))
     return written

@@ -52,8 +52,15 @@ EXTRA_UNITS = {"u": "J"}
 """Units of the arrays the export derives (the contacts' elastic total ``u`` = u1 + u2)."""
 
 
-def export_vtk(results: Results, directory: str | Path, inputs: Iterable[str | Path] = (), *,
-               overwrite: bool = False, progress: bool | None = None, not_drawn: list[str] | None = None) -> list[Path]:
+def export_vtk(
+    results: Results,
+    directory: str | Path,
+    inputs: Iterable[str | Path] = (),
+    *,
+    overwrite: bool = False,
+    progress: bool | None = None,
+    not_drawn: list[str] | None = None,
+) -> list[Path]:
     """Write the VTK series of ``results`` into ``directory`` (module docstring); return the files written.
     The files are written together, all or none, into a new or empty folder or over an earlier VTK export,
     whose series is replaced whole; never over one of ``inputs`` (:class:`demsplit.outputs.OutputFolder`;
@@ -62,20 +69,26 @@ def export_vtk(results: Results, directory: str | Path, inputs: Iterable[str | P
     try:
         import meshio
     except ImportError:
-        raise StoreError("the VTK export needs meshio, which is not installed.",
-                         fix="pip install 'demsplit[vtk]'.") from None
+        raise StoreError(
+            "the VTK export needs meshio, which is not installed.", fix="pip install 'demsplit[vtk]'."
+        ) from None
     from tqdm import tqdm
 
     steps = [int(s) for s in results.steps]
     walls = list((results.provenance.get("scene") or {}).get("walls") or [])
-    series = [name for name in SERIES if name == "particles" or (name == "contacts" and not results.contacts.empty)
-              or (name == "walls" and walls)]
+    series = [
+        name
+        for name in SERIES
+        if name == "particles" or (name == "contacts" and not results.contacts.empty) or (name == "walls" and walls)
+    ]
     plan = {name: [(step, f"{name}_{step:012d}.vtu") for step in steps] for name in series}
     files = [f for name, frames in plan.items() for f in [*dict(frames).values(), f"{name}.pvd"]]
     folder = OutputFolder(directory, files, inputs, kind="vtk", overwrite=overwrite)
     names = _material_field_data(results.type_names())
-    by_step = {name: dict(tuple(getattr(results, name).groupby("step", sort=False)))
-               for name in ("particles", "contacts", "walls")}
+    by_step = {
+        name: dict(tuple(getattr(results, name).groupby("step", sort=False)))
+        for name in ("particles", "contacts", "walls")
+    }
     frames = results.frames.set_index("step")
     meshes: dict[str, np.ndarray] = {}
     extent = mesh_extent(walls, meshes)
@@ -94,15 +107,22 @@ def export_vtk(results: Results, directory: str | Path, inputs: Iterable[str | P
                     points, cells, data, where, left_out = _walls(tables["walls"], walls, box, meshes)
                 if not_drawn is not None:
                     not_drawn += [wall for wall in left_out if wall not in not_drawn]
-                mesh = meshio.Mesh(points, cells, **{f"{where}_data": data if where == "point" else
-                                                     {c: [v] for c, v in data.items()}})
-                written.append(folder.write(dict(plan[name])[step], lambda tmp, m=mesh, d=data: _write_vtu(
-                    meshio, tmp, m, d, names)))
+                mesh = meshio.Mesh(
+                    points, cells, **{f"{where}_data": data if where == "point" else {c: [v] for c, v in data.items()}}
+                )
+                written.append(
+                    folder.write(
+                        dict(plan[name])[step], lambda tmp, m=mesh, d=data: _write_vtu(meshio, tmp, m, d, names)
+                    )
+                )
         for name in series:
-            rows = "\n".join(f'    <DataSet timestep="{step}" part="0" file={quoteattr(file)}/>'
-                             for step, file in plan[name])
-            text = ('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n  <Collection>\n'
-                    f"{rows}\n  </Collection>\n</VTKFile>\n")
+            rows = "\n".join(
+                f'    <DataSet timestep="{step}" part="0" file={quoteattr(file)}/>' for step, file in plan[name]
+            )
+            text = (
+                '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n  <Collection>\n'
+                f"{rows}\n  </Collection>\n</VTKFile>\n"
+            )
             written.append(folder.write(f"{name}.pvd", lambda tmp, t=text: tmp.write_text(t)))
     return written
 
@@ -121,8 +141,9 @@ def _empty(table: pd.DataFrame) -> pd.DataFrame:
     return table.iloc[:0]
 
 
-def _box(frame: pd.Series | None, particles: pd.DataFrame,
-         extent: tuple[np.ndarray, np.ndarray] | None) -> tuple[np.ndarray, np.ndarray]:
+def _box(
+    frame: pd.Series | None, particles: pd.DataFrame, extent: tuple[np.ndarray, np.ndarray] | None
+) -> tuple[np.ndarray, np.ndarray]:
     """The frame's simulation box (m), else the extent of its particles (centre +- radius) and the mesh walls."""
     if frame is not None and all(c in frame.index for c in BOX):
         values = frame[list(BOX)].to_numpy(dtype=np.float64)
@@ -144,8 +165,13 @@ def _columns(table: pd.DataFrame, leave: Iterable[str]) -> dict[str, np.ndarray]
 def _particles(particles: pd.DataFrame):
     """Points at the particle centres, every per-particle column as point data."""
     points = particles[["x", "y", "z"]].to_numpy(dtype=np.float64)
-    return points, [("vertex", np.arange(len(points)).reshape(-1, 1))], _columns(particles, ("x", "y", "z")), \
-        "point", []
+    return (
+        points,
+        [("vertex", np.arange(len(points)).reshape(-1, 1))],
+        _columns(particles, ("x", "y", "z")),
+        "point",
+        [],
+    )
 
 
 def _contacts(contacts: pd.DataFrame, particles: pd.DataFrame, box: tuple[np.ndarray, np.ndarray], step: int):
@@ -156,8 +182,11 @@ def _contacts(contacts: pd.DataFrame, particles: pd.DataFrame, box: tuple[np.nda
     pair = contacts["wall"].to_numpy() < 0
     rows2 = np.where(pair, ids.get_indexer(contacts["id2"].to_numpy()), 0)
     if (rows1 < 0).any() or (rows2 < 0).any():
-        raise StoreError("a contact names a particle that the frame's particle table does not hold.", step=step,
-                         fix="the store is inconsistent: run demsplit run again to rewrite it.")
+        raise StoreError(
+            "a contact names a particle that the frame's particle table does not hold.",
+            step=step,
+            fix="the store is inconsistent: run demsplit run again to rewrite it.",
+        )
     start = xyz[rows1]
     end = contacts[["cpx", "cpy", "cpz"]].to_numpy(dtype=np.float64).copy()
     d = xyz[rows2[pair]] - start[pair]
@@ -172,8 +201,7 @@ def _contacts(contacts: pd.DataFrame, particles: pd.DataFrame, box: tuple[np.nda
     return points, [("line", np.arange(len(points)).reshape(-1, 2))], data, "cell", []
 
 
-def _walls(rows: pd.DataFrame, walls: list[Mapping], box: tuple[np.ndarray, np.ndarray],
-           meshes: dict[str, np.ndarray]):
+def _walls(rows: pd.DataFrame, walls: list[Mapping], box: tuple[np.ndarray, np.ndarray], meshes: dict[str, np.ndarray]):
     """Triangles of the walls that have a row in this frame, each triangle with its wall's row as cell data;
     the names of the walls left out and why."""
     parts, data_rows, not_drawn = [], [], []
@@ -195,8 +223,9 @@ def _strings(name: str, values: list[str]) -> bytes:
     """A VTK XML string array, ASCII format (a string is its characters' codes ended by 0, as VTK's own XML
     writer writes it)."""
     codes = " ".join(" ".join(str(b) for b in v.encode("utf-8")) + " 0" for v in values)
-    return (f'<Array type="String" Name={quoteattr(name)} NumberOfTuples="{len(values)}" format="ascii">{codes}'
-            "</Array>").encode("ascii")
+    return (
+        f'<Array type="String" Name={quoteattr(name)} NumberOfTuples="{len(values)}" format="ascii">{codes}</Array>'
+    ).encode("ascii")
 
 
 _DATA_ARRAY = re.compile(rb'(<DataArray[^>]*\bName="([^"]*)"[^>]*>)([^<]*)(</DataArray>)')
@@ -205,6 +234,7 @@ _DATA_ARRAY = re.compile(rb'(<DataArray[^>]*\bName="([^"]*)"[^>]*>)([^<]*)(</Dat
 def _with_units(text: bytes, data: Mapping[str, np.ndarray]) -> bytes:
     """The VTK XML ``text`` with a ``UNITS_LABEL`` information key in each data array of ``data`` and in the
     points (m), as VTK's own XML writer writes one."""
+
     def unit(match: re.Match) -> bytes:
         name = match.group(2).decode()
         if name != "Points" and name not in data:
@@ -212,6 +242,7 @@ def _with_units(text: bytes, data: Mapping[str, np.ndarray]) -> bytes:
         label = "m" if name == "Points" else EXTRA_UNITS.get(name, UNITS.get(name, ""))
         key = f'<InformationKey name="UNITS_LABEL" location="vtkDataArray">{label}</InformationKey>'.encode()
         return match.group(1) + match.group(3) + key + match.group(4)
+
     return _DATA_ARRAY.sub(unit, text)
 
 
@@ -220,6 +251,7 @@ def _material_field_data(names: dict[int, str]) -> bytes:
     if not names:
         return b""
     types = sorted(names)
-    return (f'<DataArray type="Int32" Name="type_id" NumberOfTuples="{len(types)}" format="ascii">'
-            f'{" ".join(str(t) for t in types)}</DataArray>').encode("ascii") + \
-        _strings("material", [names[t] for t in types])
+    return (
+        f'<DataArray type="Int32" Name="type_id" NumberOfTuples="{len(types)}" format="ascii">'
+        f"{' '.join(str(t) for t in types)}</DataArray>"
+    ).encode("ascii") + _strings("material", [names[t] for t in types])

@@ -41,18 +41,25 @@ def read_stl(path: str | Path) -> np.ndarray:
     if len(data) >= 84:
         (n,) = struct.unpack_from("<I", data, 80)
         if len(data) == 84 + 50 * n:
-            rows = np.frombuffer(data, dtype=np.dtype([("normal", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")]),
-                                 count=n, offset=84)
+            rows = np.frombuffer(
+                data, dtype=np.dtype([("normal", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")]), count=n, offset=84
+            )
             return rows["v"].astype(np.float64)
     try:
         words = [line.split() for line in data.decode("ascii").splitlines()]
         vertices = np.array([w[1:4] for w in words if w and w[0] == "vertex"], dtype=np.float64)
     except (UnicodeDecodeError, ValueError, IndexError):
-        raise InputFormatError("not an STL file (neither binary nor ASCII 'vertex' lines).", file=path,
-                               fix="give the mesh file the run's 'fix mesh/surface' read.") from None
+        raise InputFormatError(
+            "not an STL file (neither binary nor ASCII 'vertex' lines).",
+            file=path,
+            fix="give the mesh file the run's 'fix mesh/surface' read.",
+        ) from None
     if len(vertices) % 3 or not len(vertices):
-        raise InputFormatError(f"an ASCII STL file with {len(vertices)} vertices: not whole triangles.", file=path,
-                               fix="give the mesh file the run's 'fix mesh/surface' read.")
+        raise InputFormatError(
+            f"an ASCII STL file with {len(vertices)} vertices: not whole triangles.",
+            file=path,
+            fix="give the mesh file the run's 'fix mesh/surface' read.",
+        )
     return vertices.reshape(-1, 3, 3)
 
 
@@ -104,8 +111,9 @@ def _cylinder(axis: int, radius: float, center: Sequence[float], lo: np.ndarray,
     return np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
 
 
-def wall_triangles(wall: Mapping, lo: np.ndarray, hi: np.ndarray,
-                   meshes: dict[str, np.ndarray]) -> tuple[np.ndarray | None, str]:
+def wall_triangles(
+    wall: Mapping, lo: np.ndarray, hi: np.ndarray, meshes: dict[str, np.ndarray]
+) -> tuple[np.ndarray | None, str]:
     """The triangles of one wall of the provenance's scene (module docstring) in the box [lo, hi] (m), or
     None and why it is not drawn. ``meshes``: mesh files already read, by path (filled in)."""
     kind = wall.get("kind")

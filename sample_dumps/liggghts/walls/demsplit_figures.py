@@ -72,9 +72,11 @@ def primitive_scenes(tmp: Path) -> None:
         frames = read(script)
         reasons = Counter(names[n] for f, _ in frames for n in f.notes if n in names)
         contacts = sum(int((f.contacts["wall"] >= 0).sum()) for f, _ in frames)
-        print(f"   {scene}: {contacts} floor contacts in {len(frames)} frames; not computed without "
-              f"{not_computed(read(bare), modes_of(model))}, with {not_computed(frames, modes_of(model))}; "
-              f"frames with each reason {dict(reasons)}; largest residual/tolerance {max(CLOSURES):.2g}")
+        print(
+            f"   {scene}: {contacts} floor contacts in {len(frames)} frames; not computed without "
+            f"{not_computed(read(bare), modes_of(model))}, with {not_computed(frames, modes_of(model))}; "
+            f"frames with each reason {dict(reasons)}; largest residual/tolerance {max(CLOSURES):.2g}"
+        )
 
 
 def mesh_scenes(tmp: Path) -> None:
@@ -95,27 +97,37 @@ def mesh_scenes(tmp: Path) -> None:
                 worst[m] = max(worst[m], float(rel.max(initial=0.0)))
                 compared[m] += int(known.sum())
                 missing[m] += int((~known).sum())
-        print(f"   {scene}: compared {dict(compared)}, not computed {dict(missing)}, "
-              f"max relative difference {', '.join(f'{m} {v:.2g}' for m, v in worst.items())}; largest residual/"
-              f"tolerance {max(CLOSURES):.2g}")
+        print(
+            f"   {scene}: compared {dict(compared)}, not computed {dict(missing)}, "
+            f"max relative difference {', '.join(f'{m} {v:.2g}' for m, v in worst.items())}; largest residual/"
+            f"tolerance {max(CLOSURES):.2g}"
+        )
 
 
 def packing(tmp: Path) -> None:
     source = WALLS.parent / "packing"
     before = read(source / "in.packing")
-    print(f"== packing: committed dumps (no stored force): u_t not computed per frame "
-          f"{[not_computed([f], ['u_t'])['u_t'] for f in before]}")
+    print(
+        f"== packing: committed dumps (no stored force): u_t not computed per frame "
+        f"{[not_computed([f], ['u_t'])['u_t'] for f in before]}"
+    )
     for name in ("in.packing", "floor.stl"):
         shutil.copy(source / name, tmp / name)
     subprocess.run(["demsplit", "prepare", "in.packing", "-q"], cwd=tmp, check=True)
-    subprocess.run(["stdbuf", "-o0", "-e0", "liggghts", "-in", "in.packing.demsplit", "-echo", "none", "-log",
-                    "none"], cwd=tmp, check=True, capture_output=True)
+    subprocess.run(
+        ["stdbuf", "-o0", "-e0", "liggghts", "-in", "in.packing.demsplit", "-echo", "none", "-log", "none"],
+        cwd=tmp,
+        check=True,
+        capture_output=True,
+    )
     CLOSURES.clear()
     after = read(tmp / "in.packing.demsplit")
     primitive = [float(e.u_t[f.contacts["wall"] >= 1].sum()) for f, e in after]
-    print(f"   prepared and rerun: u_t not computed per frame {[not_computed([f], ['u_t'])['u_t'] for f in after]}; "
-          f"primitive walls' u_t per frame {', '.join(f'{u:.4g}' for u in primitive)} J; largest residual/tolerance "
-          f"{max(CLOSURES):.2g}")
+    print(
+        f"   prepared and rerun: u_t not computed per frame {[not_computed([f], ['u_t'])['u_t'] for f in after]}; "
+        f"primitive walls' u_t per frame {', '.join(f'{u:.4g}' for u in primitive)} J; largest residual/tolerance "
+        f"{max(CLOSURES):.2g}"
+    )
 
 
 if __name__ == "__main__":

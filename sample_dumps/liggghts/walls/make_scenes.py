@@ -50,25 +50,37 @@ def _table(values) -> str:
 MODELS: dict[str, tuple[str, list[str], list[str]]] = {
     # name: (model words of pair_style gran and fix wall/gran, property/global lines, history columns)
     "hertz": ("model hertz tangential history", [], ["shearx", "sheary", "shearz"]),
-    "hooke": ("model hooke tangential history", [f"characteristicVelocity scalar {CHARACTERISTIC_VELOCITY}"],
-              ["shearx", "sheary", "shearz"]),
-    "epsd2": ("model hertz tangential history rolling_friction epsd2",
-              [f"coefficientRollingFriction peratomtypepair 3 {_table(ROLLING_FRICTION)}"],
-              ["shearx", "sheary", "shearz", "rolling_torquex", "rolling_torquey", "rolling_torquez"]),
-    "hysteresis": ("model hooke/hysteresis tangential history",
-                   [f"characteristicVelocity scalar {CHARACTERISTIC_VELOCITY}",
-                    f"coefficientMaxElasticStiffness peratomtypepair 3 {_table([[MAX_ELASTIC_STIFFNESS] * 3] * 3)}",
-                    f"coefficientAdhesionStiffness peratomtypepair 3 {_table([[0] * 3] * 3)}",
-                    f"coefficientPlasticityDepth peratomtypepair 3 {_table([[PLASTICITY_DEPTH] * 3] * 3)}"],
-                   ["delta_max", "shearx", "sheary", "shearz"]),
+    "hooke": (
+        "model hooke tangential history",
+        [f"characteristicVelocity scalar {CHARACTERISTIC_VELOCITY}"],
+        ["shearx", "sheary", "shearz"],
+    ),
+    "epsd2": (
+        "model hertz tangential history rolling_friction epsd2",
+        [f"coefficientRollingFriction peratomtypepair 3 {_table(ROLLING_FRICTION)}"],
+        ["shearx", "sheary", "shearz", "rolling_torquex", "rolling_torquey", "rolling_torquez"],
+    ),
+    "hysteresis": (
+        "model hooke/hysteresis tangential history",
+        [
+            f"characteristicVelocity scalar {CHARACTERISTIC_VELOCITY}",
+            f"coefficientMaxElasticStiffness peratomtypepair 3 {_table([[MAX_ELASTIC_STIFFNESS] * 3] * 3)}",
+            f"coefficientAdhesionStiffness peratomtypepair 3 {_table([[0] * 3] * 3)}",
+            f"coefficientPlasticityDepth peratomtypepair 3 {_table([[PLASTICITY_DEPTH] * 3] * 3)}",
+        ],
+        ["delta_max", "shearx", "sheary", "shearz"],
+    ),
 }
 KEYWORDS = "pos vel id force force_normal force_tangential torque history contactArea delta contactPoint"
 """The keywords of demsplit prepare's contact computes: 32 columns plus the history."""
-LOCAL_COLUMNS = ("x1 y1 z1 x2 y2 z2 vx1 vy1 vz1 vx2 vy2 vz2 id1 id2 periodic fx fy fz fnx fny fnz ftx fty ftz "
-                 "tqx tqy tqz").split()
+LOCAL_COLUMNS = (
+    "x1 y1 z1 x2 y2 z2 vx1 vy1 vz1 vx2 vy2 vz2 id1 id2 periodic fx fy fz fnx fny fnz ftx fty ftz tqx tqy tqz"
+).split()
 """Names of the local dumps' columns before the history; contactArea, delta and contactPoint (3) follow it."""
-ATOM_COLUMNS = ("id type x y z vx vy vz omegax omegay omegaz fx fy fz tqx tqy tqz radius mass "
-                "f_force_wfloor[1] f_force_wfloor[2] f_force_wfloor[3]").split()
+ATOM_COLUMNS = (
+    "id type x y z vx vy vz omegax omegay omegaz fx fy fz tqx tqy tqz radius mass "
+    "f_force_wfloor[1] f_force_wfloor[2] f_force_wfloor[3]"
+).split()
 
 
 def local_columns(model: str, wall: bool = False) -> list[str]:
@@ -84,16 +96,25 @@ def write_floor(path: Path, n: int = 4) -> None:
     for i in range(n):
         for j in range(n):
             x0, y0 = -HALF_WIDTH + i * step, -HALF_WIDTH + j * step
-            for tri in (((x0, y0), (x0 + step, y0), (x0 + step, y0 + step)),
-                        ((x0, y0), (x0 + step, y0 + step), (x0, y0 + step))):
-                lines += ["  facet normal 0 0 1", "    outer loop",
-                          *(f"      vertex {x:.6f} {y:.6f} 0.000000" for x, y in tri), "    endloop", "  endfacet"]
+            for tri in (
+                ((x0, y0), (x0 + step, y0), (x0 + step, y0 + step)),
+                ((x0, y0), (x0 + step, y0 + step), (x0, y0 + step)),
+            ):
+                lines += [
+                    "  facet normal 0 0 1",
+                    "    outer loop",
+                    *(f"      vertex {x:.6f} {y:.6f} 0.000000" for x, y in tri),
+                    "    endloop",
+                    "  endfacet",
+                ]
     path.write_text("\n".join(lines + ["endsolid floor"]) + "\n")
 
 
 def _local_dump(cid: str, name: str, width: int) -> list[str]:
-    return [f"dump d{cid} all local {OUTPUT_EVERY} {name} " + " ".join(f"c_{cid}[{k}]" for k in range(1, width + 1)),
-            f'dump_modify d{cid} format "{" ".join(["%.17g"] * width)}"']
+    return [
+        f"dump d{cid} all local {OUTPUT_EVERY} {name} " + " ".join(f"c_{cid}[{k}]" for k in range(1, width + 1)),
+        f'dump_modify d{cid} format "{" ".join(["%.17g"] * width)}"',
+    ]
 
 
 def script(scene: str) -> str:
@@ -104,36 +125,55 @@ def script(scene: str) -> str:
     if wall == "prim":
         floor = [f"fix wfloor all wall/gran {words} primitive type 3 zplane 0.0 store_force yes"]
     else:
-        floor = ["fix floor all mesh/surface file floor.stl type 3",
-                 f"fix wfloor all wall/gran {words} mesh n_meshes 1 meshes floor store_force yes"]
+        floor = [
+            "fix floor all mesh/surface file floor.stl type 3",
+            f"fix wfloor all wall/gran {words} mesh n_meshes 1 meshes floor store_force yes",
+        ]
     computes = [f"compute dsPair all pair/gran/local {KEYWORDS}"]
-    dumps = [f"dump dsAtoms all custom {OUTPUT_EVERY} ds_atoms.txt {' '.join(ATOM_COLUMNS)}",
-             'dump_modify dsAtoms format "%d %d' + " %.17g" * (len(ATOM_COLUMNS) - 2) + '" sort id',
-             *_local_dump("dsPair", "ds_pairs.txt", width)]
+    dumps = [
+        f"dump dsAtoms all custom {OUTPUT_EVERY} ds_atoms.txt {' '.join(ATOM_COLUMNS)}",
+        'dump_modify dsAtoms format "%d %d' + " %.17g" * (len(ATOM_COLUMNS) - 2) + '" sort id',
+        *_local_dump("dsPair", "ds_pairs.txt", width),
+    ]
     if wall == "mesh":
         computes.append(f"compute dsWall all wall/gran/local {KEYWORDS}")
         dumps += _local_dump("dsWall", "ds_walls.txt", width)
     g, (gx, gy, gz) = GRAVITY
     lines = [
         f"# demsplit sample (sample_dumps/liggghts/walls/make_scenes.py): {words}, {wall} floor with store_force.",
-        "units           si", "atom_style      granular", "atom_modify     map array", "boundary        p p f",
-        "newton          off", "communicate     single vel yes",
+        "units           si",
+        "atom_style      granular",
+        "atom_modify     map array",
+        "boundary        p p f",
+        "newton          off",
+        "communicate     single vel yes",
         f"region          domain block {-HALF_WIDTH} {HALF_WIDTH} {-HALF_WIDTH} {HALF_WIDTH} -0.002 0.03 units box",
-        "create_box      3 domain", "neighbor        0.0004 bin", "neigh_modify    delay 0",
+        "create_box      3 domain",
+        "neighbor        0.0004 bin",
+        "neigh_modify    delay 0",
         f"fix m1 all property/global youngsModulus peratomtype {' '.join(map(str, YOUNG))}",
         f"fix m2 all property/global poissonsRatio peratomtype {' '.join(map(str, POISSON))}",
         f"fix m3 all property/global coefficientRestitution peratomtypepair 3 {_table(RESTITUTION)}",
         f"fix m4 all property/global coefficientFriction peratomtypepair 3 {_table(FRICTION)}",
         *(f"fix p{k} all property/global {p}" for k, p in enumerate(props, 1)),
-        f"pair_style      gran {words}", "pair_coeff      * *", f"timestep        {TIMESTEP}",
+        f"pair_style      gran {words}",
+        "pair_coeff      * *",
+        f"timestep        {TIMESTEP}",
         f"fix gravi all gravity {g} vector {gx} {gy} {gz}",
-        *floor, *computes,
-        "region pack block -0.005 0.005 -0.005 0.005 0.0014 0.0098 units box", "lattice sc 0.0024",
-        "create_atoms 1 region pack", "set type 1 type/fraction 2 0.5 32452843",
+        *floor,
+        *computes,
+        "region pack block -0.005 0.005 -0.005 0.005 0.0014 0.0098 units box",
+        "lattice sc 0.0024",
+        "create_atoms 1 region pack",
+        "set type 1 type/fraction 2 0.5 32452843",
         "displace_atoms all random 0.00008 0.00008 0.00008 15485863 units box",
         *(f"set type {t} diameter {DIAMETER[t]} density {DENSITY[t]}" for t in (1, 2)),
-        "velocity all set 0.2 0.05 0.0 units box", "fix integr all nve/sphere", "thermo 5000",
-        f"run {SETTLE}", *dumps, f"run {OUTPUT_STEPS}",
+        "velocity all set 0.2 0.05 0.0 units box",
+        "fix integr all nve/sphere",
+        "thermo 5000",
+        f"run {SETTLE}",
+        *dumps,
+        f"run {OUTPUT_STEPS}",
     ]
     return "\n".join(lines) + "\n"
 
@@ -151,8 +191,13 @@ def write_scene(scene: str, directory: Path) -> Path:
 def run(path: Path, liggghts: str = "liggghts") -> None:
     """Run LIGGGHTS on the script ``path`` in its directory (stdbuf: LIGGGHTS loses error->one messages when
     stdout is a pipe); raise with LIGGGHTS' error lines on failure."""
-    proc = subprocess.run(["stdbuf", "-o0", "-e0", liggghts, "-in", path.name, "-echo", "none", "-log", "none"],
-                          cwd=path.parent, capture_output=True, text=True, timeout=600)
+    proc = subprocess.run(
+        ["stdbuf", "-o0", "-e0", liggghts, "-in", path.name, "-echo", "none", "-log", "none"],
+        cwd=path.parent,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     if proc.returncode != 0:
         errors = [line for line in (proc.stdout + proc.stderr).splitlines() if "ERROR" in line]
         raise RuntimeError(f"liggghts failed on {path}: {errors or proc.stdout[-2000:]}")

@@ -23,7 +23,15 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[3] / "tests"))
 from liggghts_wallforce_reference import Frame, Law, Wall, from_history, reconstruct  # noqa: E402
 from test_liggghts_wallforce_facts import (  # noqa: E402
-    FLOOR, FLOOR_TYPE, SCENES, _agree, _dump, frames, law, make_scenes, rebuilt,
+    FLOOR,
+    FLOOR_TYPE,
+    SCENES,
+    _agree,
+    _dump,
+    frames,
+    law,
+    make_scenes,
+    rebuilt,
 )
 
 PACKING = Path(__file__).resolve().parent.parent / "packing"
@@ -39,8 +47,10 @@ def closure_line(closures) -> str:
     force = max(float(np.max(c.force_residual / c.force_tolerance)) for c in closures)
     with np.errstate(invalid="ignore"):  # 0/0: an atom touching nothing, with no torque
         torque = max(float(np.nanmax(c.torque_residual / c.torque_tolerance, initial=0.0)) for c in closures)
-    return f"balance closes for {closes}/{total} atom-frames (largest residual/tolerance: force {force:.2g}, " \
-           f"torque {torque:.2g})"
+    return (
+        f"balance closes for {closes}/{total} atom-frames (largest residual/tolerance: force {force:.2g}, "
+        f"torque {torque:.2g})"
+    )
 
 
 def churn(scene: str, contacts) -> str:
@@ -69,8 +79,12 @@ def velocities(scene: str, model: str) -> str:
         busy = np.isin(closure.id, np.concatenate([contacts.id, frame.pairs["id1"], frame.pairs["id2"]]))
         fails += int((~closure.closes[busy]).sum())
         touching += int(busy.sum())
-    normal = f"floor normal force vs model, largest / largest force: {right:.1g} with the step's velocities, " \
-             f"{wrong:.1g} with the other frame kind's; " if model != "hysteresis" else ""
+    normal = (
+        f"floor normal force vs model, largest / largest force: {right:.1g} with the step's velocities, "
+        f"{wrong:.1g} with the other frame kind's; "
+        if model != "hysteresis"
+        else ""
+    )
     return normal + f"with the other frame kind's velocities {fails} of {touching} touching atom-frames do not close"
 
 
@@ -82,8 +96,10 @@ def walls_scenes() -> None:
         contacts = [c for c, _ in result]
         n = sum(len(c.id) for c in contacts)
         capped = sum(int(c.capped.sum()) for c in contacts)
-        print(f"== {scene}: {len(pairs)} frames, pair contacts {pairs}, floor contacts "
-              f"{[len(c.id) for c in contacts]} ({capped} of {n} at the Coulomb cap)")
+        print(
+            f"== {scene}: {len(pairs)} frames, pair contacts {pairs}, floor contacts "
+            f"{[len(c.id) for c in contacts]} ({capped} of {n} at the Coulomb cap)"
+        )
         print("   " + closure_line([c for _, c in result]) + "; " + churn(scene, contacts))
         modes = ["u_n", "u_t"] + (["u_r"] if "rolling" in make_scenes.MODELS[model][0] else [])
         missing = {m: sum(int(np.isnan(getattr(c, m)).sum()) for c in contacts) for m in modes}
@@ -104,8 +120,10 @@ def walls_scenes() -> None:
                     rel = np.abs(mine[big] - theirs[big]) / theirs[big]
                     worst[m] = max(worst.get(m, 0.0), float(rel.max(initial=0.0)))
                     compared[m] += int(ok.sum())
-            print(f"   from the wall force vs from the history: contacts compared {dict(compared)}, largest relative "
-                  f"difference {({m: f'{v:.2g}' for m, v in worst.items()})}")
+            print(
+                f"   from the wall force vs from the history: contacts compared {dict(compared)}, largest relative "
+                f"difference { ({m: f'{v:.2g}' for m, v in worst.items()}) }"
+            )
             stored_vs_output(scene)
 
 
@@ -122,14 +140,17 @@ def stored_vs_output(scene: str) -> None:
         output = np.stack([walls[c] for c in ("fx", "fy", "fz")], -1)
         mu_fn = make_scenes.FRICTION[0][2] * np.abs(output[:, 2])
         ratio = np.hypot(output[:, 0], output[:, 1]) / mu_fn
-        out.append(f"{'setup ' if frame.setup else ''}{np.abs(stored - output).max() / np.abs(output).max():.1g} "
-                   f"({(ratio > 1 + 1e-9).sum()} rows beyond mu F_n, up to {ratio.max():.3g}x)")
+        out.append(
+            f"{'setup ' if frame.setup else ''}{np.abs(stored - output).max() / np.abs(output).max():.1g} "
+            f"({(ratio > 1 + 1e-9).sum()} rows beyond mu F_n, up to {ratio.max():.3g}x)"
+        )
         if frame.setup:
             continue
         a, delta = frame.atoms, walls["delta"]
         r = a["radius"][rows]
-        _, kt, _, gammat = law(model).stiffness(a["type"][rows].astype(np.int64), np.full(len(rows), FLOOR_TYPE), r,
-                                                a["mass"][rows], delta)
+        _, kt, _, gammat = law(model).stiffness(
+            a["type"][rows].astype(np.int64), np.full(len(rows), FLOOR_TYPE), r, a["mass"][rows], delta
+        )
         en, dist = np.array([0.0, 0.0, 1.0]), r - delta
         omega = np.stack([a[f"omega{c}"][rows] for c in "xyz"], -1)
         vr = np.stack([a[f"v{c}"][rows] for c in "xyz"], -1)
@@ -140,20 +161,36 @@ def stored_vs_output(scene: str) -> None:
         ft = np.where((mag <= mu_fn)[:, None], f_el - gammat[:, None] * vtr, f_el * (mu_fn / mag)[:, None])
         rebuilt_err.append(np.abs(ft - (output - output[:, 2:3] * en)).max() / np.abs(output).max())
     print("   |stored - output-time force| / largest force per frame: " + "; ".join(out))
-    print("   output-time tangential force rebuilt (uncapped unless k_t|shear| > mu F_n(output)), largest error / "
-          "largest force per mid-run frame: " + ", ".join(f"{e:.1g}" for e in rebuilt_err))
+    print(
+        "   output-time tangential force rebuilt (uncapped unless k_t|shear| > mu F_n(output)), largest error / "
+        "largest force per mid-run frame: " + ", ".join(f"{e:.1g}" for e in rebuilt_err)
+    )
 
 
 # packing/: hertz, tangential history; types 1, 2 spheres, 3 primitive walls, 4 mesh floor
-PACKING_LAW = Law(normal="hertz", rolling=None, young=(1.0e8, 1.0e7, 5.0e8, 2.0e8), poisson=(0.25, 0.40, 0.30, 0.28),
-                  restitution=((0.3,) * 4,) * 4,
-                  friction=((0.5, 0.4, 0.3, 0.3), (0.4, 0.6, 0.3, 0.3), (0.3,) * 4, (0.3,) * 4),
-                  timestep=2e-6, gravity=np.array([0.0, 0.0, -9.81]))
-PACKING_WALLS = [Wall("wfloor", 4, "plane", 2, 0.0), Wall("wxlo", 3, "plane", 0, -0.02),
-                 Wall("wxhi", 3, "plane", 0, 0.02), Wall("wylo", 3, "plane", 1, -0.02),
-                 Wall("wyhi", 3, "plane", 1, 0.02), Wall("wpost", 3, "cylinder", 2, radius=0.004, center=(0.0, 0.0))]
-PACKING_PAIR = make_scenes.LOCAL_COLUMNS + [f"tq{k}{c}" for k in "nt" for c in "xyz"] + \
-    ["shearx", "sheary", "shearz", "area", "delta", "cpx", "cpy", "cpz"]
+PACKING_LAW = Law(
+    normal="hertz",
+    rolling=None,
+    young=(1.0e8, 1.0e7, 5.0e8, 2.0e8),
+    poisson=(0.25, 0.40, 0.30, 0.28),
+    restitution=((0.3,) * 4,) * 4,
+    friction=((0.5, 0.4, 0.3, 0.3), (0.4, 0.6, 0.3, 0.3), (0.3,) * 4, (0.3,) * 4),
+    timestep=2e-6,
+    gravity=np.array([0.0, 0.0, -9.81]),
+)
+PACKING_WALLS = [
+    Wall("wfloor", 4, "plane", 2, 0.0),
+    Wall("wxlo", 3, "plane", 0, -0.02),
+    Wall("wxhi", 3, "plane", 0, 0.02),
+    Wall("wylo", 3, "plane", 1, -0.02),
+    Wall("wyhi", 3, "plane", 1, 0.02),
+    Wall("wpost", 3, "cylinder", 2, radius=0.004, center=(0.0, 0.0)),
+]
+PACKING_PAIR = (
+    make_scenes.LOCAL_COLUMNS
+    + [f"tq{k}{c}" for k in "nt" for c in "xyz"]
+    + ["shearx", "sheary", "shearz", "area", "delta", "cpx", "cpy", "cpz"]
+)
 
 
 def packing() -> None:
@@ -164,18 +201,27 @@ def packing() -> None:
         shutil.copy(PACKING / "floor.stl", tmp)
         text = (PACKING / "in.packing").read_text()
         text = re.sub(r"^(fix w\w+ +all wall/gran .*)$", r"\1 store_force yes", text, flags=re.M)
-        columns = "id type x y z vx vy vz omegax omegay omegaz fx fy fz tqx tqy tqz radius mass " + \
-            " ".join(f"f_force_{w.fix}[{c}]" for w in PACKING_WALLS for c in (1, 2, 3))
-        dump = f"dump dforce all custom 2000 atoms_force.txt {columns}\n" \
-               f'dump_modify dforce format "%d %d{" %.17g" * (len(columns.split()) - 2)}" sort id\n'
+        columns = "id type x y z vx vy vz omegax omegay omegaz fx fy fz tqx tqy tqz radius mass " + " ".join(
+            f"f_force_{w.fix}[{c}]" for w in PACKING_WALLS for c in (1, 2, 3)
+        )
+        dump = (
+            f"dump dforce all custom 2000 atoms_force.txt {columns}\n"
+            f'dump_modify dforce format "%d %d{" %.17g" * (len(columns.split()) - 2)}" sort id\n'
+        )
         text = text.replace("\ndump dpair ", "\n" + dump + "dump dpair ", 1)
         (tmp / "in.packing").write_text(text)
-        subprocess.run(["stdbuf", "-o0", "-e0", "liggghts", "-in", "in.packing", "-echo", "none", "-log", "none"],
-                       cwd=tmp, check=True, capture_output=True)
+        subprocess.run(
+            ["stdbuf", "-o0", "-e0", "liggghts", "-in", "in.packing", "-echo", "none", "-log", "none"],
+            cwd=tmp,
+            check=True,
+            capture_output=True,
+        )
         with gzip.open(PACKING / "atoms_full.txt.gz", "rb") as f:
             same = (tmp / "atoms_full.txt").read_bytes() == f.read()
-        print(f"== packing rerun with store_force yes: atoms_full.txt {'identical to' if same else 'DIFFERS from'} "
-              "the committed one")
+        print(
+            f"== packing rerun with store_force yes: atoms_full.txt {'identical to' if same else 'DIFFERS from'} "
+            "the committed one"
+        )
         atoms = _dump(tmp, "atoms_force.txt", None)
         pairs = _dump(tmp, "pairs_full.txt", PACKING_PAIR)
         walls = _dump(tmp, "wall_full.txt", PACKING_PAIR[:12] + ["mesh", "triangle", "id"] + PACKING_PAIR[15:])
@@ -193,12 +239,14 @@ def packing() -> None:
             rows = np.array([at[i] for i in c.id[floor].tolist()])
             ok = np.isfinite(c.u_t[floor])
             agree = _agree(c.u_t[floor][ok], history["u_t"][rows][ok])
-            print(f"   step {step}{' (setup)' if k == 0 else ''}: wall contacts {per_fix}; particles on two primitive "
-                  f"walls {(two > 1).sum()}; u_t not computed: primitive {int(np.isnan(c.u_t[primitive]).sum())} of "
-                  f"{int(primitive.sum())}, mesh floor {int((~ok).sum())} of {len(floor)}; reasons "
-                  f"{dict(reasons(c))}; floor u_t from force = from history (1e-9) for "
-                  f"{int(agree.sum())}/{len(agree)}; u_t of the primitive walls "
-                  f"{np.nansum(c.u_t[primitive]):.4g} J (mesh floor {np.nansum(c.u_t[floor]):.4g} J)")
+            print(
+                f"   step {step}{' (setup)' if k == 0 else ''}: wall contacts {per_fix}; particles on two primitive "
+                f"walls {(two > 1).sum()}; u_t not computed: primitive {int(np.isnan(c.u_t[primitive]).sum())} of "
+                f"{int(primitive.sum())}, mesh floor {int((~ok).sum())} of {len(floor)}; reasons "
+                f"{dict(reasons(c))}; floor u_t from force = from history (1e-9) for "
+                f"{int(agree.sum())}/{len(agree)}; u_t of the primitive walls "
+                f"{np.nansum(c.u_t[primitive]):.4g} J (mesh floor {np.nansum(c.u_t[floor]):.4g} J)"
+            )
         print("   " + closure_line(closures))
 
 
