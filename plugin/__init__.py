@@ -13,6 +13,10 @@ from __future__ import annotations
 
 from importlib import import_module
 
+# isort: off
+from .runtime import command  # noqa: F401 (first: sets the demsplit command's process up before numpy loads)
+
+# isort: on
 from .errors import (
     ContactError,
     DemsplitError,
@@ -43,7 +47,6 @@ from .physics.moduli import (
 )
 from .physics.partition import ContactEnergy, contact_energies, partition, per_particle
 from .physics.shares import contact_point, normal_share, overlap_depths, radius_share, springs_share, tangential_share
-from .runtime import command  # noqa: F401 (first: sets the demsplit command's process up before numpy loads)
 from .scene import ContactModel, Material, Scene, Wall
 
 __version__ = "0.1.0"
