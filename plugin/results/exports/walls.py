@@ -115,7 +115,20 @@ def wall_triangles(
     wall: Mapping, lo: np.ndarray, hi: np.ndarray, meshes: dict[str, np.ndarray]
 ) -> tuple[np.ndarray | None, str]:
     """The triangles of one wall of the provenance's scene (module docstring) in the box [lo, hi] (m), or
-    None and why it is not drawn. ``meshes``: mesh files already read, by path (filled in)."""
+    None and why it is not drawn (no geometry in the store, a mesh file gone, a description that is not numbers).
+    ``meshes``: mesh files already read, by path (filled in)."""
+    try:
+        triangles, why = _triangles(wall, lo, hi, meshes)
+    except (TypeError, ValueError, IndexError, KeyError, AttributeError) as exc:  # a damaged provenance
+        return None, f"the store's description of it is not a geometry ({type(exc).__name__})"
+    if triangles is not None and not np.isfinite(triangles).all():
+        return None, "its geometry in the store is not finite"
+    return triangles, why
+
+
+def _triangles(
+    wall: Mapping, lo: np.ndarray, hi: np.ndarray, meshes: dict[str, np.ndarray]
+) -> tuple[np.ndarray | None, str]:
     kind = wall.get("kind")
     if kind == "mesh":
         file = wall.get("file")
