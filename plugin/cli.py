@@ -150,7 +150,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         from .readers import reader_for
 
         first = args.input[0] if isinstance(args.input, list) else args.input
-        options = {**reader_for(first).output_options(Path(args.output)), **options}
+        options = {**reader_for(first, getattr(args, "simulator", None)).output_options(Path(args.output)), **options}
     report, _ = run_to_store(
         args.input,
         args.output,
