@@ -1,8 +1,9 @@
 """Fuzz: generated bad inputs of every family of the fuzzer ``tests/fuzz.py`` (LIGGGHTS text, binary and
-compressed dumps, input scripts, YADE snapshots in both formats, output paths) keep the promise: exit 0 with a
+compressed dumps, input scripts, YADE snapshots in both formats, output paths, result stores, ingest caches,
+exports, prepare) keep the promise: exit 0 with a
 store whose every number is finite, or exit 2 with one message; never another exception, never an input
-changed, never a file left behind. A bounded hypothesis run (under a minute); the long run and its counts are
-in docs/reliability.md (``python tests/fuzz.py --count 30000 --seed 1``), which also bounds the time and the
+changed, never a file left behind. A bounded hypothesis run (under a minute); the long runs and their counts
+are in docs/reliability.md (``python tests/fuzz.py --seconds 3600 --seed 2``); the fuzzer also bounds the time and the
 memory of every input in a worker child, tested here with inputs that hang, crash or allocate too much."""
 
 from __future__ import annotations
