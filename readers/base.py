@@ -39,7 +39,7 @@ class Option:
     ``add_argument`` in ``argparse``, and where the parsed value goes: the reader's constructor keyword ``name``,
     through ``convert`` (default: as parsed), or, with ``into``, the entry ``name`` of the dict keyword
     ``into``. ``group``: the help section (default: the reader's ``cli_group``). Readers that take the same
-    flag share its definition (the first registered reader's help is shown)."""
+    flag share one definition, declared once below (:data:`MATERIALS`, :data:`ATOMS`, ...)."""
 
     name: str
     flags: tuple[str, ...]
