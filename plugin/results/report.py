@@ -152,8 +152,8 @@ def simulator_energies(results: Results, step: int, frame: pd.Series) -> list[st
     snapshot, the ``O.energy`` entries the law fills when the run tracks energies)."""
     run = (results.provenance or {}).get("run") or {}
     lines = []
-    for e in run.get("yade_energies", []):
-        if e.get("step") != step:
+    for e in run.get("yade_energies", []):  # checked when the store is read (results.store)
+        if e["step"] != step:
             continue
         modes = [m for m in e["modes"] if m in frame]
         ours, theirs = float(sum(frame[m] for m in modes)), float(e["value"])

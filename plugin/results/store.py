@@ -20,6 +20,7 @@ the reading.
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Iterable
 from pathlib import Path
 
@@ -266,7 +267,7 @@ def _small_int(value) -> bool:
 
 def _check_names(provenance: dict, path: Path) -> None:
     """The material names the readers of a store look up by type: ``type_names`` and the scene's materials,
-    keyed by the decimal text of a type."""
+    keyed by the decimal text of a type; the simulator's own energies the report prints (``run.yade_energies``)."""
     scene = provenance.get("scene") or {}
     if not isinstance(scene.get("walls") or [], list) or not isinstance(scene.get("source") or "", str):
         raise _damaged(path, "its provenance's scene has walls that are not a list, or a source that is not text.")
@@ -280,6 +281,21 @@ def _check_names(provenance: dict, path: Path) -> None:
         not isinstance(m, dict) for m in (materials or {}).values()
     ):
         raise _damaged(path, "its provenance's material names are not text, or its materials not JSON objects.")
+    run = provenance.get("run") or {}
+    energies = run.get("yade_energies", []) if isinstance(run, dict) else None
+    if not isinstance(energies, list) or not all(
+        isinstance(e, dict)
+        and isinstance(e.get("step"), int)
+        and not isinstance(e.get("step"), bool)
+        and isinstance(e.get("name"), str)
+        and isinstance(e.get("value"), (int, float))
+        and not isinstance(e.get("value"), bool)
+        and math.isfinite(e["value"])
+        and isinstance(e.get("modes"), list)
+        and all(isinstance(m, str) for m in e["modes"])
+        for e in energies
+    ):
+        raise _damaged(path, "its provenance's run, or the simulator's own energies it lists, are not as written.")
 
 
 def _json_attr(h5, name: str, kind: type, path: Path):
