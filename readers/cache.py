@@ -145,11 +145,12 @@ def _write_frame(g: h5py.Group, frame: Frame) -> None:
 
 
 def is_cache(path: str | Path) -> bool:
-    """True when ``path`` is an HDF5 file written by :func:`convert_run`."""
+    """True when ``path`` is an HDF5 file written by :func:`convert_run` (False for one whose metadata cannot
+    even be read: the reader of its format, if any, names the damage)."""
     try:
         with h5py.File(path, "r") as h5:
             return text_attribute(h5, "format") == FORMAT
-    except OSError:
+    except H5_FAULTS:
         return False
 
 

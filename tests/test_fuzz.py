@@ -83,13 +83,14 @@ def test_a_hang_a_crash_and_too_much_memory_are_reported_with_their_input(bases,
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("seed, index", [(2, 2039), (2, 3327), (2, 6880), (2, 7719), (2, 11370), (3, 3164)])
+@pytest.mark.parametrize("seed, index", [(2, 2039), (2, 3327), (2, 6880), (2, 7719), (2, 11370), (3, 3164), (3, 6891)])
 def test_inputs_that_once_broke_the_promise_keep_it(bases, seed, index):
     """Inputs of a long run (``python tests/fuzz.py --seed 2``) that broke the promise before their fix: YADE
     snapshots whose phys functor's attrs, or whose recorded YADE energies, were not objects (exit 3), an ingest
     cache with a frame's box removed (refused as a store schema error), a store whose provenance gives a wall a
     centre that is text (exit 3 in export --vtk; the wall is now left undrawn, and said), a store whose provenance
-    lists the simulator's energies as numbers, not objects (exit 3 in report; now refused as a damaged store)."""
+    lists the simulator's energies as numbers, not objects (exit 3 in report; now refused as a damaged store), an
+    HDF5 snapshot whose root cannot be opened (exit 3 while the readers were asked whether it is theirs)."""
     root, base = bases
     case = fuzz.build_case(base, root / "work", seed, index, fuzz.FAMILIES)
     outcome, detail = fuzz.check_case(case)
