@@ -508,15 +508,7 @@ class _LammpsReader(_Reader):
 
     def cmd_dump_modify(self, args: list[str], where: Where) -> None:
         """LAMMPS' ``format line|float|int|N FMT|none`` and ``sort``; the other keywords are not needed."""
-        self.need(args, 1, where, "dump_modify", "dump_modify ID KEYWORD VALUE ...")
-        dump = self.dumps.get(args[0])
-        if dump is None:
-            raise self.error(
-                ScriptError,
-                f"dump_modify: no dump with id {excerpt(args[0])} is defined before.",
-                where,
-                "define the dump before modifying it.",
-            )
+        dump = self.modified_dump(args, where)
         rest, k = args[1:], 0
         while k < len(rest):
             if rest[k] == "format" and k + 1 < len(rest):

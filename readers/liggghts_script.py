@@ -1069,7 +1069,8 @@ class _Reader:
         )
         self.dump_where[did] = where
 
-    def cmd_dump_modify(self, args: list[str], where: Where) -> None:
+    def modified_dump(self, args: list[str], where: Where) -> DumpSpec:
+        """The dump a ``dump_modify`` line names (defined before it, else a :class:`ScriptError`)."""
         self.need(args, 1, where, "dump_modify", "dump_modify ID KEYWORD VALUE ...")
         dump = self.dumps.get(args[0])
         if dump is None:
@@ -1079,6 +1080,10 @@ class _Reader:
                 where,
                 "define the dump before modifying it.",
             )
+        return dump
+
+    def cmd_dump_modify(self, args: list[str], where: Where) -> None:
+        dump = self.modified_dump(args, where)
         i, rest = 0, args[1:]
         while i < len(rest):
             key = rest[i]
